@@ -1,0 +1,38 @@
+"""Which particles lie in which cell, and the cell volume fractions theta (eqs. 8, 9)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kernels import binning
+
+
+@dataclass
+class CellBins:
+    """Particles grouped by cell: cell ``c`` holds ``order[start[c]:start[c+1]]``."""
+
+    cell: np.ndarray  # (n,) flat cell index of each particle
+    start: np.ndarray  # (ncells+1,)
+    order: np.ndarray  # (n,)
+    theta: np.ndarray  # (ncells,) particle volume / cell volume
+
+    def counts(self):
+        return np.diff(self.start)
+
+
+def bin_particles(grid, particles, bins=None):
+    """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell."""
+    n = particles.count
+    if bins is None or bins.cell.shape[0] != n:
+        bins = CellBins(
+            cell=np.empty(n, dtype=np.int64),
+            start=np.empty(grid.ncells + 1, dtype=np.int64),
+            order=np.empty(n, dtype=np.int64),
+            theta=np.empty(grid.ncells),
+        )
+    if grid.dim != 2:
+        raise NotImplementedError("only 2D grids are implemented")
+    binning.cell_index_2d(particles.x, grid.spacing, grid.cells[0], grid.cells[1], bins.cell)
+    binning.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
+    binning.cell_volume_fraction(bins.cell, particles.volume, grid.cell_volume, bins.theta)
+    return bins

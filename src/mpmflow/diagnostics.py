@@ -1,0 +1,47 @@
+"""Quantities measured on a running simulation (SI units).
+
+``front`` and ``height`` follow the definition used for the VOF reference data: on the
+per-cell particle volume fraction f (clipped to [0, 1]), along each row of cells, the x
+where f last crosses 1/2 going right (linear interpolation between cell centres; the wall
+position if the last cell is at least half full); ``front`` is the largest over rows.
+``height`` is the same in y along the column of cells touching the left wall (x = 0).
+"""
+
+import numpy as np
+
+
+def last_crossing(f, centres, wall):
+    """Position where the profile f (one value per cell) last drops below 1/2; nan if never above."""
+    full = np.flatnonzero(f >= 0.5)
+    if full.size == 0:
+        return np.nan
+    k = full[-1]
+    if k == f.size - 1:
+        return wall
+    return centres[k] + (centres[k + 1] - centres[k]) * (f[k] - 0.5) / (f[k] - f[k + 1])
+
+
+def volume_fraction_field(grid, theta):
+    """Cell volume fractions as an array indexed [cx, cy], clipped to [0, 1]."""
+    return np.clip(theta, 0.0, 1.0).reshape(grid.cells[::-1]).T
+
+
+def front_and_height(grid, theta):
+    """(front, height) in metres from the cell volume fractions theta (flat cell order)."""
+    f = volume_fraction_field(grid, theta)
+    xc = grid.cell_centres(0)
+    yc = grid.cell_centres(1)
+    lx, ly = grid.size
+    fronts = [last_crossing(f[:, j], xc, lx) for j in range(f.shape[1])]
+    fronts = [x for x in fronts if np.isfinite(x)]
+    front = max(fronts) if fronts else np.nan
+    height = last_crossing(f[0, :], yc, ly)
+    return float(front), float(height)
+
+
+def kinetic_energy(particles):
+    return float(0.5 * np.sum(particles.mass * np.sum(particles.v**2, axis=1)))
+
+
+def potential_energy(particles, gravity):
+    return float(-np.sum(particles.mass * (particles.x @ np.asarray(gravity))))

@@ -1,0 +1,65 @@
+"""The fixed background grid: uniform square (cubic) cells covering the domain [0, size]."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Uniform grid of ``cells[k]`` cells of side ``spacing`` (m) along each axis k."""
+
+    spacing: float
+    cells: tuple[int, ...]
+
+    @classmethod
+    def covering(cls, size, spacing, rtol=1e-6):
+        """The grid of the given spacing that covers the box [0, size].
+
+        Walls lie on grid lines, so a side that is not a whole number of cells is extended
+        to the next whole cell (by less than one spacing); ``adjusted`` tells the caller.
+        """
+        counts = []
+        for length in size:
+            n = length / spacing
+            counts.append(max(1, int(round(n)) if abs(n - round(n)) <= rtol * n else
+                          int(np.ceil(n))))
+        return cls(float(spacing), tuple(counts))
+
+    def adjusted(self, size, rtol=1e-6):
+        """True when the grid's extent differs from the requested domain size."""
+        return any(abs(a - b) > rtol * b for a, b in zip(self.size, size))
+
+    @property
+    def dim(self):
+        return len(self.cells)
+
+    @property
+    def nodes(self):
+        return tuple(n + 1 for n in self.cells)
+
+    @property
+    def ncells(self):
+        return int(np.prod(self.cells))
+
+    @property
+    def nnodes(self):
+        return int(np.prod(self.nodes))
+
+    @property
+    def size(self):
+        return np.array(self.cells, dtype=float) * self.spacing
+
+    @property
+    def cell_volume(self):
+        return self.spacing**self.dim
+
+    def cell_centres(self, axis):
+        """Coordinates (m) of the cell centres along one axis."""
+        return (np.arange(self.cells[axis]) + 0.5) * self.spacing
+
+    def node_coordinates(self):
+        """(nnodes, dim) coordinates of the nodes in flat order (x fastest)."""
+        axes = [np.arange(n) * self.spacing for n in self.nodes]
+        mesh = np.meshgrid(*axes, indexing="ij")
+        return np.stack([m.ravel(order="F") for m in mesh], axis=1)

@@ -1,0 +1,45 @@
+"""Particles to cells: cell index of each particle, counting sort, cell volume fractions."""
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def cell_index_2d(x, h, ncx, ncy, out):
+    """Flat cell index of every particle. Particles on the upper domain edge go to the last cell."""
+    inv_h = 1.0 / h
+    for p in range(x.shape[0]):
+        cx = int(np.floor(x[p, 0] * inv_h))
+        cy = int(np.floor(x[p, 1] * inv_h))
+        cx = min(max(cx, 0), ncx - 1)
+        cy = min(max(cy, 0), ncy - 1)
+        out[p] = cx + ncx * cy
+
+
+@njit(cache=True)
+def counting_sort(cell, ncells, start, order):
+    """Group particles by cell: particles of cell c are ``order[start[c]:start[c+1]]``.
+
+    ``start`` has ncells+1 entries; the sort is stable (particles keep their order in a cell).
+    """
+    start[:] = 0
+    for p in range(cell.shape[0]):
+        start[cell[p] + 1] += 1
+    for c in range(ncells):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    for p in range(cell.shape[0]):
+        c = cell[p]
+        order[fill[c]] = p
+        fill[c] += 1
+
+
+@njit(cache=True)
+def cell_volume_fraction(cell, volume, cell_volume, theta):
+    """theta_e = sum of particle volumes in cell e / cell volume (eqs. 8-9 of the paper)."""
+    theta[:] = 0.0
+    for p in range(cell.shape[0]):
+        theta[cell[p]] += volume[p]
+    inv = 1.0 / cell_volume
+    for c in range(theta.shape[0]):
+        theta[c] *= inv

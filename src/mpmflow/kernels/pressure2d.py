@@ -1,0 +1,297 @@
+"""Pressure Poisson system (eq. 13), ghost pressures and corrector (eq. 16) on the 2D grid.
+
+Element integrals come as stacked arrays ``K[s], C[s], V[s]`` (see ``quadrature2d``) and
+``cell_slot[c]`` says which slot cell c uses: -1 = left out of the system (sparse cell),
+0 = the full-cell Gauss tensors, s > 0 = the cell's own material-point tensors.
+
+Free-surface treatment (``subcell``): a node's volume fraction ``f`` is the mean of its
+cells' volume fractions; the surface is the f = 0.5 level. The coupling of an unknown
+node i to a node g outside the fluid uses the pressure extrapolated linearly along the
+edge i-g to p = 0 at the surface, ``p_g = (1 - 1/theta) p_i`` with
+``theta = (f_i - 1/2) / (f_i - f_g)`` the fractional distance from i to the surface. This
+is the ghost-fluid method of Gibou et al. (2002); it changes only the diagonal, so the
+matrix stays symmetric positive definite. With ``subcell`` off, nodes outside the
+unknown set have p = 0 (the paper's free-surface nodes).
+"""
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def classify_nodes_2d(ncx, ncy, cell_slot, theta, subcell, node_f, node_row):
+    """Nodal volume fraction and the unknown set; returns the number of unknowns.
+
+    A node is an unknown when all its cells inside the domain take part in the system and,
+    with ``subcell``, its volume fraction exceeds 1/2. Unknowns are numbered in node order.
+    """
+    nnx = ncx + 1
+    nny = ncy + 1
+    nrows = 0
+    for iy in range(nny):
+        for ix in range(nnx):
+            i = ix + nnx * iy
+            fsum = 0.0
+            ncell = 0
+            nactive = 0
+            for cy in range(iy - 1, iy + 1):
+                if cy < 0 or cy >= ncy:
+                    continue
+                for cx in range(ix - 1, ix + 1):
+                    if cx < 0 or cx >= ncx:
+                        continue
+                    c = cx + ncx * cy
+                    fsum += min(theta[c], 1.0)
+                    ncell += 1
+                    if cell_slot[c] >= 0:
+                        nactive += 1
+            node_f[i] = fsum / ncell
+            unknown = nactive == ncell
+            if subcell and node_f[i] <= 0.5:
+                unknown = False
+            if unknown:
+                node_row[i] = nrows
+                nrows += 1
+            else:
+                node_row[i] = -1
+    return nrows
+
+
+@njit(cache=True, inline="always")
+def _ghost_factor(f_i, f_g, theta_min):
+    """(1 - 1/theta): p_g = factor * p_i, linear extrapolation to p = 0 at f = 1/2."""
+    if f_i - f_g <= 0.0:
+        return 0.0
+    t = (f_i - 0.5) / (f_i - f_g)
+    if t >= 1.0:
+        return 0.0
+    if t < theta_min:
+        t = theta_min
+    return 1.0 - 1.0 / t
+
+
+@njit(cache=True)
+def _stencil(ix, iy, ncx, ncy, cell_slot, K, S):
+    """Couplings sum_e K_e[a_i, b_j] of node (ix, iy) to its 3x3 neighbours, S[dy+1, dx+1]."""
+    S[:] = 0.0
+    for dcy in range(-1, 1):
+        cy = iy + dcy
+        if cy < 0 or cy >= ncy:
+            continue
+        for dcx in range(-1, 1):
+            cx = ix + dcx
+            if cx < 0 or cx >= ncx:
+                continue
+            s = cell_slot[cx + ncx * cy]
+            if s < 0:
+                continue
+            a = -dcx + 2 * (-dcy)
+            for b in range(4):
+                jx = (b & 1) + dcx
+                jy = (b >> 1) + dcy
+                S[jy + 1, jx + 1] += K[s, a, b]
+
+
+@njit(cache=True)
+def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, nrows, node_f, subcell, theta_min,
+                       indptr, indices, data, anchored):
+    """Assemble L of eq. (14) in CSR (sorted columns) row by row; returns the non-zero count.
+
+    Couplings to nodes that are not unknowns go to the diagonal through the ghost
+    extrapolation (``subcell``) or vanish (p = 0 there). ``indices``/``data`` must hold
+    9*nrows entries. ``anchored[r]`` tells whether row r couples to such a node (a system
+    with no anchored row is pure Neumann, hence singular).
+    """
+    nnx = ncx + 1
+    nny = ncy + 1
+    S = np.empty((3, 3))
+    nnz = 0
+    indptr[0] = 0
+    for i in range(nnx * nny):
+        r = node_row[i]
+        if r < 0:
+            continue
+        ix = i % nnx
+        iy = i // nnx
+        _stencil(ix, iy, ncx, ncy, cell_slot, K, S)
+        anchored[r] = False
+        for dy in range(3):
+            for dx in range(3):
+                sv = S[dy, dx]
+                if (dy == 1 and dx == 1) or sv == 0.0:
+                    continue
+                j = (ix + dx - 1) + nnx * (iy + dy - 1)
+                if node_row[j] < 0:
+                    anchored[r] = True
+                    if subcell and sv < 0.0:
+                        S[1, 1] += sv * _ghost_factor(node_f[i], node_f[j], theta_min)
+                    S[dy, dx] = 0.0
+        for dy in range(3):
+            for dx in range(3):
+                sv = S[dy, dx]
+                if sv == 0.0:
+                    continue
+                indices[nnz] = node_row[(ix + dx - 1) + nnx * (iy + dy - 1)]
+                data[nnz] = sv
+                nnz += 1
+        indptr[r + 1] = nnz
+    return nnz
+
+
+@njit(cache=True)
+def assemble_rhs_2d(ncx, ncy, h, cell_slot, C, V, node_vol, node_row, vstar, contact,
+                    wall_flux, expansion, rho_over_dt, rhs):
+    """Right-hand side of eq. (13) for every unknown node.
+
+    rhs_i = -(rho/dt) sum_e C_e[a_i, b, k] v*_{b,k}                (divergence, eq. 15)
+            + (rho/dt) int_{wetted walls in contact} N_i v*.n ds   (if wall_flux)
+            + (rho/dt) expansion * max(vol_i - V_i, 0)
+    ``contact[i, k]`` marks wall nodes whose wall normal to axis k holds the material.
+    ``vol_i`` = sum_p N_i V_p is the material volume the particles give node i and
+    V_i = sum_e V_e[a_i] the node's volume in the system: the last term asks for
+    div v = expansion * (vol_i/V_i - 1) (1/s) where particles are packed tighter than the
+    material's volume allows, so they spread out again (density correction;
+    ``expansion`` = beta/dt).
+    """
+    nnx = ncx + 1
+    nny = ncy + 1
+    for i in range(nnx * nny):
+        r = node_row[i]
+        if r < 0:
+            continue
+        ix = i % nnx
+        iy = i // nnx
+        b = 0.0
+        vol = 0.0
+        for dcy in range(-1, 1):
+            cy = iy + dcy
+            if cy < 0 or cy >= ncy:
+                continue
+            for dcx in range(-1, 1):
+                cx = ix + dcx
+                if cx < 0 or cx >= ncx:
+                    continue
+                s = cell_slot[cx + ncx * cy]
+                if s < 0:
+                    continue
+                a = -dcx + 2 * (-dcy)
+                vol += V[s, a]
+                base = cx + nnx * cy
+                for bb in range(4):
+                    j = base + (bb & 1) + nnx * (bb >> 1)
+                    b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
+        excess = node_vol[i] - vol
+        if expansion > 0.0 and excess > 0.0:
+            b += expansion * excess
+        if wall_flux:
+            b += _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact)
+        rhs[r] = rho_over_dt * b
+
+
+@njit(cache=True)
+def _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact):
+    """sum over wetted wall edges through node i of int N_i (v*.n) ds, nodes in contact only.
+
+    Along an edge v*.n is interpolated linearly from its two nodes (1D mass matrix h/6 [2 1; 1 2]);
+    a node whose wall released the material contributes zero (natural condition).
+    """
+    nnx = ncx + 1
+    total = 0.0
+    for k in range(2):
+        pos = ix if k == 0 else iy
+        top = ncx if k == 0 else ncy
+        for side in range(2):
+            if (side == 0 and pos != 0) or (side == 1 and pos != top):
+                continue
+            sign = -1.0 if side == 0 else 1.0
+            i = ix + nnx * iy
+            vi = sign * vstar[i, k] if contact[i, k] else 0.0
+            for e in range(2):
+                # neighbours along the wall: the other axis, one node down or up
+                if k == 0:
+                    jx, jy = ix, iy - 1 + 2 * e
+                    cx, cy = (0 if side == 0 else ncx - 1), iy - 1 + e
+                    if jy < 0 or jy > ncy:
+                        continue
+                else:
+                    jx, jy = ix - 1 + 2 * e, iy
+                    cx, cy = ix - 1 + e, (0 if side == 0 else ncy - 1)
+                    if jx < 0 or jx > ncx:
+                        continue
+                if cell_slot[cx + ncx * cy] < 0:
+                    continue
+                j = jx + nnx * jy
+                vj = sign * vstar[j, k] if contact[j, k] else 0.0
+                total += h * (vi / 3.0 + vj / 6.0)
+    return total
+
+
+@njit(cache=True)
+def ghost_pressures_2d(ncx, ncy, cell_slot, K, node_row, node_f, theta_min, p_node):
+    """Pressure at nodes of the system that are not unknowns (in place, p_node of unknowns set).
+
+    Each such node takes the coupling-weighted mean of the extrapolations from its unknown
+    neighbours, the same extrapolations the assembly used; 0 where it has none.
+    """
+    nnx = ncx + 1
+    nny = ncy + 1
+    S = np.empty((3, 3))
+    for i in range(nnx * nny):
+        if node_row[i] >= 0:
+            continue
+        ix = i % nnx
+        iy = i // nnx
+        _stencil(ix, iy, ncx, ncy, cell_slot, K, S)
+        num = 0.0
+        den = 0.0
+        for dy in range(3):
+            for dx in range(3):
+                sv = S[dy, dx]
+                if (dy == 1 and dx == 1) or sv >= 0.0:
+                    continue
+                j = (ix + dx - 1) + nnx * (iy + dy - 1)
+                if node_row[j] < 0:
+                    continue
+                num -= sv * _ghost_factor(node_f[j], node_f[i], theta_min) * p_node[j]
+                den -= sv
+        p_node[i] = num / den if den > 0.0 else 0.0
+
+
+@njit(cache=True)
+def correct_velocity_2d(ncx, ncy, cell_slot, C, V, p_node, vstar, dt_over_rho, v_new):
+    """Eq. (16) with the row-sum lumped volume matrix: v_i = v*_i - dt/rho (G p)_i / V_i.
+
+    Nodes outside every cell of the system keep v* (they carry splashes only).
+    """
+    nnx = ncx + 1
+    nny = ncy + 1
+    for i in range(nnx * nny):
+        ix = i % nnx
+        iy = i // nnx
+        vol = 0.0
+        g0 = 0.0
+        g1 = 0.0
+        for dcy in range(-1, 1):
+            cy = iy + dcy
+            if cy < 0 or cy >= ncy:
+                continue
+            for dcx in range(-1, 1):
+                cx = ix + dcx
+                if cx < 0 or cx >= ncx:
+                    continue
+                s = cell_slot[cx + ncx * cy]
+                if s < 0:
+                    continue
+                a = -dcx + 2 * (-dcy)
+                vol += V[s, a]
+                base = cx + nnx * cy
+                for b in range(4):
+                    pj = p_node[base + (b & 1) + nnx * (b >> 1)]
+                    g0 += C[s, a, b, 0] * pj
+                    g1 += C[s, a, b, 1] * pj
+        if vol > 0.0:
+            v_new[i, 0] = vstar[i, 0] - dt_over_rho * g0 / vol
+            v_new[i, 1] = vstar[i, 1] - dt_over_rho * g1 / vol
+        else:
+            v_new[i, 0] = vstar[i, 0]
+            v_new[i, 1] = vstar[i, 1]

@@ -1,0 +1,41 @@
+"""Particle snapshots as VTU files (meshio) indexed by a ParaView time series (particles.pvd)."""
+
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import meshio
+import numpy as np
+
+from .atomic import atomic_path, write_text
+
+
+class SnapshotWriter:
+    def __init__(self, folder, stem="particles"):
+        self.folder = Path(folder)
+        self.stem = stem
+        self.entries = []  # (time, file name)
+
+    def write(self, time, particles):
+        name = f"{self.stem}_{len(self.entries):06d}.vtu"
+        n, dim = particles.x.shape
+        points = np.zeros((n, 3))
+        points[:, :dim] = particles.x
+        velocity = np.zeros((n, 3))
+        velocity[:, :dim] = particles.v
+        mesh = meshio.Mesh(
+            points,
+            [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))],
+            point_data={"velocity": velocity, "pressure": particles.pressure.copy(),
+                        "mass": particles.mass.copy()},
+        )
+        with atomic_path(self.folder / name) as tmp:
+            meshio.write(tmp, mesh, file_format="vtu")
+        self.entries.append((time, name))
+        datasets = "\n".join(
+            f'    <DataSet timestep="{t:.9g}" part="0" file={quoteattr(f)}/>'
+            for t, f in self.entries)
+        write_text(self.folder / f"{self.stem}.pvd",
+                   '<?xml version="1.0"?>\n'
+                   '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                   "  <Collection>\n" + datasets + "\n  </Collection>\n</VTKFile>\n")
+        return name

@@ -1,0 +1,17 @@
+"""Time-integration schemes, registered by the name used in ``solver.scheme``."""
+
+SCHEMES = {}
+
+
+def register(name):
+    def deco(cls):
+        cls.name = name
+        SCHEMES[name] = cls
+        return cls
+    return deco
+
+
+def make_scheme(case, grid, particles):
+    from . import projection  # noqa: F401  (registers itself)
+
+    return SCHEMES[case.solver.scheme](case, grid, particles)

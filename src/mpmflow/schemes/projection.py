@@ -1,0 +1,83 @@
+"""Chorin's projection in MPM (Kularathna & Soga 2017; METHOD.md, one time step)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import transfers
+from ..boundaries import apply_walls, wall_contact
+from ..cells import bin_particles
+from ..free_surface import FreeSurface
+from ..pressure import PressureProjection
+from ..quadrature import Quadrature
+from . import register
+
+
+@dataclass
+class StepReport:
+    dt: float
+    unknowns: int
+    solves: int
+    iterations: int
+    residual: float
+    released: int
+    moved_inside: int
+
+
+@register("projection")
+class ProjectionScheme:
+    def __init__(self, case, grid, particles):
+        s = case.solver
+        self.grid = grid
+        self.particles = particles
+        self.gravity = np.asarray(case.physics.gravity, dtype=float)
+        self.walls = case.domain.walls
+        self.flip = s.flip
+        self.wall_flux = s.wall_flux
+        self.quadrature = Quadrature(grid, s.full_cell_threshold, s.sparse_cell_threshold,
+                                     s.partial_cell_quadrature)
+        self.surface = FreeSurface(grid, s.free_surface)
+        self.projection = PressureProjection(grid, case.material.density, case.domain.walls,
+                                             s.wall_flux, s.ghost_theta_min,
+                                             s.density_correction, s.linear_solver,
+                                             s.tolerance, s.max_iterations)
+        self.wall_nodes = wall_contact(grid)
+        self.contact = self.wall_nodes.copy()
+        n, d = grid.nnodes, grid.dim
+        self.node_mass = np.zeros(n)
+        self.node_mom = np.zeros((n, d))
+        self.node_vol = np.zeros(n)
+        self.v_old = np.zeros((n, d))
+        self.v_star = np.zeros((n, d))
+        self.v_new = np.zeros((n, d))
+        self.bins = None
+
+    @property
+    def node_pressure(self):
+        return self.projection.p_node
+
+    def step(self, dt, where=""):
+        g, P = self.grid, self.particles
+        # 1. particle-to-grid
+        self.bins = bin_particles(g, P, self.bins)
+        transfers.particles_to_grid(g, P, self.node_mass, self.node_mom, self.v_old,
+                                    self.node_vol)
+        # 2. predictor with gravity (eqs. 10-12); wall conditions are applied in step 5
+        has_mass = self.node_mass > 0.0
+        np.copyto(self.v_star, self.v_old)
+        self.v_star[has_mass] += dt * self.gravity
+        # 3. cell classification and quadrature (eqs. 8, 9)
+        integrals = self.quadrature.integrals(P, self.bins)
+        # 4. free surface
+        nodes = self.surface.classify(integrals, self.bins.theta)
+        # 5-6. pressure Poisson equation with contact walls, and corrector (eqs. 13-18)
+        np.copyto(self.contact, self.wall_nodes)
+        stats = self.projection.project(integrals, nodes, self.node_vol, self.v_star,
+                                        self.contact, dt, self.v_new, where)
+        apply_walls(g, self.v_new, self.contact, self.walls)
+        # 7. grid-to-particle (eqs. 19-21) and pressure to particles
+        transfers.grid_to_particles(g, P, self.v_old, self.v_new, self.projection.p_node, dt,
+                                    self.flip)
+        moved = transfers.keep_inside(g, P)
+        return StepReport(dt, stats.unknowns, stats.solves, stats.iterations, stats.residual,
+                          stats.released, moved)

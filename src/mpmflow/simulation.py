@@ -1,0 +1,205 @@
+"""A run: the time loop, its output schedule, and the run's bookkeeping.
+
+``Simulation(case, out_dir).run()`` steps the scheme from t = 0 to ``time.end``; steps are
+shortened where needed to land exactly on output times. Outputs go to ``out_dir`` (see
+``mpmflow.output``); ``summary.json`` is written at the end, also when the run fails.
+"""
+
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .case import resolved
+from .cells import bin_particles
+from .diagnostics import front_and_height, kinetic_energy, potential_energy
+from .errors import SimulationError
+from .output.snapshots import SnapshotWriter
+from .output.summary import write_summary
+from .output.timeseries import COLUMNS, TimeSeriesWriter
+from .schemes import make_scheme
+from .setup_case import build_grid, build_particles
+
+
+@dataclass
+class Counters:
+    moved_inside: int = 0
+    solves: int = 0
+    iterations: int = 0
+    iterations_since_output: int = 0
+    max_iterations: int = 0
+    max_unknowns: int = 0
+    released: int = 0
+    worst_residual: float = 0.0
+
+
+@dataclass
+class Outputs:
+    timeseries: TimeSeriesWriter | None = None
+    snapshots: SnapshotWriter | None = None
+    written: list = field(default_factory=list)
+
+
+class Simulation:
+    def __init__(self, case, out_dir=None, progress=None):
+        self.case = case
+        self.grid = build_grid(case)
+        self.particles = build_particles(case, self.grid)
+        if self.particles.count == 0:
+            from .errors import CaseError
+
+            raise CaseError("The bodies hold no particles: every box is thinner than one particle "
+                            "spacing (grid.spacing / bodies.N.particles_per_cell). Enlarge the "
+                            "boxes or raise particles_per_cell.")
+        self.scheme = make_scheme(case, self.grid, self.particles)
+        self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.progress = progress
+        self.time = 0.0
+        self.steps = 0
+        self.counters = Counters()
+        self.notices = []
+        if self.grid.adjusted(case.domain.size):
+            used = " x ".join(f"{s:.6g}" for s in self.grid.size)
+            asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
+            self.notices.append(
+                f"domain {asked} m is not a whole number of {case.grid.spacing:g} m cells; the "
+                f"walls are placed on the grid at {used} m")
+        self.mass0 = float(self.particles.mass.sum())
+        self.volume0 = float(self.particles.volume.sum())
+        self.count0 = self.particles.count
+        self._outputs = Outputs()
+        self._wall0 = None
+
+    # ------------------------------------------------------------------ outputs
+    def _open_outputs(self):
+        if self.out_dir is None:
+            return
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        self._outputs.timeseries = TimeSeriesWriter(self.out_dir / "timeseries.csv")
+        if self.case.output.snapshots:
+            self._outputs.snapshots = SnapshotWriter(self.out_dir)
+
+    def measure(self):
+        """The diagnostics of one timeseries row at the current state."""
+        P, g = self.particles, self.grid
+        bins = bin_particles(g, P)
+        front, height = front_and_height(g, bins.theta)
+        speed = np.sqrt(np.sum(P.v**2, axis=1))
+        return {
+            "time": self.time,
+            "front": front,
+            "height": height,
+            "step": self.steps,
+            "kinetic_energy": kinetic_energy(P),
+            "potential_energy": potential_energy(P, self.case.physics.gravity),
+            "max_speed": float(speed.max()),
+            "max_pressure": float(P.pressure.max()),
+            "volume_ratio": float(np.minimum(bins.theta, 1.0).sum() * g.cell_volume
+                                  / self.volume0),
+            "max_particles_per_cell": int(np.diff(bins.start).max()),
+            "pressure_unknowns": int(self.counters.max_unknowns),
+            "solver_iterations": int(self.counters.iterations_since_output),
+        }
+
+    def _output(self, snapshot):
+        row = self.measure()
+        self.counters.iterations_since_output = 0
+        if self._outputs.timeseries is not None:
+            self._outputs.timeseries.append(row)
+        if snapshot and self._outputs.snapshots is not None:
+            self._outputs.snapshots.write(self.time, self.particles)
+        return row
+
+    # ------------------------------------------------------------------ time loop
+    def run(self):
+        """Run to ``time.end``; returns the summary dict (also written to summary.json)."""
+        case = self.case
+        dt, end = case.time.dt, case.time.end
+        interval = case.output.interval
+        snap_interval = case.output.snapshot_interval or interval
+        self._wall0 = _time.perf_counter()
+        self._open_outputs()
+        status, message = "completed", ""
+        try:
+            self._output(snapshot=True)
+            k_out, k_snap = 1, 1
+            while self.time < end:
+                t_next = min(k_out * interval, end)
+                remaining = t_next - self.time
+                landing = remaining <= dt * (1.0 + 1e-6)
+                step_dt = remaining if landing else dt
+                self._step(step_dt)
+                if landing:
+                    self.time = t_next
+                    k_out += 1
+                    snap = self.time >= k_snap * snap_interval - 1e-9 * dt or self.time >= end
+                    if snap:
+                        k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
+                    self._output(snapshot=snap)
+                if self.progress is not None:
+                    self.progress(self.time, self.steps, end)
+        except SimulationError as err:
+            status, message = "failed", str(err)
+            raise
+        except KeyboardInterrupt:
+            status, message = "interrupted", "interrupted by the user"
+            raise
+        finally:
+            self.summary = self._summary(status, message)
+            if self.out_dir is not None:
+                write_summary(self.out_dir / "summary.json", self.summary)
+        return self.summary
+
+    def _step(self, dt):
+        where = f" at step {self.steps + 1} (t = {self.time + dt:.6g} s)"
+        report = self.scheme.step(dt, where=where)
+        self.steps += 1
+        self.time += dt
+        c = self.counters
+        c.moved_inside += report.moved_inside
+        c.solves += report.solves
+        c.iterations += report.iterations
+        c.iterations_since_output += report.iterations
+        c.max_iterations = max(c.max_iterations, report.iterations)
+        c.max_unknowns = max(c.max_unknowns, report.unknowns)
+        c.released += report.released
+        c.worst_residual = max(c.worst_residual, report.residual)
+        P = self.particles
+        if not (np.isfinite(P.v).all() and np.isfinite(P.x).all()):
+            bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
+            raise SimulationError(
+                f"The run blew up{where}: {bad.size} particles have non-finite velocity or "
+                f"position (first: particle {bad[0]}). Try a smaller time.dt.")
+
+    def _summary(self, status, message):
+        P, c = self.particles, self.counters
+        wall = _time.perf_counter() - self._wall0 if self._wall0 else 0.0
+        bins = bin_particles(self.grid, P)
+        mass = float(P.mass.sum())
+        return {
+            "status": status,
+            "message": message,
+            "mpmflow_version": __version__,
+            "time": self.time,
+            "steps": self.steps,
+            "particles": P.count,
+            "particles_lost": self.count0 - P.count,
+            "particles_moved_inside": c.moved_inside,
+            "mass_initial": self.mass0,
+            "mass_final": mass,
+            "mass_relative_change": (mass - self.mass0) / self.mass0,
+            "max_particles_per_cell": int(np.diff(bins.start).max()),
+            "wall_seconds": wall,
+            "grid": {"spacing": self.grid.spacing, "cells": list(self.grid.cells),
+                     "domain_used": [float(s) for s in self.grid.size]},
+            "pressure_solver": {"solves": c.solves, "iterations": c.iterations,
+                                "max_iterations_per_step": c.max_iterations,
+                                "max_unknowns": c.max_unknowns,
+                                "worst_relative_residual": c.worst_residual,
+                                "wall_nodes_released": c.released},
+            "notices": self.notices,
+            "units": dict(COLUMNS, mass="kg/m", wall_seconds="s", domain_used="m", spacing="m"),
+            "case": resolved(self.case),
+        }
