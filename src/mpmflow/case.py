@@ -95,12 +95,30 @@ class Output(_Section):
                             "particles.pvd time series for ParaView).")
 
 
+# The formulation presets: defaults of the five settings that separate mpmflow's projection
+# from the plain reading of the paper (measured against each other in docs/variants.md).
+FORMULATIONS = {
+    "mpmflow": {"free_surface": "subcell", "wall_flux": True, "partial_cell_quadrature": "gauss",
+                "density_correction": 0.2, "flip": 0.99},
+    "paper": {"free_surface": "node", "wall_flux": False, "partial_cell_quadrature": "particles",
+              "density_correction": 0.0, "flip": 1.0},
+}
+
+
 class Solver(_Section):
     scheme: Literal["projection"] = Field(
         "projection", description="Time integration scheme: \"projection\" is the implicit "
         "Chorin projection of Kularathna & Soga (2017).")
-    flip: float = Field(1.0, ge=0, le=1, description="FLIP fraction of the particle velocity "
-                        "update: 1 = pure FLIP (the paper), 0 = pure PIC; values between blend.")
+    formulation: Literal["mpmflow", "paper"] = Field(
+        "mpmflow", description="Preset for free_surface, wall_flux, partial_cell_quadrature, "
+        "density_correction and flip: \"paper\" is the plain reading of Kularathna & Soga "
+        "(2017) (p = 0 at free-surface nodes, homogeneous Neumann walls, material-point "
+        "quadrature in partial cells, pure FLIP); \"mpmflow\" is the default, which keeps a "
+        "column at rest exactly at rest. Keys set explicitly override the preset.")
+    flip: float = Field(None, ge=0, le=1, description="FLIP fraction of the particle velocity "
+                        "update: 1 = pure FLIP (the paper), 0 = pure PIC; values between blend. "
+                        "The default keeps 1% PIC, which stops the thin surge tip from running "
+                        "ahead on FLIP noise.")
     full_cell_threshold: float = Field(
         0.9, gt=0, le=1, description="Cells with volume fraction theta at or above this are full "
         "and integrated with 2x2 Gauss points (paper: 0.9).")
@@ -108,15 +126,15 @@ class Solver(_Section):
         0.2, ge=0, lt=1, description="Cells with theta below this are left out of the pressure "
         "system (paper: 0.2).")
     partial_cell_quadrature: Literal["gauss", "particles"] = Field(
-        "gauss", description="Quadrature of partial cells (sparse <= theta < full): "
+        None, description="Quadrature of partial cells (sparse <= theta < full): "
         "\"particles\" integrates with the material points (the paper); \"gauss\" with Gauss "
         "points over the whole cell, consistent with free_surface = \"subcell\".")
     free_surface: Literal["subcell", "node"] = Field(
-        "subcell", description="Free-surface condition: \"node\" sets p = 0 at nodes bordering "
+        None, description="Free-surface condition: \"node\" sets p = 0 at nodes bordering "
         "left-out cells (the paper); \"subcell\" places p = 0 at the f = 1/2 level of the nodal "
         "volume fraction with ghost-fluid extrapolation.")
     wall_flux: bool = Field(
-        True, description="Use the wall term of the weak form (grad p . n = rho/dt v*.n on "
+        None, description="Use the wall term of the weak form (grad p . n = rho/dt v*.n on "
         "wetted walls) with the divergence of the unconstrained v*. false = the paper's "
         "homogeneous Neumann condition with the wall-constrained v*.")
     ghost_theta_min: float = Field(
@@ -124,15 +142,26 @@ class Solver(_Section):
         "free surface used in the ghost extrapolation (subcell only); keeps the system well "
         "conditioned when the surface passes very close to a node.")
     density_correction: float = Field(
-        0.0, ge=0, le=1, description="Density correction beta (dimensionless): the projection "
+        None, ge=0, le=1, description="Density correction beta (dimensionless): the projection "
         "asks for div v = beta (theta - 1)/dt in over-full cells (theta > 1), so particles "
         "packed by the approximate projection spread out again. 0 = off (the paper).")
-    linear_solver: Literal["amg", "direct"] = Field(
-        "amg", description="Pressure solver: \"amg\" = conjugate gradients with smoothed "
-        "aggregation AMG (pyamg); \"direct\" = sparse LU (SciPy).")
+    linear_solver: Literal["multigrid", "amg", "direct"] = Field(
+        "multigrid", description="Pressure solver: \"multigrid\" = conjugate gradients "
+        "preconditioned by geometric multigrid on the grid (compiled); \"amg\" = conjugate "
+        "gradients with smoothed-aggregation algebraic multigrid (pyamg); \"direct\" = sparse "
+        "LU (SciPy).")
     tolerance: float = Field(1e-8, gt=0, lt=1, description="Relative residual the pressure "
                              "solve must reach every step; the run stops if it does not.")
     max_iterations: int = Field(200, ge=1, description="Iteration limit of the pressure solve.")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _preset(cls, data):
+        if isinstance(data, dict):
+            preset = FORMULATIONS.get(data.get("formulation", "mpmflow"))
+            if preset is not None:
+                data = {**preset, **data}
+        return data
 
     @model_validator(mode="after")
     def _thresholds(self):
@@ -228,8 +257,10 @@ def key_reference():
                 walk(sub, f"{prefix}{name}.N." if is_list else f"{prefix}{name}.")
                 continue
             required = field.is_required()
-            rows.append({"key": f"{prefix}{name}", "required": required,
-                         "default": None if required else field.get_default(),
+            default = None if required else field.get_default()
+            if model is Solver and name in FORMULATIONS["mpmflow"]:
+                default = FORMULATIONS["mpmflow"][name]
+            rows.append({"key": f"{prefix}{name}", "required": required, "default": default,
                          "example": (field.examples or [None])[0],
                          "description": field.description or ""})
 

@@ -9,6 +9,8 @@ position if the last cell is at least half full); ``front`` is the largest over 
 
 import numpy as np
 
+from .kernels import transfer2d
+
 
 def last_crossing(f, centres, wall):
     """Position where the profile f (one value per cell) last drops below 1/2; nan if never above."""
@@ -45,3 +47,12 @@ def kinetic_energy(particles):
 
 def potential_energy(particles, gravity):
     return float(-np.sum(particles.mass * (particles.x @ np.asarray(gravity))))
+
+
+def pressure_noise(grid, particles):
+    """RMS difference between particle pressure and its grid-smoothed value (Pa)."""
+    m = np.empty(grid.nnodes)
+    mp = np.empty(grid.nnodes)
+    nx, ny = grid.cells
+    return float(transfer2d.pressure_noise_2d(particles.x, particles.mass, particles.pressure,
+                                              grid.spacing, nx, ny, m, mp))

@@ -7,7 +7,9 @@
            all of whose cells are in the system; the others are ghost nodes whose pressure
            extrapolates linearly to p = 0 at the surface (see ``kernels.pressure2d``).
            For a flat surface at any height this places p = 0 exactly at the surface, not
-           at the nearest node row.
+           at the nearest node row. A cell all of whose nodes lie inside the fluid stays in
+           the system even when few particles are left in it: a gap that opens between
+           particle lines inside the water is not a free surface (see ``quadrature``).
 """
 
 from dataclasses import dataclass
@@ -37,8 +39,23 @@ class FreeSurface:
         self._f = np.empty(grid.nnodes)
         self._row = np.empty(grid.nnodes, dtype=np.int64)
 
-    def classify(self, integrals, theta):
+    def nodal_fraction(self, theta):
+        """The nodal volume fraction f from the cell fractions theta."""
         nx, ny = self.grid.cells
-        nrows = pressure2d.classify_nodes_2d(nx, ny, integrals.slot, theta, self.subcell,
-                                            self._f, self._row)
-        return NodeSets(self._f, self._row, int(nrows), self.subcell)
+        pressure2d.nodal_fraction_2d(nx, ny, theta, self._f)
+        return self._f
+
+    def enclosed_cells(self, node_f):
+        """Cells inside the fluid by the nodal fraction (all nodes f > 1/2); None for ``node``."""
+        if not self.subcell:
+            return None
+        nx, ny = self.grid.cells
+        enclosed = np.empty(self.grid.ncells, dtype=np.bool_)
+        pressure2d.enclosed_cells_2d(nx, ny, node_f, enclosed)
+        return enclosed
+
+    def classify(self, integrals, node_f):
+        nx, ny = self.grid.cells
+        nrows = pressure2d.classify_nodes_2d(nx, ny, integrals.slot, node_f, self.subcell,
+                                            self._row)
+        return NodeSets(node_f, self._row, int(nrows), self.subcell)

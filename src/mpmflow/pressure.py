@@ -5,12 +5,11 @@ the grid velocity (eq. 16)."""
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .boundaries import apply_walls, outward_normal_velocity
 from .errors import SolverError
 from .kernels import pressure2d
-from .linsolve import LinearSolver
+from .linsolve import LinearSolver, PressureMatrix
 
 
 @dataclass
@@ -42,26 +41,25 @@ class PressureProjection:
     def _matrix(self, integrals, nodes, where):
         nx, ny = self.grid.cells
         n = nodes.nrows
-        indptr = np.empty(n + 1, dtype=np.int64)
-        indices = np.empty(9 * n, dtype=np.int64)
-        data = np.empty(9 * n)
+        cols = np.empty((n, 9), dtype=np.int64)
+        vals = np.empty((n, 9))
         anchored = np.empty(n, dtype=np.bool_)
-        nnz = pressure2d.assemble_matrix_2d(nx, ny, integrals.slot, integrals.K, nodes.row, n,
-                                            nodes.f, nodes.subcell, self.theta_min, indptr,
-                                            indices, data, anchored)
+        pressure2d.assemble_matrix_2d(nx, ny, integrals.slot, integrals.K, nodes.row, nodes.f,
+                                      nodes.subcell, self.theta_min, cols, vals, anchored)
         if not anchored.any():
             raise SolverError(
                 f"The pressure system is singular{where}: the material touches no free surface "
                 "(it fills a closed container), so the pressure is defined only up to a "
                 "constant. mpmflow needs a free surface; leave some empty space in the domain.")
-        return sp.csr_matrix((data[:nnz], indices[:nnz], indptr), shape=(n, n))
+        return PressureMatrix(cols, vals, nodes.row_nodes(), self.grid.nodes)
 
     def project(self, integrals, nodes, node_vol, vstar, contact, dt, v_new, where=""):
         """Solve for p^{t+1} (kept in ``p_node``) and write v^{t+1} into ``v_new``.
 
-        ``contact`` (modified) starts with all wall nodes holding the material; a wall node
-        whose pressure comes out negative while v* leaves the wall is released and the
-        pressure is solved again (the matrix and its preconditioner are kept).
+        ``contact`` (modified) starts with all wall nodes that carry a pressure unknown, and
+        the others where v* presses into the wall, holding the material; a wall node whose
+        pressure comes out negative while v* leaves the wall is released and the pressure is
+        solved again (the matrix and its preconditioner are kept).
         """
         g = self.grid
         nx, ny = g.cells
@@ -70,11 +68,15 @@ class PressureProjection:
         stats = PressureStats(unknowns=n)
         p_node = np.zeros(g.nnodes)
         if n:
-            A = self._matrix(integrals, nodes, where)
-            self.solver.prepare(A)
-            rows = nodes.row_nodes()
+            matrix = self._matrix(integrals, nodes, where)
+            self.solver.prepare(matrix)
+            rows = matrix.nodes
             x0 = self.p_node[rows]
             vn = outward_normal_velocity(g, vstar)
+            unknown = (nodes.row >= 0)[:, None]
+            # wall nodes without a pressure of their own (at the free surface, p ~ 0) hold
+            # the material only while it presses into the wall
+            contact &= unknown | (vn > 0.0)
             rhs = np.empty(n)
             while True:
                 v_c = vstar
@@ -91,10 +93,10 @@ class PressureProjection:
                 stats.iterations += result.iterations
                 stats.residual = max(stats.residual, result.residual)
                 if not result.converged:
-                    self._fail(A, rhs, result, rows, where)
+                    self._fail(rhs, result, rows, where)
                 x0 = result.x
                 p_node[rows] = result.x
-                release = contact & (vn < 0.0) & (p_node[:, None] < 0.0) & (nodes.row >= 0)[:, None]
+                release = contact & unknown & (vn < 0.0) & (p_node[:, None] < 0.0)
                 if not release.any():
                     break
                 contact &= ~release
@@ -107,8 +109,8 @@ class PressureProjection:
                                        vstar, dt / rho, v_new)
         return stats
 
-    def _fail(self, A, rhs, result, rows, where):
-        worst = int(np.argmax(np.abs(rhs - A @ result.x)))
+    def _fail(self, rhs, result, rows, where):
+        worst = int(np.argmax(np.abs(self.solver.residual_vector(rhs, result.x))))
         xy = self.grid.node_coordinates()[rows[worst]]
         raise SolverError(
             f"The pressure solve did not converge{where}: relative residual "

@@ -6,7 +6,9 @@ Cells are classified by their volume fraction theta:
   material points (``partial="particles"``, the paper) or, like a full cell, with Gauss
   points (``partial="gauss"``: the free surface is then placed inside the cell by the
   sub-cell free-surface treatment, see ``free_surface``);
-* theta < sparse threshold: left out of the pressure system.
+* theta < sparse threshold: left out of the pressure system, unless the free-surface
+  treatment says the cell lies inside the fluid (``enclosed``): then it is a gap between
+  particle lines in continuous material, integrated like a full cell.
 The element integrals of every cell in the system are returned as stacked arrays; slot 0
 holds the Gauss-point integrals shared by all Gauss cells.
 """
@@ -52,13 +54,16 @@ class Quadrature:
         quadrature2d.gauss_cell_tensors_2d(grid.spacing, self._K_ref, self._C_ref, self._V_ref)
         self._slot = np.empty(grid.ncells, dtype=np.int64)
 
-    def integrals(self, particles, bins):
+    def integrals(self, particles, bins, enclosed=None):
         theta = bins.theta
         slot = self._slot
         slot[:] = LEFT_OUT
-        slot[theta >= self.sparse_threshold] = GAUSS
+        counted = theta >= self.sparse_threshold
+        slot[counted] = GAUSS
+        if enclosed is not None:
+            slot[enclosed] = GAUSS
         if self.partial == "particles":
-            partial = np.flatnonzero((theta >= self.sparse_threshold) & (theta < self.full_threshold))
+            partial = np.flatnonzero(counted & (theta < self.full_threshold))
         else:
             partial = np.empty(0, dtype=np.int64)
         n = partial.size + 1

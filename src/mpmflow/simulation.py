@@ -6,7 +6,7 @@ shortened where needed to land exactly on output times. Outputs go to ``out_dir`
 """
 
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +14,7 @@ import numpy as np
 from . import __version__
 from .case import resolved
 from .cells import bin_particles
-from .diagnostics import front_and_height, kinetic_energy, potential_energy
+from .diagnostics import front_and_height, kinetic_energy, potential_energy, pressure_noise
 from .errors import SimulationError
 from .output.snapshots import SnapshotWriter
 from .output.summary import write_summary
@@ -39,7 +39,6 @@ class Counters:
 class Outputs:
     timeseries: TimeSeriesWriter | None = None
     snapshots: SnapshotWriter | None = None
-    written: list = field(default_factory=list)
 
 
 class Simulation:
@@ -71,6 +70,7 @@ class Simulation:
         self.count0 = self.particles.count
         self._outputs = Outputs()
         self._wall0 = None
+        self.rows = []  # the timeseries rows, also kept in memory
 
     # ------------------------------------------------------------------ outputs
     def _open_outputs(self):
@@ -96,21 +96,27 @@ class Simulation:
             "potential_energy": potential_energy(P, self.case.physics.gravity),
             "max_speed": float(speed.max()),
             "max_pressure": float(P.pressure.max()),
+            "pressure_noise": pressure_noise(g, P),
             "volume_ratio": float(np.minimum(bins.theta, 1.0).sum() * g.cell_volume
                                   / self.volume0),
             "max_particles_per_cell": int(np.diff(bins.start).max()),
-            "pressure_unknowns": int(self.counters.max_unknowns),
+            "pressure_unknowns": int(self.scheme.last_unknowns),
             "solver_iterations": int(self.counters.iterations_since_output),
         }
 
     def _output(self, snapshot):
         row = self.measure()
+        self.rows.append(row)
         self.counters.iterations_since_output = 0
         if self._outputs.timeseries is not None:
             self._outputs.timeseries.append(row)
         if snapshot and self._outputs.snapshots is not None:
             self._outputs.snapshots.write(self.time, self.particles)
         return row
+
+    def series(self, name):
+        """One timeseries column as an array (see ``output.timeseries.COLUMNS``)."""
+        return np.array([row[name] for row in self.rows], dtype=float)
 
     # ------------------------------------------------------------------ time loop
     def run(self):

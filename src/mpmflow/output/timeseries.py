@@ -14,6 +14,7 @@ COLUMNS = {
     "potential_energy": "J/m",
     "max_speed": "m/s",
     "max_pressure": "Pa",
+    "pressure_noise": "Pa",
     "volume_ratio": "-",
     "max_particles_per_cell": "-",
     "pressure_unknowns": "-",

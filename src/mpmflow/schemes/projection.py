@@ -51,6 +51,7 @@ class ProjectionScheme:
         self.v_star = np.zeros((n, d))
         self.v_new = np.zeros((n, d))
         self.bins = None
+        self.last_unknowns = 0
 
     @property
     def node_pressure(self):
@@ -67,9 +68,10 @@ class ProjectionScheme:
         np.copyto(self.v_star, self.v_old)
         self.v_star[has_mass] += dt * self.gravity
         # 3. cell classification and quadrature (eqs. 8, 9)
-        integrals = self.quadrature.integrals(P, self.bins)
+        node_f = self.surface.nodal_fraction(self.bins.theta)
+        integrals = self.quadrature.integrals(P, self.bins, self.surface.enclosed_cells(node_f))
         # 4. free surface
-        nodes = self.surface.classify(integrals, self.bins.theta)
+        nodes = self.surface.classify(integrals, node_f)
         # 5-6. pressure Poisson equation with contact walls, and corrector (eqs. 13-18)
         np.copyto(self.contact, self.wall_nodes)
         stats = self.projection.project(integrals, nodes, self.node_vol, self.v_star,
@@ -79,5 +81,6 @@ class ProjectionScheme:
         transfers.grid_to_particles(g, P, self.v_old, self.v_new, self.projection.p_node, dt,
                                     self.flip)
         moved = transfers.keep_inside(g, P)
+        self.last_unknowns = stats.unknowns
         return StepReport(dt, stats.unknowns, stats.solves, stats.iterations, stats.residual,
                           stats.released, moved)

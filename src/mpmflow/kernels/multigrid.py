@@ -1,0 +1,300 @@
+"""Geometric multigrid-preconditioned conjugate gradients on the node grid (2D).
+
+Matrices are in ELL form: row r has up to 9 entries ``cols[r, s], vals[r, s]`` (col -1 =
+empty), slot ``s = 3*(dy+1) + (dx+1)`` for the neighbour at node offset (dx, dy), so the
+structure of the grid is kept at every level. ``node[r]`` is the node of row r on its
+level's node grid (``nnx`` nodes per row of nodes).
+
+Levels: a coarse node is an unknown when the fine node it coincides with (2I, 2J) is one;
+prolongation is bilinear interpolation from the coarse unknowns (missing ones count as
+zero), so P has full column rank and the Galerkin operator P^T A P stays symmetric
+positive definite. Smoothing is Gauss-Seidel, forward before and backward after the coarse
+correction, which makes the V-cycle a symmetric preconditioner; the coarsest level is
+solved with a dense Cholesky factor. (McAdams, Sifakis & Teran 2010 use the same structure
+with rediscretised coarse operators.)
+"""
+
+import numpy as np
+from numba import njit
+
+COARSEST = 64  # unknowns at which the hierarchy stops and a dense factor takes over
+
+
+@njit(cache=True)
+def coarse_level(node, nnx, nny):
+    """Coarse unknowns of a level: returns (coarse node per coarse row, nnx_c, nny_c,
+    row of each coarse node or -1, P columns (n, 4) and weights (n, 4))."""
+    nnx_c = nnx // 2 + 1
+    nny_c = nny // 2 + 1
+    crow = -np.ones(nnx_c * nny_c, dtype=np.int64)
+    n = node.shape[0]
+    nc = 0
+    for r in range(n):
+        ix = node[r] % nnx
+        iy = node[r] // nnx
+        if ix % 2 == 0 and iy % 2 == 0:
+            crow[(ix // 2) + nnx_c * (iy // 2)] = 0
+    cnode = np.empty(nnx_c * nny_c, dtype=np.int64)
+    for i in range(nnx_c * nny_c):
+        if crow[i] == 0:
+            crow[i] = nc
+            cnode[nc] = i
+            nc += 1
+    pcols = -np.ones((n, 4), dtype=np.int64)
+    pw = np.zeros((n, 4))
+    for r in range(n):
+        ix = node[r] % nnx
+        iy = node[r] // nnx
+        k = 0
+        for ey in range(2):
+            if iy % 2 == 0 and ey == 1:
+                break
+            cy = iy // 2 + ey
+            wy = 1.0 if iy % 2 == 0 else 0.5
+            for ex in range(2):
+                if ix % 2 == 0 and ex == 1:
+                    break
+                cx = ix // 2 + ex
+                wx = 1.0 if ix % 2 == 0 else 0.5
+                if cx < nnx_c and cy < nny_c:
+                    c = crow[cx + nnx_c * cy]
+                    if c >= 0:
+                        pcols[r, k] = c
+                        pw[r, k] = wx * wy
+                        k += 1
+    return cnode[:nc].copy(), nnx_c, nny_c, crow, pcols, pw
+
+
+@njit(cache=True)
+def galerkin(cols, vals, pcols, pw, cnode, nnx_c):
+    """Coarse operator P^T A P in ELL form (9 slots per row)."""
+    nc = cnode.shape[0]
+    ccols = -np.ones((nc, 9), dtype=np.int64)
+    cvals = np.zeros((nc, 9))
+    n = cols.shape[0]
+    for r in range(n):
+        for a in range(4):
+            I = pcols[r, a]
+            if I < 0:
+                continue
+            wa = pw[r, a]
+            Ix = cnode[I] % nnx_c
+            Iy = cnode[I] // nnx_c
+            for s in range(9):
+                j = cols[r, s]
+                if j < 0:
+                    continue
+                v = wa * vals[r, s]
+                for b in range(4):
+                    J = pcols[j, b]
+                    if J < 0:
+                        continue
+                    dx = cnode[J] % nnx_c - Ix
+                    dy = cnode[J] // nnx_c - Iy
+                    slot = 3 * (dy + 1) + (dx + 1)
+                    ccols[I, slot] = J
+                    cvals[I, slot] += v * pw[j, b]
+    return ccols, cvals
+
+
+@njit(cache=True)
+def dense(cols, vals):
+    n = cols.shape[0]
+    A = np.zeros((n, n))
+    for r in range(n):
+        for s in range(9):
+            if cols[r, s] >= 0:
+                A[r, cols[r, s]] += vals[r, s]
+    return A
+
+
+@njit(cache=True)
+def matvec(cols, vals, x, y):
+    for r in range(cols.shape[0]):
+        acc = 0.0
+        for s in range(9):
+            c = cols[r, s]
+            if c >= 0:
+                acc += vals[r, s] * x[c]
+        y[r] = acc
+
+
+@njit(cache=True)
+def _gauss_seidel(cols, vals, b, x, forward):
+    n = cols.shape[0]
+    for k in range(n):
+        r = k if forward else n - 1 - k
+        acc = b[r]
+        diag = 0.0
+        for s in range(9):
+            c = cols[r, s]
+            if c < 0:
+                continue
+            if c == r:
+                diag = vals[r, s]
+            else:
+                acc -= vals[r, s] * x[c]
+        x[r] = acc / diag
+
+
+@njit(cache=True)
+def _restrict(pcols, pw, r_f, r_c):
+    r_c[:] = 0.0
+    for r in range(pcols.shape[0]):
+        for a in range(4):
+            c = pcols[r, a]
+            if c >= 0:
+                r_c[c] += pw[r, a] * r_f[r]
+
+
+@njit(cache=True)
+def _prolong_add(pcols, pw, e_c, x_f):
+    for r in range(pcols.shape[0]):
+        acc = 0.0
+        for a in range(4):
+            c = pcols[r, a]
+            if c >= 0:
+                acc += pw[r, a] * e_c[c]
+        x_f[r] += acc
+
+
+@njit(cache=True)
+def _cholesky_solve(L, b, x):
+    n = L.shape[0]
+    for i in range(n):
+        acc = b[i]
+        for k in range(i):
+            acc -= L[i, k] * x[k]
+        x[i] = acc / L[i, i]
+    for i in range(n - 1, -1, -1):
+        acc = x[i]
+        for k in range(i + 1, n):
+            acc -= L[k, i] * x[k]
+        x[i] = acc / L[i, i]
+
+
+@njit(cache=True)
+def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
+    """All levels, flattened: level l has rows off[l]:off[l+1] of Acols/Avals (column indices
+    local to the level) and, for l < nlev-1, the same rows of Pcols/Pw (columns local to
+    level l+1). Returns (off, Acols, Avals, Pcols, Pw, L) with L the Cholesky factor of the
+    coarsest operator."""
+    cols_l = [cols]
+    vals_l = [vals]
+    pc_l = [np.empty((0, 4), dtype=np.int64)]
+    pw_l = [np.empty((0, 4))]
+    pc_l.pop()
+    pw_l.pop()
+    while cols_l[-1].shape[0] > coarsest:
+        cnode, nnx_c, nny_c, crow, pcols, pw = coarse_level(node, nnx, nny)
+        if cnode.shape[0] == 0:
+            break
+        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, cnode, nnx_c)
+        pc_l.append(pcols)
+        pw_l.append(pw)
+        cols_l.append(ccols)
+        vals_l.append(cvals)
+        node = cnode
+        nnx = nnx_c
+        nny = nny_c
+    nlev = len(cols_l)
+    off = np.zeros(nlev + 1, dtype=np.int64)
+    for lv in range(nlev):
+        off[lv + 1] = off[lv] + cols_l[lv].shape[0]
+    Acols = np.empty((off[nlev], 9), dtype=np.int64)
+    Avals = np.empty((off[nlev], 9))
+    Pcols = -np.ones((off[nlev], 4), dtype=np.int64)
+    Pw = np.zeros((off[nlev], 4))
+    for lv in range(nlev):
+        Acols[off[lv]:off[lv + 1]] = cols_l[lv]
+        Avals[off[lv]:off[lv + 1]] = vals_l[lv]
+        if lv < nlev - 1:
+            Pcols[off[lv]:off[lv + 1]] = pc_l[lv]
+            Pw[off[lv]:off[lv + 1]] = pw_l[lv]
+    L = np.linalg.cholesky(dense(cols_l[-1], vals_l[-1]))
+    return off, Acols, Avals, Pcols, Pw, L
+
+
+@njit(cache=True)
+def vcycle(off, Acols, Avals, Pcols, Pw, L, b, x, r, sweeps):
+    """One V-cycle with zero initial guess: b[off[0]:off[1]] in, x[off[0]:off[1]] out.
+
+    b, x, r are work vectors over all levels (length off[-1])."""
+    nlev = off.shape[0] - 1
+    for lv in range(nlev - 1):
+        lo, hi = off[lv], off[lv + 1]
+        cols, vals = Acols[lo:hi], Avals[lo:hi]
+        bl, xl, rl = b[lo:hi], x[lo:hi], r[lo:hi]
+        xl[:] = 0.0
+        for _ in range(sweeps):
+            _gauss_seidel(cols, vals, bl, xl, True)
+        matvec(cols, vals, xl, rl)
+        for i in range(rl.shape[0]):
+            rl[i] = bl[i] - rl[i]
+        _restrict(Pcols[lo:hi], Pw[lo:hi], rl, b[hi:off[lv + 2]])
+    lo, hi = off[nlev - 1], off[nlev]
+    _cholesky_solve(L, b[lo:hi], x[lo:hi])
+    for lv in range(nlev - 2, -1, -1):
+        lo, hi = off[lv], off[lv + 1]
+        _prolong_add(Pcols[lo:hi], Pw[lo:hi], x[hi:off[lv + 2]], x[lo:hi])
+        for _ in range(sweeps):
+            _gauss_seidel(Acols[lo:hi], Avals[lo:hi], b[lo:hi], x[lo:hi], False)
+
+
+@njit(cache=True)
+def pcg(off, Acols, Avals, Pcols, Pw, L, rhs, x, tol, maxiter, sweeps):
+    """Multigrid-preconditioned CG from the initial guess in x (updated in place).
+
+    Stops when ||rhs - A x|| <= tol ||rhs||; returns (iterations, relative residual)."""
+    n = rhs.shape[0]
+    cols = Acols[:n]
+    vals = Avals[:n]
+    total = off[-1]
+    b = np.zeros(total)
+    z = np.zeros(total)
+    w = np.zeros(total)
+    bnorm = np.sqrt(np.dot(rhs, rhs))
+    if bnorm == 0.0:
+        x[:] = 0.0
+        return 0, 0.0
+    r = np.empty(n)
+    matvec(cols, vals, x, r)
+    for i in range(n):
+        r[i] = rhs[i] - r[i]
+    rnorm = np.sqrt(np.dot(r, r))
+    if rnorm > bnorm:
+        # a warm start worse than zero (the right-hand side changed a lot) would only cost
+        # accuracy: the residual would have to fall far below round-off of A x0
+        x[:] = 0.0
+        r[:] = rhs
+        rnorm = bnorm
+    if rnorm <= tol * bnorm:
+        return 0, rnorm / bnorm
+    b[:n] = r
+    vcycle(off, Acols, Avals, Pcols, Pw, L, b, z, w, sweeps)
+    p = z[:n].copy()
+    rz = np.dot(r, z[:n])
+    q = np.empty(n)
+    it = 0
+    while it < maxiter:
+        it += 1
+        matvec(cols, vals, p, q)
+        alpha = rz / np.dot(p, q)
+        for i in range(n):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+        rnorm = np.sqrt(np.dot(r, r))
+        if rnorm <= tol * bnorm:
+            break
+        b[:n] = r
+        vcycle(off, Acols, Avals, Pcols, Pw, L, b, z, w, sweeps)
+        rz_new = np.dot(r, z[:n])
+        beta = rz_new / rz
+        rz = rz_new
+        for i in range(n):
+            p[i] = z[i] + beta * p[i]
+    # the recursive residual can drift from the true one: report the true residual
+    matvec(cols, vals, x, q)
+    for i in range(n):
+        q[i] = rhs[i] - q[i]
+    return it, np.sqrt(np.dot(q, q)) / bnorm

@@ -1,0 +1,127 @@
+"""The command line: outputs of a run, bad input, solver failure (run as a user would)."""
+
+import csv
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+
+from conftest import EXAMPLES
+
+QUICK = ["--set", "time.end=0.05", "--set", "output.snapshot_interval=0.02"]
+
+
+def mpmflow(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "mpmflow.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run") / "out"
+    res = mpmflow("run", EXAMPLES / "dam_break.toml", "--out", out, "--set",
+                  "grid.spacing=0.008", *QUICK)
+    assert res.returncode == 0, res.stderr
+    return out, res
+
+
+def test_run_writes_timeseries_summary_and_snapshots(quick_run):
+    out, _ = quick_run
+    with open(out / "timeseries.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert {"time", "front", "height"} <= set(rows[0])
+    times = [float(r["time"]) for r in rows]
+    np.testing.assert_allclose(times, np.arange(0, 0.0501, 0.01), atol=1e-12)  # every interval
+    assert float(rows[0]["front"]) == pytest.approx(0.114, abs=0.008)
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("status", "steps", "particles", "wall_seconds", "case"):
+        assert key in summary
+    assert summary["status"] == "completed" and summary["steps"] == 50
+    assert summary["case"]["grid"]["spacing"] == 0.008  # the resolved case, overrides applied
+    assert summary["case"]["solver"]["scheme"] == "projection"
+    assert summary["notices"]  # 0.42 m is not a whole number of 0.008 m cells
+
+
+def test_snapshots_form_a_paraview_time_series(quick_run):
+    out, _ = quick_run
+    datasets = ET.parse(out / "particles.pvd").getroot().find("Collection").findall("DataSet")
+    times = [float(d.get("timestep")) for d in datasets]
+    np.testing.assert_allclose(times, [0.0, 0.02, 0.04, 0.05], atol=1e-12)
+    summary = json.loads((out / "summary.json").read_text())
+    for d in datasets:
+        mesh = meshio.read(out / d.get("file"))
+        assert mesh.points.shape == (summary["particles"], 3)
+        assert {"velocity", "pressure"} <= set(mesh.point_data)
+    assert not list(out.glob(".*.tmp"))  # atomic writes leave nothing behind
+
+
+def test_refuses_to_overwrite_a_previous_run(quick_run):
+    out, _ = quick_run
+    res = mpmflow("run", EXAMPLES / "dam_break.toml", "--out", out, *QUICK)
+    assert res.returncode == 2
+    assert "--overwrite" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_progress_and_help():
+    assert "mpmflow run" in mpmflow("--help").stdout or "run" in mpmflow("--help").stdout
+    text = mpmflow("run", "--help").stdout
+    for word in ("--out", "--set", "timeseries.csv", "summary.json", "particles.pvd"):
+        assert word in text
+    keys = mpmflow("keys").stdout
+    for key in ("grid.spacing", "time.dt", "time.end", "output.interval", "solver.scheme"):
+        assert key in keys
+
+
+BAD = [
+    (["--set", "grid.spaceing=0.01"], "grid.spaceing", "Did you mean `grid.spacing`"),
+    (["--set", "grid.spacing=-0.01"], "grid.spacing", "greater than 0"),
+    (["--set", "bodies.0.max=[0.5, 0.2]"], "bodies.0", "outside the domain"),
+    (["--set", "time.dt=0"], "time.dt", "greater than 0"),
+    (["--set", "time.dt=-1e-3"], "time.dt", "greater than 0"),
+    (["--set", "solver.scheme=explicit"], "solver.scheme", "projection"),
+    (["--set", "solver.sparse_cell_threshold=0.95"], "sparse_cell_threshold", "smaller"),
+    (["--set", "nonsense"], "nonsense", "dotted.key=value"),
+]
+
+
+@pytest.mark.parametrize("args, key, hint", BAD)
+def test_bad_settings_give_one_clear_error(tmp_path, args, key, hint):
+    res = mpmflow("run", EXAMPLES / "hydrostatic.toml", "--out", tmp_path / "o", *args)
+    assert res.returncode == 2
+    assert "Traceback" not in res.stderr
+    assert key in res.stderr and hint in res.stderr
+    assert res.stderr.count("\n") == 1  # one paragraph
+    assert not (tmp_path / "o").exists()  # nothing was run
+
+
+@pytest.mark.parametrize("text, hint", [
+    ("[domain\nsize = [1, 1]\n", "not valid TOML"),
+    ("[domain]\nsize = [1.0, 1.0]\nsise = 2\n", "`domain.sise`"),
+    ("[grid]\nspacing = 0.1\n", "missing key `domain`"),
+])
+def test_bad_case_files(tmp_path, text, hint):
+    case = tmp_path / "case.toml"
+    case.write_text(text)
+    res = mpmflow("run", case, "--out", tmp_path / "o")
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert hint in res.stderr
+
+
+def test_missing_case_file(tmp_path):
+    res = mpmflow("run", tmp_path / "none.toml", "--out", tmp_path / "o")
+    assert res.returncode == 2 and "does not exist" in res.stderr
+
+
+def test_pressure_solve_failure_stops_the_run_and_says_where(tmp_path):
+    out = tmp_path / "o"
+    res = mpmflow("run", EXAMPLES / "hydrostatic.toml", "--out", out, "--set",
+                  "solver.max_iterations=1", "--set", "solver.tolerance=1e-14")
+    assert res.returncode == 3 and "Traceback" not in res.stderr
+    assert "did not converge at step 1" in res.stderr and "largest residual at node" in res.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and "did not converge" in summary["message"]
+    assert (out / "timeseries.csv").read_text().startswith("time,front,height")

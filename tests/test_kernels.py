@@ -1,0 +1,116 @@
+"""Exact properties of the compiled kernels: quadrature, transfers, binning, walls."""
+
+import numpy as np
+import pytest
+
+from mpmflow.cells import bin_particles
+from mpmflow.grid import Grid
+from mpmflow.kernels import quadrature2d, transfer2d, walls2d
+from mpmflow.particles import lattice_in_box, seed_box
+
+
+def test_gauss_cell_integrals_are_the_bilinear_element_matrices():
+    h = 0.3
+    K, C, V = np.zeros((4, 4)), np.zeros((4, 4, 2)), np.zeros(4)
+    quadrature2d.gauss_cell_tensors_2d(h, K, C, V)
+    # Q1 stiffness on a square: 2/3 on the diagonal, -1/6 along edges, -1/3 across
+    expected = np.array([[4, -1, -1, -2], [-1, 4, -2, -1], [-1, -2, 4, -1], [-2, -1, -1, 4]]) / 6
+    np.testing.assert_allclose(K, expected, atol=1e-14)
+    np.testing.assert_allclose(V, h * h / 4)
+    # sum_b C[a, b, k] = int N_a d/dx_k (sum_b N_b) = 0 ; sum_a C[a, b, k] = int dN_b/dx_k
+    np.testing.assert_allclose(C.sum(axis=1), 0.0, atol=1e-15)
+    np.testing.assert_allclose(C.sum(axis=0)[:, 0], [-h / 2, h / 2, -h / 2, h / 2], atol=1e-15)
+
+
+def test_particle_quadrature_integrates_constants_exactly():
+    # volumes sum to the cell area; sum_a V[a] = total weight, K of a constant field is 0
+    h = 0.1
+    pts = lattice_in_box([0, 0], [h, h], h / 4)
+    K, C, V = np.zeros((1, 4, 4)), np.zeros((1, 4, 4, 2)), np.zeros((1, 4))
+    order = np.arange(len(pts))
+    start = np.array([0, len(pts)])
+    quadrature2d.particle_cell_tensors_2d(pts, np.full(len(pts), (h / 4) ** 2), order, start,
+                                          np.array([0]), h, 1, K, C, V)
+    assert V.sum() == pytest.approx(h * h)
+    np.testing.assert_allclose(K[0].sum(axis=1), 0.0, atol=1e-12)
+
+
+def test_particles_to_grid_conserves_mass_and_momentum():
+    rng = np.random.default_rng(1)
+    n = 500
+    x = rng.uniform(0, 1, (n, 2))
+    v = rng.normal(size=(n, 2))
+    m = rng.uniform(0.5, 2.0, n)
+    vol = m / 1000
+    grid = Grid(0.1, (10, 10))
+    mass, mom, nvol = np.zeros(grid.nnodes), np.zeros((grid.nnodes, 2)), np.zeros(grid.nnodes)
+    transfer2d.particles_to_grid_2d(x, v, m, vol, 0.1, 10, 10, mass, mom, nvol)
+    assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
+    np.testing.assert_allclose(mom.sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=1e-12)
+    assert nvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
+
+
+def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
+    grid = Grid(0.1, (10, 10))
+    nodes = grid.node_coordinates()
+    v_old = np.zeros((grid.nnodes, 2))
+    v_new = np.stack([1 + 2 * nodes[:, 0] - nodes[:, 1], 3 * nodes[:, 1]], axis=1)
+    p_node = 5 - 4 * nodes[:, 0] + 7 * nodes[:, 1]
+    rng = np.random.default_rng(2)
+    x = rng.uniform(0.05, 0.95, (200, 2))
+    x0 = x.copy()
+    v = np.ones((200, 2))
+    p = np.zeros(200)
+    dt = 0.01
+    exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
+    transfer2d.grid_to_particles_2d(x, v, p, 0.1, 10, 10, v_old, v_new, p_node, dt, 1.0)
+    np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
+    np.testing.assert_allclose(x, x0 + dt * exact, atol=1e-12)  # eq. 21 moves with v^{t+1}
+    np.testing.assert_allclose(p, 5 - 4 * x0[:, 0] + 7 * x0[:, 1], atol=1e-12)
+
+
+def test_keep_inside_puts_particles_back_and_counts_them():
+    x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
+    v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
+    moved = transfer2d.keep_inside(x, v, np.array([1.0, 1.0]), 1e-9)
+    assert moved == 3
+    assert np.all((x >= 0) & (x <= 1))
+    np.testing.assert_allclose(x[0], [0.01, 0.5])  # mirrored back across the wall
+    np.testing.assert_allclose(x[2], [0.5, 0.5])  # untouched
+    assert v[0, 0] == 0.0 and v[1, 1] == 0.0 and v[3, 0] == 0.0 and v[3, 1] == 0.0
+    assert v[2, 0] == 1.0
+
+
+def test_binning_and_volume_fraction():
+    grid = Grid(0.01, (10, 30))
+    P = seed_box([0, 0], [0.1, 0.195], 0.0025, 1000.0, [0, 0])
+    bins = bin_particles(grid, P)
+    theta = bins.theta.reshape(30, 10)
+    np.testing.assert_allclose(theta[:19], 1.0)
+    np.testing.assert_allclose(theta[19], 0.5)
+    np.testing.assert_allclose(theta[20:], 0.0)
+    counts = bins.counts()
+    assert counts.sum() == P.count
+    for c in (0, 191, 199):
+        members = bins.order[bins.start[c]:bins.start[c + 1]]
+        assert np.all(bins.cell[members] == c)
+
+
+def test_walls_are_one_sided_unless_in_contact():
+    ncx, ncy = 2, 2
+    n = (ncx + 1) * (ncy + 1)
+    contact = np.zeros((n, 2), dtype=np.bool_)
+    walls2d.wall_nodes_2d(ncx, ncy, contact)
+    v = np.tile([[-1.0, 1.0]], (n, 1))  # moving into the left and top walls
+    released = contact.copy()
+    released[:] = False
+    walls2d.apply_walls_2d(ncx, ncy, v, released, False)
+    left = [0, 3, 6]
+    top = [6, 7, 8]
+    assert np.all(v[left, 0] == 0.0) and np.all(v[top, 1] == 0.0)
+    bottom_mid = 1  # leaving the bottom wall upwards: kept
+    assert v[bottom_mid, 1] == 1.0
+    v = np.tile([[1.0, 1.0]], (n, 1))
+    walls2d.apply_walls_2d(ncx, ncy, v, contact, True)  # in contact, no-slip: all zero
+    assert np.all(v[bottom_mid] == 0.0)
+    assert np.all(v[4] == 1.0)  # interior node untouched

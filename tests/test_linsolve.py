@@ -1,0 +1,81 @@
+"""The pressure solvers agree with each other and report failure."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from mpmflow.linsolve import LinearSolver, PressureMatrix
+
+
+def poisson_ell(nnx, nny, mask):
+    """Q1 9-point Laplacian on the masked nodes, Dirichlet outside, in ELL form."""
+    row = -np.ones(nnx * nny, dtype=np.int64)
+    nodes = np.flatnonzero(mask.ravel())
+    row[nodes] = np.arange(nodes.size)
+    cols = -np.ones((nodes.size, 9), dtype=np.int64)
+    vals = np.zeros((nodes.size, 9))
+    for r, i in enumerate(nodes):
+        ix, iy = i % nnx, i // nnx
+        for dy in range(3):
+            for dx in range(3):
+                jx, jy = ix + dx - 1, iy + dy - 1
+                s = 3 * dy + dx
+                if dx == 1 and dy == 1:
+                    cols[r, s], vals[r, s] = r, 8 / 3
+                elif 0 <= jx < nnx and 0 <= jy < nny and row[jy * nnx + jx] >= 0:
+                    cols[r, s], vals[r, s] = row[jy * nnx + jx], -1 / 3
+    return PressureMatrix(cols, vals, nodes, (nnx, nny))
+
+
+@pytest.fixture(scope="module")
+def system():
+    nnx, nny = 41, 37
+    yy, xx = np.mgrid[0:nny, 0:nnx]
+    mask = ((xx - 20) ** 2 + (yy - 18) ** 2 < 15**2) | ((xx > 3) & (xx < 10) & (yy > 2))
+    m = poisson_ell(nnx, nny, mask.astype(bool))
+    b = np.random.default_rng(0).normal(size=m.nodes.size)
+    return m, b
+
+
+def test_csr_is_symmetric(system):
+    m, _ = system
+    A = m.csr()
+    assert abs(A - A.T).max() == 0.0
+    assert A.has_sorted_indices
+
+
+@pytest.mark.parametrize("method", ["multigrid", "amg", "direct"])
+def test_solvers_match_sparse_lu(system, method):
+    m, b = system
+    exact = spla.spsolve(m.csr().tocsc(), b)
+    s = LinearSolver(method, 1e-10, 200)
+    s.prepare(m)
+    res = s.solve(b)
+    assert res.converged and res.residual <= 1e-10
+    np.testing.assert_allclose(res.x, exact, rtol=0, atol=1e-8 * np.abs(exact).max())
+
+
+def test_multigrid_converges_in_few_iterations(system):
+    m, b = system
+    s = LinearSolver("multigrid", 1e-8, 200)
+    s.prepare(m)
+    res = s.solve(b)
+    assert res.iterations <= 20  # mesh-independent convergence of the V-cycle
+
+
+def test_multigrid_warm_start_from_solution_takes_no_iterations(system):
+    m, b = system
+    s = LinearSolver("multigrid", 1e-8, 200)
+    s.prepare(m)
+    x = s.solve(b).x
+    again = s.solve(b, x0=x)
+    assert again.iterations == 0 and again.converged
+
+
+def test_iteration_limit_is_reported_not_hidden(system):
+    m, b = system
+    s = LinearSolver("multigrid", 1e-14, 1)
+    s.prepare(m)
+    res = s.solve(b)
+    assert not res.converged and res.residual > 1e-14
