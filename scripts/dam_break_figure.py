@@ -77,7 +77,7 @@ def main():
             if k == 0:
                 ax.set_ylabel("y (m)")
         fig.colorbar(sc, ax=fig.axes[-3:], label="particle pressure (Pa)", shrink=0.8)
-    ax_h.set(xlabel="tau = t sqrt(g/a)", ylabel="height at left wall / (2a)", xlim=(0, 4.6),
+    ax_h.set(xlabel="tau = t sqrt(g/a)", ylabel="height at left wall / (2a)", xlim=(0, 4.2),
              ylim=(0, 1.05), title="Column height (a = 0.114 m)")
     ax_f.set(xlabel="T = t sqrt(2g/a)", ylabel="surge front / a", xlim=(0, 3.6), ylim=(1, 3.8),
              title="Surge front")

@@ -30,8 +30,10 @@ class Domain(_Section):
         "[0, size]. Its boundaries are walls.",
         examples=[[0.42, 0.44]], min_length=2, max_length=2)
     walls: Literal["slip", "no_slip"] = Field(
-        "slip", description="Wall condition on all domain boundaries. Both are one-sided: a wall "
-        "stops material from entering it but lets it leave.")
+        "slip", description="Wall condition on all domain boundaries. Walls are contact "
+        "conditions: they push (p >= 0) but never pull, so material leaves a wall freely "
+        "(water never hangs from a ceiling); no_slip also stops tangential motion at "
+        "wetted wall nodes.")
 
     @model_validator(mode="after")
     def _positive(self):
@@ -372,3 +374,21 @@ def resolved(case):
     """The fully resolved case as plain data (defaults filled in)."""
     return copy.deepcopy(case.model_dump(mode="json"))
 
+
+
+def reference_markdown():
+    """The case-file reference as a Markdown table (generated into the README)."""
+    lines = ["| key | default | meaning |", "|---|---|---|"]
+    for row in key_reference():
+        if row["required"]:
+            default = "**required**"
+        elif isinstance(row["default"], bool):
+            default = f"`{str(row['default']).lower()}`"
+        elif isinstance(row["default"], str):
+            default = f'`"{row["default"]}"`' if row["default"] else '`""`'
+        elif row["default"] is None:
+            default = "(see meaning)"
+        else:
+            default = f"`{row['default']}`"
+        lines.append(f"| `{row['key']}` | {default} | {row['description']} |")
+    return "\n".join(lines)

@@ -49,6 +49,7 @@ def _parser():
                        description="List every case-file key (dotted name), its default and "
                        "its meaning.")
     k.add_argument("--json", action="store_true", help="machine-readable output")
+    k.add_argument("--markdown", action="store_true", help="the README's reference table")
     return p
 
 
@@ -99,9 +100,12 @@ def _run(args):
 
 
 def _keys(args):
-    from .case import key_reference
+    from .case import key_reference, reference_markdown
 
     rows = key_reference()
+    if args.markdown:
+        print(reference_markdown())
+        return 0
     if args.json:
         print(json.dumps(rows, indent=2))
         return 0

@@ -1,0 +1,32 @@
+# The two commands of a fresh machine (needs python3 >= 3.10 and make):
+#   make dam-break   set up, then run the paper's dam break (examples/dam_break.toml)
+#   make test        set up, then run the test suite
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+
+.PHONY: setup test dam-break bench figures clean
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test,plot]"
+	touch $@
+
+setup: $(VENV)/.installed
+
+test: setup
+	$(BIN)/python -m pytest
+
+dam-break: setup
+	$(BIN)/mpmflow run examples/dam_break.toml --out runs/dam_break --overwrite
+
+bench: setup
+	$(BIN)/python benchmarks/dam_break.py
+
+figures: setup
+	$(BIN)/python scripts/dam_break_figure.py --out docs/dam_break.png
+	$(BIN)/python scripts/compare_variants.py --out docs
+
+clean:
+	rm -rf runs .pytest_cache

@@ -1,0 +1,85 @@
+"""Whole-process wall time of `mpmflow run examples/dam_break.toml` (1.0 s of flow, 0.004 m,
+26k particles, 1000 steps, outputs at the example's intervals).
+
+One warm-up run first (it fills Numba's on-disk cache, as any first run does), then
+--repeat timed runs; prints the median, min and max and the machine, and appends a JSON
+record to benchmarks/results.jsonl.
+
+    python benchmarks/dam_break.py [--repeat 3] [--set key=value ...]
+"""
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def machine():
+    cpu = platform.processor()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import numba
+    import numpy
+
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
+            "numpy": numpy.__version__, "numba": numba.__version__,
+            "threads": os.environ.get("NUMBA_NUM_THREADS", "default")}
+
+
+def run_once(case, out, overrides):
+    cmd = [sys.executable, "-m", "mpmflow.cli", "run", str(case), "--out", str(out), "--quiet",
+           "--overwrite"]
+    for o in overrides:
+        cmd += ["--set", o]
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True)
+    wall = time.perf_counter() - t0
+    summary = json.loads((Path(out) / "summary.json").read_text())
+    return wall, summary
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", default=str(ROOT / "examples" / "dam_break.toml"))
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--set", action="append", default=[], dest="overrides")
+    ap.add_argument("--label", default="")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        run_once(args.case, tmp, args.overrides)  # warm-up: JIT cache
+        walls, loops = [], []
+        for _ in range(args.repeat):
+            wall, summary = run_once(args.case, tmp, args.overrides)
+            walls.append(wall)
+            loops.append(summary["wall_seconds"])
+    record = {"label": args.label, "case": Path(args.case).name, "overrides": args.overrides,
+              "repeat": args.repeat, "process_median_s": statistics.median(walls),
+              "process_min_s": min(walls), "process_max_s": max(walls),
+              "time_loop_median_s": statistics.median(loops), "steps": summary["steps"],
+              "particles": summary["particles"], "machine": machine(),
+              "date": time.strftime("%Y-%m-%d")}
+    print(f"{record['case']} {' '.join(args.overrides)}: whole process median "
+          f"{record['process_median_s']:.2f} s (min {record['process_min_s']:.2f}, max "
+          f"{record['process_max_s']:.2f}; {args.repeat} runs after a warm-up), time loop "
+          f"{record['time_loop_median_s']:.2f} s, {record['steps']} steps, "
+          f"{record['particles']} particles")
+    print(f"machine: {record['machine']}")
+    with open(ROOT / "benchmarks" / "results.jsonl", "a") as f:
+        f.write(json.dumps(record) + "\n")
+
+
+if __name__ == "__main__":
+    main()
