@@ -120,6 +120,14 @@ def matvec(cols, vals, x, y):
 
 
 @njit(cache=True)
+def residual(cols, vals, x, b, out):
+    """out = b - A x."""
+    matvec(cols, vals, x, out)
+    for i in range(out.shape[0]):
+        out[i] = b[i] - out[i]
+
+
+@njit(cache=True)
 def _gauss_seidel(cols, vals, b, x, forward):
     n = cols.shape[0]
     for k in range(n):
@@ -228,9 +236,7 @@ def vcycle(off, Acols, Avals, Pcols, Pw, L, b, x, r, sweeps):
         xl[:] = 0.0
         for _ in range(sweeps):
             _gauss_seidel(cols, vals, bl, xl, True)
-        matvec(cols, vals, xl, rl)
-        for i in range(rl.shape[0]):
-            rl[i] = bl[i] - rl[i]
+        residual(cols, vals, xl, bl, rl)
         _restrict(Pcols[lo:hi], Pw[lo:hi], rl, b[hi:off[lv + 2]])
     lo, hi = off[nlev - 1], off[nlev]
     _cholesky_solve(L, b[lo:hi], x[lo:hi])
@@ -258,9 +264,7 @@ def pcg(off, Acols, Avals, Pcols, Pw, L, rhs, x, tol, maxiter, sweeps):
         x[:] = 0.0
         return 0, 0.0
     r = np.empty(n)
-    matvec(cols, vals, x, r)
-    for i in range(n):
-        r[i] = rhs[i] - r[i]
+    residual(cols, vals, x, rhs, r)
     rnorm = np.sqrt(np.dot(r, r))
     if rnorm > bnorm:
         # a warm start worse than zero (the right-hand side changed a lot) would only cost
@@ -294,7 +298,5 @@ def pcg(off, Acols, Avals, Pcols, Pw, L, rhs, x, tol, maxiter, sweeps):
         for i in range(n):
             p[i] = z[i] + beta * p[i]
     # the recursive residual can drift from the true one: report the true residual
-    matvec(cols, vals, x, q)
-    for i in range(n):
-        q[i] = rhs[i] - q[i]
+    residual(cols, vals, x, rhs, q)
     return it, np.sqrt(np.dot(q, q)) / bnorm

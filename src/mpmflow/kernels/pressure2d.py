@@ -85,10 +85,12 @@ def _ghost_factor(f_i, f_g, theta_min):
     return 1.0 - 1.0 / t
 
 
-@njit(cache=True)
-def _stencil(ix, iy, ncx, ncy, cell_slot, K, S):
-    """Couplings sum_e K_e[a_i, b_j] of node (ix, iy) to its 3x3 neighbours, S[dy+1, dx+1]."""
-    S[:] = 0.0
+@njit(cache=True, inline="always")
+def _cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base):
+    """The cells around node (ix, iy) that take part in the system: their slot, the node's
+    local index in each, and each cell's first node. Returns how many (at most 4)."""
+    nnx = ncx + 1
+    n = 0
     for dcy in range(-1, 1):
         cy = iy + dcy
         if cy < 0 or cy >= ncy:
@@ -100,11 +102,26 @@ def _stencil(ix, iy, ncx, ncy, cell_slot, K, S):
             s = cell_slot[cx + ncx * cy]
             if s < 0:
                 continue
-            a = -dcx + 2 * (-dcy)
-            for b in range(4):
-                jx = (b & 1) + dcx
-                jy = (b >> 1) + dcy
-                S[jy + 1, jx + 1] += K[s, a, b]
+            slots[n] = s
+            local[n] = -dcx + 2 * (-dcy)
+            base[n] = cx + nnx * cy
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base):
+    """Couplings sum_e K_e[a_i, b_j] of node (ix, iy) to its 3x3 neighbours, S[dy+1, dx+1].
+
+    ``slots``, ``local``, ``base``: scratch arrays of 4 for ``_cells_of_node``."""
+    S[:] = 0.0
+    n = _cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)
+    for k in range(n):
+        a = local[k]
+        for b in range(4):
+            # node b of the cell sits at offset (b - a) from node i, per axis
+            S[(b >> 1) - (a >> 1) + 1, (b & 1) - (a & 1) + 1] += K[slots[k], a, b]
+    return n
 
 
 @njit(cache=True)
@@ -122,13 +139,16 @@ def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_
     nnx = ncx + 1
     nny = ncy + 1
     S = np.empty((3, 3))
+    slots = np.empty(4, dtype=np.int64)
+    local = np.empty(4, dtype=np.int64)
+    base = np.empty(4, dtype=np.int64)
     for i in range(nnx * nny):
         r = node_row[i]
         if r < 0:
             continue
         ix = i % nnx
         iy = i // nnx
-        _stencil(ix, iy, ncx, ncy, cell_slot, K, S)
+        _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base)
         anchored[r] = False
         for dy in range(3):
             for dx in range(3):
@@ -172,6 +192,9 @@ def assemble_rhs_2d(ncx, ncy, h, cell_slot, C, V, node_vol, node_row, vstar, con
     """
     nnx = ncx + 1
     nny = ncy + 1
+    slots = np.empty(4, dtype=np.int64)
+    local = np.empty(4, dtype=np.int64)
+    base = np.empty(4, dtype=np.int64)
     for i in range(nnx * nny):
         r = node_row[i]
         if r < 0:
@@ -180,23 +203,12 @@ def assemble_rhs_2d(ncx, ncy, h, cell_slot, C, V, node_vol, node_row, vstar, con
         iy = i // nnx
         b = 0.0
         vol = 0.0
-        for dcy in range(-1, 1):
-            cy = iy + dcy
-            if cy < 0 or cy >= ncy:
-                continue
-            for dcx in range(-1, 1):
-                cx = ix + dcx
-                if cx < 0 or cx >= ncx:
-                    continue
-                s = cell_slot[cx + ncx * cy]
-                if s < 0:
-                    continue
-                a = -dcx + 2 * (-dcy)
-                vol += V[s, a]
-                base = cx + nnx * cy
-                for bb in range(4):
-                    j = base + (bb & 1) + nnx * (bb >> 1)
-                    b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
+        for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
+            s, a = slots[k], local[k]
+            vol += V[s, a]
+            for bb in range(4):
+                j = base[k] + (bb & 1) + nnx * (bb >> 1)
+                b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
         excess = node_vol[i] - vol
         if expansion > 0.0 and excess > 0.0:
             b += expansion * excess
@@ -253,12 +265,17 @@ def ghost_pressures_2d(ncx, ncy, cell_slot, K, node_row, node_f, theta_min, p_no
     nnx = ncx + 1
     nny = ncy + 1
     S = np.empty((3, 3))
+    slots = np.empty(4, dtype=np.int64)
+    local = np.empty(4, dtype=np.int64)
+    base = np.empty(4, dtype=np.int64)
     for i in range(nnx * nny):
         if node_row[i] >= 0:
             continue
         ix = i % nnx
         iy = i // nnx
-        _stencil(ix, iy, ncx, ncy, cell_slot, K, S)
+        if _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base) == 0:
+            p_node[i] = 0.0
+            continue
         num = 0.0
         den = 0.0
         for dy in range(3):
@@ -282,30 +299,22 @@ def correct_velocity_2d(ncx, ncy, cell_slot, C, V, p_node, vstar, dt_over_rho, v
     """
     nnx = ncx + 1
     nny = ncy + 1
+    slots = np.empty(4, dtype=np.int64)
+    local = np.empty(4, dtype=np.int64)
+    base = np.empty(4, dtype=np.int64)
     for i in range(nnx * nny):
         ix = i % nnx
         iy = i // nnx
         vol = 0.0
         g0 = 0.0
         g1 = 0.0
-        for dcy in range(-1, 1):
-            cy = iy + dcy
-            if cy < 0 or cy >= ncy:
-                continue
-            for dcx in range(-1, 1):
-                cx = ix + dcx
-                if cx < 0 or cx >= ncx:
-                    continue
-                s = cell_slot[cx + ncx * cy]
-                if s < 0:
-                    continue
-                a = -dcx + 2 * (-dcy)
-                vol += V[s, a]
-                base = cx + nnx * cy
-                for b in range(4):
-                    pj = p_node[base + (b & 1) + nnx * (b >> 1)]
-                    g0 += C[s, a, b, 0] * pj
-                    g1 += C[s, a, b, 1] * pj
+        for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
+            s, a = slots[k], local[k]
+            vol += V[s, a]
+            for b in range(4):
+                pj = p_node[base[k] + (b & 1) + nnx * (b >> 1)]
+                g0 += C[s, a, b, 0] * pj
+                g1 += C[s, a, b, 1] * pj
         if vol > 0.0:
             v_new[i, 0] = vstar[i, 0] - dt_over_rho * g0 / vol
             v_new[i, 1] = vstar[i, 1] - dt_over_rho * g1 / vol

@@ -5,13 +5,19 @@ from numba import njit
 
 
 @njit(cache=True, inline="always")
-def _locate(x0, x1, inv_h, ncx, ncy):
-    """Cell (cx, cy) of a point and its local coordinates (xi, eta) in [0, 1]."""
+def _weights(x0, x1, inv_h, ncx, ncy):
+    """The four nodes of the cell holding a point and their bilinear weights N_a."""
     sx = x0 * inv_h
     sy = x1 * inv_h
     cx = min(max(int(np.floor(sx)), 0), ncx - 1)
     cy = min(max(int(np.floor(sy)), 0), ncy - 1)
-    return cx, cy, sx - cx, sy - cy
+    xi = sx - cx
+    eta = sy - cy
+    nnx = ncx + 1
+    base = cx + nnx * cy
+    nodes = (base, base + 1, base + nnx, base + nnx + 1)
+    w = ((1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), (1.0 - xi) * eta, xi * eta)
+    return nodes, w
 
 
 @njit(cache=True)
@@ -22,17 +28,8 @@ def particles_to_grid_2d(x, v, mass, volume, h, ncx, ncy, node_mass, node_mom, n
     node_mom[:] = 0.0
     node_vol[:] = 0.0
     inv_h = 1.0 / h
-    nnx = ncx + 1
     for p in range(x.shape[0]):
-        cx, cy, xi, eta = _locate(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        base = cx + nnx * cy
-        w = (
-            (1.0 - xi) * (1.0 - eta),
-            xi * (1.0 - eta),
-            (1.0 - xi) * eta,
-            xi * eta,
-        )
-        nodes = (base, base + 1, base + nnx, base + nnx + 1)
+        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
         for a in range(4):
             i = nodes[a]
             wm = w[a] * mass[p]
@@ -63,17 +60,8 @@ def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, 
     Positions move with the interpolated new grid velocity (eq. 21), evaluated at x_p^t.
     """
     inv_h = 1.0 / h
-    nnx = ncx + 1
     for p in range(x.shape[0]):
-        cx, cy, xi, eta = _locate(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        base = cx + nnx * cy
-        w = (
-            (1.0 - xi) * (1.0 - eta),
-            xi * (1.0 - eta),
-            (1.0 - xi) * eta,
-            xi * eta,
-        )
-        nodes = (base, base + 1, base + nnx, base + nnx + 1)
+        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
         pic0 = 0.0
         pic1 = 0.0
         dv0 = 0.0
@@ -132,21 +120,14 @@ def pressure_noise_2d(x, mass, pressure, h, ncx, ncy, work_m, work_mp):
     work_m[:] = 0.0
     work_mp[:] = 0.0
     inv_h = 1.0 / h
-    nnx = ncx + 1
     for p in range(x.shape[0]):
-        cx, cy, xi, eta = _locate(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        base = cx + nnx * cy
-        w = ((1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), (1.0 - xi) * eta, xi * eta)
-        nodes = (base, base + 1, base + nnx, base + nnx + 1)
+        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
         for a in range(4):
             work_m[nodes[a]] += w[a] * mass[p]
             work_mp[nodes[a]] += w[a] * mass[p] * pressure[p]
     total = 0.0
     for p in range(x.shape[0]):
-        cx, cy, xi, eta = _locate(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        base = cx + nnx * cy
-        w = ((1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), (1.0 - xi) * eta, xi * eta)
-        nodes = (base, base + 1, base + nnx, base + nnx + 1)
+        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
         smooth = 0.0
         for a in range(4):
             smooth += w[a] * work_mp[nodes[a]] / work_m[nodes[a]]
