@@ -66,8 +66,10 @@ def test_refuses_to_overwrite_a_previous_run(quick_run):
     assert "--overwrite" in res.stderr and "Traceback" not in res.stderr
 
 
-def test_progress_and_help():
-    assert "mpmflow run" in mpmflow("--help").stdout or "run" in mpmflow("--help").stdout
+def test_help_explains_commands_keys_and_exit_codes():
+    top = mpmflow("--help").stdout
+    for word in ("run", "keys", "exit codes", "invalid input"):
+        assert word in top
     text = mpmflow("run", "--help").stdout
     for word in ("--out", "--set", "timeseries.csv", "summary.json", "particles.pvd"):
         assert word in text

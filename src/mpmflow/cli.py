@@ -30,12 +30,22 @@ reference (`mpmflow keys` lists them), e.g.
 Values are TOML: numbers, true/false, [lists], "strings" (bare words are taken as strings)."""
 
 
+EPILOG = """\
+examples:
+  mpmflow run examples/dam_break.toml --out runs/dam_break
+  mpmflow run examples/hydrostatic.toml --out runs/still --set solver.formulation=paper
+  mpmflow keys
+
+exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
+summary.json), 130 interrupted."""
+
+
 def _parser():
-    p = argparse.ArgumentParser(prog="mpmflow", description=DESCRIPTION,
+    p = argparse.ArgumentParser(prog="mpmflow", description=DESCRIPTION, epilog=EPILOG,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"mpmflow {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
-    r = sub.add_parser("run", help="run a case file", description=RUN_HELP,
+    r = sub.add_parser("run", help="run a case file", description=RUN_HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("case", metavar="CASE.toml", help="case file (TOML)")
     r.add_argument("--out", "-o", metavar="DIR", required=True,
