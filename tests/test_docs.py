@@ -9,7 +9,7 @@ def test_readme_case_reference_is_generated_from_the_schema():
     text = (ROOT / "README.md").read_text()
     block = text.split("<!-- case-reference:start -->\n", 1)[1].split(
         "\n<!-- case-reference:end -->", 1)[0]
-    assert block == reference_markdown(), "regenerate with `mpmflow keys --markdown`"
+    assert block == reference_markdown(), "run python scripts/update_readme_reference.py"
 
 
 def test_readme_commands_are_the_ci_commands():

@@ -5,9 +5,19 @@ projection (Kularathna & Soga 2017). SI units throughout.
     summary = Simulation(load_case("examples/dam_break.toml"), out_dir="run").run()
 """
 
-__version__ = "0.1.0"
-
-from .case import load_case  # noqa: E402
-from .simulation import Simulation  # noqa: E402
+from ._version import __version__
 
 __all__ = ["load_case", "Simulation", "__version__"]
+
+
+def __getattr__(name):
+    # imported on first use, so that `mpmflow --help` and `mpmflow keys` start quickly
+    if name == "load_case":
+        from .case import load_case
+
+        return load_case
+    if name == "Simulation":
+        from .simulation import Simulation
+
+        return Simulation
+    raise AttributeError(f"module 'mpmflow' has no attribute {name!r}")

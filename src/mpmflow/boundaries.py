@@ -1,8 +1,9 @@
 """Domain walls: which wall nodes hold the material, and their velocity conditions.
 
-A wall is a contact condition: it pushes (p >= 0) but never pulls. Each step starts with
-every wall node in contact; the projection releases the nodes where holding the material
-would need a negative pressure while it moves away from the wall (see ``schemes``).
+A wall is a contact condition. Each step starts with the wall nodes that carry a pressure
+unknown in contact, and the others only where the material presses into the wall; the
+pressure step then releases the nodes where holding the material would need a negative
+pressure while it moves away from the wall (see ``pressure.PressureProjection.project``).
 """
 
 import numpy as np

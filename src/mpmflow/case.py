@@ -4,12 +4,12 @@ The schema is the single source of the case-file reference: every key's descript
 is what the documentation and the error messages show.
 """
 
-import copy
 import difflib
 import sys
 from pathlib import Path
 from typing import Literal, Optional
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .errors import CaseError
@@ -20,20 +20,25 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
+MAX_CELLS = 5e7
+MAX_PARTICLES = 5e7
+
+
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
 
 
 class Domain(_Section):
     size: list[float] = Field(
-        description="Extent of the rectangular domain (m), one value per axis; the domain is "
-        "[0, size]. Its boundaries are walls.",
+        description="Extent of the rectangular domain (m), one value per axis (2D for now); "
+        "the domain is [0, size]. Its boundaries are walls.",
         examples=[[0.42, 0.44]], min_length=2, max_length=2)
     walls: Literal["slip", "no_slip"] = Field(
         "slip", description="Wall condition on all domain boundaries. Walls are contact "
-        "conditions: they push (p >= 0) but never pull, so material leaves a wall freely "
-        "(water never hangs from a ceiling); no_slip also stops tangential motion at "
-        "wetted wall nodes.")
+        "conditions: a wall holds the material where it presses against it and lets go where "
+        "holding it would need suction while it moves away, so water falls from a ceiling "
+        "and leaves a wall freely. no_slip also stops tangential motion where the wall "
+        "holds.")
 
     @model_validator(mode="after")
     def _positive(self):
@@ -87,8 +92,9 @@ class Time(_Section):
 
 class Output(_Section):
     interval: float = Field(
-        0.01, gt=0, description="Simulated time between rows of timeseries.csv (s). Steps are "
-        "shortened where needed to land on output times.")
+        0.01, gt=0, description="Simulated time between rows of timeseries.csv (s). The steps "
+        "between two output times are all equal and at most time.dt, so every output time is "
+        "landed on exactly.")
     snapshot_interval: Optional[float] = Field(
         None, gt=0, description="Simulated time between particle snapshots (s); defaults to "
         "output.interval. Snapshots are written at the first output time at or after each "
@@ -125,7 +131,7 @@ class Solver(_Section):
         0.9, gt=0, le=1, description="Cells with volume fraction theta at or above this are full "
         "and integrated with 2x2 Gauss points (paper: 0.9).")
     sparse_cell_threshold: float = Field(
-        0.2, ge=0, lt=1, description="Cells with theta below this are left out of the pressure "
+        0.2, gt=0, lt=1, description="Cells with theta below this are left out of the pressure "
         "system (paper: 0.2).")
     partial_cell_quadrature: Literal["gauss", "particles"] = Field(
         None, description="Quadrature of partial cells (sparse <= theta < full): "
@@ -144,9 +150,10 @@ class Solver(_Section):
         "free surface used in the ghost extrapolation (subcell only); keeps the system well "
         "conditioned when the surface passes very close to a node.")
     density_correction: float = Field(
-        None, ge=0, le=1, description="Density correction beta (dimensionless): the projection "
-        "asks for div v = beta (theta - 1)/dt in over-full cells (theta > 1), so particles "
-        "packed by the approximate projection spread out again. 0 = off (the paper).")
+        None, ge=0, le=1, description="Density correction beta (dimensionless): where the "
+        "particles give a node more material volume than the node holds (vol_i > V_i, packed "
+        "by the approximate projection), the projection asks for div v = beta (vol_i/V_i - "
+        "1)/dt, so they spread out again. 0 = off (the paper).")
     linear_solver: Literal["multigrid", "amg", "direct"] = Field(
         "multigrid", description="Pressure solver: \"multigrid\" = conjugate gradients "
         "preconditioned by geometric multigrid on the grid (compiled); \"amg\" = conjugate "
@@ -154,13 +161,15 @@ class Solver(_Section):
         "LU (SciPy).")
     tolerance: float = Field(1e-8, gt=0, lt=1, description="Relative residual the pressure "
                              "solve must reach every step; the run stops if it does not.")
-    max_iterations: int = Field(200, ge=1, description="Iteration limit of the pressure solve.")
+    max_iterations: int = Field(200, ge=1, le=100000,
+                                description="Iteration limit of the pressure solve.")
 
     @model_validator(mode="before")
     @classmethod
     def _preset(cls, data):
         if isinstance(data, dict):
-            preset = FORMULATIONS.get(data.get("formulation", "mpmflow"))
+            name = data.get("formulation", "mpmflow")
+            preset = FORMULATIONS.get(name) if isinstance(name, str) else None
             if preset is not None:
                 data = {**preset, **data}
         return data
@@ -188,10 +197,20 @@ class Case(_Section):
     @model_validator(mode="after")
     def _consistent(self):
         size = self.domain.size
-        if any(s / self.grid.spacing > 1e5 for s in size):
+        cells = 1.0
+        for s in size:
+            cells *= s / self.grid.spacing
+        if cells > MAX_CELLS:
             raise ValueError(
-                f"grid.spacing = {self.grid.spacing:g} m gives more than 100000 cells along a "
-                "side of the domain; choose a larger spacing")
+                f"grid.spacing = {self.grid.spacing:g} m gives {cells:.3g} cells, more than "
+                f"the {MAX_CELLS:.0e} mpmflow allows; choose a larger grid.spacing")
+        particles = sum(np.prod([(b - a) / self.grid.spacing * body.particles_per_cell
+                                 for a, b in zip(body.min, body.max)]) for body in self.bodies)
+        if particles > MAX_PARTICLES:
+            raise ValueError(
+                f"the bodies would hold {particles:.3g} particles, more than the "
+                f"{MAX_PARTICLES:.0e} mpmflow allows; use a larger grid.spacing or fewer "
+                "bodies.N.particles_per_cell")
         if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
@@ -209,20 +228,22 @@ class Case(_Section):
                 f"{self.time.dt:g} s; make it at least one time step")
         return self
 
-    @property
-    def dim(self):
-        return len(self.domain.size)
-
 
 # --------------------------------------------------------------------------- loading
 
 def _read_toml(path):
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise CaseError(f"Case file {path} is not a UTF-8 text file; give a TOML case file, "
+                        "e.g. examples/dam_break.toml.") from None
     except FileNotFoundError:
         raise CaseError(f"Case file {path} does not exist. Give the path of a .toml case file, "
                         "e.g. examples/dam_break.toml.") from None
+    except IsADirectoryError:
+        raise CaseError(f"Case file {path} is a folder; give the path of a .toml case "
+                        "file.") from None
     except OSError as err:
         raise CaseError(f"Case file {path} cannot be read: {err.strerror}.") from None
     try:
@@ -338,7 +359,7 @@ def _format_error(err, source):
             lines.append(f"`{loc}` = {e.get('input')!r} is not allowed: {msg}. {loc}: "
                          f"{row['description']}{fix}")
         else:
-            lines.append(f"{msg}.")
+            lines.append(f"{loc}: {msg}." if loc else f"{msg}.")
     head = f"Invalid case {source}: " if source else "Invalid case: "
     return CaseError(head + " ".join(lines) + " See the case-file reference in the README "
                      "(or `mpmflow keys`).")
@@ -372,7 +393,7 @@ def load_case(path, overrides=()):
 
 def resolved(case):
     """The fully resolved case as plain data (defaults filled in)."""
-    return copy.deepcopy(case.model_dump(mode="json"))
+    return case.model_dump(mode="json")
 
 
 

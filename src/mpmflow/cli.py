@@ -10,7 +10,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from . import __version__
+from ._version import __version__
 from .errors import CaseError, MpmflowError
 
 DESCRIPTION = """\
@@ -90,9 +90,18 @@ def _run(args):
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
-    if (out / "summary.json").exists() and not args.overwrite:
-        raise CaseError(f"--out {out} already holds the results of a run (summary.json). "
-                        "Choose another folder, or add --overwrite to replace them.")
+    if (out / "summary.json").exists():
+        if not args.overwrite:
+            raise CaseError(f"--out {out} already holds the results of a run (summary.json). "
+                            "Choose another folder, or add --overwrite to replace them.")
+        for old in [*out.glob("particles_*.vtu"), out / "particles.pvd",
+                    out / "timeseries.csv", out / "summary.json"]:
+            old.unlink(missing_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
+                        "can write to.") from None
     sim = Simulation(case, out)
     for note in sim.notices:
         print(f"mpmflow: note: {note}", file=sys.stderr)

@@ -21,6 +21,8 @@ from .kernels import pressure2d
 
 @dataclass
 class NodeSets:
+    """The unknown set of one step; ``f`` and ``row`` are buffers overwritten next step."""
+
     f: np.ndarray  # (nnodes,) nodal volume fraction
     row: np.ndarray  # (nnodes,) equation number of each unknown node, -1 otherwise
     nrows: int

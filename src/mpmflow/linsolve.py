@@ -91,6 +91,7 @@ class LinearSolver:
         return SolveResult(x, int(iterations), float(residual), ok)
 
     def residual_vector(self, b, x):
+        """b - A x for the prepared matrix."""
         out = np.empty_like(b)
-        multigrid.matvec(self.matrix.cols, self.matrix.vals, x, out)
-        return b - out
+        multigrid.residual(self.matrix.cols, self.matrix.vals, x, b, out)
+        return out

@@ -19,10 +19,6 @@ class Particles:
     def count(self):
         return self.x.shape[0]
 
-    @property
-    def dim(self):
-        return self.x.shape[1]
-
     @classmethod
     def concatenate(cls, parts):
         return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in

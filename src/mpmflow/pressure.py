@@ -1,6 +1,6 @@
-"""The pressure step of the projection (METHOD.md steps 5 and 6): assemble eq. (13), solve
-it with the walls as contact conditions, extend the pressure to ghost nodes, and correct
-the grid velocity (eq. 16)."""
+"""The pressure step of the projection (docs/method.md, steps 5 and 6): assemble eq. (13),
+solve it with the walls as contact conditions, extend the pressure to ghost nodes, and
+correct the grid velocity (eq. 16)."""
 
 from dataclasses import dataclass
 
@@ -67,16 +67,21 @@ class PressureProjection:
         rho = self.density
         stats = PressureStats(unknowns=n)
         p_node = np.zeros(g.nnodes)
+        vn = outward_normal_velocity(g, vstar)
+        unknown = (nodes.row >= 0)[:, None]
+        # wall nodes without a pressure of their own (at the free surface, p ~ 0) hold the
+        # material only while it presses into the wall
+        contact &= unknown | (vn > 0.0)
         if n:
             matrix = self._matrix(integrals, nodes, where)
-            self.solver.prepare(matrix)
+            try:
+                self.solver.prepare(matrix)
+            except (np.linalg.LinAlgError, RuntimeError, ValueError) as err:
+                raise SolverError(f"The pressure solver could not be set up{where}: {err}. "
+                                  f"{n} unknowns. Try solver.linear_solver = \"direct\" or "
+                                  "a smaller time.dt.") from None
             rows = matrix.nodes
             x0 = self.p_node[rows]
-            vn = outward_normal_velocity(g, vstar)
-            unknown = (nodes.row >= 0)[:, None]
-            # wall nodes without a pressure of their own (at the free surface, p ~ 0) hold
-            # the material only while it presses into the wall
-            contact &= unknown | (vn > 0.0)
             rhs = np.empty(n)
             while True:
                 v_c = vstar
@@ -110,7 +115,7 @@ class PressureProjection:
         return stats
 
     def _fail(self, rhs, result, rows, where):
-        worst = int(np.argmax(np.abs(self.solver.residual_vector(rhs, result.x))))
+        worst = int(np.nanargmax(np.abs(self.solver.residual_vector(rhs, result.x))))
         xy = self.grid.node_coordinates()[rows[worst]]
         raise SolverError(
             f"The pressure solve did not converge{where}: relative residual "

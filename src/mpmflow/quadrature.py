@@ -25,16 +25,14 @@ GAUSS = 0
 
 @dataclass
 class CellIntegrals:
-    """Per-cell element integrals; ``slot[c]`` indexes K, C, V (-1: cell left out)."""
+    """Per-cell element integrals; ``slot[c]`` indexes K, C, V (-1: cell left out).
+
+    ``slot`` is the builder's buffer, overwritten at the next step: use it within the step."""
 
     slot: np.ndarray  # (ncells,) int64
     K: np.ndarray  # (nslots, 2^d, 2^d)       grad N_a . grad N_b
     C: np.ndarray  # (nslots, 2^d, 2^d, d)    N_a dN_b/dx_k
     V: np.ndarray  # (nslots, 2^d)            N_a
-
-    @property
-    def active(self):
-        return self.slot >= 0
 
 
 class Quadrature:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from .case import resolved
 from .cells import bin_particles
 from .diagnostics import front_and_height, kinetic_energy, potential_energy, pressure_noise
@@ -126,36 +126,47 @@ class Simulation:
         interval = case.output.interval
         snap_interval = case.output.snapshot_interval or interval
         self._wall0 = _time.perf_counter()
-        self._open_outputs()
-        status, message = "completed", ""
+        status, message = "failed", ""
         try:
+            self._open_outputs()
             self._output(snapshot=True)
             k_out, k_snap = 1, 1
             while self.time < end:
+                # the steps up to the next output time: as few as dt allows, all equal, so no
+                # step is a sliver of dt (the pressure scales with 1/dt)
                 t_next = min(k_out * interval, end)
-                remaining = t_next - self.time
-                landing = remaining <= dt * (1.0 + 1e-6)
-                step_dt = remaining if landing else dt
-                self._step(step_dt)
-                if landing:
-                    self.time = t_next
-                    k_out += 1
-                    snap = self.time >= k_snap * snap_interval - 1e-9 * dt or self.time >= end
-                    if snap:
-                        k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
-                    self._output(snapshot=snap)
-                if self.progress is not None:
-                    self.progress(self.time, self.steps, end)
+                n = max(1, int(np.ceil((t_next - self.time) / dt - 1e-6)))
+                step_dt = (t_next - self.time) / n
+                for _ in range(n):
+                    self._step(step_dt)
+                    if self.progress is not None:
+                        self.progress(self.time, self.steps, end)
+                self.time = t_next
+                k_out += 1
+                snap = self.time >= k_snap * snap_interval - 1e-9 * dt or self.time >= end
+                if snap:
+                    k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
+                self._output(snapshot=snap)
+            status = "completed"
         except SimulationError as err:
-            status, message = "failed", str(err)
+            message = str(err)
             raise
         except KeyboardInterrupt:
             status, message = "interrupted", "interrupted by the user"
             raise
+        except OSError as err:
+            message = f"Writing the outputs failed: {err}. Check the --out folder and free space."
+            raise SimulationError(message) from None
+        except Exception as err:  # a bug: record it, then let the traceback through
+            message = f"internal error: {type(err).__name__}: {err}"
+            raise
         finally:
             self.summary = self._summary(status, message)
-            if self.out_dir is not None:
-                write_summary(self.out_dir / "summary.json", self.summary)
+            if self.out_dir is not None and self.out_dir.is_dir():
+                try:
+                    write_summary(self.out_dir / "summary.json", self.summary)
+                except OSError:
+                    pass  # the run's own error (often the same one) is the one to report
         return self.summary
 
     def _step(self, dt):

@@ -1,4 +1,4 @@
-"""Particle-to-grid and grid-to-particle transfers (METHOD.md steps 1 and 7)."""
+"""Particle-to-grid and grid-to-particle transfers (docs/method.md, steps 1 and 7)."""
 
 import numpy as np
 

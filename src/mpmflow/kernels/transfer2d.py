@@ -130,7 +130,8 @@ def pressure_noise_2d(x, mass, pressure, h, ncx, ncy, work_m, work_mp):
         nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
         smooth = 0.0
         for a in range(4):
-            smooth += w[a] * work_mp[nodes[a]] / work_m[nodes[a]]
+            if w[a] > 0.0:  # then the node has mass from this particle at least
+                smooth += w[a] * work_mp[nodes[a]] / work_m[nodes[a]]
         d = pressure[p] - smooth
         total += d * d
     return np.sqrt(total / max(x.shape[0], 1))

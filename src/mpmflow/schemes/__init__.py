@@ -5,7 +5,6 @@ SCHEMES = {}
 
 def register(name):
     def deco(cls):
-        cls.name = name
         SCHEMES[name] = cls
         return cls
     return deco

@@ -1,4 +1,4 @@
-"""Chorin's projection in MPM (Kularathna & Soga 2017; METHOD.md, one time step)."""
+"""Chorin's projection in MPM (Kularathna & Soga 2017; one time step as in docs/method.md)."""
 
 from dataclasses import dataclass
 
@@ -15,7 +15,6 @@ from . import register
 
 @dataclass
 class StepReport:
-    dt: float
     unknowns: int
     solves: int
     iterations: int
@@ -33,7 +32,6 @@ class ProjectionScheme:
         self.gravity = np.asarray(case.physics.gravity, dtype=float)
         self.walls = case.domain.walls
         self.flip = s.flip
-        self.wall_flux = s.wall_flux
         self.quadrature = Quadrature(grid, s.full_cell_threshold, s.sparse_cell_threshold,
                                      s.partial_cell_quadrature)
         self.surface = FreeSurface(grid, s.free_surface)
@@ -52,10 +50,6 @@ class ProjectionScheme:
         self.v_new = np.zeros((n, d))
         self.bins = None
         self.last_unknowns = 0
-
-    @property
-    def node_pressure(self):
-        return self.projection.p_node
 
     def step(self, dt, where=""):
         g, P = self.grid, self.particles
@@ -82,5 +76,5 @@ class ProjectionScheme:
                                     self.flip)
         moved = transfers.keep_inside(g, P)
         self.last_unknowns = stats.unknowns
-        return StepReport(dt, stats.unknowns, stats.solves, stats.iterations, stats.residual,
+        return StepReport(stats.unknowns, stats.solves, stats.iterations, stats.residual,
                           stats.released, moved)
