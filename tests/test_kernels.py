@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from mpmflow.boundaries import wall_contact
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
 from mpmflow.kernels import quadrature2d, transfer2d, walls2d
@@ -99,8 +100,7 @@ def test_binning_and_volume_fraction():
 def test_walls_are_one_sided_unless_in_contact():
     ncx, ncy = 2, 2
     n = (ncx + 1) * (ncy + 1)
-    contact = np.zeros((n, 2), dtype=np.bool_)
-    walls2d.wall_nodes_2d(ncx, ncy, contact)
+    contact = wall_contact(Grid(1.0, (ncx, ncy)))
     v = np.tile([[-1.0, 1.0]], (n, 1))  # moving into the left and top walls
     released = contact.copy()
     released[:] = False

@@ -11,29 +11,27 @@ import numpy as np
 from .kernels import walls2d
 
 
-def wall_contact(grid):
-    """(nnodes, dim) mask of the wall nodes, all in contact."""
+def outward_normals(grid):
+    """(nnodes, dim): the outward normal sign (-1 or +1) of the wall normal to axis k at each
+    wall node, 0 where the node is not on such a wall. Fixed for a grid: compute it once."""
     if grid.dim != 2:
         raise NotImplementedError("only 2D grids are implemented")
-    contact = np.zeros((grid.nnodes, grid.dim), dtype=np.bool_)
-    walls2d.wall_nodes_2d(grid.cells[0], grid.cells[1], contact)
-    return contact
+    out = np.zeros((grid.nnodes, grid.dim), dtype=np.int8)
+    idx = np.arange(grid.nnodes)
+    stride = 1
+    for k, n in enumerate(grid.nodes):
+        pos = (idx // stride) % n
+        out[pos == 0, k] = -1
+        out[pos == n - 1, k] = 1
+        stride *= n
+    return out
+
+
+def wall_contact(grid):
+    """(nnodes, dim) mask of the wall nodes, all in contact."""
+    return outward_normals(grid) != 0
 
 
 def apply_walls(grid, v, contact, kind):
     """Velocity conditions at wall nodes (in place); ``kind``: slip | no_slip."""
     walls2d.apply_walls_2d(grid.cells[0], grid.cells[1], v, contact, kind == "no_slip")
-
-
-def outward_normal_velocity(grid, v):
-    """(nnodes, dim): v_k times the outward normal sign of the wall normal to axis k (0 off walls)."""
-    out = np.zeros_like(v)
-    nodes = grid.nodes
-    idx = np.arange(grid.nnodes)
-    stride = 1
-    for k in range(grid.dim):
-        pos = (idx // stride) % nodes[k]
-        out[pos == 0, k] = -v[pos == 0, k]
-        out[pos == nodes[k] - 1, k] = v[pos == nodes[k] - 1, k]
-        stride *= nodes[k]
-    return out

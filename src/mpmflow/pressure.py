@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .boundaries import apply_walls, outward_normal_velocity
+from .boundaries import apply_walls, outward_normals
 from .errors import SolverError
 from .kernels import pressure2d
 from .linsolve import LinearSolver, PressureMatrix
@@ -36,6 +36,7 @@ class PressureProjection:
         self.density_correction = density_correction
         self.solver = LinearSolver(method, tolerance, max_iterations)
         self.p_node = np.zeros(grid.nnodes)
+        self._normals = outward_normals(grid)
         self._v_c = np.zeros((grid.nnodes, grid.dim))
 
     def _matrix(self, integrals, nodes, where):
@@ -67,7 +68,7 @@ class PressureProjection:
         rho = self.density
         stats = PressureStats(unknowns=n)
         p_node = np.zeros(g.nnodes)
-        vn = outward_normal_velocity(g, vstar)
+        vn = self._normals * vstar  # v* . n on walls, 0 elsewhere
         unknown = (nodes.row >= 0)[:, None]
         # wall nodes without a pressure of their own (at the free surface, p ~ 0) hold the
         # material only while it presses into the wall

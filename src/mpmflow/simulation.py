@@ -1,7 +1,7 @@
 """A run: the time loop, its output schedule, and the run's bookkeeping.
 
-``Simulation(case, out_dir).run()`` steps the scheme from t = 0 to ``time.end``; steps are
-shortened where needed to land exactly on output times. Outputs go to ``out_dir`` (see
+``Simulation(case, out_dir).run()`` steps the scheme from t = 0 to ``time.end``; the steps
+between two output times are equal and at most ``time.dt``, so output times are exact. Outputs go to ``out_dir`` (see
 ``mpmflow.output``); ``summary.json`` is written at the end, also when the run fails.
 """
 

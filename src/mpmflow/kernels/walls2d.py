@@ -4,18 +4,6 @@ from numba import njit
 
 
 @njit(cache=True)
-def wall_nodes_2d(ncx, ncy, contact):
-    """contact[i, k] = True for nodes on a wall normal to axis k, False elsewhere."""
-    nnx = ncx + 1
-    contact[:] = False
-    for iy in range(ncy + 1):
-        for ix in range(nnx):
-            i = ix + nnx * iy
-            contact[i, 0] = ix == 0 or ix == ncx
-            contact[i, 1] = iy == 0 or iy == ncy
-
-
-@njit(cache=True)
 def apply_walls_2d(ncx, ncy, v, contact, no_slip):
     """Velocity conditions at wall nodes (in place).
 
