@@ -84,7 +84,7 @@ BAD = [
     (["--set", "bodies.0.max=[0.5, 0.2]"], "bodies.0", "outside the domain"),
     (["--set", "time.dt=0"], "time.dt", "greater than 0"),
     (["--set", "time.dt=-1e-3"], "time.dt", "greater than 0"),
-    (["--set", "solver.scheme=explicit"], "solver.scheme", "projection"),
+    (["--set", "solver.scheme=implicit"], "solver.scheme", "explicit"),
     (["--set", "solver.sparse_cell_threshold=0.95"], "sparse_cell_threshold", "smaller"),
     (["--set", "nonsense"], "nonsense", "dotted.key=value"),
 ]

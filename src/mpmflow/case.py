@@ -7,12 +7,13 @@ is what the documentation and the error messages show.
 import difflib
 import sys
 from pathlib import Path
-from typing import Literal, Optional
+from typing import Literal, Optional, Union
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .errors import CaseError
+from .stability import case_stable_time_step, initial_speed, sound_speed
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -65,6 +66,12 @@ class Box(_Section):
         "cell in 2D). Points sit on a lattice aligned with the grid.")
     velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s).",
                                   min_length=2, max_length=2)
+    initial_pressure: Literal["zero", "hydrostatic"] = Field(
+        "zero", description="Initial particle pressure: \"zero\", or \"hydrostatic\" = "
+        "density * |g| * depth below the box's top (its highest corner against gravity). The "
+        "explicit scheme starts from the matching compression (volume (1 - p/K) m/density), "
+        "which spares it the acoustic transient of a column released without pressure; the "
+        "projection scheme computes the pressure anew in its first step.")
 
     @model_validator(mode="after")
     def _ordered(self):
@@ -77,6 +84,11 @@ class Material(_Section):
     density: float = Field(1000.0, gt=0, description="Density (kg/m^3).")
     viscosity: float = Field(0.0, ge=0, le=0, description="Dynamic viscosity (Pa s). Only "
                              "inviscid material (0) is implemented so far.")
+    bulk_modulus: float = Field(
+        2.2e9, gt=0, description="Bulk modulus K (Pa) of the weakly compressible material of "
+        "the explicit scheme, p = -K * volumetric strain (water: 2.2e9). It sets the sound "
+        "speed sqrt(K / density) and with it the stable time step. Not used by the projection "
+        "scheme, whose material is incompressible.")
 
 
 class Physics(_Section):
@@ -85,9 +97,22 @@ class Physics(_Section):
 
 
 class Time(_Section):
-    dt: float = Field(description="Time step (s).", gt=0, examples=[1e-3])
+    dt: Union[Literal["auto"], float] = Field(
+        description="Time step (s). The explicit scheme also takes \"auto\": its stable step "
+        "h / (c + |v|) (sound speed c = sqrt(K / density), largest initial speed |v|) times "
+        "time.safety_factor.", examples=[1e-3])
+    safety_factor: float = Field(
+        0.5, gt=0, le=1, description="Fraction of the stable explicit time step used by "
+        "time.dt = \"auto\" (dimensionless).")
     end: float = Field(description="Simulated time at which the run stops (s).", gt=0,
                        examples=[1.0])
+
+    @model_validator(mode="after")
+    def _positive(self):
+        if self.dt != "auto" and self.dt <= 0:
+            raise ValueError("time.dt must be greater than 0 (seconds), or \"auto\" for the "
+                             "explicit scheme")
+        return self
 
 
 class Output(_Section):
@@ -114,9 +139,11 @@ FORMULATIONS = {
 
 
 class Solver(_Section):
-    scheme: Literal["projection"] = Field(
+    scheme: Literal["projection", "explicit"] = Field(
         "projection", description="Time integration scheme: \"projection\" is the implicit "
-        "Chorin projection of Kularathna & Soga (2017).")
+        "Chorin projection of Kularathna & Soga (2017); \"explicit\" is the explicit weakly "
+        "compressible MPM the paper compares with (MUSL, p = -K * volumetric strain per cell, "
+        "smoothed; material.bulk_modulus, time step limited by the sound speed).")
     formulation: Literal["mpmflow", "paper"] = Field(
         "mpmflow", description="Preset for free_surface, wall_flux, partial_cell_quadrature, "
         "density_correction and flip: \"paper\" is the plain reading of Kularathna & Soga "
@@ -163,6 +190,12 @@ class Solver(_Section):
                              "solve must reach every step; the run stops if it does not.")
     max_iterations: int = Field(200, ge=1, le=100000,
                                 description="Iteration limit of the pressure solve.")
+    pressure_smoothing: Literal["nodal", "none"] = Field(
+        "nodal", description="Explicit scheme: the pressure is evaluated once per cell from "
+        "the volumetric strain of the particles in it, and that cell pressure drives the "
+        "motion. The particles report it smoothed with \"nodal\" (each node takes the "
+        "volume-weighted average of the cells around it, interpolated to the particle) or "
+        "as their cell's value with \"none\".")
 
     @model_validator(mode="before")
     @classmethod
@@ -222,6 +255,23 @@ class Case(_Section):
                     raise ValueError(
                         f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
                         f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
+        if self.time.dt == "auto":
+            if self.solver.scheme != "explicit":
+                raise ValueError(
+                    "time.dt = \"auto\" is the stable step of the explicit scheme; the "
+                    "projection scheme needs a number, e.g. time.dt = 1e-3 (s)")
+            return self
+        if self.solver.scheme == "explicit":
+            limit = case_stable_time_step(self)
+            if self.time.dt > limit:
+                c = sound_speed(self.material.bulk_modulus, self.material.density)
+                raise ValueError(
+                    f"time.dt = {self.time.dt:g} s is above the stable step of the explicit "
+                    f"scheme, {limit:.4g} s = grid.spacing / (sound speed + initial speed) = "
+                    f"{self.grid.spacing:g} / ({c:.4g} + {initial_speed(self):.3g}) m/s; set "
+                    f"time.dt to at most {limit:.4g} s, or time.dt = \"auto\" (which uses "
+                    f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
+                    "material.bulk_modulus")
         if self.output.interval < self.time.dt * (1 - 1e-9):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "

@@ -21,6 +21,7 @@ from .output.summary import write_summary
 from .output.timeseries import COLUMNS, TimeSeriesWriter
 from .schemes import make_scheme
 from .setup_case import build_grid, build_particles
+from .stability import case_stable_time_step, sound_speed, time_step
 
 
 @dataclass
@@ -53,6 +54,7 @@ class Simulation:
                             "spacing (grid.spacing / bodies.N.particles_per_cell). Enlarge the "
                             "boxes or raise particles_per_cell.")
         self.scheme = make_scheme(case, self.grid, self.particles)
+        self.dt = time_step(case)
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.progress = progress
         self.time = 0.0
@@ -71,6 +73,7 @@ class Simulation:
         self._outputs = Outputs()
         self._wall0 = None
         self.rows = []  # the timeseries rows, also kept in memory
+        self.on_output = None  # optional callable(sim), called after each output row
 
     # ------------------------------------------------------------------ outputs
     def _open_outputs(self):
@@ -112,6 +115,8 @@ class Simulation:
             self._outputs.timeseries.append(row)
         if snapshot and self._outputs.snapshots is not None:
             self._outputs.snapshots.write(self.time, self.particles)
+        if self.on_output is not None:
+            self.on_output(self)
         return row
 
     def series(self, name):
@@ -119,10 +124,13 @@ class Simulation:
         return np.array([row[name] for row in self.rows], dtype=float)
 
     # ------------------------------------------------------------------ time loop
-    def run(self):
-        """Run to ``time.end``; returns the summary dict (also written to summary.json)."""
+    def run(self, wall_budget=None):
+        """Run to ``time.end``; returns the summary dict (also written to summary.json).
+
+        ``wall_budget`` (s of wall time): stop at the first output time after it is spent,
+        with status "budget" (used by the study for explicit runs at the real K)."""
         case = self.case
-        dt, end = case.time.dt, case.time.end
+        dt, end = self.dt, case.time.end
         interval = case.output.interval
         snap_interval = case.output.snapshot_interval or interval
         self._wall0 = _time.perf_counter()
@@ -136,18 +144,22 @@ class Simulation:
                 # step is a sliver of dt (the pressure scales with 1/dt)
                 t_next = min(k_out * interval, end)
                 n = max(1, int(np.ceil((t_next - self.time) / dt - 1e-6)))
-                step_dt = (t_next - self.time) / n
-                for _ in range(n):
-                    self._step(step_dt)
-                    if self.progress is not None:
-                        self.progress(self.time, self.steps, end)
+                self._advance((t_next - self.time) / n, n)
                 self.time = t_next
+                if self.progress is not None:
+                    self.progress(self.time, self.steps, end)
                 k_out += 1
                 snap = self.time >= k_snap * snap_interval - 1e-9 * dt or self.time >= end
                 if snap:
                     k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
                 self._output(snapshot=snap)
-            status = "completed"
+                if (wall_budget is not None and self.time < end
+                        and _time.perf_counter() - self._wall0 > wall_budget):
+                    status, message = "budget", (f"stopped at t = {self.time:.6g} s when the "
+                                                 f"wall budget of {wall_budget:g} s was spent")
+                    break
+            else:
+                status = "completed"
         except SimulationError as err:
             message = str(err)
             raise
@@ -169,17 +181,25 @@ class Simulation:
                     pass  # the run's own error (often the same one) is the one to report
         return self.summary
 
-    def _step(self, dt):
-        where = f" at step {self.steps + 1} (t = {self.time + dt:.6g} s)"
-        report = self.scheme.step(dt, where=where)
-        self.steps += 1
-        self.time += dt
+    def _advance(self, dt, n):
+        """n steps of size dt, then a check that the particles are finite."""
+        first, t0 = self.steps + 1, self.time
+
+        def where(k):
+            return f" at step {first + k} (t = {t0 + (k + 1) * dt:.6g} s)"
+
+        span = (f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
+                if n > 1 else where(0))
+        report = self.scheme.advance(dt, n, where=where if self.case.solver.scheme ==
+                                     "projection" else span)
+        self.steps += n
+        self.time = t0 + n * dt
         c = self.counters
         c.moved_inside += report.moved_inside
         c.solves += report.solves
         c.iterations += report.iterations
         c.iterations_since_output += report.iterations
-        c.max_iterations = max(c.max_iterations, report.iterations)
+        c.max_iterations = max(c.max_iterations, report.max_iterations)
         c.max_unknowns = max(c.max_unknowns, report.unknowns)
         c.released += report.released
         c.worst_residual = max(c.worst_residual, report.residual)
@@ -187,8 +207,15 @@ class Simulation:
         if not (np.isfinite(P.v).all() and np.isfinite(P.x).all()):
             bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
             raise SimulationError(
-                f"The run blew up{where}: {bad.size} particles have non-finite velocity or "
+                f"The run blew up{span}: {bad.size} particles have non-finite velocity or "
                 f"position (first: particle {bad[0]}). Try a smaller time.dt.")
+
+    def _explicit_summary(self):
+        if self.case.solver.scheme != "explicit":
+            return {}
+        m = self.case.material
+        return {"sound_speed": sound_speed(m.bulk_modulus, m.density),
+                "stable_time_step": case_stable_time_step(self.case)}
 
     def _summary(self, status, message):
         P, c = self.particles, self.counters
@@ -209,6 +236,9 @@ class Simulation:
             "mass_relative_change": (mass - self.mass0) / self.mass0,
             "max_particles_per_cell": int(np.diff(bins.start).max()),
             "wall_seconds": wall,
+            "scheme": self.case.solver.scheme,
+            "dt": self.dt,
+            **self._explicit_summary(),
             "grid": {"spacing": self.grid.spacing, "cells": list(self.grid.cells),
                      "domain_used": [float(s) for s in self.grid.size]},
             "pressure_solver": {"solves": c.solves, "iterations": c.iterations,
@@ -217,6 +247,7 @@ class Simulation:
                                 "worst_relative_residual": c.worst_residual,
                                 "wall_nodes_released": c.released},
             "notices": self.notices,
-            "units": dict(COLUMNS, mass="kg/m", wall_seconds="s", domain_used="m", spacing="m"),
+            "units": dict(COLUMNS, mass="kg/m", wall_seconds="s", domain_used="m", spacing="m",
+                          dt="s", sound_speed="m/s", stable_time_step="s"),
             "case": resolved(self.case),
         }

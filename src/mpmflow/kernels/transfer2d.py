@@ -82,30 +82,37 @@ def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, 
         pressure[p] = pp
 
 
-@njit(cache=True)
-def keep_inside(x, v, upper, margin):
-    """Put particles that left the box [0, upper] back inside; return how many were moved.
+@njit(cache=True, inline="always")
+def put_inside(x, v, p, upper, margin):
+    """Put particle p back inside the box [0, upper] if it left it; True if it was moved.
 
     A particle beyond a wall is mirrored back across it (so it keeps its distance from the
     wall) and at least ``margin`` inside; its velocity component into the wall is removed.
     """
+    out = False
+    for k in range(x.shape[1]):
+        lo = margin
+        hi = upper[k] - margin
+        if x[p, k] < 0.0:
+            x[p, k] = min(max(-x[p, k], lo), hi)
+            if v[p, k] < 0.0:
+                v[p, k] = 0.0
+            out = True
+        elif x[p, k] > upper[k]:
+            x[p, k] = max(min(2.0 * upper[k] - x[p, k], hi), lo)
+            if v[p, k] > 0.0:
+                v[p, k] = 0.0
+            out = True
+    return out
+
+
+@njit(cache=True)
+def keep_inside(x, v, upper, margin):
+    """Put particles that left the box [0, upper] back inside (``put_inside``); return how
+    many were moved."""
     moved = 0
     for p in range(x.shape[0]):
-        out = False
-        for k in range(x.shape[1]):
-            lo = margin
-            hi = upper[k] - margin
-            if x[p, k] < 0.0:
-                x[p, k] = min(max(-x[p, k], lo), hi)
-                if v[p, k] < 0.0:
-                    v[p, k] = 0.0
-                out = True
-            elif x[p, k] > upper[k]:
-                x[p, k] = max(min(2.0 * upper[k] - x[p, k], hi), lo)
-                if v[p, k] > 0.0:
-                    v[p, k] = 0.0
-                out = True
-        if out:
+        if put_inside(x, v, p, upper, margin):
             moved += 1
     return moved
 

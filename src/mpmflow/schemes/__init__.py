@@ -11,6 +11,6 @@ def register(name):
 
 
 def make_scheme(case, grid, particles):
-    from . import projection  # noqa: F401  (registers itself)
+    from . import explicit, projection  # noqa: F401  (they register themselves)
 
     return SCHEMES[case.solver.scheme](case, grid, particles)

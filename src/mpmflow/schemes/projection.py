@@ -15,12 +15,22 @@ from . import register
 
 @dataclass
 class StepReport:
-    unknowns: int
-    solves: int
-    iterations: int
-    residual: float
-    released: int
-    moved_inside: int
+    """What a scheme reports after one or more steps."""
+
+    unknowns: int = 0  # the largest count of pressure unknowns in a step
+    solves: int = 0
+    iterations: int = 0
+    max_iterations: int = 0  # the most iterations in one step
+    residual: float = 0.0  # the worst relative residual
+    released: int = 0
+    moved_inside: int = 0
+
+    def merge(self, other):
+        return StepReport(max(self.unknowns, other.unknowns), self.solves + other.solves,
+                          self.iterations + other.iterations,
+                          max(self.max_iterations, other.max_iterations),
+                          max(self.residual, other.residual), self.released + other.released,
+                          self.moved_inside + other.moved_inside)
 
 
 @register("projection")
@@ -51,6 +61,13 @@ class ProjectionScheme:
         self.bins = None
         self.last_unknowns = 0
 
+    def advance(self, dt, nsteps, where=""):
+        """``nsteps`` steps of size dt; the report sums them (residual: the worst)."""
+        total = StepReport()
+        for k in range(nsteps):
+            total = total.merge(self.step(dt, where=where(k) if callable(where) else where))
+        return total
+
     def step(self, dt, where=""):
         g, P = self.grid, self.particles
         # 1. particle-to-grid
@@ -76,5 +93,5 @@ class ProjectionScheme:
                                     self.flip)
         moved = transfers.keep_inside(g, P)
         self.last_unknowns = stats.unknowns
-        return StepReport(stats.unknowns, stats.solves, stats.iterations, stats.residual,
-                          stats.released, moved)
+        return StepReport(stats.unknowns, stats.solves, stats.iterations, stats.iterations,
+                          stats.residual, stats.released, moved)

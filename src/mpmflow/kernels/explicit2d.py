@@ -1,0 +1,238 @@
+"""Explicit weakly compressible MPM (2D, update stress last): whole steps in one compiled call.
+
+The time loop inside ``explicit_steps_2d`` runs the steps between two output times without
+returning to Python; one explicit step is cheap and there are many of them. A step makes
+two passes over the particles (P2G; G2P with the volume update and the cell sums) and a
+few over the grid.
+"""
+
+import numpy as np
+from numba import njit
+
+from .transfer2d import _weights, nodal_velocity, put_inside
+from .walls2d import apply_walls_2d
+
+
+@njit(cache=True)
+def _walls(ncx, ncy, v, contact, no_slip):
+    """Wall nodes where the velocity points into the wall are in contact: normal velocity 0
+    (and tangential too for no-slip); elsewhere the material leaves the wall freely."""
+    nnx = ncx + 1
+    for iy in range(ncy + 1):
+        for ix in range(nnx):
+            if 0 < ix < ncx and 0 < iy < ncy:
+                continue
+            i = ix + nnx * iy
+            contact[i, 0] = (ix == 0 and v[i, 0] < 0.0) or (ix == ncx and v[i, 0] > 0.0)
+            contact[i, 1] = (iy == 0 and v[i, 1] < 0.0) or (iy == ncy and v[i, 1] > 0.0)
+    apply_walls_2d(ncx, ncy, v, contact, no_slip)
+
+
+@njit(cache=True, inline="always")
+def _cell_grads(cx, cy, xi, eta, inv_h, ncx):
+    """The four nodes of cell (cx, cy) and dN/dx, dN/dy at its local point (xi, eta)."""
+    nnx = ncx + 1
+    base = cx + nnx * cy
+    nodes = (base, base + 1, base + nnx, base + nnx + 1)
+    gx = (-(1.0 - eta) * inv_h, (1.0 - eta) * inv_h, -eta * inv_h, eta * inv_h)
+    gy = (-(1.0 - xi) * inv_h, -xi * inv_h, (1.0 - xi) * inv_h, xi * inv_h)
+    return nodes, gx, gy
+
+
+@njit(cache=True, inline="always")
+def _add_to_cell(x0, x1, v0, vol, inv_h, ncx, ncy, sum_v, sum_v0, sum_xi):
+    """Add one particle (reference volume v0, current volume vol) to its cell's sums."""
+    sx = x0 * inv_h
+    sy = x1 * inv_h
+    cx = min(max(int(np.floor(sx)), 0), ncx - 1)
+    cy = min(max(int(np.floor(sy)), 0), ncy - 1)
+    c = cx + ncx * cy
+    sum_v[c] += vol
+    sum_v0[c] += v0
+    sum_xi[c, 0] += v0 * (sx - cx)
+    sum_xi[c, 1] += v0 * (sy - cy)
+
+
+@njit(cache=True)
+def _finish_cells(bulk, full_volume, cell_j, cell_vol, cell_xi, cell_p):
+    """From the sums (cell_j: current volume, cell_vol: reference volume V0_c, cell_xi:
+    V0-weighted local coordinates) to J_c = V/V0_c capped at 1 (free water holds no
+    tension), the current volume J_c V0_c, the pressure K (1 - J_c) and the cell's
+    quadrature point: its centre if the cell is full (V0_c >= full_volume), else the
+    centroid of its particles, so that a partly filled cell pushes where its material is."""
+    for c in range(cell_vol.shape[0]):
+        if cell_vol[c] > 0.0:
+            j = min(cell_j[c] / cell_vol[c], 1.0)
+            if cell_vol[c] >= full_volume:
+                cell_xi[c, 0] = 0.5
+                cell_xi[c, 1] = 0.5
+            else:
+                cell_xi[c, 0] /= cell_vol[c]
+                cell_xi[c, 1] /= cell_vol[c]
+            cell_j[c] = j
+            cell_vol[c] *= j
+            cell_p[c] = bulk * (1.0 - j)
+        else:
+            cell_j[c] = 1.0
+            cell_p[c] = 0.0
+
+
+@njit(cache=True)
+def cell_state_2d(x, mass, volume, density, bulk, h, ncx, ncy, full, cell_j, cell_vol,
+                  cell_xi, cell_p):
+    """Volumetric strain and pressure once per cell (in place).
+
+    Per cell c: reference volume V0_c = sum m_p / rho and current volume V_c = sum V_p of
+    its particles, J_c = V_c / V0_c capped at 1, and pressure K (1 - J_c). cell_vol returns
+    J_c V0_c.
+    """
+    cell_j[:] = 0.0
+    cell_vol[:] = 0.0
+    cell_xi[:] = 0.0
+    inv_h = 1.0 / h
+    for p in range(x.shape[0]):
+        _add_to_cell(x[p, 0], x[p, 1], mass[p] / density, volume[p], inv_h, ncx, ncy,
+                     cell_j, cell_vol, cell_xi)
+    _finish_cells(bulk, full * h * h, cell_j, cell_vol, cell_xi, cell_p)
+
+
+@njit(cache=True)
+def particle_state_2d(x, mass, volume, pressure, density, h, ncx, ncy, smoothing, cell_j,
+                      cell_vol, cell_p, node_w, node_p):
+    """Each particle takes its cell's J (volume J_c m_p / rho) and its pressure: with
+    ``smoothing`` the interpolation of the node pressures, each the volume-weighted average
+    of the pressures of the cells around the node; else its cell's pressure."""
+    inv_h = 1.0 / h
+    nnx = ncx + 1
+    if smoothing:
+        node_w[:] = 0.0
+        node_p[:] = 0.0
+        for cy in range(ncy):
+            for cx in range(ncx):
+                c = cx + ncx * cy
+                if cell_vol[c] > 0.0:
+                    base = cx + nnx * cy
+                    for i in (base, base + 1, base + nnx, base + nnx + 1):
+                        node_w[i] += cell_vol[c]
+                        node_p[i] += cell_vol[c] * cell_p[c]
+        for i in range(node_w.shape[0]):
+            if node_w[i] > 0.0:
+                node_p[i] /= node_w[i]
+    for p in range(x.shape[0]):
+        cx = min(max(int(np.floor(x[p, 0] * inv_h)), 0), ncx - 1)
+        cy = min(max(int(np.floor(x[p, 1] * inv_h)), 0), ncy - 1)
+        c = cx + ncx * cy
+        volume[p] = cell_j[c] * mass[p] / density
+        if smoothing:
+            nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+            s = 0.0
+            for a in range(4):
+                s += w[a] * node_p[nodes[a]]
+            pressure[p] = s
+        else:
+            pressure[p] = cell_p[c]
+
+
+@njit(cache=True)
+def explicit_steps_2d(nsteps, dt, x, v, pressure, mass, volume, density, bulk, gx, gy, h,
+                      ncx, ncy, flip, no_slip, smoothing, full, upper, margin, node_mass,
+                      node_mom, v_old, v_new, contact, cell_j, cell_vol, cell_xi, cell_p, node_w,
+                      node_p):
+    """``nsteps`` explicit steps of size dt (in place); returns the number of particles put
+    back inside the domain. Expects the cell state of the current particles
+    (``cell_state_2d``), keeps it up to date, and sets the particles' volume and pressure
+    at the end (``particle_state_2d``).
+
+    One step: (1) P2G of mass and momentum; (2) nodal force: gravity, and from each cell its
+    pressure on its current volume, f_i = sum_c V_c p_c grad N_i(centre_c); grid velocity
+    before (v_old) and after (v_new) the step, wall contact on v_new; the strain rate of v_new
+    as div v at each cell's centre (the transpose of the force), giving the cell's new J;
+    (3) G2P: the particle takes its cell's new J, FLIP/PIC velocity (fraction ``flip``),
+    position x += dt * sum N v_new (the field whose divergence changed the volumes), is put
+    back inside if it crossed a wall, and is added to its new cell's sums; (4) the cells'
+    J and pressure from those sums.
+    """
+    inv_h = 1.0 / h
+    full_volume = full * h * h
+    n = x.shape[0]
+    nnode = node_mass.shape[0]
+    moved = 0
+    for _ in range(nsteps):
+        # (1) particle to grid
+        node_mass[:] = 0.0
+        node_mom[:] = 0.0
+        for p in range(n):
+            nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+            for a in range(4):
+                i = nodes[a]
+                wm = w[a] * mass[p]
+                node_mass[i] += wm
+                node_mom[i, 0] += wm * v[p, 0]
+                node_mom[i, 1] += wm * v[p, 1]
+        # (2) nodal forces (v_new holds them first), grid update, walls, cell strain rate
+        for i in range(nnode):
+            v_new[i, 0] = node_mass[i] * gx
+            v_new[i, 1] = node_mass[i] * gy
+        for cy in range(ncy):
+            for cx in range(ncx):
+                c = cx + ncx * cy
+                vp = cell_vol[c] * cell_p[c]
+                if vp != 0.0:
+                    nodes, dx, dy = _cell_grads(cx, cy, cell_xi[c, 0], cell_xi[c, 1], inv_h,
+                                                ncx)
+                    for a in range(4):
+                        v_new[nodes[a], 0] += vp * dx[a]
+                        v_new[nodes[a], 1] += vp * dy[a]
+        nodal_velocity(node_mass, node_mom, v_old)
+        for i in range(nnode):
+            if node_mass[i] > 0.0:
+                v_new[i, 0] = v_old[i, 0] + dt * v_new[i, 0] / node_mass[i]
+                v_new[i, 1] = v_old[i, 1] + dt * v_new[i, 1] / node_mass[i]
+            else:
+                v_new[i, 0] = 0.0
+                v_new[i, 1] = 0.0
+        _walls(ncx, ncy, v_new, contact, no_slip)
+        for cy in range(ncy):
+            for cx in range(ncx):
+                c = cx + ncx * cy
+                if cell_vol[c] > 0.0:
+                    nodes, dx, dy = _cell_grads(cx, cy, cell_xi[c, 0], cell_xi[c, 1], inv_h,
+                                                ncx)
+                    d = 0.0
+                    for a in range(4):
+                        d += dx[a] * v_new[nodes[a], 0] + dy[a] * v_new[nodes[a], 1]
+                    cell_p[c] = cell_j[c] * (1.0 + dt * d)  # the new J, until (4)
+        # (3) grid to particle; the cell sums of the moved particles
+        cell_j[:] = 0.0
+        cell_vol[:] = 0.0
+        cell_xi[:] = 0.0
+        for p in range(n):
+            nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+            cx = nodes[0] % (ncx + 1)
+            cy = nodes[0] // (ncx + 1)
+            v0 = mass[p] / density
+            vol = cell_p[cx + ncx * cy] * v0
+            pic0 = 0.0
+            pic1 = 0.0
+            dv0 = 0.0
+            dv1 = 0.0
+            for a in range(4):
+                i = nodes[a]
+                pic0 += w[a] * v_new[i, 0]
+                pic1 += w[a] * v_new[i, 1]
+                dv0 += w[a] * (v_new[i, 0] - v_old[i, 0])
+                dv1 += w[a] * (v_new[i, 1] - v_old[i, 1])
+            v[p, 0] = flip * (v[p, 0] + dv0) + (1.0 - flip) * pic0
+            v[p, 1] = flip * (v[p, 1] + dv1) + (1.0 - flip) * pic1
+            x[p, 0] += dt * pic0
+            x[p, 1] += dt * pic1
+            if put_inside(x, v, p, upper, margin):
+                moved += 1
+            volume[p] = vol
+            _add_to_cell(x[p, 0], x[p, 1], v0, vol, inv_h, ncx, ncy, cell_j, cell_vol,
+                         cell_xi)
+        # (4) the cell state of the moved particles
+        _finish_cells(bulk, full_volume, cell_j, cell_vol, cell_xi, cell_p)
+    particle_state_2d(x, mass, volume, pressure, density, h, ncx, ncy, smoothing, cell_j,
+                      cell_vol, cell_p, node_w, node_p)
+    return moved

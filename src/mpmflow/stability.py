@@ -1,0 +1,36 @@
+"""The explicit scheme's time-step limit: the sound speed sqrt(K / rho) crossing one cell.
+
+A signal travels at the sound speed c plus the flow speed |v|; an explicit step must not let
+it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explicit MPM).
+"""
+
+import math
+
+
+def sound_speed(bulk_modulus, density):
+    """c = sqrt(K / rho) (m/s)."""
+    return math.sqrt(bulk_modulus / density)
+
+
+def stable_time_step(spacing, bulk_modulus, density, speed=0.0):
+    """The largest stable explicit step h / (c + |v|) (s)."""
+    return spacing / (sound_speed(bulk_modulus, density) + speed)
+
+
+def initial_speed(case):
+    """The largest initial body speed (m/s)."""
+    return max(math.hypot(*body.velocity) for body in case.bodies)
+
+
+def case_stable_time_step(case):
+    """The stable explicit step of a case at its initial speeds (s)."""
+    return stable_time_step(case.grid.spacing, case.material.bulk_modulus,
+                            case.material.density, initial_speed(case))
+
+
+def time_step(case):
+    """The time step a run uses: time.dt, or for time.dt = "auto" the stable explicit step
+    times time.safety_factor (s)."""
+    if case.time.dt == "auto":
+        return case.time.safety_factor * case_stable_time_step(case)
+    return case.time.dt

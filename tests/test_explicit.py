@@ -1,0 +1,129 @@
+"""The explicit weakly compressible scheme: stable step, column at rest, dam break against
+the projection scheme and the VOF reference, and the study command."""
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mpmflow import Simulation, load_case
+from mpmflow.errors import CaseError
+from mpmflow.reference import errors_against_vof
+from mpmflow.stability import stable_time_step
+from mpmflow.study import reduced_bulk_modulus
+
+from conftest import EXAMPLES
+
+RHO, G = 1000.0, 9.81
+EXPLICIT = ["solver.scheme=explicit", "output.snapshots=false"]
+
+
+def test_stable_step_is_the_sound_crossing_time():
+    assert stable_time_step(0.004, 2.2e9, 1000.0) == pytest.approx(0.004 / math.sqrt(2.2e6))
+    assert stable_time_step(0.01, 4e5, 1000.0, speed=5.0) == pytest.approx(0.01 / 25.0)
+
+
+def test_dt_above_the_stable_step_is_refused_with_the_limit():
+    with pytest.raises(CaseError) as err:
+        load_case(EXAMPLES / "dam_break.toml", EXPLICIT + ["time.dt=1e-5"])
+    limit = 0.004 / math.sqrt(2.2e6)
+    msg = str(err.value)
+    assert "time.dt" in msg and f"{limit:.4g} s" in msg and "auto" in msg
+    # just below the limit is accepted
+    load_case(EXAMPLES / "dam_break.toml", EXPLICIT + [f"time.dt={0.999 * limit}"])
+
+
+def test_cli_refuses_an_unstable_step(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
+                          str(EXAMPLES / "dam_break.toml"), "--out", str(tmp_path / "o"),
+                          "--set", "solver.scheme=explicit"], capture_output=True, text=True)
+    assert res.returncode == 2
+    assert "stable step" in res.stderr and "2.697e-06 s" in res.stderr
+    assert "Traceback" not in res.stderr
+
+
+def test_auto_step_is_safety_times_the_limit():
+    case = load_case(EXAMPLES / "hydrostatic.toml", EXPLICIT + [
+        "time.dt=auto", "time.safety_factor=0.3", "material.bulk_modulus=4e5"])
+    sim = Simulation(case)
+    assert sim.dt == pytest.approx(0.3 * 0.01 / 20.0)
+    with pytest.raises(CaseError, match="projection scheme needs a number"):
+        load_case(EXAMPLES / "hydrostatic.toml", ["time.dt=auto"])
+
+
+def test_column_at_rest_settles_to_hydrostatic():
+    """Acceptance: released without pressure, the column rings (sound speed 20 m/s); its
+    pressure averaged over 0.5-1.0 s is within 2% (relative L2) of rho g (H - y)."""
+    depth = 0.195
+    case = load_case(EXAMPLES / "hydrostatic.toml", EXPLICIT + [
+        "time.dt=auto", "material.bulk_modulus=4e5", "time.end=1.0"])
+    sim = Simulation(case)
+    samples = []
+    sim.on_output = lambda s: samples.append(s.particles.pressure.copy()) \
+        if s.time > 0.5 + 1e-9 else None
+    sim.run()
+    assert len(samples) == 50
+    mean = np.mean(samples, axis=0)
+    P = sim.particles
+    exact = RHO * G * (depth - P.x[:, 1])
+    err = np.sqrt(np.sum((mean - exact) ** 2) / np.sum(exact**2))
+    assert err < 0.02
+    # it did ring: a single snapshot is far from hydrostatic, so the average is what settles
+    snap = np.sqrt(np.sum((P.pressure - exact) ** 2) / np.sum(exact**2))
+    assert snap > 5 * err
+    # mass is exact; the compressed volume matches the pressure: V/V0 = 1 - p/K on average
+    assert P.mass.sum() == pytest.approx(RHO * 0.1 * depth, rel=1e-12)
+
+
+def test_hydrostatic_start_stays_at_rest():
+    case = load_case(EXAMPLES / "hydrostatic.toml", EXPLICIT + [
+        "time.dt=auto", "material.bulk_modulus=4e5", "time.end=0.5",
+        "bodies.0.initial_pressure=hydrostatic"])
+    sim = Simulation(case)
+    sim.run()
+    assert np.max(sim.series("max_speed")) < 1e-3
+    P = sim.particles
+    exact = RHO * G * (0.195 - P.x[:, 1])
+    assert np.sqrt(np.sum((P.pressure - exact) ** 2) / np.sum(exact**2)) < 0.02
+
+
+def _series(overrides):
+    sim = Simulation(load_case(EXAMPLES / "dam_break.toml", [
+        "grid.spacing=0.008", "time.end=0.3", "output.snapshots=false", *overrides]))
+    sim.run()
+    return sim.series("time"), sim.series("front"), sim.series("height")
+
+
+def test_reduced_k_dam_break_matches_projection_and_vof():
+    """Acceptance (short version: 0.3 s): explicit with K for a sound speed ten times the
+    free-fall speed, at 0.008 m: front (t <= 0.2 s) and height within 0.08 a of the
+    projection scheme and within 0.10 a of the VOF reference."""
+    a = 0.114
+    k = reduced_bulk_modulus(load_case(EXAMPLES / "dam_break.toml"))
+    assert math.sqrt(k / RHO) == pytest.approx(10 * math.sqrt(2 * G * 0.228))
+    t, f_p, h_p = _series([])
+    t_e, f_e, h_e = _series(["solver.scheme=explicit", "time.dt=auto",
+                             f"material.bulk_modulus={k}",
+                             "bodies.0.initial_pressure=hydrostatic"])
+    assert np.array_equal(t, t_e)
+    early = t <= 0.2 + 1e-9
+    assert np.max(np.abs(f_e - f_p)[early]) / a <= 0.08
+    assert np.max(np.abs(h_e - h_p)) / a <= 0.08
+    err = errors_against_vof(t_e, f_e, h_e, a, 0.2, 0.3)
+    assert err["front"] <= 0.10 and err["height"] <= 0.10
+
+
+def test_study_quick(tmp_path):
+    """The study command end to end on its smoke-test size: tables and figures written."""
+    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "study", "paper", "--out",
+                          str(tmp_path), "--quick"], capture_output=True, text=True,
+                         timeout=600)
+    assert res.returncode == 0, res.stderr
+    for name in ("study.md", "study.csv", "fig2_height_front_ar2.png",
+                 "fig3_pressure_ar2.png", "fig4_surface_ar2.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    rows = (tmp_path / "study.csv").read_text().splitlines()
+    assert len(rows) == 4  # header + projection, explicit real K, explicit reduced K
+    assert "time-step ratio" in (tmp_path / "study.md").read_text()
