@@ -142,8 +142,8 @@ class Solver(_Section):
     scheme: Literal["projection", "explicit"] = Field(
         "projection", description="Time integration scheme: \"projection\" is the implicit "
         "Chorin projection of Kularathna & Soga (2017); \"explicit\" is the explicit weakly "
-        "compressible MPM the paper compares with (MUSL, p = -K * volumetric strain per cell, "
-        "smoothed; material.bulk_modulus, time step limited by the sound speed).")
+        "compressible MPM the paper compares with (update stress last, p = -K * volumetric "
+        "strain once per cell; material.bulk_modulus; time step limited by the sound speed).")
     formulation: Literal["mpmflow", "paper"] = Field(
         "mpmflow", description="Preset for free_surface, wall_flux, partial_cell_quadrature, "
         "density_correction and flip: \"paper\" is the plain reading of Kularathna & Soga "
@@ -153,7 +153,9 @@ class Solver(_Section):
     flip: float = Field(None, ge=0, le=1, description="FLIP fraction of the particle velocity "
                         "update: 1 = pure FLIP (the paper), 0 = pure PIC; values between blend. "
                         "The default keeps 1% PIC, which stops the thin surge tip from running "
-                        "ahead on FLIP noise.")
+                        "ahead on FLIP noise. For the explicit scheme it is the fraction per "
+                        "millisecond of simulated time (flip^(dt / 1 ms) per step), so its "
+                        "damping does not grow with the number of tiny steps.")
     full_cell_threshold: float = Field(
         0.9, gt=0, le=1, description="Cells with volume fraction theta at or above this are full "
         "and integrated with 2x2 Gauss points (paper: 0.9).")

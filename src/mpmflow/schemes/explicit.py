@@ -1,21 +1,14 @@
 """Explicit weakly compressible MPM: the comparator of Kularathna & Soga (2017), section 4.
 
 Update stress last (USL): the grid velocity after the momentum update moves the particles
-and gives the volumetric strain rate, so the particles' volumes follow their motion. (The
-modified variant, MUSL, takes the strain rate from the particle velocities re-mapped to
-the grid instead; tried and rejected: under FLIP the particle spacing and the strain then
-drift apart, and a column at rest gained kinetic energy, 0.1 J/m in 3 s.) The material is water with bulk modulus K:
-p = -K * volumetric strain = K (1 - J), J = V / V0, evaluated once per cell from the
-particles in it (J-bar: every particle of a cell takes the cell's J); no tension (J <= 1).
-The cell pressure drives the motion (one-point quadrature at the cell centre on the cell's
-material volume, the transpose of the strain rate, so the pair is energy-consistent;
-evaluating both at the centroid of the cell's particles instead was tried and rejected: the
-pre-stressed column at rest then grows a mode through the centroid's motion under FLIP).
-The particles report it smoothed (``solver.pressure_smoothing = "nodal"``: the
-volume-weighted average over the cells around each node, interpolated to the particle).
-Smoothing the pressure that drives the motion was tried and rejected: the cell-node-cell
-average has the checkerboard in its null space, which then grows unresisted under FLIP. The kernel is
+and gives the volumetric strain rate, so the particles' volumes follow their motion. The
+material is water with bulk modulus K: p = -K * volumetric strain = K (1 - J), J = V / V0,
+once per cell from the particles in it (every particle of a cell takes the cell's J); no
+tension (J <= 1). The cell pressure drives the motion at the cell centre (at the particles'
+centroid in partly filled cells), the transpose of the strain rate; the particles report it
+smoothed through the nodes (``solver.pressure_smoothing``). The kernel is
 ``kernels.explicit2d``; walls, FLIP/PIC and outputs are those of the projection scheme.
+The choices and the variants tried and rejected: docs/method.md, "The explicit comparator".
 """
 
 import numpy as np
