@@ -9,7 +9,7 @@ few over the grid.
 import numpy as np
 from numba import njit
 
-from .transfer2d import _weights, nodal_velocity, put_inside
+from .transfer2d import _weights, flip_update, nodal_velocity, put_inside
 from .walls2d import apply_walls_2d
 
 
@@ -212,20 +212,7 @@ def explicit_steps_2d(nsteps, dt, x, v, pressure, mass, volume, density, bulk, g
             cy = nodes[0] // (ncx + 1)
             v0 = mass[p] / density
             vol = cell_p[cx + ncx * cy] * v0
-            pic0 = 0.0
-            pic1 = 0.0
-            dv0 = 0.0
-            dv1 = 0.0
-            for a in range(4):
-                i = nodes[a]
-                pic0 += w[a] * v_new[i, 0]
-                pic1 += w[a] * v_new[i, 1]
-                dv0 += w[a] * (v_new[i, 0] - v_old[i, 0])
-                dv1 += w[a] * (v_new[i, 1] - v_old[i, 1])
-            v[p, 0] = flip * (v[p, 0] + dv0) + (1.0 - flip) * pic0
-            v[p, 1] = flip * (v[p, 1] + dv1) + (1.0 - flip) * pic1
-            x[p, 0] += dt * pic0
-            x[p, 1] += dt * pic1
+            flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip)
             if put_inside(x, v, p, upper, margin):
                 moved += 1
             volume[p] = vol

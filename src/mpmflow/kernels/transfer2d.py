@@ -52,6 +52,26 @@ def nodal_velocity(node_mass, node_mom, out):
                 out[i, k] = 0.0
 
 
+@njit(cache=True, inline="always")
+def flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip):
+    """Particle p's FLIP/PIC velocity (FLIP fraction ``flip``) and its position moved with
+    the interpolated new grid velocity, from its four nodes and weights."""
+    pic0 = 0.0
+    pic1 = 0.0
+    dv0 = 0.0
+    dv1 = 0.0
+    for a in range(4):
+        i = nodes[a]
+        pic0 += w[a] * v_new[i, 0]
+        pic1 += w[a] * v_new[i, 1]
+        dv0 += w[a] * (v_new[i, 0] - v_old[i, 0])
+        dv1 += w[a] * (v_new[i, 1] - v_old[i, 1])
+    v[p, 0] = flip * (v[p, 0] + dv0) + (1.0 - flip) * pic0
+    v[p, 1] = flip * (v[p, 1] + dv1) + (1.0 - flip) * pic1
+    x[p, 0] += dt * pic0
+    x[p, 1] += dt * pic1
+
+
 @njit(cache=True)
 def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip):
     """Eqs. (19)-(21): FLIP/PIC velocity update, position update with v^{t+1}, pressure.
@@ -62,23 +82,10 @@ def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, 
     inv_h = 1.0 / h
     for p in range(x.shape[0]):
         nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        pic0 = 0.0
-        pic1 = 0.0
-        dv0 = 0.0
-        dv1 = 0.0
+        flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip)
         pp = 0.0
         for a in range(4):
-            i = nodes[a]
-            wa = w[a]
-            pic0 += wa * v_new[i, 0]
-            pic1 += wa * v_new[i, 1]
-            dv0 += wa * (v_new[i, 0] - v_old[i, 0])
-            dv1 += wa * (v_new[i, 1] - v_old[i, 1])
-            pp += wa * p_node[i]
-        v[p, 0] = flip * (v[p, 0] + dv0) + (1.0 - flip) * pic0
-        v[p, 1] = flip * (v[p, 1] + dv1) + (1.0 - flip) * pic1
-        x[p, 0] += dt * pic0
-        x[p, 1] += dt * pic1
+            pp += w[a] * p_node[nodes[a]]
         pressure[p] = pp
 
 
