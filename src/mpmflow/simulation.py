@@ -190,8 +190,7 @@ class Simulation:
 
         span = (f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
                 if n > 1 else where(0))
-        report = self.scheme.advance(dt, n, where=where if self.case.solver.scheme ==
-                                     "projection" else span)
+        report = self.scheme.advance(dt, n, where=where)
         self.steps += n
         self.time = t0 + n * dt
         c = self.counters

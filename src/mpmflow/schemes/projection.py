@@ -62,10 +62,11 @@ class ProjectionScheme:
         self.last_unknowns = 0
 
     def advance(self, dt, nsteps, where=""):
-        """``nsteps`` steps of size dt; the report sums them (residual: the worst)."""
+        """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
+        the steps (residual: the worst)."""
         total = StepReport()
         for k in range(nsteps):
-            total = total.merge(self.step(dt, where=where(k) if callable(where) else where))
+            total = total.merge(self.step(dt, where=where(k)))
         return total
 
     def step(self, dt, where=""):
