@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 
-from mpmflow.boundaries import wall_contact
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
 from mpmflow.kernels import quadrature2d, transfer2d, walls2d
-from mpmflow.particles import lattice_in_box, seed_box
+from mpmflow.particles import Particles, lattice_in_box, seed_box
 
 
 def test_gauss_cell_integrals_are_the_bilinear_element_matrices():
@@ -45,10 +44,19 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     vol = m / 1000
     grid = Grid(0.1, (10, 10))
     mass, mom, nvol = np.zeros(grid.nnodes), np.zeros((grid.nnodes, 2)), np.zeros(grid.nnodes)
-    transfer2d.particles_to_grid_2d(x, v, m, vol, 0.1, 10, 10, mass, mom, nvol)
+    v_old, v_star = np.zeros((grid.nnodes, 2)), np.zeros((grid.nnodes, 2))
+    bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, vol))
+    g, dt = np.array([0.5, -9.81]), 0.01
+    transfer2d.particles_to_grid_2d(x, v, m, vol, bins.order, bins.start, 0.1, 10, 10, g, dt,
+                                    mass, mom, nvol, v_old, v_star)
     assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
     np.testing.assert_allclose(mom.sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=1e-12)
     assert nvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
+    # nodal velocity and predictor: momentum / mass, + dt g where there is mass, else 0
+    has = mass > 0
+    np.testing.assert_allclose(v_old[has], mom[has] / mass[has, None], rtol=1e-14)
+    np.testing.assert_allclose(v_star[has], v_old[has] + dt * g, rtol=1e-14)
+    assert not v_old[~has].any() and not v_star[~has].any()
 
 
 def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
@@ -64,7 +72,9 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     p = np.zeros(200)
     dt = 0.01
     exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
-    transfer2d.grid_to_particles_2d(x, v, p, 0.1, 10, 10, v_old, v_new, p_node, dt, 1.0)
+    moved = transfer2d.grid_to_particles_2d(x, v, p, 0.1, 10, 10, v_old, v_new, p_node, dt,
+                                            1.0, np.array([1.0, 1.0]), 1e-9)
+    assert moved == 0
     np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
     np.testing.assert_allclose(x, x0 + dt * exact, atol=1e-12)  # eq. 21 moves with v^{t+1}
     np.testing.assert_allclose(p, 5 - 4 * x0[:, 0] + 7 * x0[:, 1], atol=1e-12)
@@ -73,7 +83,10 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
 def test_keep_inside_puts_particles_back_and_counts_them():
     x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
     v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
-    moved = transfer2d.keep_inside(x, v, np.array([1.0, 1.0]), 1e-9)
+    still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move
+    moved = transfer2d.grid_to_particles_2d(x, v, np.zeros(4), 0.1, 10, 10, still, still,
+                                            np.zeros(121), 0.01, 1.0, np.array([1.0, 1.0]),
+                                            1e-9)
     assert moved == 3
     assert np.all((x >= 0) & (x <= 1))
     np.testing.assert_allclose(x[0], [0.01, 0.5])  # mirrored back across the wall
@@ -100,17 +113,41 @@ def test_binning_and_volume_fraction():
 def test_walls_are_one_sided_unless_in_contact():
     ncx, ncy = 2, 2
     n = (ncx + 1) * (ncy + 1)
-    contact = wall_contact(Grid(1.0, (ncx, ncy)))
     v = np.tile([[-1.0, 1.0]], (n, 1))  # moving into the left and top walls
-    released = contact.copy()
-    released[:] = False
+    released = np.zeros((n, 2), dtype=np.bool_)
     walls2d.apply_walls_2d(ncx, ncy, v, released, False)
     left = [0, 3, 6]
     top = [6, 7, 8]
     assert np.all(v[left, 0] == 0.0) and np.all(v[top, 1] == 0.0)
     bottom_mid = 1  # leaving the bottom wall upwards: kept
     assert v[bottom_mid, 1] == 1.0
+    # every node carries a pressure unknown: every wall node starts in contact
+    contact = np.zeros((n, 2), dtype=np.bool_)
+    walls2d.start_contact_2d(ncx, ncy, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
+    ix, iy = np.arange(n) % (ncx + 1), np.arange(n) // (ncx + 1)
+    np.testing.assert_array_equal(contact, np.stack([(ix == 0) | (ix == ncx),
+                                                     (iy == 0) | (iy == ncy)], axis=1))
     v = np.tile([[1.0, 1.0]], (n, 1))
     walls2d.apply_walls_2d(ncx, ncy, v, contact, True)  # in contact, no-slip: all zero
     assert np.all(v[bottom_mid] == 0.0)
     assert np.all(v[4] == 1.0)  # interior node untouched
+
+
+def test_contact_starts_where_material_presses_and_releases_under_tension():
+    ncx, ncy = 2, 2
+    n = (ncx + 1) * (ncy + 1)
+    row = -np.ones(n, dtype=np.int64)
+    row[[0, 1]] = [0, 1]  # two bottom nodes carry unknowns
+    vstar = np.zeros((n, 2))
+    vstar[3, 0] = -1.0  # left wall node without unknown pressing into the wall
+    vstar[5, 0] = -1.0  # right wall node without unknown leaving the wall
+    vstar[1, 1] = 2.0  # bottom node with unknown leaving the floor
+    contact = np.ones((n, 2), dtype=np.bool_)
+    walls2d.start_contact_2d(ncx, ncy, vstar, row, contact)
+    assert contact[0].tolist() == [True, True] and contact[1].tolist() == [False, True]
+    assert contact[3, 0] and not contact[5, 0] and not contact[4].any()
+    p_node = np.zeros(n)
+    p_node[1] = -5.0  # tension at the node that leaves the floor: released
+    p_node[0] = -5.0  # tension, but v* does not leave the walls: kept
+    assert walls2d.release_contact_2d(ncx, ncy, vstar, row, p_node, contact) == 1
+    assert not contact[1, 1] and contact[0].all()

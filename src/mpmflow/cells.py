@@ -34,5 +34,6 @@ def bin_particles(grid, particles, bins=None):
         raise NotImplementedError("only 2D grids are implemented")
     binning.cell_index_2d(particles.x, grid.spacing, grid.cells[0], grid.cells[1], bins.cell)
     binning.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
-    binning.cell_volume_fraction(bins.cell, particles.volume, grid.cell_volume, bins.theta)
+    binning.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
+                                 bins.theta)
     return bins

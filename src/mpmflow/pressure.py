@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .boundaries import apply_walls, outward_normals
+from .boundaries import apply_walls
 from .errors import SolverError
-from .kernels import pressure2d
+from .kernels import pressure2d, walls2d
 from .linsolve import LinearSolver, PressureMatrix
 
 
@@ -35,8 +35,9 @@ class PressureProjection:
         self.theta_min = theta_min
         self.density_correction = density_correction
         self.solver = LinearSolver(method, tolerance, max_iterations)
-        self.p_node = np.zeros(grid.nnodes)
-        self._normals = outward_normals(grid)
+        self.p_node = np.zeros(grid.nnodes)  # this step's nodal pressure (Pa)
+        self._p_next = np.zeros(grid.nnodes)
+        self._rhs = np.empty(0)
         self._v_c = np.zeros((grid.nnodes, grid.dim))
 
     def _matrix(self, integrals, nodes, where):
@@ -67,12 +68,11 @@ class PressureProjection:
         n = nodes.nrows
         rho = self.density
         stats = PressureStats(unknowns=n)
-        p_node = np.zeros(g.nnodes)
-        vn = self._normals * vstar  # v* . n on walls, 0 elsewhere
-        unknown = (nodes.row >= 0)[:, None]
+        p_node = self._p_next
+        p_node[:] = 0.0
         # wall nodes without a pressure of their own (at the free surface, p ~ 0) hold the
         # material only while it presses into the wall
-        contact &= unknown | (vn > 0.0)
+        walls2d.start_contact_2d(nx, ny, vstar, nodes.row, contact)
         if n:
             matrix = self._matrix(integrals, nodes, where)
             try:
@@ -83,7 +83,9 @@ class PressureProjection:
                                   "a smaller time.dt.") from None
             rows = matrix.nodes
             x0 = self.p_node[rows]
-            rhs = np.empty(n)
+            rhs = self._rhs if self._rhs.size >= n else np.empty(2 * n)
+            self._rhs = rhs
+            rhs = rhs[:n]
             while True:
                 v_c = vstar
                 if not self.wall_flux:  # the paper: divergence of the wall-constrained v*
@@ -91,7 +93,7 @@ class PressureProjection:
                     np.copyto(v_c, vstar)
                     apply_walls(g, v_c, contact, self.walls)
                 pressure2d.assemble_rhs_2d(nx, ny, g.spacing, integrals.slot, integrals.C,
-                                           integrals.V, node_vol, nodes.row, v_c, contact,
+                                           integrals.V, node_vol, rows, v_c, contact,
                                            self.wall_flux, self.density_correction / dt,
                                            rho / dt, rhs)
                 result = self.solver.solve(rhs, x0)
@@ -102,15 +104,14 @@ class PressureProjection:
                     self._fail(rhs, result, rows, where)
                 x0 = result.x
                 p_node[rows] = result.x
-                release = contact & unknown & (vn < 0.0) & (p_node[:, None] < 0.0)
-                if not release.any():
+                released = walls2d.release_contact_2d(nx, ny, vstar, nodes.row, p_node, contact)
+                if not released:
                     break
-                contact &= ~release
-                stats.released += int(release.sum())
+                stats.released += released
             if nodes.subcell:
                 pressure2d.ghost_pressures_2d(nx, ny, integrals.slot, integrals.K, nodes.row,
                                               nodes.f, self.theta_min, p_node)
-        self.p_node = p_node
+        self._p_next, self.p_node = self.p_node, p_node
         pressure2d.correct_velocity_2d(nx, ny, integrals.slot, integrals.C, integrals.V, p_node,
                                        vstar, dt / rho, v_new)
         return stats

@@ -1,14 +1,14 @@
 """Particles to cells: cell index of each particle, counting sort, cell volume fractions."""
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def cell_index_2d(x, h, ncx, ncy, out):
     """Flat cell index of every particle. Particles on the upper domain edge go to the last cell."""
     inv_h = 1.0 / h
-    for p in range(x.shape[0]):
+    for p in prange(x.shape[0]):
         cx = int(np.floor(x[p, 0] * inv_h))
         cy = int(np.floor(x[p, 1] * inv_h))
         cx = min(max(cx, 0), ncx - 1)
@@ -34,12 +34,13 @@ def counting_sort(cell, ncells, start, order):
         fill[c] += 1
 
 
-@njit(cache=True)
-def cell_volume_fraction(cell, volume, cell_volume, theta):
-    """theta_e = sum of particle volumes in cell e / cell volume (eqs. 8-9 of the paper)."""
-    theta[:] = 0.0
-    for p in range(cell.shape[0]):
-        theta[cell[p]] += volume[p]
+@njit(cache=True, parallel=True)
+def cell_volume_fraction(order, start, volume, cell_volume, theta):
+    """theta_e = sum of particle volumes in cell e / cell volume (eqs. 8-9 of the paper),
+    from the sorted particles (each cell summed in particle order)."""
     inv = 1.0 / cell_volume
-    for c in range(theta.shape[0]):
-        theta[c] *= inv
+    for c in prange(theta.shape[0]):
+        total = 0.0
+        for s in range(start[c], start[c + 1]):
+            total += volume[order[s]]
+        theta[c] = total * inv

@@ -71,15 +71,18 @@ def galerkin(cols, vals, pcols, pw, cnode, nnx_c):
     nc = cnode.shape[0]
     ccols = -np.ones((nc, 9), dtype=np.int64)
     cvals = np.zeros((nc, 9))
+    cx = np.empty(nc, dtype=np.int64)
+    cy = np.empty(nc, dtype=np.int64)
+    for I in range(nc):
+        cx[I] = cnode[I] % nnx_c
+        cy[I] = cnode[I] // nnx_c
     n = cols.shape[0]
     for r in range(n):
         for a in range(4):
             I = pcols[r, a]
             if I < 0:
-                continue
+                break  # P's entries of a row come first, then -1
             wa = pw[r, a]
-            Ix = cnode[I] % nnx_c
-            Iy = cnode[I] // nnx_c
             for s in range(9):
                 j = cols[r, s]
                 if j < 0:
@@ -88,10 +91,8 @@ def galerkin(cols, vals, pcols, pw, cnode, nnx_c):
                 for b in range(4):
                     J = pcols[j, b]
                     if J < 0:
-                        continue
-                    dx = cnode[J] % nnx_c - Ix
-                    dy = cnode[J] // nnx_c - Iy
-                    slot = 3 * (dy + 1) + (dx + 1)
+                        break
+                    slot = 3 * (cy[J] - cy[I] + 1) + (cx[J] - cx[I] + 1)
                     ccols[I, slot] = J
                     cvals[I, slot] += v * pw[j, b]
     return ccols, cvals
@@ -129,20 +130,16 @@ def residual(cols, vals, x, b, out):
 
 @njit(cache=True)
 def _gauss_seidel(cols, vals, b, x, forward):
+    """One Gauss-Seidel sweep; the diagonal of every row is in slot 4 (offset 0, 0)."""
     n = cols.shape[0]
     for k in range(n):
         r = k if forward else n - 1 - k
         acc = b[r]
-        diag = 0.0
         for s in range(9):
             c = cols[r, s]
-            if c < 0:
-                continue
-            if c == r:
-                diag = vals[r, s]
-            else:
+            if c >= 0 and s != 4:
                 acc -= vals[r, s] * x[c]
-        x[r] = acc / diag
+        x[r] = acc / vals[r, 4]
 
 
 @njit(cache=True)

@@ -15,14 +15,16 @@ unknown set have p = 0 (the paper's free-surface nodes).
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+CHUNKS = 64  # parallel loops over a list of rows hand out this many chunks
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def nodal_fraction_2d(ncx, ncy, theta, node_f):
     """Nodal volume fraction: mean of the node's in-domain cells' theta, each clipped to 1."""
     nnx = ncx + 1
-    for iy in range(ncy + 1):
+    for iy in prange(ncy + 1):
         for ix in range(nnx):
             fsum = 0.0
             ncell = 0
@@ -33,18 +35,18 @@ def nodal_fraction_2d(ncx, ncy, theta, node_f):
             node_f[ix + nnx * iy] = fsum / ncell
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def enclosed_cells_2d(ncx, ncy, node_f, enclosed):
     """Cells whose four nodes all lie inside the fluid (f > 1/2)."""
     nnx = ncx + 1
-    for cy in range(ncy):
+    for cy in prange(ncy):
         for cx in range(ncx):
             i = cx + nnx * cy
             enclosed[cx + ncx * cy] = (node_f[i] > 0.5 and node_f[i + 1] > 0.5 and
                                        node_f[i + nnx] > 0.5 and node_f[i + nnx + 1] > 0.5)
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def classify_nodes_2d(ncx, ncy, cell_slot, node_f, subcell, node_row):
     """Number the unknowns; returns their count.
 
@@ -53,22 +55,26 @@ def classify_nodes_2d(ncx, ncy, cell_slot, node_f, subcell, node_row):
     """
     nnx = ncx + 1
     nny = ncy + 1
-    nrows = 0
-    for iy in range(nny):
+    for iy in prange(nny):
         for ix in range(nnx):
             i = ix + nnx * iy
-            unknown = True
+            unknown = not (subcell and node_f[i] <= 0.5)
             for cy in range(max(iy - 1, 0), min(iy + 1, ncy)):
                 for cx in range(max(ix - 1, 0), min(ix + 1, ncx)):
                     if cell_slot[cx + ncx * cy] < 0:
                         unknown = False
-            if subcell and node_f[i] <= 0.5:
-                unknown = False
-            if unknown:
-                node_row[i] = nrows
-                nrows += 1
-            else:
-                node_row[i] = -1
+            node_row[i] = 0 if unknown else -1
+    return _number(node_row)
+
+
+@njit(cache=True)
+def _number(node_row):
+    """Number the entries >= 0 in order; returns how many."""
+    nrows = 0
+    for i in range(node_row.shape[0]):
+        if node_row[i] >= 0:
+            node_row[i] = nrows
+            nrows += 1
     return nrows
 
 
@@ -124,7 +130,7 @@ def _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols, vals,
                        anchored):
     """Assemble L of eq. (14) row by row in ELL form.
@@ -138,16 +144,25 @@ def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_
     """
     nnx = ncx + 1
     nny = ncy + 1
-    S = np.empty((3, 3))
-    slots = np.empty(4, dtype=np.int64)
-    local = np.empty(4, dtype=np.int64)
-    base = np.empty(4, dtype=np.int64)
-    for i in range(nnx * nny):
-        r = node_row[i]
-        if r < 0:
-            continue
-        ix = i % nnx
-        iy = i // nnx
+    for iy in prange(nny):
+        S = np.empty((3, 3))
+        slots = np.empty(4, dtype=np.int64)
+        local = np.empty(4, dtype=np.int64)
+        base = np.empty(4, dtype=np.int64)
+        for ix in range(nnx):
+            if node_row[ix + nnx * iy] >= 0:
+                _matrix_row(ix, iy, ncx, ncy, cell_slot, K, node_row, node_f, subcell,
+                            theta_min, cols, vals, anchored, S, slots, local, base)
+
+
+@njit(cache=True)
+def _matrix_row(ix, iy, ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols,
+                vals, anchored, S, slots, local, base):
+    """Row of the unknown at node (ix, iy) of ``assemble_matrix_2d``."""
+    nnx = ncx + 1
+    i = ix + nnx * iy
+    r = node_row[i]
+    if r >= 0:
         _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base)
         anchored[r] = False
         for dy in range(3):
@@ -173,10 +188,10 @@ def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_
                     vals[r, slot] = sv
 
 
-@njit(cache=True)
-def assemble_rhs_2d(ncx, ncy, h, cell_slot, C, V, node_vol, node_row, vstar, contact,
+@njit(cache=True, parallel=True)
+def assemble_rhs_2d(ncx, ncy, spacing, cell_slot, C, V, node_vol, row_nodes, vstar, contact,
                     wall_flux, expansion, rho_over_dt, rhs):
-    """Right-hand side of eq. (13) for every unknown node.
+    """Right-hand side of eq. (13) for every unknown (``row_nodes[r]``: the node of row r).
 
     rhs_i = -(rho/dt) sum_e C_e[a_i, b, k] v*_{b,k}                (divergence, eq. 15)
             + (rho/dt) int_{wetted walls in contact} N_i v*.n ds   (if wall_flux)
@@ -191,30 +206,38 @@ def assemble_rhs_2d(ncx, ncy, h, cell_slot, C, V, node_vol, node_row, vstar, con
     neighbours instead (measured: the wetted volume then drifts by 11% in the dam break).
     """
     nnx = ncx + 1
-    nny = ncy + 1
-    slots = np.empty(4, dtype=np.int64)
-    local = np.empty(4, dtype=np.int64)
-    base = np.empty(4, dtype=np.int64)
-    for i in range(nnx * nny):
-        r = node_row[i]
-        if r < 0:
-            continue
-        ix = i % nnx
-        iy = i // nnx
-        b = 0.0
-        vol = 0.0
-        for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
-            s, a = slots[k], local[k]
-            vol += V[s, a]
-            for bb in range(4):
-                j = base[k] + (bb & 1) + nnx * (bb >> 1)
-                b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
-        excess = node_vol[i] - vol
-        if expansion > 0.0 and excess > 0.0:
-            b += expansion * excess
-        if wall_flux:
-            b += _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact)
-        rhs[r] = rho_over_dt * b
+    n = row_nodes.shape[0]
+    nchunks = min(CHUNKS, n)
+    for chunk in prange(nchunks):
+        slots = np.empty(4, dtype=np.int64)
+        local = np.empty(4, dtype=np.int64)
+        base = np.empty(4, dtype=np.int64)
+        for r in range(chunk * n // nchunks, (chunk + 1) * n // nchunks):
+            i = row_nodes[r]
+            rhs[r] = rho_over_dt * _rhs_row(i % nnx, i // nnx, ncx, ncy, spacing, cell_slot, C,
+                                            V, node_vol, vstar, contact, wall_flux, expansion,
+                                            slots, local, base)
+
+
+@njit(cache=True)
+def _rhs_row(ix, iy, ncx, ncy, h, cell_slot, C, V, node_vol, vstar, contact, wall_flux,
+             expansion, slots, local, base):
+    """Row of node (ix, iy) of ``assemble_rhs_2d``, without the factor rho/dt."""
+    nnx = ncx + 1
+    b = 0.0
+    vol = 0.0
+    for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
+        s, a = slots[k], local[k]
+        vol += V[s, a]
+        for bb in range(4):
+            j = base[k] + (bb & 1) + nnx * (bb >> 1)
+            b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
+    excess = node_vol[ix + nnx * iy] - vol
+    if expansion > 0.0 and excess > 0.0:
+        b += expansion * excess
+    if wall_flux:
+        b += _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact)
+    return b
 
 
 @njit(cache=True)
@@ -255,7 +278,7 @@ def _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def ghost_pressures_2d(ncx, ncy, cell_slot, K, node_row, node_f, theta_min, p_node):
     """Pressure at nodes of the system that are not unknowns (in place, p_node of unknowns set).
 
@@ -264,34 +287,34 @@ def ghost_pressures_2d(ncx, ncy, cell_slot, K, node_row, node_f, theta_min, p_no
     """
     nnx = ncx + 1
     nny = ncy + 1
-    S = np.empty((3, 3))
-    slots = np.empty(4, dtype=np.int64)
-    local = np.empty(4, dtype=np.int64)
-    base = np.empty(4, dtype=np.int64)
-    for i in range(nnx * nny):
-        if node_row[i] >= 0:
-            continue
-        ix = i % nnx
-        iy = i // nnx
-        if _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base) == 0:
-            p_node[i] = 0.0
-            continue
-        num = 0.0
-        den = 0.0
-        for dy in range(3):
-            for dx in range(3):
-                sv = S[dy, dx]
-                if (dy == 1 and dx == 1) or sv >= 0.0:
-                    continue
-                j = (ix + dx - 1) + nnx * (iy + dy - 1)
-                if node_row[j] < 0:
-                    continue
-                num -= sv * _ghost_factor(node_f[j], node_f[i], theta_min) * p_node[j]
-                den -= sv
-        p_node[i] = num / den if den > 0.0 else 0.0
+    for iy in prange(nny):
+        S = np.empty((3, 3))
+        slots = np.empty(4, dtype=np.int64)
+        local = np.empty(4, dtype=np.int64)
+        base = np.empty(4, dtype=np.int64)
+        for ix in range(nnx):
+            i = ix + nnx * iy
+            if node_row[i] >= 0:
+                continue
+            if _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base) == 0:
+                p_node[i] = 0.0
+                continue
+            num = 0.0
+            den = 0.0
+            for dy in range(3):
+                for dx in range(3):
+                    sv = S[dy, dx]
+                    if (dy == 1 and dx == 1) or sv >= 0.0:
+                        continue
+                    j = (ix + dx - 1) + nnx * (iy + dy - 1)
+                    if node_row[j] < 0:
+                        continue
+                    num -= sv * _ghost_factor(node_f[j], node_f[i], theta_min) * p_node[j]
+                    den -= sv
+            p_node[i] = num / den if den > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def correct_velocity_2d(ncx, ncy, cell_slot, C, V, p_node, vstar, dt_over_rho, v_new):
     """Eq. (16) with the row-sum lumped volume matrix: v_i = v*_i - dt/rho (G p)_i / V_i.
 
@@ -299,25 +322,25 @@ def correct_velocity_2d(ncx, ncy, cell_slot, C, V, p_node, vstar, dt_over_rho, v
     """
     nnx = ncx + 1
     nny = ncy + 1
-    slots = np.empty(4, dtype=np.int64)
-    local = np.empty(4, dtype=np.int64)
-    base = np.empty(4, dtype=np.int64)
-    for i in range(nnx * nny):
-        ix = i % nnx
-        iy = i // nnx
-        vol = 0.0
-        g0 = 0.0
-        g1 = 0.0
-        for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
-            s, a = slots[k], local[k]
-            vol += V[s, a]
-            for b in range(4):
-                pj = p_node[base[k] + (b & 1) + nnx * (b >> 1)]
-                g0 += C[s, a, b, 0] * pj
-                g1 += C[s, a, b, 1] * pj
-        if vol > 0.0:
-            v_new[i, 0] = vstar[i, 0] - dt_over_rho * g0 / vol
-            v_new[i, 1] = vstar[i, 1] - dt_over_rho * g1 / vol
-        else:
-            v_new[i, 0] = vstar[i, 0]
-            v_new[i, 1] = vstar[i, 1]
+    for iy in prange(nny):
+        slots = np.empty(4, dtype=np.int64)
+        local = np.empty(4, dtype=np.int64)
+        base = np.empty(4, dtype=np.int64)
+        for ix in range(nnx):
+            i = ix + nnx * iy
+            vol = 0.0
+            g0 = 0.0
+            g1 = 0.0
+            for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
+                s, a = slots[k], local[k]
+                vol += V[s, a]
+                for b in range(4):
+                    pj = p_node[base[k] + (b & 1) + nnx * (b >> 1)]
+                    g0 += C[s, a, b, 0] * pj
+                    g1 += C[s, a, b, 1] * pj
+            if vol > 0.0:
+                v_new[i, 0] = vstar[i, 0] - dt_over_rho * g0 / vol
+                v_new[i, 1] = vstar[i, 1] - dt_over_rho * g1 / vol
+            else:
+                v_new[i, 0] = vstar[i, 0]
+                v_new[i, 1] = vstar[i, 1]

@@ -1,7 +1,9 @@
 """Particle-grid transfers with bilinear shape functions (2D)."""
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+CHUNKS = 64  # parallel loops over particles hand out this many chunks
 
 
 @njit(cache=True, inline="always")
@@ -21,22 +23,77 @@ def _weights(x0, x1, inv_h, ncx, ncy):
 
 
 @njit(cache=True)
-def particles_to_grid_2d(x, v, mass, volume, h, ncx, ncy, node_mass, node_mom, node_vol):
-    """Lumped nodal mass M_i = sum_p N_i(x_p) m_p, momentum sum_p N_i m_p v_p and
-    material volume sum_p N_i V_p."""
-    node_mass[:] = 0.0
-    node_mom[:] = 0.0
-    node_vol[:] = 0.0
+def _scatter_cells(j0, j1, px, py, x, v, mass, volume, order, start, h, ncx, ncy, node_mass,
+                   node_mom, node_vol):
+    """P2G of the particles of cells j0 to j1 - 1 of colour (px, py); cell j of a colour is
+    (px + 2 (j mod m), py + 2 (j div m)) with m its cells per row."""
     inv_h = 1.0 / h
-    for p in range(x.shape[0]):
-        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        for a in range(4):
-            i = nodes[a]
-            wm = w[a] * mass[p]
-            node_mass[i] += wm
-            node_vol[i] += w[a] * volume[p]
-            node_mom[i, 0] += wm * v[p, 0]
-            node_mom[i, 1] += wm * v[p, 1]
+    m = (ncx - px + 1) // 2
+    for j in range(j0, j1):
+        c = px + 2 * (j % m) + ncx * (py + 2 * (j // m))
+        for s in range(start[c], start[c + 1]):
+            p = order[s]
+            nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+            for a in range(4):
+                i = nodes[a]
+                wm = w[a] * mass[p]
+                node_mass[i] += wm
+                node_vol[i] += w[a] * volume[p]
+                node_mom[i, 0] += wm * v[p, 0]
+                node_mom[i, 1] += wm * v[p, 1]
+
+
+@njit(cache=True)
+def _balanced_chunks(px, py, ncx, ncy, start, nchunks, bounds):
+    """Split the cells of colour (px, py) into ``nchunks`` runs holding about equal numbers
+    of particles: run t is cells bounds[t] to bounds[t + 1] - 1."""
+    m = (ncx - px + 1) // 2
+    ncol = m * ((ncy - py + 1) // 2)
+    cum = np.empty(ncol + 1, dtype=np.int64)
+    cum[0] = 0
+    for j in range(ncol):
+        c = px + 2 * (j % m) + ncx * (py + 2 * (j // m))
+        cum[j + 1] = cum[j] + start[c + 1] - start[c]
+    for t in range(nchunks + 1):
+        bounds[t] = np.searchsorted(cum, cum[ncol] * t // nchunks)
+    bounds[nchunks] = ncol
+
+
+@njit(cache=True, parallel=True)
+def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity, dt, node_mass,
+                         node_mom, node_vol, v_old, v_star):
+    """Lumped nodal mass M_i = sum_p N_i(x_p) m_p, momentum sum_p N_i m_p v_p, material
+    volume sum_p N_i V_p, velocity v_i = momentum / M_i and the predictor without pressure
+    v*_i = v_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere).
+
+    The particles come binned by cell (``order``, ``start``: see ``binning``). Cells of one
+    parity class (cx mod 2, cy mod 2) share no node, so each class is scattered in parallel
+    with no write conflict, in runs of cells holding equal numbers of particles; every sum
+    is taken in the same order whatever the thread count, so results do not depend on it.
+    """
+    nn = node_mass.shape[0]
+    for i in prange(nn):
+        node_mass[i] = 0.0
+        node_vol[i] = 0.0
+        node_mom[i, 0] = 0.0
+        node_mom[i, 1] = 0.0
+    bounds = np.empty(CHUNKS + 1, dtype=np.int64)
+    for colour in range(4):
+        px = colour & 1
+        py = colour >> 1
+        _balanced_chunks(px, py, ncx, ncy, start, CHUNKS, bounds)
+        for t in prange(CHUNKS):
+            _scatter_cells(bounds[t], bounds[t + 1], px, py, x, v, mass, volume, order, start,
+                           h, ncx, ncy, node_mass, node_mom, node_vol)
+    for i in prange(nn):
+        m = node_mass[i]
+        for k in range(2):
+            if m > 0.0:
+                v_old[i, k] = node_mom[i, k] / m
+                v_star[i, k] = v_old[i, k] + dt * gravity[k]
+            else:
+                v_old[i, k] = 0.0
+                v_star[i, k] = 0.0
 
 
 @njit(cache=True)
@@ -72,23 +129,6 @@ def flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip):
     x[p, 1] += dt * pic1
 
 
-@njit(cache=True)
-def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip):
-    """Eqs. (19)-(21): FLIP/PIC velocity update, position update with v^{t+1}, pressure.
-
-    ``flip`` is the FLIP fraction: 1 = pure FLIP (the paper), 0 = pure PIC.
-    Positions move with the interpolated new grid velocity (eq. 21), evaluated at x_p^t.
-    """
-    inv_h = 1.0 / h
-    for p in range(x.shape[0]):
-        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-        flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip)
-        pp = 0.0
-        for a in range(4):
-            pp += w[a] * p_node[nodes[a]]
-        pressure[p] = pp
-
-
 @njit(cache=True, inline="always")
 def put_inside(x, v, p, upper, margin):
     """Put particle p back inside the box [0, upper] if it left it; True if it was moved.
@@ -114,13 +154,41 @@ def put_inside(x, v, p, upper, margin):
 
 
 @njit(cache=True)
-def keep_inside(x, v, upper, margin):
-    """Put particles that left the box [0, upper] back inside (``put_inside``); return how
-    many were moved."""
+def _gather_particles(lo, hi, x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip,
+                      upper, margin):
+    """G2P of particles lo to hi - 1 (see ``grid_to_particles_2d``); returns how many were
+    put back inside."""
+    inv_h = 1.0 / h
     moved = 0
-    for p in range(x.shape[0]):
+    for p in range(lo, hi):
+        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+        flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip)
+        pp = 0.0
+        for a in range(4):
+            pp += w[a] * p_node[nodes[a]]
+        pressure[p] = pp
         if put_inside(x, v, p, upper, margin):
             moved += 1
+    return moved
+
+
+@njit(cache=True, parallel=True)
+def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip, upper,
+                         margin):
+    """Eqs. (19)-(21): FLIP/PIC velocity update, position update with v^{t+1}, pressure;
+    then particles that left the box [0, upper] are put back inside (``put_inside``).
+    Returns how many were put back.
+
+    ``flip`` is the FLIP fraction: 1 = pure FLIP (the paper), 0 = pure PIC.
+    Positions move with the interpolated new grid velocity (eq. 21), evaluated at x_p^t.
+    """
+    n = x.shape[0]
+    nchunks = min(CHUNKS, n)
+    moved = 0
+    for chunk in prange(nchunks):
+        moved += _gather_particles(chunk * n // nchunks, (chunk + 1) * n // nchunks, x, v,
+                                   pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip,
+                                   upper, margin)
     return moved
 
 

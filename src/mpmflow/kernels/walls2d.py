@@ -28,3 +28,52 @@ def apply_walls_2d(ncx, ncy, v, contact, no_slip):
                     v[i, k] = 0.0
                     if no_slip and contact[i, k]:
                         v[i, 1 - k] = 0.0
+
+
+@njit(cache=True)
+def start_contact_2d(ncx, ncy, vstar, node_row, contact):
+    """The wall nodes that hold the material when the pressure step starts (in place):
+    ``contact[i, k]`` for the wall normal to axis k through node i is set where the node
+    carries a pressure unknown (``node_row[i] >= 0``) or v* presses into that wall; every
+    other entry is cleared."""
+    nnx = ncx + 1
+    nny = ncy + 1
+    contact[:] = False
+    for iy in range(nny):
+        for ix in range(nnx):
+            if 0 < ix < ncx and 0 < iy < ncy:
+                continue
+            i = ix + nnx * iy
+            for k in range(2):
+                pos = ix if k == 0 else iy
+                top = ncx if k == 0 else ncy
+                if pos != 0 and pos != top:
+                    continue
+                sign = -1.0 if pos == 0 else 1.0
+                contact[i, k] = node_row[i] >= 0 or sign * vstar[i, k] > 0.0
+
+
+@njit(cache=True)
+def release_contact_2d(ncx, ncy, vstar, node_row, p_node, contact):
+    """Release the wall nodes in contact whose pressure unknown came out negative while v*
+    leaves the wall (in place); returns how many (node, wall) pairs were released."""
+    nnx = ncx + 1
+    nny = ncy + 1
+    released = 0
+    for iy in range(nny):
+        for ix in range(nnx):
+            if 0 < ix < ncx and 0 < iy < ncy:
+                continue
+            i = ix + nnx * iy
+            if node_row[i] < 0 or p_node[i] >= 0.0:
+                continue
+            for k in range(2):
+                pos = ix if k == 0 else iy
+                top = ncx if k == 0 else ncy
+                if pos != 0 and pos != top:
+                    continue
+                sign = -1.0 if pos == 0 else 1.0
+                if contact[i, k] and sign * vstar[i, k] < 0.0:
+                    contact[i, k] = False
+                    released += 1
+    return released

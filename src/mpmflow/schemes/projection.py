@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import transfers
-from ..boundaries import apply_walls, wall_contact
+from ..boundaries import apply_walls
 from ..cells import bin_particles
 from ..free_surface import FreeSurface
 from ..pressure import PressureProjection
@@ -49,8 +49,7 @@ class ProjectionScheme:
                                              s.wall_flux, s.ghost_theta_min,
                                              s.density_correction, s.linear_solver,
                                              s.tolerance, s.max_iterations)
-        self.wall_nodes = wall_contact(grid)
-        self.contact = self.wall_nodes.copy()
+        self.contact = np.zeros((grid.nnodes, grid.dim), dtype=np.bool_)
         n, d = grid.nnodes, grid.dim
         self.node_mass = np.zeros(n)
         self.node_mom = np.zeros((n, d))
@@ -71,28 +70,23 @@ class ProjectionScheme:
 
     def step(self, dt, where=""):
         g, P = self.grid, self.particles
-        # 1. particle-to-grid
+        # 1-2. particle-to-grid and the predictor with gravity (eqs. 10-12); wall conditions
+        # are applied in step 5
         self.bins = bin_particles(g, P, self.bins)
-        transfers.particles_to_grid(g, P, self.node_mass, self.node_mom, self.v_old,
-                                    self.node_vol)
-        # 2. predictor with gravity (eqs. 10-12); wall conditions are applied in step 5
-        has_mass = self.node_mass > 0.0
-        np.copyto(self.v_star, self.v_old)
-        self.v_star[has_mass] += dt * self.gravity
+        transfers.particles_to_grid(g, P, self.bins, self.gravity, dt, self.node_mass,
+                                    self.node_mom, self.node_vol, self.v_old, self.v_star)
         # 3. cell classification and quadrature (eqs. 8, 9)
         node_f = self.surface.nodal_fraction(self.bins.theta)
         integrals = self.quadrature.integrals(P, self.bins, self.surface.enclosed_cells(node_f))
         # 4. free surface
         nodes = self.surface.classify(integrals, node_f)
         # 5-6. pressure Poisson equation with contact walls, and corrector (eqs. 13-18)
-        np.copyto(self.contact, self.wall_nodes)
         stats = self.projection.project(integrals, nodes, self.node_vol, self.v_star,
                                         self.contact, dt, self.v_new, where)
         apply_walls(g, self.v_new, self.contact, self.walls)
         # 7. grid-to-particle (eqs. 19-21) and pressure to particles
-        transfers.grid_to_particles(g, P, self.v_old, self.v_new, self.projection.p_node, dt,
-                                    self.flip)
-        moved = transfers.keep_inside(g, P)
+        moved = transfers.grid_to_particles(g, P, self.v_old, self.v_new,
+                                            self.projection.p_node, dt, self.flip)
         self.last_unknowns = stats.unknowns
         return StepReport(stats.unknowns, stats.solves, stats.iterations, stats.iterations,
                           stats.residual, stats.released, moved)
