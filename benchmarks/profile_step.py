@@ -4,7 +4,7 @@ Runs a case in-process under cProfile (after a short warm-up run that loads Numb
 cache) and sums the time of each compiled kernel and of the Python around it into the
 phases of a step. Prints a Markdown table of milliseconds per step.
 
-    python benchmarks/profile_step.py [--case examples/dam_break.toml] [--set key=value ...]
+    python benchmarks/profile_step.py [--case examples/dam_break.toml] [--set key=value ...] [--cpu]
 
 cProfile adds a few microseconds per Python call, so the "Python glue" row is an upper
 bound; the kernels' own times are not affected (each is one call).
@@ -15,6 +15,8 @@ import cProfile
 import pstats
 import time
 from pathlib import Path
+
+import numba
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -44,19 +46,20 @@ def phase_of(name):
     return None
 
 
-def profile(case_path, overrides):
+def profile(case_path, overrides, cpu=False):
     from mpmflow import Simulation, load_case
 
     warm = load_case(case_path, [*overrides, "time.end=0.003", "output.interval=0.001"])
     Simulation(warm).run()
     case = load_case(case_path, overrides)
     sim = Simulation(case)
-    prof = cProfile.Profile()
-    t0 = time.perf_counter()
+    clock = time.process_time if cpu else time.perf_counter
+    prof = cProfile.Profile(clock)
+    t0 = clock()
     prof.enable()
     sim.run()
     prof.disable()
-    wall = time.perf_counter() - t0
+    wall = clock() - t0
     stats = pstats.Stats(prof).stats
     # a phase's time: the inclusive time of its functions, over the calls that come from
     # outside every phase (calls from within a phase are in that caller's time already)
@@ -77,10 +80,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default=str(ROOT / "examples" / "dam_break.toml"))
     ap.add_argument("--set", action="append", default=[], dest="overrides")
+    ap.add_argument("--cpu", action="store_true",
+                    help="CPU time of the process instead of wall time (steadier on a busy "
+                         "machine; use with NUMBA_NUM_THREADS=1)")
     args = ap.parse_args()
-    sim, wall, steps, totals, glue = profile(args.case, args.overrides)
+    sim, wall, steps, totals, glue = profile(args.case, args.overrides, args.cpu)
     print(f"{Path(args.case).name} {' '.join(args.overrides)}: {sim.particles.count} "
-          f"particles, {steps} steps, time loop {wall:.2f} s under cProfile")
+          f"particles, {steps} steps, time loop {wall:.2f} s ({'CPU' if args.cpu else 'wall'}) "
+          f"under cProfile, {numba.get_num_threads()} threads")
     print()
     print("| phase | ms per step | share |")
     print("|---|---|---|")

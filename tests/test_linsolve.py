@@ -79,3 +79,34 @@ def test_iteration_limit_is_reported_not_hidden(system):
     s.prepare(m)
     res = s.solve(b)
     assert not res.converged and res.residual > 1e-14
+
+
+def test_large_multigrid_solve_is_right_and_independent_of_threads():
+    # above multigrid.PARALLEL_ROWS the row loops and dot products run on all threads:
+    # the answer must match sparse LU and be bit-identical on 1 and 2 threads
+    import numba
+
+    from mpmflow.kernels import multigrid
+
+    nnx, nny = 121, 111
+    yy, xx = np.mgrid[0:nny, 0:nnx]
+    mask = (yy > 0) & (xx > 0) & (xx < nnx - 1) & (yy < 0.8 * nny + 5 * np.sin(xx / 7))
+    m = poisson_ell(nnx, nny, mask)
+    assert m.nodes.size > multigrid.PARALLEL_ROWS
+    b = np.random.default_rng(3).normal(size=m.nodes.size)
+    exact = spla.spsolve(m.csr().tocsc(), b)
+    answers = []
+    before = numba.get_num_threads()
+    try:
+        for threads in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+            numba.set_num_threads(threads)
+            s = LinearSolver("multigrid", 1e-10, 200)
+            s.prepare(m)
+            res = s.solve(b)
+            assert res.converged and res.iterations <= 20
+            answers.append(res.x)
+    finally:
+        numba.set_num_threads(before)
+    np.testing.assert_allclose(answers[0], exact, rtol=0, atol=1e-8 * np.abs(exact).max())
+    for x in answers[1:]:
+        assert np.array_equal(x, answers[0])

@@ -8,16 +8,21 @@ level's node grid (``nnx`` nodes per row of nodes).
 Levels: a coarse node is an unknown when the fine node it coincides with (2I, 2J) is one;
 prolongation is bilinear interpolation from the coarse unknowns (missing ones count as
 zero), so P has full column rank and the Galerkin operator P^T A P stays symmetric
-positive definite. Smoothing is Gauss-Seidel, forward before and backward after the coarse
-correction, which makes the V-cycle a symmetric preconditioner; the coarsest level is
-solved with a dense Cholesky factor. (McAdams, Sifakis & Teran 2010 use the same structure
+positive definite. Smoothing is four-colour Gauss-Seidel (colour = node parity in x and y;
+in a 9-point stencil rows of one colour do not couple, so each colour is updated in
+parallel), colours 0-3 before and 3-0 after the coarse correction, which makes the
+V-cycle a symmetric preconditioner; the coarsest level is solved with a dense Cholesky
+factor. Levels of at least ``PARALLEL_ROWS`` rows run their row loops and dot products in
+parallel; the arithmetic is the same whatever the thread count, so the results are too. (McAdams, Sifakis & Teran 2010 use the same structure
 with rediscretised coarse operators.)
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 COARSEST = 64  # unknowns at which the hierarchy stops and a dense factor takes over
+PARALLEL_ROWS = 8192  # levels at least this large run their loops on all threads
+CHUNKS = 64  # parallel loops and dot products split the rows into this many runs
 
 
 @njit(cache=True)
@@ -110,36 +115,143 @@ def dense(cols, vals):
 
 
 @njit(cache=True)
-def matvec(cols, vals, x, y):
-    for r in range(cols.shape[0]):
+def _matvec_rows(cols, vals, x, b, y, lo, hi, subtract):
+    """y = A x (or b - A x when ``subtract``) for rows lo to hi - 1."""
+    for r in range(lo, hi):
         acc = 0.0
         for s in range(9):
             c = cols[r, s]
             if c >= 0:
                 acc += vals[r, s] * x[c]
-        y[r] = acc
+        y[r] = b[r] - acc if subtract else acc
+
+
+@njit(cache=True, parallel=True)
+def _matvec_parallel(cols, vals, x, b, y, subtract):
+    n = cols.shape[0]
+    for t in prange(CHUNKS):
+        _matvec_rows(cols, vals, x, b, y, t * n // CHUNKS, (t + 1) * n // CHUNKS, subtract)
+
+
+@njit(cache=True)
+def matvec(cols, vals, x, y):
+    """y = A x."""
+    if cols.shape[0] >= PARALLEL_ROWS:
+        _matvec_parallel(cols, vals, x, y, y, False)
+    else:
+        _matvec_rows(cols, vals, x, y, y, 0, cols.shape[0], False)
 
 
 @njit(cache=True)
 def residual(cols, vals, x, b, out):
     """out = b - A x."""
-    matvec(cols, vals, x, out)
-    for i in range(out.shape[0]):
-        out[i] = b[i] - out[i]
+    if cols.shape[0] >= PARALLEL_ROWS:
+        _matvec_parallel(cols, vals, x, b, out, True)
+    else:
+        _matvec_rows(cols, vals, x, b, out, 0, cols.shape[0], True)
 
 
 @njit(cache=True)
-def _gauss_seidel(cols, vals, b, x, forward):
-    """One Gauss-Seidel sweep; the diagonal of every row is in slot 4 (offset 0, 0)."""
-    n = cols.shape[0]
-    for k in range(n):
-        r = k if forward else n - 1 - k
+def _cg_rows(x, r, p, q, z, alpha, beta, lo, hi, step):
+    """CG vector updates of entries lo to hi - 1: x += alpha p, r -= alpha q (``step``),
+    or p = z + beta p."""
+    if step:
+        for i in range(lo, hi):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+    else:
+        for i in range(lo, hi):
+            p[i] = z[i] + beta * p[i]
+
+
+@njit(cache=True, parallel=True)
+def _cg_parallel(x, r, p, q, z, alpha, beta, step):
+    n = r.shape[0]
+    for t in prange(CHUNKS):
+        _cg_rows(x, r, p, q, z, alpha, beta, t * n // CHUNKS, (t + 1) * n // CHUNKS, step)
+
+
+@njit(cache=True)
+def _cg_update(x, r, p, q, z, alpha, beta, step):
+    if r.shape[0] >= PARALLEL_ROWS:
+        _cg_parallel(x, r, p, q, z, alpha, beta, step)
+    else:
+        _cg_rows(x, r, p, q, z, alpha, beta, 0, r.shape[0], step)
+
+
+@njit(cache=True)
+def dot(a, b):
+    """a . b, summed in CHUNKS runs (in parallel) when long: the same sum on any thread count."""
+    n = a.shape[0]
+    if n < PARALLEL_ROWS:
+        return np.dot(a, b)
+    part = np.empty(CHUNKS)
+    _dot_parts(a, b, part)
+    total = 0.0
+    for t in range(CHUNKS):
+        total += part[t]
+    return total
+
+
+@njit(cache=True, parallel=True)
+def _dot_parts(a, b, part):
+    n = a.shape[0]
+    for t in prange(CHUNKS):
+        acc = 0.0
+        for i in range(t * n // CHUNKS, (t + 1) * n // CHUNKS):
+            acc += a[i] * b[i]
+        part[t] = acc
+
+
+@njit(cache=True)
+def _gs_rows(cols, vals, b, x, rows, lo, hi):
+    """Gauss-Seidel update of rows[lo:hi] (rows of one colour: they do not couple); the
+    diagonal of every row is in slot 4 (offset 0, 0)."""
+    for k in range(lo, hi):
+        r = rows[k]
         acc = b[r]
         for s in range(9):
             c = cols[r, s]
             if c >= 0 and s != 4:
                 acc -= vals[r, s] * x[c]
         x[r] = acc / vals[r, 4]
+
+
+@njit(cache=True, parallel=True)
+def _gs_rows_parallel(cols, vals, b, x, rows, lo, hi):
+    n = hi - lo
+    for t in prange(CHUNKS):
+        _gs_rows(cols, vals, b, x, rows, lo + t * n // CHUNKS, lo + (t + 1) * n // CHUNKS)
+
+
+@njit(cache=True)
+def _gauss_seidel(cols, vals, b, x, rows, cstart, forward):
+    """One four-colour Gauss-Seidel sweep: colours 0-3 (forward) or 3-0; ``rows`` lists the
+    rows by colour, colour k is rows[cstart[k]:cstart[k+1]]."""
+    parallel = cols.shape[0] >= PARALLEL_ROWS
+    for k in range(4):
+        colour = k if forward else 3 - k
+        lo, hi = cstart[colour], cstart[colour + 1]
+        if parallel:
+            _gs_rows_parallel(cols, vals, b, x, rows, lo, hi)
+        else:
+            _gs_rows(cols, vals, b, x, rows, lo, hi)
+
+
+@njit(cache=True)
+def _colour_rows(node, nnx, rows, cstart):
+    """Rows sorted by colour (ix mod 2) + 2 (iy mod 2) of their node; cstart: 5 offsets."""
+    n = node.shape[0]
+    cstart[:] = 0
+    for r in range(n):
+        cstart[(node[r] % nnx) % 2 + 2 * ((node[r] // nnx) % 2) + 1] += 1
+    for k in range(4):
+        cstart[k + 1] += cstart[k]
+    fill = cstart[:4].copy()
+    for r in range(n):
+        k = (node[r] % nnx) % 2 + 2 * ((node[r] // nnx) % 2)
+        rows[fill[k]] = r
+        fill[k] += 1
 
 
 @njit(cache=True)
@@ -182,10 +294,13 @@ def _cholesky_solve(L, b, x):
 def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
     """All levels, flattened: level l has rows off[l]:off[l+1] of Acols/Avals (column indices
     local to the level) and, for l < nlev-1, the same rows of Pcols/Pw (columns local to
-    level l+1). Returns (off, Acols, Avals, Pcols, Pw, L) with L the Cholesky factor of the
-    coarsest operator."""
+    level l+1). Returns (off, Acols, Avals, Pcols, Pw, L, rows, cstart) with L the Cholesky
+    factor of the coarsest operator and rows[off[l]:off[l+1]] level l's rows by colour, colour
+    k from cstart[l, k] to cstart[l, k+1]."""
     cols_l = [cols]
     vals_l = [vals]
+    node_l = [node]
+    nnx_l = [nnx]
     pc_l = [np.empty((0, 4), dtype=np.int64)]
     pw_l = [np.empty((0, 4))]
     pc_l.pop()
@@ -199,6 +314,8 @@ def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
         pw_l.append(pw)
         cols_l.append(ccols)
         vals_l.append(cvals)
+        node_l.append(cnode)
+        nnx_l.append(nnx_c)
         node = cnode
         nnx = nnx_c
         nny = nny_c
@@ -216,12 +333,16 @@ def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
         if lv < nlev - 1:
             Pcols[off[lv]:off[lv + 1]] = pc_l[lv]
             Pw[off[lv]:off[lv + 1]] = pw_l[lv]
+    rows = np.empty(off[nlev], dtype=np.int64)
+    cstart = np.empty((nlev, 5), dtype=np.int64)
+    for lv in range(nlev):
+        _colour_rows(node_l[lv], nnx_l[lv], rows[off[lv]:off[lv + 1]], cstart[lv])
     L = np.linalg.cholesky(dense(cols_l[-1], vals_l[-1]))
-    return off, Acols, Avals, Pcols, Pw, L
+    return off, Acols, Avals, Pcols, Pw, L, rows, cstart
 
 
 @njit(cache=True)
-def vcycle(off, Acols, Avals, Pcols, Pw, L, b, x, r, sweeps):
+def vcycle(off, Acols, Avals, Pcols, Pw, L, rows, cstart, b, x, r, sweeps):
     """One V-cycle with zero initial guess: b[off[0]:off[1]] in, x[off[0]:off[1]] out.
 
     b, x, r are work vectors over all levels (length off[-1])."""
@@ -232,7 +353,7 @@ def vcycle(off, Acols, Avals, Pcols, Pw, L, b, x, r, sweeps):
         bl, xl, rl = b[lo:hi], x[lo:hi], r[lo:hi]
         xl[:] = 0.0
         for _ in range(sweeps):
-            _gauss_seidel(cols, vals, bl, xl, True)
+            _gauss_seidel(cols, vals, bl, xl, rows[lo:hi], cstart[lv], True)
         residual(cols, vals, xl, bl, rl)
         _restrict(Pcols[lo:hi], Pw[lo:hi], rl, b[hi:off[lv + 2]])
     lo, hi = off[nlev - 1], off[nlev]
@@ -241,11 +362,12 @@ def vcycle(off, Acols, Avals, Pcols, Pw, L, b, x, r, sweeps):
         lo, hi = off[lv], off[lv + 1]
         _prolong_add(Pcols[lo:hi], Pw[lo:hi], x[hi:off[lv + 2]], x[lo:hi])
         for _ in range(sweeps):
-            _gauss_seidel(Acols[lo:hi], Avals[lo:hi], b[lo:hi], x[lo:hi], False)
+            _gauss_seidel(Acols[lo:hi], Avals[lo:hi], b[lo:hi], x[lo:hi], rows[lo:hi],
+                          cstart[lv], False)
 
 
 @njit(cache=True)
-def pcg(off, Acols, Avals, Pcols, Pw, L, rhs, x, tol, maxiter, sweeps):
+def pcg(off, Acols, Avals, Pcols, Pw, L, rows, cstart, rhs, x, tol, maxiter, sweeps):
     """Multigrid-preconditioned CG from the initial guess in x (updated in place).
 
     Stops when ||rhs - A x|| <= tol ||rhs||; returns (iterations, relative residual)."""
@@ -256,13 +378,13 @@ def pcg(off, Acols, Avals, Pcols, Pw, L, rhs, x, tol, maxiter, sweeps):
     b = np.zeros(total)
     z = np.zeros(total)
     w = np.zeros(total)
-    bnorm = np.sqrt(np.dot(rhs, rhs))
+    bnorm = np.sqrt(dot(rhs, rhs))
     if bnorm == 0.0:
         x[:] = 0.0
         return 0, 0.0
     r = np.empty(n)
     residual(cols, vals, x, rhs, r)
-    rnorm = np.sqrt(np.dot(r, r))
+    rnorm = np.sqrt(dot(r, r))
     if rnorm > bnorm:
         # a warm start worse than zero (the right-hand side changed a lot) would only cost
         # accuracy: the residual would have to fall far below round-off of A x0
@@ -272,28 +394,25 @@ def pcg(off, Acols, Avals, Pcols, Pw, L, rhs, x, tol, maxiter, sweeps):
     if rnorm <= tol * bnorm:
         return 0, rnorm / bnorm
     b[:n] = r
-    vcycle(off, Acols, Avals, Pcols, Pw, L, b, z, w, sweeps)
+    vcycle(off, Acols, Avals, Pcols, Pw, L, rows, cstart, b, z, w, sweeps)
     p = z[:n].copy()
-    rz = np.dot(r, z[:n])
+    rz = dot(r, z[:n])
     q = np.empty(n)
     it = 0
     while it < maxiter:
         it += 1
         matvec(cols, vals, p, q)
-        alpha = rz / np.dot(p, q)
-        for i in range(n):
-            x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
-        rnorm = np.sqrt(np.dot(r, r))
+        alpha = rz / dot(p, q)
+        _cg_update(x, r, p, q, z, alpha, 0.0, True)
+        rnorm = np.sqrt(dot(r, r))
         if rnorm <= tol * bnorm:
             break
         b[:n] = r
-        vcycle(off, Acols, Avals, Pcols, Pw, L, b, z, w, sweeps)
-        rz_new = np.dot(r, z[:n])
+        vcycle(off, Acols, Avals, Pcols, Pw, L, rows, cstart, b, z, w, sweeps)
+        rz_new = dot(r, z[:n])
         beta = rz_new / rz
         rz = rz_new
-        for i in range(n):
-            p[i] = z[i] + beta * p[i]
+        _cg_update(x, r, p, q, z[:n], 0.0, beta, False)
     # the recursive residual can drift from the true one: report the true residual
     residual(cols, vals, x, rhs, q)
-    return it, np.sqrt(np.dot(q, q)) / bnorm
+    return it, np.sqrt(dot(q, q)) / bnorm

@@ -142,27 +142,28 @@ def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_
     (p = 0 there). ``anchored[r]`` tells whether row r couples to such a node (a system with
     no anchored row is pure Neumann, hence singular).
     """
-    nnx = ncx + 1
     nny = ncy + 1
-    for iy in prange(nny):
-        S = np.empty((3, 3))
-        slots = np.empty(4, dtype=np.int64)
-        local = np.empty(4, dtype=np.int64)
-        base = np.empty(4, dtype=np.int64)
-        for ix in range(nnx):
-            if node_row[ix + nnx * iy] >= 0:
-                _matrix_row(ix, iy, ncx, ncy, cell_slot, K, node_row, node_f, subcell,
-                            theta_min, cols, vals, anchored, S, slots, local, base)
+    nchunks = min(CHUNKS, nny)
+    for t in prange(nchunks):
+        _matrix_rows(t * nny // nchunks, (t + 1) * nny // nchunks, ncx, ncy, cell_slot, K,
+                     node_row, node_f, subcell, theta_min, cols, vals, anchored)
 
 
 @njit(cache=True)
-def _matrix_row(ix, iy, ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols,
-                vals, anchored, S, slots, local, base):
-    """Row of the unknown at node (ix, iy) of ``assemble_matrix_2d``."""
+def _matrix_rows(iy0, iy1, ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols,
+                 vals, anchored):
+    """The rows of the unknowns on node rows iy0 to iy1 - 1 (see ``assemble_matrix_2d``)."""
     nnx = ncx + 1
-    i = ix + nnx * iy
-    r = node_row[i]
-    if r >= 0:
+    S = np.empty((3, 3))
+    slots = np.empty(4, dtype=np.int64)
+    local = np.empty(4, dtype=np.int64)
+    base = np.empty(4, dtype=np.int64)
+    for i in range(iy0 * nnx, iy1 * nnx):
+        r = node_row[i]
+        if r < 0:
+            continue
+        ix = i % nnx
+        iy = i // nnx
         _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base)
         anchored[r] = False
         for dy in range(3):

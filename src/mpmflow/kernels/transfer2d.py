@@ -4,6 +4,7 @@ import numpy as np
 from numba import njit, prange
 
 CHUNKS = 64  # parallel loops over particles hand out this many chunks
+STRIPS = 16  # P2G cuts the grid into 2 STRIPS strips of cell rows
 
 
 @njit(cache=True, inline="always")
@@ -23,40 +24,40 @@ def _weights(x0, x1, inv_h, ncx, ncy):
 
 
 @njit(cache=True)
-def _scatter_cells(j0, j1, px, py, x, v, mass, volume, order, start, h, ncx, ncy, node_mass,
-                   node_mom, node_vol):
-    """P2G of the particles of cells j0 to j1 - 1 of colour (px, py); cell j of a colour is
-    (px + 2 (j mod m), py + 2 (j div m)) with m its cells per row."""
+def _scatter_rows(cy0, cy1, x, v, mass, volume, order, start, h, ncx, ncy, node_mass, node_mom,
+                  node_vol):
+    """P2G of the particles of cell rows cy0 to cy1 - 1, cell by cell."""
     inv_h = 1.0 / h
-    m = (ncx - px + 1) // 2
-    for j in range(j0, j1):
-        c = px + 2 * (j % m) + ncx * (py + 2 * (j // m))
-        for s in range(start[c], start[c + 1]):
-            p = order[s]
-            nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
-            for a in range(4):
-                i = nodes[a]
-                wm = w[a] * mass[p]
-                node_mass[i] += wm
-                node_vol[i] += w[a] * volume[p]
-                node_mom[i, 0] += wm * v[p, 0]
-                node_mom[i, 1] += wm * v[p, 1]
+    for s in range(start[cy0 * ncx], start[cy1 * ncx]):
+        p = order[s]
+        nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+        for a in range(4):
+            i = nodes[a]
+            wm = w[a] * mass[p]
+            node_mass[i] += wm
+            node_vol[i] += w[a] * volume[p]
+            node_mom[i, 0] += wm * v[p, 0]
+            node_mom[i, 1] += wm * v[p, 1]
 
 
 @njit(cache=True)
-def _balanced_chunks(px, py, ncx, ncy, start, nchunks, bounds):
-    """Split the cells of colour (px, py) into ``nchunks`` runs holding about equal numbers
-    of particles: run t is cells bounds[t] to bounds[t + 1] - 1."""
-    m = (ncx - px + 1) // 2
-    ncol = m * ((ncy - py + 1) // 2)
-    cum = np.empty(ncol + 1, dtype=np.int64)
-    cum[0] = 0
-    for j in range(ncol):
-        c = px + 2 * (j % m) + ncx * (py + 2 * (j // m))
-        cum[j + 1] = cum[j] + start[c + 1] - start[c]
-    for t in range(nchunks + 1):
-        bounds[t] = np.searchsorted(cum, cum[ncol] * t // nchunks)
-    bounds[nchunks] = ncol
+def strips(ncx, ncy, start, nstrips, bounds):
+    """Split the cell rows into ``nstrips`` strips of whole rows, at least one row each,
+    holding about equal numbers of particles: strip t is rows bounds[t] to bounds[t+1] - 1.
+    Returns the number of strips (fewer when there are fewer rows)."""
+    k = min(nstrips, ncy)
+    total = start[ncy * ncx]
+    bounds[0] = 0
+    for t in range(1, k):
+        target = total * t // k
+        # first row whose particles start at or after the target
+        lo, hi = bounds[t - 1] + 1, ncy - (k - t)
+        row = lo
+        while row < hi and start[row * ncx] < target:
+            row += 1
+        bounds[t] = row
+    bounds[k] = ncy
+    return k
 
 
 @njit(cache=True, parallel=True)
@@ -66,10 +67,10 @@ def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity,
     volume sum_p N_i V_p, velocity v_i = momentum / M_i and the predictor without pressure
     v*_i = v_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere).
 
-    The particles come binned by cell (``order``, ``start``: see ``binning``). Cells of one
-    parity class (cx mod 2, cy mod 2) share no node, so each class is scattered in parallel
-    with no write conflict, in runs of cells holding equal numbers of particles; every sum
-    is taken in the same order whatever the thread count, so results do not depend on it.
+    The particles come binned by cell (``order``, ``start``: see ``binning``). The cell rows
+    are cut into 2 STRIPS strips holding equal numbers of particles; strips 0, 2, 4, ... share
+    no node, so they are scattered in parallel, then strips 1, 3, 5, .... Every sum is taken
+    in the same order whatever the thread count, so results do not depend on it.
     """
     nn = node_mass.shape[0]
     for i in prange(nn):
@@ -77,14 +78,13 @@ def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity,
         node_vol[i] = 0.0
         node_mom[i, 0] = 0.0
         node_mom[i, 1] = 0.0
-    bounds = np.empty(CHUNKS + 1, dtype=np.int64)
-    for colour in range(4):
-        px = colour & 1
-        py = colour >> 1
-        _balanced_chunks(px, py, ncx, ncy, start, CHUNKS, bounds)
-        for t in prange(CHUNKS):
-            _scatter_cells(bounds[t], bounds[t + 1], px, py, x, v, mass, volume, order, start,
-                           h, ncx, ncy, node_mass, node_mom, node_vol)
+    bounds = np.empty(2 * STRIPS + 1, dtype=np.int64)
+    k = strips(ncx, ncy, start, 2 * STRIPS, bounds)
+    for parity in range(2):
+        for t in prange((k - parity + 1) // 2):
+            u = 2 * t + parity
+            _scatter_rows(bounds[u], bounds[u + 1], x, v, mass, volume, order, start, h, ncx,
+                          ncy, node_mass, node_mom, node_vol)
     for i in prange(nn):
         m = node_mass[i]
         for k in range(2):

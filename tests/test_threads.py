@@ -1,0 +1,29 @@
+"""Results do not depend on the number of threads (the parallel kernels sum in a fixed order)."""
+
+import numba
+import numpy as np
+import pytest
+from conftest import EXAMPLES
+
+from mpmflow import Simulation, load_case
+
+
+def run(threads):
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        case = load_case(EXAMPLES / "dam_break.toml",
+                         ["grid.spacing=0.01", "time.end=0.15", "output.snapshots=false"])
+        sim = Simulation(case)
+        sim.run()
+        return sim.particles
+    finally:
+        numba.set_num_threads(before)
+
+
+def test_dam_break_is_bit_identical_on_one_and_two_threads():
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread only")
+    one, two = run(1), run(2)
+    for field in ("x", "v", "pressure"):
+        assert np.array_equal(getattr(one, field), getattr(two, field)), field
