@@ -128,6 +128,16 @@ class Output(_Section):
                             "particles.pvd time series for ParaView).")
 
 
+class Checkpoint(_Section):
+    interval: float = Field(
+        0.1, gt=0, description="Simulated time between checkpoints (s), written at the first "
+        "output time at or after each multiple, at the end of the run and when it is "
+        "interrupted (Ctrl-C, SIGTERM). A checkpoint (checkpoint_NNNNNNNNN.npz in the output "
+        "folder, the latest two kept) holds everything needed to continue: `mpmflow run CASE "
+        "--out DIR --restart` resumes from the latest and reproduces the uninterrupted run "
+        "bit for bit.")
+
+
 # The formulation presets: defaults of the five settings that separate mpmflow's projection
 # from the plain reading of the paper (measured against each other in docs/variants.md).
 FORMULATIONS = {
@@ -192,6 +202,12 @@ class Solver(_Section):
                              "solve must reach every step; the run stops if it does not.")
     max_iterations: int = Field(200, ge=1, le=100000,
                                 description="Iteration limit of the pressure solve.")
+    max_speed: float = Field(
+        100.0, gt=0, description="Largest particle speed (m/s) the run accepts: a faster "
+        "particle means the computation is blowing up, and the run stops with the step, time "
+        "and particle (exit code 3), keeping the outputs written so far. Checked after every "
+        "output interval. The default, 100 m/s, is about ten times the speed of water "
+        "falling 5 m; raise it for faster flows.")
     pressure_smoothing: Literal["nodal", "none"] = Field(
         "nodal", description="Explicit scheme: the pressure is evaluated once per cell from "
         "the volumetric strain of the particles in it, and that cell pressure drives the "
@@ -228,6 +244,7 @@ class Case(_Section):
     time: Time
     output: Output = Output()
     solver: Solver = Solver()
+    checkpoint: Checkpoint = Checkpoint()
 
     @model_validator(mode="after")
     def _consistent(self):
