@@ -422,16 +422,39 @@ def _format_error(err, source):
             lines.append(f"missing key `{loc}`{': ' + desc if desc else ''}")
             continue
         msg = e["msg"].removeprefix("Value error, ")
-        row = _REFERENCE.get(_generic(loc))
+        key, entry = loc, ""
+        while _generic(key) not in _REFERENCE and key.rsplit(".", 1)[-1].isdigit():
+            key = key.rsplit(".", 1)[0]  # an entry of a list value: name the key
+            entry = f" (entry {loc[len(key) + 1:]} of {key})"
+        row = _REFERENCE.get(_generic(key))
         if row is not None:
-            fix = f" Set a valid value, e.g. {loc} = {_example(row)}." if _example(row) else ""
-            lines.append(f"`{loc}` = {e.get('input')!r} is not allowed: {msg}. {loc}: "
+            fix = f" Set a valid value, e.g. {key} = {_example(row)}." if _example(row) else ""
+            lines.append(f"`{loc}`{entry} = {e.get('input')!r} is not allowed: {msg}. {key}: "
                          f"{row['description']}{fix}")
+        elif _is_section(loc) and e["type"] == "model_type":
+            lines.append(f"`{loc}` = {e.get('input')!r} is not allowed: {loc} is a section; "
+                         f"write it as a [{loc}] table of keys (`mpmflow keys` lists them).")
         else:
             lines.append(f"{loc}: {msg}." if loc else f"{msg}.")
     head = f"Invalid case {source}: " if source else "Invalid case: "
     return CaseError(head + " ".join(lines) + " See the case-file reference in the README "
                      "(or `mpmflow keys`).")
+
+
+def _is_section(loc):
+    parts = [p for p in loc.split(".") if not p.isdigit()]
+    model = Case
+    for part in parts:
+        field = model.model_fields.get(part)
+        if field is None:
+            return False
+        ann = field.annotation
+        inner = getattr(ann, "__args__", (None,))[0] if getattr(ann, "__origin__", None) \
+            is list else ann
+        model = _model_for(inner)
+        if model is None:
+            return False
+    return True
 
 
 def _describe(loc):
