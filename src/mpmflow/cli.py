@@ -41,6 +41,7 @@ it had not stopped; --set time.end=... with a later time extends a finished run.
 EPILOG = """\
 examples:
   mpmflow run examples/dam_break.toml --out runs/dam_break
+  mpmflow plot runs/dam_break                     (figures into runs/dam_break/plots)
   mpmflow run examples/hydrostatic.toml --out runs/still --set solver.formulation=paper
   mpmflow keys
 
@@ -81,6 +82,16 @@ def _parser():
                     "whole study then takes about 15 minutes on 2 cores)")
     st.add_argument("--quick", action="store_true",
                     help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)")
+    pl = sub.add_parser(
+        "plot", help="plot a run's time series, particle snapshots and an animation",
+        description="Plot the outputs of a run (needs matplotlib: pip install "
+        "'mpmflow[plot]'): timeseries.png (front and height, energies, largest speed and "
+        "pressure, pressure noise, volume ratio), snapshots/particles_NNNNNN.png and "
+        "snapshots.png (particles coloured by pressure) and animation.gif (the snapshots; "
+        "set output.snapshot_interval for more frames).")
+    pl.add_argument("run_dir", metavar="DIR", help="the --out folder of a run")
+    pl.add_argument("--out", "-o", metavar="DIR2", default=None,
+                    help="folder for the figures (default: DIR/plots)")
     k = sub.add_parser("keys", help="list every case key with its meaning and default",
                        description="List every case-file key (dotted name), its default and "
                        "its meaning.")
@@ -201,6 +212,14 @@ def _study(args):
     return 0
 
 
+def _plot(args):
+    from .plots import plot_run
+
+    written = plot_run(args.run_dir, args.out)
+    print(f"mpmflow: wrote {len(written)} figures to {written[0].parent}", file=sys.stderr)
+    return 0
+
+
 def _keys(args):
     from .case import key_reference, reference_markdown
 
@@ -229,6 +248,8 @@ def main(argv=None):
             return _run(args)
         if args.command == "study":
             return _study(args)
+        if args.command == "plot":
+            return _plot(args)
         return _keys(args)
     except MpmflowError as err:
         print(f"mpmflow: error: {err}", file=sys.stderr)
