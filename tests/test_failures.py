@@ -156,3 +156,11 @@ def test_a_particle_pushed_outside_is_put_back_and_counted(scheme):
     assert P.count == n and P.mass.sum() == mass
     assert (P.x >= 0).all() and (P.x <= [0.1, 0.3]).all()
     assert P.x[0, 0] > 0 and P.x[1, 1] < 0.3 and P.v[1, 1] <= 0.0
+
+
+def test_a_body_faster_than_the_bound_is_refused_before_the_run(tmp_path, capsys):
+    code = main(["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(tmp_path / "o"),
+                 "--set", "bodies.0.velocity=[300.0, 400.0]"])
+    err = capsys.readouterr().err
+    assert code == 2 and "bodies.0.velocity = [300.0, 400.0] m/s is 500 m/s fast" in err
+    assert "solver.max_speed = 100 m/s" in err and not (tmp_path / "o").exists()

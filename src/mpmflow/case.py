@@ -274,6 +274,13 @@ class Case(_Section):
                     raise ValueError(
                         f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
                         f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
+        for k, body in enumerate(self.bodies):
+            speed = float(np.hypot(*body.velocity))
+            if not speed <= self.solver.max_speed:
+                raise ValueError(
+                    f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
+                    f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
+                    f"stop at once; give a slower velocity or raise solver.max_speed")
         if self.time.dt == "auto":
             if self.solver.scheme != "explicit":
                 raise ValueError(

@@ -96,7 +96,7 @@ def _parser():
                        description="List every case-file key (dotted name), its default and "
                        "its meaning.")
     k.add_argument("--json", action="store_true", help="machine-readable output")
-    k.add_argument("--markdown", action="store_true", help="the README's reference table")
+    k.add_argument("--markdown", action="store_true", help="the reference table of docs/reference.md")
     return p
 
 

@@ -302,7 +302,8 @@ class Simulation:
                 f"The run blew up{span}: {bad.size} particles have non-finite velocity or "
                 f"position (first: particle {bad[0]}). The outputs up to t = {t0:.6g} s are "
                 "kept. Try a smaller time.dt.")
-        speed = np.sqrt(np.sum(P.v**2, axis=1))
+        with np.errstate(over="ignore"):  # a speed beyond 1e154 m/s is inf: still caught
+            speed = np.sqrt(np.sum(P.v**2, axis=1))
         fastest = int(np.argmax(speed))
         limit = self.case.solver.max_speed
         if not speed[fastest] <= limit:
