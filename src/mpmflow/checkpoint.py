@@ -89,10 +89,10 @@ def check_same_case(saved, current, path, may_change=("time.end",)):
     for key in sorted(set(old) | set(new)):
         if key in may_change or old.get(key) == new.get(key):
             continue
-        return_value = old.get(key, "(not set)")
+        saved_value = old.get(key, "(not set)")
         raise CaseError(
             f"--restart: the case differs from the one checkpoint {path} was written with: "
             f"`{key}` = {json.dumps(new.get(key, '(not set)'))} now, "
-            f"{json.dumps(return_value)} in the checkpoint. A restart must use the same "
+            f"{json.dumps(saved_value)} in the checkpoint. A restart must use the same "
             f"settings except time.end (which may be later, to extend the run). Use "
-            f"--set {key}={json.dumps(return_value)}, or start a new run in another folder.")
+            f"--set {key}={json.dumps(saved_value)}, or start a new run in another folder.")
