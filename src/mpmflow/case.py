@@ -128,6 +128,16 @@ class Output(_Section):
                             "particles.pvd time series for ParaView).")
 
 
+class Checkpoint(_Section):
+    interval: float = Field(
+        0.1, gt=0, description="Simulated time between checkpoints (s), written at the first "
+        "output time at or after each multiple, at the end of the run and when it is "
+        "interrupted (Ctrl-C, SIGTERM). A checkpoint (checkpoint_NNNNNNNNN.npz in the output "
+        "folder, the latest two kept) holds everything needed to continue: `mpmflow run CASE "
+        "--out DIR --restart` resumes from the latest and reproduces the uninterrupted run "
+        "bit for bit.")
+
+
 # The formulation presets: defaults of the five settings that separate mpmflow's projection
 # from the plain reading of the paper (measured against each other in docs/variants.md).
 FORMULATIONS = {
@@ -192,6 +202,12 @@ class Solver(_Section):
                              "solve must reach every step; the run stops if it does not.")
     max_iterations: int = Field(200, ge=1, le=100000,
                                 description="Iteration limit of the pressure solve.")
+    max_speed: float = Field(
+        100.0, gt=0, description="Largest particle speed (m/s) the run accepts: a faster "
+        "particle means the computation is blowing up, and the run stops with the step, time "
+        "and particle (exit code 3), keeping the outputs written so far. Checked after every "
+        "output interval. The default, 100 m/s, is about ten times the speed of water "
+        "falling 5 m; raise it for faster flows.")
     pressure_smoothing: Literal["nodal", "none"] = Field(
         "nodal", description="Explicit scheme: the pressure is evaluated once per cell from "
         "the volumetric strain of the particles in it, and that cell pressure drives the "
@@ -228,6 +244,7 @@ class Case(_Section):
     time: Time
     output: Output = Output()
     solver: Solver = Solver()
+    checkpoint: Checkpoint = Checkpoint()
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -257,6 +274,13 @@ class Case(_Section):
                     raise ValueError(
                         f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
                         f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
+        for k, body in enumerate(self.bodies):
+            speed = float(np.hypot(*body.velocity))
+            if not speed <= self.solver.max_speed:
+                raise ValueError(
+                    f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
+                    f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
+                    f"stop at once; give a slower velocity or raise solver.max_speed")
         if self.time.dt == "auto":
             if self.solver.scheme != "explicit":
                 raise ValueError(
@@ -405,16 +429,39 @@ def _format_error(err, source):
             lines.append(f"missing key `{loc}`{': ' + desc if desc else ''}")
             continue
         msg = e["msg"].removeprefix("Value error, ")
-        row = _REFERENCE.get(_generic(loc))
+        key, entry = loc, ""
+        while _generic(key) not in _REFERENCE and key.rsplit(".", 1)[-1].isdigit():
+            key = key.rsplit(".", 1)[0]  # an entry of a list value: name the key
+            entry = f" (entry {loc[len(key) + 1:]} of {key})"
+        row = _REFERENCE.get(_generic(key))
         if row is not None:
-            fix = f" Set a valid value, e.g. {loc} = {_example(row)}." if _example(row) else ""
-            lines.append(f"`{loc}` = {e.get('input')!r} is not allowed: {msg}. {loc}: "
+            fix = f" Set a valid value, e.g. {key} = {_example(row)}." if _example(row) else ""
+            lines.append(f"`{loc}`{entry} = {e.get('input')!r} is not allowed: {msg}. {key}: "
                          f"{row['description']}{fix}")
+        elif _is_section(loc) and e["type"] == "model_type":
+            lines.append(f"`{loc}` = {e.get('input')!r} is not allowed: {loc} is a section; "
+                         f"write it as a [{loc}] table of keys (`mpmflow keys` lists them).")
         else:
             lines.append(f"{loc}: {msg}." if loc else f"{msg}.")
     head = f"Invalid case {source}: " if source else "Invalid case: "
-    return CaseError(head + " ".join(lines) + " See the case-file reference in the README "
+    return CaseError(head + " ".join(lines) + " See the case-file reference, docs/reference.md "
                      "(or `mpmflow keys`).")
+
+
+def _is_section(loc):
+    parts = [p for p in loc.split(".") if not p.isdigit()]
+    model = Case
+    for part in parts:
+        field = model.model_fields.get(part)
+        if field is None:
+            return False
+        ann = field.annotation
+        inner = getattr(ann, "__args__", (None,))[0] if getattr(ann, "__origin__", None) \
+            is list else ann
+        model = _model_for(inner)
+        if model is None:
+            return False
+    return True
 
 
 def _describe(loc):
@@ -465,3 +512,18 @@ def reference_markdown():
             default = f"`{row['default']}`"
         lines.append(f"| `{row['key']}` | {default} | {row['description']} |")
     return "\n".join(lines)
+
+
+def reference_page():
+    """docs/reference.md: the case-file reference page, generated from the schema."""
+    return (
+        "# Case-file reference\n\n"
+        "<!-- generated by scripts/update_readme_reference.py from src/mpmflow/case.py; "
+        "do not edit -->\n\n"
+        "A case is a TOML file; all quantities are SI (m, s, kg, Pa). The domain is "
+        "[0, size] and its boundaries are walls. `bodies` is a list of `[[bodies]]` tables "
+        "(`bodies.N.` below is the N-th, from 0). Any key can be overridden on the command "
+        "line with `--set dotted.key=value`; `mpmflow keys` prints this list. Unknown keys "
+        "are errors (with a suggestion), and a bad value stops with a message naming the "
+        "key, the value, the allowed range and the fix (exit code 2).\n\n"
+        + reference_markdown() + "\n")

@@ -1,11 +1,13 @@
 """Command line: ``mpmflow run CASE.toml --out DIR [--set key=value ...]`` and friends.
 
 Exit codes: 0 success; 2 invalid input (case file, settings, command line); 3 the
-simulation failed (pressure solve, blow-up); 130 interrupted.
+simulation failed (pressure solve, blow-up); 130 interrupted by Ctrl-C (SIGINT), 143 by
+SIGTERM (a checkpoint was written: continue with --restart).
 """
 
 import argparse
 import json
+import shlex
 import sys
 import textwrap
 from pathlib import Path
@@ -27,17 +29,25 @@ Run a case and write its outputs to DIR:
 Any case key can be overridden with --set, using the dotted names of the case-file
 reference (`mpmflow keys` lists them), e.g.
   mpmflow run examples/dam_break.toml --out run --set grid.spacing=0.008 --set time.end=0.3
-Values are TOML: numbers, true/false, [lists], "strings" (bare words are taken as strings)."""
+Values are TOML: numbers, true/false, [lists], "strings" (bare words are taken as strings).
+
+Checkpoints (checkpoint_NNNNNNNNN.npz, every checkpoint.interval of simulated time, at the
+end, and on Ctrl-C or SIGTERM) let a run continue where it stopped:
+  mpmflow run examples/dam_break.toml --out run --restart
+continues from the latest checkpoint in run/ with the same settings, bit for bit as if
+it had not stopped; --set time.end=... with a later time extends a finished run."""
 
 
 EPILOG = """\
 examples:
   mpmflow run examples/dam_break.toml --out runs/dam_break
+  mpmflow plot runs/dam_break                     (figures into runs/dam_break/plots)
   mpmflow run examples/hydrostatic.toml --out runs/still --set solver.formulation=paper
   mpmflow keys
 
 exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
-summary.json), 130 interrupted."""
+summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (both leave a checkpoint:
+continue with --restart)."""
 
 
 def _parser():
@@ -54,6 +64,9 @@ def _parser():
                    dest="overrides", help="override a case key (repeatable)")
     r.add_argument("--overwrite", action="store_true",
                    help="replace the results of an earlier run in DIR")
+    r.add_argument("--restart", action="store_true",
+                   help="continue the run in DIR from its latest checkpoint (same settings; "
+                   "a later time.end extends it)")
     r.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     st = sub.add_parser(
         "study", help="run the paper's study (Table 1, Figs. 2-4) with both schemes",
@@ -69,23 +82,33 @@ def _parser():
                     "whole study then takes about 15 minutes on 2 cores)")
     st.add_argument("--quick", action="store_true",
                     help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)")
+    pl = sub.add_parser(
+        "plot", help="plot a run's time series, particle snapshots and an animation",
+        description="Plot the outputs of a run (needs matplotlib: pip install "
+        "'mpmflow[plot]'): timeseries.png (front and height, energies, largest speed and "
+        "pressure, pressure noise, volume ratio), snapshots/particles_NNNNNN.png and "
+        "snapshots.png (particles coloured by pressure) and animation.gif (the snapshots; "
+        "set output.snapshot_interval for more frames).")
+    pl.add_argument("run_dir", metavar="DIR", help="the --out folder of a run")
+    pl.add_argument("--out", "-o", metavar="DIR2", default=None,
+                    help="folder for the figures (default: DIR/plots)")
     k = sub.add_parser("keys", help="list every case key with its meaning and default",
                        description="List every case-file key (dotted name), its default and "
                        "its meaning.")
     k.add_argument("--json", action="store_true", help="machine-readable output")
-    k.add_argument("--markdown", action="store_true", help="the README's reference table")
+    k.add_argument("--markdown", action="store_true", help="the reference table of docs/reference.md")
     return p
 
 
-def _progress_bar(end, quiet):
+def _progress_bar(end, quiet, start=0.0):
     if quiet:
         return None, None
     from tqdm import tqdm
 
-    bar = tqdm(total=end, unit="s", unit_scale=False, dynamic_ncols=True, file=sys.stderr,
+    bar = tqdm(total=end, initial=start, unit="s", unit_scale=False, dynamic_ncols=True, file=sys.stderr,
                bar_format="{l_bar}{bar}| t = {n:.3f}/{total:.3f} s [{elapsed}<{remaining}]"
                           "{postfix}")
-    last = [0.0]
+    last = [start]
 
     def update(t, step, end_):
         bar.update(t - last[0])
@@ -95,19 +118,26 @@ def _progress_bar(end, quiet):
     return bar, update
 
 
-def _run(args):
-    from .case import load_case
-    from .simulation import Simulation
+def _prepare_out(out, args):
+    """Check the output folder; with --overwrite delete an earlier run's files."""
+    from .checkpoint import checkpoints
 
-    case = load_case(args.case, args.overrides)
-    out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
-    if (out / "summary.json").exists():
+    if args.restart:
+        if args.overwrite:
+            raise CaseError("--restart continues the run in --out and --overwrite replaces it; "
+                            "give one of them.")
+        if not out.is_dir():
+            raise CaseError(f"--restart: --out {out} does not exist; give the folder of the "
+                            "run to continue, or run without --restart.")
+        return
+    if out.is_dir() and ((out / "summary.json").exists() or checkpoints(out)):
         if not args.overwrite:
-            raise CaseError(f"--out {out} already holds the results of a run (summary.json). "
-                            "Choose another folder, or add --overwrite to replace them.")
-        for old in [*out.glob("particles_*.vtu"), out / "particles.pvd",
+            raise CaseError(f"--out {out} already holds the results of a run. Choose another "
+                            "folder, add --restart to continue it from its latest checkpoint, "
+                            "or add --overwrite to replace it.")
+        for old in [*out.glob("particles_*.vtu"), *checkpoints(out), out / "particles.pvd",
                     out / "timeseries.csv", out / "summary.json"]:
             old.unlink(missing_ok=True)
     try:
@@ -115,16 +145,46 @@ def _run(args):
     except OSError as err:
         raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
                         "can write to.") from None
-    sim = Simulation(case, out)
+
+
+def _resume_command(args):
+    words = ["mpmflow", "run", args.case, "--out", args.out, "--restart"]
+    for item in args.overrides:
+        words += ["--set", item]
+    return " ".join(shlex.quote(str(w)) for w in words)
+
+
+def _run(args):
+    from .case import load_case
+    from .checkpoint import latest
+    from .interrupts import exit_code, stop_on_signals
+    from .simulation import Simulation
+
+    case = load_case(args.case, args.overrides)
+    out = Path(args.out)
+    _prepare_out(out, args)
+    if args.restart:
+        path = latest(out)
+        sim = Simulation.resume(case, out, path)
+        print(f"mpmflow: continuing from {path} (t = {sim.time:.6g} s, step {sim.steps})",
+              file=sys.stderr)
+    else:
+        sim = Simulation(case, out)
     for note in sim.notices:
         print(f"mpmflow: note: {note}", file=sys.stderr)
-    bar, update = _progress_bar(case.time.end, args.quiet)
+    bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time)
     sim.progress = update
     try:
-        summary = sim.run()
+        with stop_on_signals(sim):
+            summary = sim.run()
     finally:
         if bar is not None:
             bar.close()
+    if summary["status"] == "interrupted":
+        print(f"mpmflow: interrupted at t = {summary['time']:.6g} s (step {summary['steps']}); "
+              f"checkpoint {out / summary['last_checkpoint']}. Resume with: "
+              f"{_resume_command(args)}", file=sys.stderr)
+        return exit_code(sim.stop_signal)
     if not args.quiet:
         print(f"mpmflow: {summary['steps']} steps, {summary['particles']} particles, "
               f"{summary['wall_seconds']:.2f} s wall; results in {out}", file=sys.stderr)
@@ -149,6 +209,14 @@ def _study(args):
     run_study(out, budget=args.budget, quick=args.quick, end=0.3 if args.quick else 1.0,
               progress=report)
     print(f"mpmflow: study written to {out}/study.md", file=sys.stderr)
+    return 0
+
+
+def _plot(args):
+    from .plots import plot_run
+
+    written = plot_run(args.run_dir, args.out)
+    print(f"mpmflow: wrote {len(written)} figures to {written[0].parent}", file=sys.stderr)
     return 0
 
 
@@ -180,6 +248,8 @@ def main(argv=None):
             return _run(args)
         if args.command == "study":
             return _study(args)
+        if args.command == "plot":
+            return _plot(args)
         return _keys(args)
     except MpmflowError as err:
         print(f"mpmflow: error: {err}", file=sys.stderr)

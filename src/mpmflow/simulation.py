@@ -1,16 +1,21 @@
 """A run: the time loop, its output schedule, and the run's bookkeeping.
 
 ``Simulation(case, out_dir).run()`` steps the scheme from t = 0 to ``time.end``; the steps
-between two output times are equal and at most ``time.dt``, so output times are exact. Outputs go to ``out_dir`` (see
-``mpmflow.output``); ``summary.json`` is written at the end, also when the run fails.
+between two output times are equal and at most ``time.dt``, so output times are exact.
+Outputs go to ``out_dir`` (see ``mpmflow.output``); ``summary.json`` is written at the end,
+also when the run fails or is interrupted. Checkpoints (``mpmflow.checkpoint``) are written
+every ``checkpoint.interval``, at the end and when ``stop_signal`` is set (by the CLI's
+signal handlers); ``Simulation.resume(case, out_dir, path)`` continues from one.
 """
 
+import signal
 import time as _time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
+from . import checkpoint
 from ._version import __version__
 from .case import resolved
 from .cells import bin_particles
@@ -72,17 +77,83 @@ class Simulation:
         self.count0 = self.particles.count
         self._outputs = Outputs()
         self._wall0 = None
+        self._wall_before = 0.0  # wall seconds of the runs this one continues
         self.rows = []  # the timeseries rows, also kept in memory
         self.on_output = None  # optional callable(sim), called after each output row
+        # the output schedule: the next output, snapshot and checkpoint are the k-th multiple
+        # of their interval
+        self.k_out = self.k_snap = self.k_checkpoint = 1
+        self.snapshot_entries = []  # (time, file) of the snapshots of a continued run
+        self.resumed_from = None  # the checkpoint this run continues, if any
+        self.last_checkpoint = None
+        self.stop_signal = None  # set (to a signal number) to stop at the next output time
+
+    # ------------------------------------------------------------------ checkpoints
+    def _checkpoint(self):
+        """Write a checkpoint of the current state (after its output row)."""
+        P = self.particles
+        arrays = {"x": P.x, "v": P.v, "pressure": P.pressure, "mass": P.mass,
+                  "volume": P.volume}
+        arrays.update({f"scheme.{k}": v for k, v in self.scheme.state().items()})
+        snaps = self._outputs.snapshots.entries if self._outputs.snapshots is not None else []
+        meta = {"mpmflow_version": __version__, "case": resolved(self.case),
+                "time": self.time, "steps": self.steps, "dt": self.dt,
+                "k_out": self.k_out, "k_snap": self.k_snap,
+                "k_checkpoint": self.k_checkpoint, "counters": asdict(self.counters),
+                "rows": self.rows, "snapshots": snaps, "mass0": self.mass0,
+                "volume0": self.volume0, "count0": self.count0,
+                "wall_seconds": self._wall_seconds()}
+        self.last_checkpoint = checkpoint.write(self.out_dir, self.steps, arrays, meta)
+
+    @classmethod
+    def resume(cls, case, out_dir, path, progress=None):
+        """The run of ``out_dir`` continued from checkpoint ``path``: same settings except
+        possibly a later time.end (CaseError otherwise)."""
+        arrays, meta = checkpoint.read(path)
+        checkpoint.check_same_case(meta["case"], resolved(case), path)
+        if meta["time"] >= case.time.end:
+            from .errors import CaseError
+
+            raise CaseError(
+                f"--restart: checkpoint {path} is at t = {meta['time']:.6g} s, which already "
+                f"reaches time.end = {case.time.end:g} s. To extend the run give a later end, "
+                f"e.g. --set time.end={2 * case.time.end:g}.")
+        sim = cls(case, out_dir, progress)
+        P = sim.particles
+        for name in ("x", "v", "pressure", "mass", "volume"):
+            saved = arrays[name]
+            if saved.shape != getattr(P, name).shape:
+                from .errors import CaseError
+
+                raise CaseError(f"--restart: checkpoint {path} holds {saved.shape[0]} "
+                                f"particles, the case {P.count}; it belongs to another case.")
+            np.copyto(getattr(P, name), saved)
+        sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
+                            if k.startswith("scheme.")})
+        sim.time, sim.steps, sim.dt = meta["time"], meta["steps"], meta["dt"]
+        sim.k_out, sim.k_snap = meta["k_out"], meta["k_snap"]
+        sim.k_checkpoint = meta["k_checkpoint"]
+        sim.counters = Counters(**meta["counters"])
+        sim.rows = meta["rows"]
+        sim.snapshot_entries = meta["snapshots"]
+        sim.mass0, sim.volume0, sim.count0 = meta["mass0"], meta["volume0"], meta["count0"]
+        sim._wall_before = meta["wall_seconds"]
+        sim.resumed_from = Path(path)
+        return sim
+
+    def _wall_seconds(self):
+        now = _time.perf_counter() - self._wall0 if self._wall0 else 0.0
+        return self._wall_before + now
 
     # ------------------------------------------------------------------ outputs
     def _open_outputs(self):
         if self.out_dir is None:
             return
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        self._outputs.timeseries = TimeSeriesWriter(self.out_dir / "timeseries.csv")
+        self._outputs.timeseries = TimeSeriesWriter(self.out_dir / "timeseries.csv", self.rows)
         if self.case.output.snapshots:
-            self._outputs.snapshots = SnapshotWriter(self.out_dir)
+            self._outputs.snapshots = SnapshotWriter(self.out_dir,
+                                                     entries=self.snapshot_entries)
 
     def measure(self):
         """The diagnostics of one timeseries row at the current state."""
@@ -128,31 +199,26 @@ class Simulation:
         """Run to ``time.end``; returns the summary dict (also written to summary.json).
 
         ``wall_budget`` (s of wall time): stop at the first output time after it is spent,
-        with status "budget" (used by the study for explicit runs at the real K)."""
+        with status "budget" (used by the study for explicit runs at the real K). When
+        ``stop_signal`` is set (the CLI's SIGINT/SIGTERM handlers do), the run stops at the
+        next output time with a checkpoint and status "interrupted"."""
         case = self.case
-        dt, end = self.dt, case.time.end
-        interval = case.output.interval
-        snap_interval = case.output.snapshot_interval or interval
+        end = case.time.end
         self._wall0 = _time.perf_counter()
         status, message = "failed", ""
         try:
             self._open_outputs()
-            self._output(snapshot=True)
-            k_out, k_snap = 1, 1
+            if self.resumed_from is None:
+                self._output(snapshot=True)
             while self.time < end:
-                # the steps up to the next output time: as few as dt allows, all equal, so no
-                # step is a sliver of dt (the pressure scales with 1/dt)
-                t_next = min(k_out * interval, end)
-                n = max(1, int(np.ceil((t_next - self.time) / dt - 1e-6)))
-                self._advance((t_next - self.time) / n, n)
-                self.time = t_next
-                if self.progress is not None:
-                    self.progress(self.time, self.steps, end)
-                k_out += 1
-                snap = self.time >= k_snap * snap_interval - 1e-9 * dt or self.time >= end
-                if snap:
-                    k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
-                self._output(snapshot=snap)
+                self._chunk()
+                if self.stop_signal is not None and self.time < end:
+                    self._checkpoint()
+                    status = "interrupted"
+                    message = (f"interrupted by {signal.Signals(self.stop_signal).name} at "
+                               f"t = {self.time:.6g} s (step {self.steps}); checkpoint "
+                               f"{self.last_checkpoint.name} written")
+                    break
                 if (wall_budget is not None and self.time < end
                         and _time.perf_counter() - self._wall0 > wall_budget):
                     status, message = "budget", (f"stopped at t = {self.time:.6g} s when the "
@@ -160,11 +226,14 @@ class Simulation:
                     break
             else:
                 status = "completed"
+                if self.out_dir is not None:
+                    self._checkpoint()  # to extend the run later with a later time.end
         except SimulationError as err:
             message = str(err)
             raise
         except KeyboardInterrupt:
-            status, message = "interrupted", "interrupted by the user"
+            status, message = "interrupted", ("interrupted by the user at once, without a "
+                                              "checkpoint")
             raise
         except OSError as err:
             message = f"Writing the outputs failed: {err}. Check the --out folder and free space."
@@ -180,6 +249,30 @@ class Simulation:
                 except OSError:
                     pass  # the run's own error (often the same one) is the one to report
         return self.summary
+
+    def _chunk(self):
+        """The steps up to the next output time, then its output row (and snapshot and
+        checkpoint when due). The steps are as few as dt allows and all equal, so no step is
+        a sliver of dt (the pressure scales with 1/dt)."""
+        case, dt = self.case, self.dt
+        end, interval = case.time.end, case.output.interval
+        snap_interval = case.output.snapshot_interval or interval
+        t_next = min(self.k_out * interval, end)
+        n = max(1, int(np.ceil((t_next - self.time) / dt - 1e-6)))
+        self._advance((t_next - self.time) / n, n)
+        self.time = t_next
+        if self.progress is not None:
+            self.progress(self.time, self.steps, end)
+        self.k_out += 1
+        snap = self.time >= self.k_snap * snap_interval - 1e-9 * dt or self.time >= end
+        if snap:
+            self.k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
+        self._output(snapshot=snap)
+        every = case.checkpoint.interval
+        if self.time >= self.k_checkpoint * every - 1e-9 * dt:
+            self.k_checkpoint = int(np.floor(self.time / every + 1e-9)) + 1
+            if self.out_dir is not None and self.time < end:  # the end has its own
+                self._checkpoint()
 
     def _advance(self, dt, n):
         """n steps of size dt, then a check that the particles are finite."""
@@ -207,7 +300,19 @@ class Simulation:
             bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
             raise SimulationError(
                 f"The run blew up{span}: {bad.size} particles have non-finite velocity or "
-                f"position (first: particle {bad[0]}). Try a smaller time.dt.")
+                f"position (first: particle {bad[0]}). The outputs up to t = {t0:.6g} s are "
+                "kept. Try a smaller time.dt.")
+        with np.errstate(over="ignore"):  # a speed beyond 1e154 m/s is inf: still caught
+            speed = np.sqrt(np.sum(P.v**2, axis=1))
+        fastest = int(np.argmax(speed))
+        limit = self.case.solver.max_speed
+        if not speed[fastest] <= limit:
+            xy = ", ".join(f"{c:.4g}" for c in P.x[fastest])
+            raise SimulationError(
+                f"The run blew up{span}: particle {fastest} at ({xy}) m moves at "
+                f"{speed[fastest]:.4g} m/s, above solver.max_speed = {limit:g} m/s. The outputs "
+                f"up to t = {t0:.6g} s are kept. Try a smaller time.dt, or raise "
+                "solver.max_speed if such speeds are real.")
 
     def _explicit_summary(self):
         if self.case.solver.scheme != "explicit":
@@ -218,7 +323,7 @@ class Simulation:
 
     def _summary(self, status, message):
         P, c = self.particles, self.counters
-        wall = _time.perf_counter() - self._wall0 if self._wall0 else 0.0
+        wall = self._wall_seconds()
         bins = bin_particles(self.grid, P)
         mass = float(P.mass.sum())
         return {
@@ -235,6 +340,8 @@ class Simulation:
             "mass_relative_change": (mass - self.mass0) / self.mass0,
             "max_particles_per_cell": int(np.diff(bins.start).max()),
             "wall_seconds": wall,
+            "restarted_from": self.resumed_from.name if self.resumed_from else None,
+            "last_checkpoint": self.last_checkpoint.name if self.last_checkpoint else None,
             "scheme": self.case.solver.scheme,
             "dt": self.dt,
             **self._explicit_summary(),

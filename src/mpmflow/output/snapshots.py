@@ -10,10 +10,19 @@ from .atomic import atomic_path, write_text
 
 
 class SnapshotWriter:
-    def __init__(self, folder, stem="particles"):
+    def __init__(self, folder, stem="particles", entries=()):
+        """``entries``: the (time, file name) pairs already written by the run being
+        continued (from a checkpoint); later snapshot files are deleted and the index is
+        rewritten at once."""
         self.folder = Path(folder)
         self.stem = stem
-        self.entries = []  # (time, file name)
+        self.entries = [(float(t), str(f)) for t, f in entries]  # (time, file name)
+        if self.entries:
+            keep = {f for _, f in self.entries}
+            for old in self.folder.glob(f"{self.stem}_*.vtu"):
+                if old.name not in keep:
+                    old.unlink()
+            self._write_index()
 
     def write(self, time, particles):
         name = f"{self.stem}_{len(self.entries):06d}.vtu"
@@ -31,6 +40,10 @@ class SnapshotWriter:
         with atomic_path(self.folder / name) as tmp:
             meshio.write(tmp, mesh, file_format="vtu")
         self.entries.append((time, name))
+        self._write_index()
+        return name
+
+    def _write_index(self):
         datasets = "\n".join(
             f'    <DataSet timestep="{t:.9g}" part="0" file={quoteattr(f)}/>'
             for t, f in self.entries)
@@ -38,4 +51,3 @@ class SnapshotWriter:
                    '<?xml version="1.0"?>\n'
                    '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
                    "  <Collection>\n" + datasets + "\n  </Collection>\n</VTKFile>\n")
-        return name

@@ -33,10 +33,17 @@ def _fmt(value):
 class TimeSeriesWriter:
     """Keeps the rows and rewrites the whole (small) file atomically after each row."""
 
-    def __init__(self, path):
+    def __init__(self, path, rows=()):
+        """``rows``: those already written by the run being continued (from a checkpoint);
+        the file is rewritten with them at once, dropping any rows written after it."""
         self.path = path
-        self.rows = []
+        self.rows = [",".join(_fmt(row[c]) for c in COLUMNS) for row in rows]
+        if self.rows:
+            self._write()
 
     def append(self, row):
         self.rows.append(",".join(_fmt(row[c]) for c in COLUMNS))
+        self._write()
+
+    def _write(self):
         write_text(self.path, ",".join(COLUMNS) + "\n" + "\n".join(self.rows) + "\n")

@@ -67,6 +67,20 @@ class ExplicitScheme:
                                      g.spacing, nx, ny, self.smoothing, self.cell_j,
                                      self.cell_vol, self.cell_p, self.node_w, self.node_p)
 
+    _STATE = ("cell_j", "cell_vol", "cell_xi", "cell_p")
+
+    def state(self):
+        """What the scheme carries from one step to the next beyond the particles (whose
+        volume is their compression J): the cell state the next step starts from. It is not
+        recomputed from the particles on a restart because that would not be bit-identical
+        (the particles' volumes are set from their cell's J after the sums were taken)."""
+        return {name: getattr(self, name).copy() for name in self._STATE}
+
+    def restore(self, state):
+        """Continue from ``state()`` (a checkpoint)."""
+        for name in self._STATE:
+            np.copyto(getattr(self, name), state[name])
+
     def stable_time_step(self):
         """h / (c + |v|max) at the current particle speeds (s)."""
         speed = float(np.sqrt(np.max(np.sum(self.particles.v**2, axis=1))))

@@ -60,6 +60,17 @@ class ProjectionScheme:
         self.bins = None
         self.last_unknowns = 0
 
+    def state(self):
+        """What the scheme carries from one step to the next beyond the particles: the nodal
+        pressure (the warm start of the next solve). Everything else is rebuilt each step."""
+        return {"p_node": self.projection.p_node.copy(),
+                "last_unknowns": np.array(self.last_unknowns)}
+
+    def restore(self, state):
+        """Continue from ``state()`` (a checkpoint)."""
+        self.projection.p_node = state["p_node"].copy()
+        self.last_unknowns = int(state["last_unknowns"])
+
     def advance(self, dt, nsteps, where=""):
         """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
         the steps (residual: the worst)."""

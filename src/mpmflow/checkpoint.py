@@ -1,0 +1,98 @@
+"""Checkpoints: one .npz file per checkpoint holding the arrays of a run and its JSON meta.
+
+A checkpoint holds everything a run needs to continue exactly as if it had not stopped: the
+particle arrays, the scheme's state carried between steps (``scheme.state()``), and in the
+meta the time, step, time step, output schedule, counters, the timeseries rows and snapshot
+list written so far, and the resolved case. mpmflow draws no random numbers, so there is no
+random state to keep. Files are written atomically and the latest ``KEEP`` are kept.
+"""
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CaseError
+from .output.atomic import atomic_path
+
+FORMAT = 1
+KEEP = 2
+_NAME = re.compile(r"^checkpoint_(\d{9})\.npz$")
+
+
+def path_for(folder, step):
+    return Path(folder) / f"checkpoint_{step:09d}.npz"
+
+
+def checkpoints(folder):
+    """The checkpoint files in ``folder``, oldest first (by step)."""
+    found = [(int(m.group(1)), p) for p in Path(folder).glob("checkpoint_*.npz")
+             if (m := _NAME.match(p.name))]
+    return [p for _, p in sorted(found)]
+
+
+def write(folder, step, arrays, meta):
+    """Write one checkpoint atomically and delete all but the latest ``KEEP``; returns its
+    path."""
+    path = path_for(folder, step)
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:  # a file object: np.savez would append .npz to a name
+            np.savez(f, meta=np.array(json.dumps({"format": FORMAT, **meta})), **arrays)
+    for old in checkpoints(folder)[:-KEEP]:
+        old.unlink(missing_ok=True)
+    return path
+
+
+def read(path):
+    """(arrays, meta) of a checkpoint file."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            arrays = {k: data[k] for k in data.files if k != "meta"}
+    except (OSError, ValueError, KeyError) as err:
+        raise CaseError(f"Checkpoint {path} cannot be read ({err}); delete it to restart from "
+                        "the one before, or start the run again without --restart.") from None
+    if meta.get("format") != FORMAT:
+        raise CaseError(f"Checkpoint {path} has format {meta.get('format')}, this mpmflow reads "
+                        f"format {FORMAT}; start the run again without --restart.")
+    return arrays, meta
+
+
+def latest(folder):
+    """The path of the latest checkpoint in ``folder``; CaseError if there is none."""
+    found = checkpoints(folder)
+    if not found:
+        raise CaseError(f"--restart: {folder} holds no checkpoint (checkpoint_*.npz) to "
+                        "continue from. Run without --restart to start the run.")
+    return found[-1]
+
+
+def _flatten(data, prefix=""):
+    if isinstance(data, dict):
+        out = {}
+        for key, value in data.items():
+            out.update(_flatten(value, f"{prefix}{key}."))
+        return out
+    if isinstance(data, list) and data and isinstance(data[0], dict):
+        out = {}
+        for k, value in enumerate(data):
+            out.update(_flatten(value, f"{prefix}{k}."))
+        return out
+    return {prefix[:-1]: data}
+
+
+def check_same_case(saved, current, path, may_change=("time.end",)):
+    """Refuse to continue a checkpoint with other settings than it was written with (only
+    ``may_change`` may differ): CaseError naming the first differing key."""
+    old, new = _flatten(saved), _flatten(current)
+    for key in sorted(set(old) | set(new)):
+        if key in may_change or old.get(key) == new.get(key):
+            continue
+        saved_value = old.get(key, "(not set)")
+        raise CaseError(
+            f"--restart: the case differs from the one checkpoint {path} was written with: "
+            f"`{key}` = {json.dumps(new.get(key, '(not set)'))} now, "
+            f"{json.dumps(saved_value)} in the checkpoint. A restart must use the same "
+            f"settings except time.end (which may be later, to extend the run). Use "
+            f"--set {key}={json.dumps(saved_value)}, or start a new run in another folder.")

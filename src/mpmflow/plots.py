@@ -1,0 +1,178 @@
+"""``mpmflow plot DIR``: figures of a run's outputs (matplotlib, PNG and an animated GIF).
+
+Reads ``timeseries.csv``, ``summary.json`` and the snapshots listed in ``particles.pvd``;
+writes into the plot folder:
+
+- ``timeseries.png``   front and column height, energies, largest speed and pressure,
+                       pressure noise and wetted volume ratio against time;
+- ``snapshots/particles_NNNNNN.png``   each snapshot, particles coloured by pressure;
+- ``snapshots.png``    up to six snapshots side by side (an overview);
+- ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter).
+"""
+
+import json
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CaseError
+from .output.atomic import atomic_path
+
+DPI = 80
+
+
+def _pyplot():
+    try:
+        import matplotlib
+    except ImportError:
+        raise CaseError("mpmflow plot needs matplotlib: pip install 'mpmflow[plot]' (or "
+                        "pip install matplotlib).") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def read_run(folder):
+    """(timeseries as a structured array, summary dict, [(time, vtu path)]) of a run."""
+    folder = Path(folder)
+    csv = folder / "timeseries.csv"
+    if not csv.is_file():
+        raise CaseError(f"{folder} holds no timeseries.csv; give the --out folder of a run "
+                        "(mpmflow run CASE --out DIR).")
+    series = np.atleast_1d(np.genfromtxt(csv, delimiter=",", names=True))
+    summary_path = folder / "summary.json"
+    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else {}
+    snaps = []
+    pvd = folder / "particles.pvd"
+    if pvd.is_file():
+        for d in ET.parse(pvd).getroot().find("Collection").findall("DataSet"):
+            snaps.append((float(d.get("timestep")), folder / d.get("file")))
+    return series, summary, snaps
+
+
+def _save(fig, path, plt):
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=DPI, format="png")
+    plt.close(fig)
+
+
+def plot_timeseries(series, summary, path, plt):
+    t = series["time"]
+    fig, ax = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
+    ax[0, 0].plot(t, series["front"], label="surge front")
+    ax[0, 0].plot(t, series["height"], label="column height")
+    ax[0, 0].set_ylabel("m")
+    ax[0, 1].plot(t, series["kinetic_energy"], label="kinetic")
+    ax[0, 1].plot(t, series["potential_energy"] - series["potential_energy"][0],
+                  label="potential - initial")
+    ax[0, 1].plot(t, series["kinetic_energy"] + series["potential_energy"]
+                  - series["potential_energy"][0], "k--", label="total - initial")
+    ax[0, 1].set_ylabel("J/m")
+    ax[1, 0].plot(t, series["max_speed"], label="largest particle speed [m/s]")
+    right = ax[1, 0].twinx()
+    right.plot(t, series["max_pressure"], "C3", label="largest pressure [Pa]")
+    right.set_ylabel("Pa", color="C3")
+    ax[1, 0].set_ylabel("m/s")
+    ax[1, 1].plot(t, series["pressure_noise"], label="pressure noise [Pa]")
+    ax[1, 1].set_ylabel("Pa")
+    vol = ax[1, 1].twinx()
+    vol.plot(t, series["volume_ratio"], "C2", label="wetted volume ratio [-]")
+    vol.set_ylabel("volume ratio", color="C2")
+    for a, extra in ((ax[0, 0], None), (ax[0, 1], None), (ax[1, 0], right), (ax[1, 1], vol)):
+        handles, labels = a.get_legend_handles_labels()
+        if extra is not None:
+            h2, l2 = extra.get_legend_handles_labels()
+            handles, labels = handles + h2, labels + l2
+        a.legend(handles, labels, fontsize=8, loc="best")
+        a.grid(alpha=0.3)
+    for a in ax[1]:
+        a.set_xlabel("time [s]")
+    fig.suptitle(summary.get("case", {}).get("title") or "mpmflow run", fontsize=10)
+    fig.tight_layout()
+    _save(fig, path, plt)
+
+
+def _particles(path):
+    import meshio
+
+    mesh = meshio.read(path)
+    return mesh.points[:, :2], np.asarray(mesh.point_data["pressure"])
+
+
+def _draw(ax, xy, p, t, size, vmax, plt):
+    art = ax.scatter(xy[:, 0], xy[:, 1], c=p, s=1.0, marker="s", cmap="viridis", vmin=0.0,
+                     vmax=vmax, linewidths=0, rasterized=True)
+    ax.set_xlim(0, size[0])
+    ax.set_ylim(0, size[1])
+    ax.set_aspect("equal")
+    ax.set_title(f"t = {t:.3f} s", fontsize=9)
+    ax.tick_params(labelsize=7)
+    return art
+
+
+def plot_snapshots(snaps, summary, folder, plt):
+    """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths."""
+    from matplotlib.animation import PillowWriter
+
+    if not snaps:
+        return []
+    size = summary.get("grid", {}).get("domain_used")
+    data = [(t, *_particles(f)) for t, f in snaps]
+    if size is None:
+        size = np.max([xy.max(axis=0) for _, xy, _ in data], axis=0)
+    # the colour scale: the 99.5th percentile over all snapshots, so that a few impact peaks
+    # do not leave the rest of the run dark
+    vmax = float(np.percentile(np.concatenate([p for _, _, p in data]), 99.5)) or 1.0
+    (folder / "snapshots").mkdir(exist_ok=True)
+    written = []
+    for (t, xy, p), (_, f) in zip(data, snaps):
+        fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
+        art = _draw(ax, xy, p, t, size, vmax, plt)
+        fig.colorbar(art, ax=ax, label="pressure [Pa]")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        out = folder / "snapshots" / (Path(f).stem + ".png")
+        _save(fig, out, plt)
+        written.append(out)
+    pick = np.unique(np.linspace(0, len(data) - 1, min(6, len(data))).round().astype(int))
+    fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
+                             layout="constrained")
+    for ax, k in zip(axes[0], pick):
+        art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt)
+    fig.colorbar(art, ax=axes[0].tolist(), label="pressure [Pa]")
+    _save(fig, folder / "snapshots.png", plt)
+    written.append(folder / "snapshots.png")
+    fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
+    art = _draw(ax, data[0][1], data[0][2], data[0][0], size, vmax, plt)
+    fig.colorbar(art, ax=ax, label="pressure [Pa]")
+    writer = PillowWriter(fps=4)
+    tmp = folder / ".animation.partial.gif"  # Pillow picks the format from the suffix
+    try:
+        with writer.saving(fig, str(tmp), dpi=60):
+            for t, xy, p in data:
+                art.set_offsets(xy)
+                art.set_array(p)
+                ax.set_title(f"t = {t:.3f} s", fontsize=9)
+                writer.grab_frame()
+        os.replace(tmp, folder / "animation.gif")
+    finally:
+        tmp.unlink(missing_ok=True)
+        plt.close(fig)
+    written.append(folder / "animation.gif")
+    return written
+
+
+def plot_run(run_dir, out_dir=None):
+    """All figures of the run in ``run_dir`` (into ``out_dir``, default run_dir/plots)."""
+    plt = _pyplot()
+    series, summary, snaps = read_run(run_dir)
+    out = Path(out_dir) if out_dir is not None else Path(run_dir) / "plots"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(f"--out {out} cannot be created: {err.strerror}.") from None
+    plot_timeseries(series, summary, out / "timeseries.png", plt)
+    return [out / "timeseries.png", *plot_snapshots(snaps, summary, out, plt)]

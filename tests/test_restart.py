@@ -1,0 +1,132 @@
+"""Checkpoints and restart: a continued run is the uninterrupted run, bit for bit."""
+
+import json
+import signal
+import shutil
+
+import numpy as np
+import pytest
+
+from mpmflow import Simulation, load_case
+from mpmflow.checkpoint import checkpoints
+from mpmflow.cli import main
+from mpmflow.errors import CaseError
+
+from conftest import EXAMPLES
+
+COMMON = ["grid.spacing=0.01", "time.end=0.1", "checkpoint.interval=0.03",
+          "output.snapshot_interval=0.02"]
+SCHEMES = {
+    "projection": [],
+    "explicit": ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
+                 "bodies.0.initial_pressure=hydrostatic"],
+}
+FIELDS = ("x", "v", "pressure", "mass", "volume")
+
+
+def _case(scheme, *more):
+    return load_case(EXAMPLES / "dam_break.toml", COMMON + SCHEMES[scheme] + list(more))
+
+
+@pytest.fixture(scope="module", params=list(SCHEMES))
+def uninterrupted(request, tmp_path_factory):
+    out = tmp_path_factory.mktemp(request.param) / "whole"
+    sim = Simulation(_case(request.param), out)
+    sim.run()
+    return request.param, sim, out
+
+
+def _stop_at(sim, t):
+    """Ask ``sim`` to stop at its output time t, as the SIGINT handler does."""
+    def hook(s):
+        if s.time >= t - 1e-12:
+            s.stop_signal = signal.SIGINT
+    sim.on_output = hook
+
+
+def _assert_same_run(a, b, out_a, out_b):
+    for name in FIELDS:
+        assert np.array_equal(getattr(a.particles, name), getattr(b.particles, name)), name
+    assert a.steps == b.steps and a.time == b.time
+    for name in ("timeseries.csv", "particles.pvd"):
+        assert (out_a / name).read_text() == (out_b / name).read_text(), name
+    assert sorted(p.name for p in out_a.glob("particles_*.vtu")) == \
+        sorted(p.name for p in out_b.glob("particles_*.vtu"))
+
+
+def test_interrupted_then_restarted_run_is_bit_identical(uninterrupted, tmp_path):
+    scheme, whole, whole_out = uninterrupted
+    out = tmp_path / "parts"
+    first = Simulation(_case(scheme), out)
+    _stop_at(first, 0.05)  # between checkpoints (0.03, 0.06): the stop writes its own
+    summary = first.run()
+    assert summary["status"] == "interrupted" and summary["time"] == pytest.approx(0.05)
+    assert "interrupted by SIGINT at t = 0.05 s" in summary["message"]
+    saved = checkpoints(out)  # the periodic one at 0.03 s and the one of the stop
+    assert len(saved) == 2 and saved[-1].name == f"checkpoint_{first.steps:09d}.npz"
+    rest = Simulation.resume(_case(scheme), out, checkpoints(out)[-1])
+    assert rest.time == first.time and rest.steps == first.steps
+    assert rest.run()["status"] == "completed"
+    _assert_same_run(whole, rest, whole_out, out)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["restarted_from"] == saved[-1].name
+    assert summary["steps"] == whole.steps
+
+
+def test_restart_from_an_older_checkpoint_truncates_the_later_outputs(uninterrupted, tmp_path):
+    scheme, whole, whole_out = uninterrupted
+    out = tmp_path / "copy"
+    shutil.copytree(whole_out, out)
+    older, final = checkpoints(out)  # at 0.09 s and at the end (0.1 s)
+    final.unlink()
+    rest = Simulation.resume(_case(scheme), out, older)
+    assert rest.time == pytest.approx(0.09)
+    # on resuming, the rows and snapshots after the checkpoint are dropped at once
+    rest._open_outputs()
+    times = [float(r.split(",")[0]) for r in (out / "timeseries.csv").read_text().split()[1:]]
+    assert times[-1] == pytest.approx(0.09) and len(times) == 10
+    assert not (out / "particles_000005.vtu").exists()  # the one at 0.1 s
+    rest.run()
+    _assert_same_run(whole, rest, whole_out, out)
+
+
+def test_a_later_end_extends_a_finished_run(uninterrupted, tmp_path):
+    scheme, whole, whole_out = uninterrupted
+    out = tmp_path / "copy"
+    shutil.copytree(whole_out, out)
+    longer = _case(scheme, "time.end=0.12")
+    rest = Simulation.resume(longer, out, checkpoints(out)[-1])
+    rest.run()
+    rows = (out / "timeseries.csv").read_text().split()[1:]
+    assert [round(float(r.split(",")[0]), 9) for r in rows] == \
+        [round(0.01 * k, 9) for k in range(13)]  # no duplicate row at 0.1 s
+    assert rest.steps > whole.steps
+
+
+def test_restart_refuses_other_settings_naming_the_key(uninterrupted):
+    scheme, _, whole_out = uninterrupted
+    with pytest.raises(CaseError) as err:
+        Simulation.resume(_case(scheme, "solver.flip=0.5"), whole_out,
+                          checkpoints(whole_out)[-1])
+    msg = str(err.value)
+    assert "`solver.flip` = 0.5 now" in msg and "in the checkpoint" in msg
+    assert "--set solver.flip=" in msg
+    with pytest.raises(CaseError, match="already reaches time.end = 0.1 s"):
+        Simulation.resume(_case(scheme), whole_out, checkpoints(whole_out)[-1])
+
+
+def test_cli_restart_without_checkpoint_and_with_overwrite(tmp_path, capsys):
+    case = EXAMPLES / "hydrostatic.toml"
+    (tmp_path / "empty").mkdir()
+    assert main(["run", str(case), "--out", str(tmp_path / "empty"), "--restart"]) == 2
+    assert "holds no checkpoint" in capsys.readouterr().err
+    assert main(["run", str(case), "--out", str(tmp_path / "empty"), "--restart",
+                 "--overwrite"]) == 2
+    assert "give one of them" in capsys.readouterr().err
+
+
+def test_checkpoints_keep_the_latest_two(uninterrupted):
+    _, whole, whole_out = uninterrupted
+    names = [p.name for p in checkpoints(whole_out)]
+    assert len(names) == 2 and names[-1] == f"checkpoint_{whole.steps:09d}.npz"
+    assert not list(whole_out.glob(".*.tmp"))
