@@ -12,15 +12,25 @@ import numpy as np
 from .kernels import transfer2d
 
 
+def last_crossings(f, centres, wall):
+    """For every column j of f (one value per cell along axis 0), the position where f[:, j]
+    last drops below 1/2; ``wall`` if the last cell is at least half full; nan if never."""
+    above = f >= 0.5
+    n = f.shape[0]
+    k = n - 1 - np.argmax(above[::-1], axis=0)
+    out = np.full(f.shape[1], np.nan)
+    seen = above.any(axis=0)
+    out[seen & (k == n - 1)] = wall
+    j = np.flatnonzero(seen & (k < n - 1))
+    k = k[j]
+    f0, f1 = f[k, j], f[k + 1, j]
+    out[j] = centres[k] + (centres[k + 1] - centres[k]) * (f0 - 0.5) / (f0 - f1)
+    return out
+
+
 def last_crossing(f, centres, wall):
     """Position where the profile f (one value per cell) last drops below 1/2; nan if never above."""
-    full = np.flatnonzero(f >= 0.5)
-    if full.size == 0:
-        return np.nan
-    k = full[-1]
-    if k == f.size - 1:
-        return wall
-    return centres[k] + (centres[k + 1] - centres[k]) * (f[k] - 0.5) / (f[k] - f[k + 1])
+    return float(last_crossings(f[:, None], centres, wall)[0])
 
 
 def volume_fraction_field(grid, theta):
@@ -34,9 +44,8 @@ def front_and_height(grid, theta):
     xc = grid.cell_centres(0)
     yc = grid.cell_centres(1)
     lx, ly = grid.size
-    fronts = [last_crossing(f[:, j], xc, lx) for j in range(f.shape[1])]
-    fronts = [x for x in fronts if np.isfinite(x)]
-    front = max(fronts) if fronts else np.nan
+    fronts = last_crossings(f, xc, lx)
+    front = np.nanmax(fronts) if np.isfinite(fronts).any() else np.nan
     height = last_crossing(f[0, :], yc, ly)
     return float(front), float(height)
 

@@ -297,7 +297,10 @@ def ghost_pressures_2d(ncx, ncy, cell_slot, K, node_row, node_f, theta_min, p_no
             i = ix + nnx * iy
             if node_row[i] >= 0:
                 continue
-            if _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base) == 0:
+            # no material around the node: none of its cells is in the system (a cell in
+            # the system holds particles or is enclosed by nodes with f > 1/2)
+            if node_f[i] == 0.0 or _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local,
+                                            base) == 0:
                 p_node[i] = 0.0
                 continue
             num = 0.0
