@@ -34,10 +34,15 @@ EPILOG = """\
 examples:
   mpmflow run examples/dam_break.toml --out runs/dam_break
   mpmflow run examples/hydrostatic.toml --out runs/still --set solver.formulation=paper
+  mpmflow validate --out runs/validation
   mpmflow keys
 
 exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
 summary.json), 130 interrupted."""
+
+
+VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
+                    "volume")
 
 
 def _parser():
@@ -69,6 +74,20 @@ def _parser():
                     "whole study then takes about 15 minutes on 2 cores)")
     st.add_argument("--quick", action="store_true",
                     help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)")
+    v = sub.add_parser(
+        "validate", help="run the validation suite and write its report",
+        description="Run the validation cases (hydrostatic column, standing-wave sloshing, "
+        "dam breaks of aspect ratio 2 and 1 at the paper's meshes, time-step independence, "
+        "Lobovsky et al. 2014, volume and particle distribution), compare each with its "
+        "analytic or measured reference, and write DIR/README.md (summary table: case, "
+        "quantity, error measure, value, tolerance, pass/miss; one section per case with "
+        "plots) and DIR/summary.csv. The full run takes about 15 minutes on 2 cores.",
+        epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
+    v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
+    v.add_argument("--quick", action="store_true",
+                   help="the small versions the test suite runs (about a minute)")
+    v.add_argument("--case", action="append", default=[], metavar="NAME", dest="cases",
+                   help="run only this case (repeatable): " + ", ".join(VALIDATION_CASES))
     k = sub.add_parser("keys", help="list every case key with its meaning and default",
                        description="List every case-file key (dotted name), its default and "
                        "its meaning.")
@@ -152,6 +171,39 @@ def _study(args):
     return 0
 
 
+def _validate(args):
+    from .reference import data_dir
+
+    unknown = [c for c in args.cases if c not in VALIDATION_CASES]
+    if unknown:
+        raise CaseError(f"--case {unknown[0]}: unknown validation case; choose from "
+                        + ", ".join(VALIDATION_CASES) + ".")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    try:
+        data_dir()
+    except FileNotFoundError as err:
+        raise CaseError(str(err)) from None
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
+                        "can write to.") from None
+    from .validation import run_validation
+
+    def report(res):
+        misses = sum(r.status == "miss" for r in res.rows)
+        print(f"mpmflow: {res.title}: {len(res.rows)} rows, {misses} missed, "
+              f"{res.wall_s:.0f} s", file=sys.stderr)
+
+    _, counts = run_validation(out, quick=args.quick, cases=args.cases, progress=report)
+    print(f"mpmflow: {counts['pass']} rows pass, {counts['miss']} miss"
+          + (f", {counts['n/a']} not measurable" if counts["n/a"] else "")
+          + f"; report in {out}/README.md", file=sys.stderr)
+    return 0
+
+
 def _keys(args):
     from .case import key_reference, reference_markdown
 
@@ -180,6 +232,8 @@ def main(argv=None):
             return _run(args)
         if args.command == "study":
             return _study(args)
+        if args.command == "validate":
+            return _validate(args)
         return _keys(args)
     except MpmflowError as err:
         print(f"mpmflow: error: {err}", file=sys.stderr)

@@ -53,7 +53,7 @@ class Row:
 
     @property
     def tolerance_text(self):
-        return {"<=": "<= ", ">=": ">= ", "|<=|": "|x| <= "}[self.sense] + f"{self.tolerance:g}"
+        return {"<=": "<= ", ">=": ">= ", "|<=|": "|x| <= "}[self.sense] + f"{self.tolerance:.3g}"
 
     def as_dict(self):
         return {"case": self.case, "quantity": self.quantity, "measure": self.measure,

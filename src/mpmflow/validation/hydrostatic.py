@@ -8,6 +8,8 @@ a quarter or half a cell off the grid lines. The exact pressure is rho g (H - y)
 
 import numpy as np
 
+from ..cells import bin_particles
+
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
 
 RHO, G = 1000.0, 9.81
@@ -39,7 +41,7 @@ def checkerboard(sim, H):
     (-1)^(i+j) (p_i - rho g (H - y_i)). A smooth error averages out; a checkerboard does not."""
     g = sim.grid
     nx, ny = g.cells
-    theta = np.clip(sim.scheme.bins.theta, 0, None).reshape(ny, nx)  # [cy, cx]
+    theta = bin_particles(g, sim.particles).theta.reshape(ny, nx)  # [cy, cx]
     p = sim.scheme.projection.p_node.reshape(ny + 1, nx + 1)  # [iy, ix]
     full = theta >= 0.9
     inner = np.zeros((ny + 1, nx + 1), dtype=bool)
