@@ -81,11 +81,11 @@ def _parser():
         "Lobovsky et al. 2014, volume and particle distribution), compare each with its "
         "analytic or measured reference, and write DIR/README.md (summary table: case, "
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
-        "plots) and DIR/summary.csv. The full run takes about 15 minutes on 2 cores.",
+        "plots) and DIR/summary.csv. The full run takes about 2 minutes on 2 cores.",
         epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
     v.add_argument("--quick", action="store_true",
-                   help="the small versions the test suite runs (about a minute)")
+                   help="the small versions the test suite runs (about 20 s)")
     v.add_argument("--case", action="append", default=[], metavar="NAME", dest="cases",
                    help="run only this case (repeatable): " + ", ".join(VALIDATION_CASES))
     k = sub.add_parser("keys", help="list every case key with its meaning and default",

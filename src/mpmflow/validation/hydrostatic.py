@@ -76,9 +76,9 @@ def run(out, quick=False, context=None):
                      "vt": sim.series("max_speed"), "wall": sim.summary["wall_seconds"]})
     name = "hydrostatic"
     for r in runs:
-        res.rows.append(Row(name, f"pressure, h = {r['h']} m", "relative L2 over particles at "
+        res.rows.append(Row(name, f"pressure (L2), h = {r['h']} m", "relative L2 over particles at "
                             f"t = {end:g} s", r["l2"], TOL_L2, WHY_L2))
-        res.rows.append(Row(name, f"pressure, h = {r['h']} m", "max |p - rho g (H - y)| / "
+        res.rows.append(Row(name, f"pressure (max), h = {r['h']} m", "max |p - rho g (H - y)| / "
                             "(rho g H)", r["max"], TOL_MAX, WHY_MAX))
     l2 = [r["l2"] for r in runs]
     at_floor = all(e < SOLVER_FLOOR for e in l2)
