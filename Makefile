@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: setup test dam-break bench figures clean
+.PHONY: setup test dam-break validate bench figures clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -20,6 +20,9 @@ test: setup
 
 dam-break: setup
 	$(BIN)/mpmflow run examples/dam_break.toml --out runs/dam_break --overwrite
+
+validate: setup
+	$(BIN)/mpmflow validate --out docs/validation
 
 bench: setup
 	$(BIN)/python benchmarks/dam_break.py

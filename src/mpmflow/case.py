@@ -72,11 +72,22 @@ class Box(_Section):
         "explicit scheme starts from the matching compression (volume (1 - p/K) m/density), "
         "which spares it the acoustic transient of a column released without pressure; the "
         "projection scheme computes the pressure anew in its first step.")
+    surface_amplitude: float = Field(
+        0.0, description="Amplitude A (m) of a cosine top surface, for standing-wave "
+        "sloshing: particles are kept where y < max[1] + A cos(pi (x - min[0]) / (max[0] - "
+        "min[0])), half a wavelength across the box (the first sloshing mode of a tank as "
+        "wide as the box); the box is seeded up to max[1] + |A|. 0 = flat top. |A| must be "
+        "smaller than the box's height. With initial_pressure = \"hydrostatic\" the depth is "
+        "measured from this surface.", examples=[0.01])
 
     @model_validator(mode="after")
     def _ordered(self):
         if any(b <= a for a, b in zip(self.min, self.max)):
             raise ValueError("each entry of max must be larger than the entry of min")
+        if abs(self.surface_amplitude) >= self.max[1] - self.min[1]:
+            raise ValueError(
+                f"|surface_amplitude| = {abs(self.surface_amplitude):g} m must be smaller than "
+                f"the box's height max[1] - min[1] = {self.max[1] - self.min[1]:g} m")
         return self
 
 
@@ -268,6 +279,12 @@ class Case(_Section):
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
                 f"({size} m); the grid needs at least two cells per side")
         for k, body in enumerate(self.bodies):
+            crest = body.max[1] + abs(body.surface_amplitude)
+            if crest > size[1] * (1 + 1e-12):
+                raise ValueError(
+                    f"bodies.{k}: the cosine surface reaches max[1] + |surface_amplitude| = "
+                    f"{crest:g} m, above the domain's top at {size[1]:g} m; lower "
+                    f"bodies.{k}.max or surface_amplitude, or enlarge domain.size")
             for lo, hi, s in zip(body.min, body.max, size):
                 if lo < -1e-12 or hi > s * (1 + 1e-12):
                     box = " x ".join(f"[0, {s:g}]" for s in size)

@@ -43,11 +43,16 @@ examples:
   mpmflow run examples/dam_break.toml --out runs/dam_break
   mpmflow plot runs/dam_break                     (figures into runs/dam_break/plots)
   mpmflow run examples/hydrostatic.toml --out runs/still --set solver.formulation=paper
+  mpmflow validate --out runs/validation
   mpmflow keys
 
 exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
 summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (both leave a checkpoint:
 continue with --restart)."""
+
+
+VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
+                    "volume")
 
 
 def _parser():
@@ -92,6 +97,20 @@ def _parser():
     pl.add_argument("run_dir", metavar="DIR", help="the --out folder of a run")
     pl.add_argument("--out", "-o", metavar="DIR2", default=None,
                     help="folder for the figures (default: DIR/plots)")
+    v = sub.add_parser(
+        "validate", help="run the validation suite and write its report",
+        description="Run the validation cases (hydrostatic column, standing-wave sloshing, "
+        "dam breaks of aspect ratio 2 and 1 at the paper's meshes, time-step independence, "
+        "Lobovsky et al. 2014, volume and particle distribution), compare each with its "
+        "analytic or measured reference, and write DIR/README.md (summary table: case, "
+        "quantity, error measure, value, tolerance, pass/miss; one section per case with "
+        "plots) and DIR/summary.csv. The full run takes about 2 minutes on 2 cores.",
+        epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
+    v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
+    v.add_argument("--quick", action="store_true",
+                   help="the small versions the test suite runs (about 20 s)")
+    v.add_argument("--case", action="append", default=[], metavar="NAME", dest="cases",
+                   help="run only this case (repeatable): " + ", ".join(VALIDATION_CASES))
     k = sub.add_parser("keys", help="list every case key with its meaning and default",
                        description="List every case-file key (dotted name), its default and "
                        "its meaning.")
@@ -220,6 +239,39 @@ def _plot(args):
     return 0
 
 
+def _validate(args):
+    from .reference import data_dir
+
+    unknown = [c for c in args.cases if c not in VALIDATION_CASES]
+    if unknown:
+        raise CaseError(f"--case {unknown[0]}: unknown validation case; choose from "
+                        + ", ".join(VALIDATION_CASES) + ".")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    try:
+        data_dir()
+    except FileNotFoundError as err:
+        raise CaseError(str(err)) from None
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
+                        "can write to.") from None
+    from .validation import run_validation
+
+    def report(res):
+        misses = sum(r.status == "miss" for r in res.rows)
+        print(f"mpmflow: {res.title}: {len(res.rows)} rows, {misses} missed, "
+              f"{res.wall_s:.0f} s", file=sys.stderr)
+
+    _, counts = run_validation(out, quick=args.quick, cases=args.cases, progress=report)
+    print(f"mpmflow: {counts['pass']} rows pass, {counts['miss']} miss"
+          + (f", {counts['n/a']} not measurable" if counts["n/a"] else "")
+          + f"; report in {out}/README.md", file=sys.stderr)
+    return 0
+
+
 def _keys(args):
     from .case import key_reference, reference_markdown
 
@@ -250,6 +302,8 @@ def main(argv=None):
             return _study(args)
         if args.command == "plot":
             return _plot(args)
+        if args.command == "validate":
+            return _validate(args)
         return _keys(args)
     except MpmflowError as err:
         print(f"mpmflow: error: {err}", file=sys.stderr)

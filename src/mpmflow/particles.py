@@ -25,6 +25,12 @@ class Particles:
                      ("x", "v", "pressure", "mass", "volume")))
 
 
+def subset(particles, keep):
+    """The particles selected by the boolean mask ``keep`` (copies)."""
+    return Particles(*(getattr(particles, f)[keep] for f in
+                       ("x", "v", "pressure", "mass", "volume")))
+
+
 def lattice_in_box(lo, hi, spacing):
     """Points of the lattice ``(k + 1/2) * spacing`` (k integer) that lie inside [lo, hi).
 

@@ -1,0 +1,137 @@
+"""Shared pieces of the validation cases: result rows, a case's result, running a case.
+
+Every row carries its tolerance and a one-line justification, fixed in the case module
+before the results were looked at; a row passes when its value is on the allowed side of
+the tolerance (a value that could not be measured, nan, fails).
+"""
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..case import load_case
+from ..simulation import Simulation
+
+ROOT = Path(__file__).resolve().parents[3]
+EXAMPLES = ROOT / "examples"
+
+
+@dataclass
+class Row:
+    """One line of the summary table."""
+
+    case: str
+    quantity: str
+    measure: str
+    value: float
+    tolerance: float
+    justification: str
+    unit: str = ""
+    sense: str = "<="  # "<=": the value must not exceed the tolerance; ">=": not fall below;
+    # "|<=|": its magnitude must not exceed the tolerance (signed values)
+    miss: str = ""  # why a miss of this row happens (shown only when it misses)
+    not_measurable: bool = False  # nan because there is nothing to measure (see ``miss``)
+
+    @property
+    def status(self):
+        """"pass", "miss", or "n/a" (nothing to measure, explained in ``miss``)."""
+        if self.not_measurable and not math.isfinite(self.value):
+            return "n/a"
+        return "pass" if self.passed else "miss"
+
+    @property
+    def passed(self):
+        v = self.value
+        if v is None or not math.isfinite(v):
+            return False
+        if self.sense == "|<=|":
+            return abs(v) <= self.tolerance
+        return v <= self.tolerance if self.sense == "<=" else v >= self.tolerance
+
+    @property
+    def tolerance_text(self):
+        return {"<=": "<= ", ">=": ">= ", "|<=|": "|x| <= "}[self.sense] + f"{self.tolerance:.3g}"
+
+    def as_dict(self):
+        return {"case": self.case, "quantity": self.quantity, "measure": self.measure,
+                "value": self.value, "tolerance": self.tolerance_text,
+                "unit": self.unit, "status": self.status, "justification": self.justification}
+
+
+@dataclass
+class CaseResult:
+    """What a validation case returns: rows for the table, figures, and its report section."""
+
+    name: str
+    title: str
+    rows: list = field(default_factory=list)
+    figures: list = field(default_factory=list)  # (file name in the report folder, caption)
+    text: str = ""  # Markdown: set-up, measures, per-run numbers
+    wall_s: float = 0.0
+
+
+def run_example(example, overrides=(), on_output=None):
+    """Run ``examples/<example>`` with overrides (no files written); returns the Simulation.
+
+    ``on_output(sim)`` is called at every output time. The run's wall time is in
+    ``sim.summary['wall_seconds']``."""
+    case = load_case(EXAMPLES / example, ["output.snapshots=false", *overrides])
+    sim = Simulation(case)
+    if on_output is not None:
+        sim.on_output = on_output
+    sim.run()
+    return sim
+
+
+def timed(fn):
+    """Call fn(); return (its result, wall seconds)."""
+    t0 = _time.perf_counter()
+    out = fn()
+    return out, _time.perf_counter() - t0
+
+
+def observed_order(h, e):
+    """Least-squares slope of log(error) against log(spacing): the observed order."""
+    h, e = np.asarray(h, float), np.asarray(e, float)
+    if np.any(~np.isfinite(e)) or np.any(e <= 0):
+        return float("nan")
+    return float(np.polyfit(np.log(h), np.log(e), 1)[0])
+
+
+def fmt(v, digits=3):
+    """A number for the report: 3 significant digits, nan as 'n/a'."""
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "n/a"
+    if isinstance(v, (int, np.integer)):
+        return str(v)
+    return f"{v:.{digits}g}"
+
+
+def markdown_table(header, rows):
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def pyplot():
+    """matplotlib.pyplot with the non-interactive backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save(fig, path):
+    """Save a figure atomically and close it."""
+    from ..output.atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90, format="png")
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)

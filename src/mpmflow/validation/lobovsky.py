@@ -1,0 +1,187 @@
+"""Lobovsky et al. (2014), H = 0.3 m, in 2D: water levels and pressure on the downstream wall.
+
+examples/lobovsky.toml: a column 0.6 m x 0.3 m at the left end of a tank 1.61 m long
+(tank height 0.92 m, not given by the sources; it holds the run-up), released at once
+(the experiment lifts a gate at about 3.5 m/s), 1.25 s (t sqrt(g/H) = 7.1), dt = 1 ms,
+outputs every step. Times and values are compared in the data's units t sqrt(g/H), h/H and
+p/(rho g H).
+
+* **Water level** at a gauge x_g: the height where the cell volume fraction profile,
+  interpolated linearly in x between the two cell columns around x_g, first drops below
+  1/2 going up from the floor: the top of the water layer on the floor (0 when dry).
+  Splashes and drops above the layer are not counted (taking the highest f = 1/2 crossing
+  instead puts single-sample spikes of up to 2.5 H into the series). Error: RMS of
+  (h_sim - h_exp)/H over the measured samples up to the run's end. Where the data hold two repetitions (H2, H3, H4)
+  the reference is their mean; their own RMS difference is the data's scatter.
+* **Wall pressure** at a sensor at height y_s on the right wall: the mean pressure of the
+  particles in the last cell column (x > 1.61 m - h) within |y - y_s| <= h/2 (the window
+  clipped at the floor; 0 when it holds no particle). The measured series (20 kHz) is
+  averaged over 1 ms, the simulation's step, before the peak is taken. **Peak**: the
+  largest value in the impact window 2 <= t sqrt(g/H) <= 3.5; errors: the time difference
+  in t sqrt(g/H) and the relative difference of the peak value.
+"""
+
+import math
+
+import numpy as np
+
+from ..cells import bin_particles
+from ..diagnostics import volume_fraction_field
+from ..reference import load
+from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+
+H = 0.3  # m, column height
+G = 9.81
+LEVELS = "validation/lobovsky_2014_H300mm_water_levels_fig16.csv"
+PRESSURE = "validation/lobovsky_2014_H300mm_wall_pressure_fig18_event5.csv"
+GAUGES = {"H1": (0.300, [1]), "H2": (0.865, [2, 3]), "H3": (1.114, [4, 5]),
+          "H4": (1.3625, [6, 7])}  # x (m), data columns
+SENSORS = {"sensor 1": (0.003, 1), "sensor 2": (0.015, 2), "sensor 3": (0.030, 4),
+           "sensor 4": (0.080, 5)}  # y (m), data column
+IMPACT = (2.0, 3.5)  # window of the first impact peak, in t sqrt(g/H)
+SPACING, SPACING_QUICK = 0.01, 0.01
+END, END_QUICK = 1.25, 0.75  # s
+
+# tolerances, fixed before the results were looked at
+TOL_LEVEL = 0.10
+WHY_LEVEL = ("0.1 H = 30 mm: the gauges see a bore and splashes whose repetitions differ by "
+             "several cm, and the release is a gate, not instantaneous")
+TOL_PEAK_TIME = 0.2
+WHY_PEAK_TIME = ("0.2 in t sqrt(g/H) = 35 ms: the gate takes ~0.09 s to clear the column, which "
+                 "delays the experiment's surge")
+TOL_PEAK = 0.5
+WHY_PEAK = ("impact peaks scatter by about a factor of two between Lobovsky's 100 repetitions, "
+            "and this series is one of them (peak event 5)")
+
+
+def gauge_level(sim, xg):
+    """Water level (m) at x = xg: where the interpolated f profile first drops below 1/2
+    going up from the floor (the top of the water layer on the floor; 0 when dry)."""
+    g = sim.grid
+    f = volume_fraction_field(g, bin_particles(g, sim.particles).theta)
+    s = xg / g.spacing - 0.5
+    i0 = int(np.clip(np.floor(s), 0, g.cells[0] - 2))
+    w = float(np.clip(s - i0, 0.0, 1.0))
+    col = (1 - w) * f[i0] + w * f[i0 + 1]
+    yc = g.cell_centres(1)
+    below = np.flatnonzero(col < 0.5)
+    if below.size == 0:
+        return float(g.size[1])
+    k = below[0]
+    if k == 0:
+        return 0.0
+    return float(yc[k - 1] + (yc[k] - yc[k - 1]) * (col[k - 1] - 0.5) / (col[k - 1] - col[k]))
+
+
+def wall_pressure(sim, ys):
+    """Mean particle pressure (Pa) in the last cell column within |y - ys| <= h/2."""
+    P, h = sim.particles, sim.grid.spacing
+    lx = sim.grid.size[0]
+    sel = (P.x[:, 0] > lx - h) & (np.abs(P.x[:, 1] - ys) <= 0.5 * h)
+    return float(P.pressure[sel].mean()) if np.any(sel) else 0.0
+
+
+def _running_mean(y, n):
+    if n <= 1:
+        return y
+    k = np.ones(n) / n
+    return np.convolve(y, k, mode="same")
+
+
+def _peak(t, p):
+    sel = (t >= IMPACT[0]) & (t <= IMPACT[1])
+    if not np.any(sel):
+        return float("nan"), float("nan")
+    k = np.argmax(np.where(sel, p, -np.inf))
+    return float(t[k]), float(p[k])
+
+
+def run(out, quick=False, context=None):
+    h = SPACING_QUICK if quick else SPACING
+    end = END_QUICK if quick else END
+    res = CaseResult("lobovsky", "Lobovsky et al. (2014), H = 0.3 m")
+    rec = {"t": [], **{k: [] for k in GAUGES}, **{k: [] for k in SENSORS}}
+
+    def sample(sim):
+        rec["t"].append(sim.time)
+        for k, (xg, _) in GAUGES.items():
+            rec[k].append(gauge_level(sim, xg))
+        for k, (ys, _) in SENSORS.items():
+            rec[k].append(wall_pressure(sim, ys))
+
+    dt = 1e-3
+    sim = run_example("lobovsky.toml", [f"grid.spacing={h}", f"time.dt={dt}",
+                                        f"time.end={end}", f"output.interval={dt}"],
+                      on_output=sample)
+    rho = sim.case.material.density
+    scale = math.sqrt(G / H)
+    ts = np.array(rec["t"]) * scale
+    lev = load(LEVELS)
+    prs = load(PRESSURE)
+    name = "Lobovsky"
+    level_lines = []
+    plt = pyplot()
+    fig, ax = plt.subplots(2, 4, figsize=(16, 7))
+    for k, (k_name, (xg, cols)) in enumerate(GAUGES.items()):
+        sel = lev[:, 0] <= ts[-1] + 1e-9
+        te = lev[sel, 0]
+        ref = lev[sel][:, cols].mean(axis=1)
+        sim_h = np.interp(te, ts, np.array(rec[k_name]) / H)
+        rms = float(np.sqrt(np.mean((sim_h - ref) ** 2)))
+        scatter = (float(np.sqrt(np.mean((lev[sel, cols[0]] - lev[sel, cols[1]]) ** 2)))
+                   if len(cols) == 2 else float("nan"))
+        res.rows.append(Row(name, f"water level {k_name} (x = {xg} m)", "RMS (h - h_exp) / H, "
+                            f"t sqrt(g/H) <= {ts[-1]:.2f}", rms, TOL_LEVEL, WHY_LEVEL,
+                            miss="after the impact the reflected jet plunges back over the "
+                                 "gauge: breaking and splashes that a 2D inviscid run at this "
+                                 "mesh does not reproduce sample by sample"))
+        level_lines.append([k_name, xg, fmt(rms), fmt(scatter)])
+        a_ = ax[0, k]
+        for c in cols:
+            a_.plot(lev[:, 0], lev[:, c], "k-", lw=0.8, alpha=0.6)
+        a_.plot(ts, np.array(rec[k_name]) / H, "C0-", label=f"MPM h = {h} m")
+        a_.set(title=f"{k_name}, x = {xg} m", xlabel="t sqrt(g/H) [-]", ylabel="h / H [-]",
+               xlim=(0, max(ts[-1], 1)))
+        a_.legend(fontsize=7)
+    n_avg = max(1, int(round(dt * scale / np.median(np.diff(prs[:, 0])))))
+    sensor_lines = []
+    for k, (s_name, (ys, col)) in enumerate(SENSORS.items()):
+        ps = np.array(rec[s_name]) / (rho * G * H)
+        pe = _running_mean(prs[:, col], n_avg)
+        t_sim, p_sim = _peak(ts, ps)
+        t_exp, p_exp = _peak(prs[:, 0], pe)
+        dt_err = abs(t_sim - t_exp)
+        rel = (p_sim - p_exp) / p_exp
+        res.rows.append(Row(name, f"peak time, {s_name} (y = {ys * 1e3:g} mm)",
+                            "|t_sim - t_exp| sqrt(g/H)", dt_err, TOL_PEAK_TIME, WHY_PEAK_TIME,
+                            miss="an instantaneous release: the simulated surge arrives before "
+                                 "the experiment's, whose gate still holds the water back"))
+        res.rows.append(Row(name, f"peak pressure, {s_name} (y = {ys * 1e3:g} mm)",
+                            "(p_sim - p_exp) / p_exp of the impact peak (signed)", rel, TOL_PEAK,
+                            WHY_PEAK, sense="|<=|",
+                            miss="impact peaks last a few ms: the 1 ms step and the "
+                                 "h-wide sensor window set the simulated value; at 80 mm "
+                                 "the measured series has no sharp impact peak in the window "
+                                 "(its maximum lies at the window's end), and the run overshoots"
+                                 " the 1 ms mean of the run-up pressure there"))
+        sensor_lines.append([s_name, ys * 1e3, fmt(t_exp), fmt(t_sim), fmt(p_exp), fmt(p_sim),
+                             fmt(float(prs[:, col].max()))])
+        a_ = ax[1, k]
+        a_.plot(prs[:, 0], prs[:, col], "-", color="0.7", lw=0.5, label="experiment, 20 kHz")
+        a_.plot(prs[:, 0], pe, "k-", lw=0.8, label="experiment, 1 ms mean")
+        a_.plot(ts, ps, "C0-", label=f"MPM h = {h} m")
+        a_.set(title=f"{s_name}, y = {ys * 1e3:g} mm", xlabel="t sqrt(g/H) [-]",
+               ylabel="p / (rho g H) [-]", xlim=(1.5, max(ts[-1], 2)))
+        a_.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, out / "lobovsky.png")
+    res.figures.append(("lobovsky.png", "Water levels at H1-H4 (top; black: the measured "
+                        "repetitions) and pressure on the downstream wall (bottom)."))
+    res.text = (__doc__.split("\n", 2)[2].strip() + f"\n\nGrid spacing {h} m "
+                f"({sim.particles.count} particles, {sim.summary['wall_seconds']:.0f} s wall).\n\n"
+                + markdown_table(["gauge", "x (m)", "RMS error / H", "scatter of the two "
+                                  "repetitions / H"], level_lines) + "\n\n"
+                + markdown_table(["sensor", "y (mm)", "peak time, exp. (t sqrt(g/H))",
+                                  "peak time, MPM", "peak p/(rho g H), exp. (1 ms mean)",
+                                  "peak, MPM", "raw 20 kHz maximum, exp."], sensor_lines))
+    return res
