@@ -5,7 +5,7 @@ One warm-up run first (it fills Numba's on-disk cache, as any first run does), t
 --repeat timed runs; prints the median, min and max and the machine, and appends a JSON
 record to benchmarks/results.jsonl.
 
-    python benchmarks/dam_break.py [--repeat 3] [--set key=value ...]
+    python benchmarks/dam_break.py [--repeat 5] [--set key=value ...]
 """
 
 import argparse
@@ -54,7 +54,7 @@ def run_once(case, out, overrides):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default=str(ROOT / "examples" / "dam_break.toml"))
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--set", action="append", default=[], dest="overrides")
     ap.add_argument("--label", default="")
     args = ap.parse_args()

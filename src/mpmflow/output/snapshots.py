@@ -38,7 +38,9 @@ class SnapshotWriter:
                         "mass": particles.mass.copy()},
         )
         with atomic_path(self.folder / name) as tmp:
-            meshio.write(tmp, mesh, file_format="vtu")
+            # binary, uncompressed: zlib took 55 ms of a 60 ms snapshot of 26k particles
+            # (about 0.6 s of a 5 s dam-break run) for a file about a third smaller
+            meshio.write(tmp, mesh, file_format="vtu", compression=None)
         self.entries.append((time, name))
         self._write_index()
         return name
