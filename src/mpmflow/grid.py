@@ -1,5 +1,6 @@
 """The fixed background grid: uniform square (cubic) cells covering the domain [0, size]."""
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,11 +41,11 @@ class Grid:
 
     @property
     def ncells(self):
-        return int(np.prod(self.cells))
+        return math.prod(self.cells)
 
     @property
     def nnodes(self):
-        return int(np.prod(self.nodes))
+        return math.prod(self.nodes)
 
     @property
     def size(self):
