@@ -64,7 +64,10 @@ def write_report(out, results, quick, wall):
         f"({platform.machine()}, Python {platform.python_version()}). Every case runs with "
         "the solver's default settings (`solver.formulation = \"mpmflow\"`), 16 particles "
         "per cell and dt = 1 ms unless its section says otherwise; the only settings a case "
-        "changes are its geometry, mesh, time step and output interval. Lengths in units of "
+        "changes are its geometry, mesh, time step and output interval. The one exception: the "
+        "hydrostatic rows marked `paper:` use `solver.formulation = \"paper\"` (the "
+        "paper's node-based free surface), to measure that condition's convergence order; "
+        "the rows marked `default:` and all other cases use the default. Lengths in units of "
         "the column width a = 0.114 m for the dam breaks; SI units elsewhere.", "",
         f"**{counts['pass']} of {len(rows)} rows pass, {counts['miss']} miss"
         + (f", {counts['n/a']} cannot be measured" if counts["n/a"] else "") + ".** Each "
