@@ -3,6 +3,9 @@
 import numpy as np
 from numba import njit, prange
 
+CHUNKS = 64  # parallel loops hand out this many chunks
+BLOCK = 128  # cells per block of cell_volume_fraction
+
 
 @njit(cache=True, parallel=True)
 def cell_index_2d(x, h, ncx, ncy, out):
@@ -39,8 +42,13 @@ def cell_volume_fraction(order, start, volume, cell_volume, theta):
     """theta_e = sum of particle volumes in cell e / cell volume (eqs. 8-9 of the paper),
     from the sorted particles (each cell summed in particle order)."""
     inv = 1.0 / cell_volume
-    for c in prange(theta.shape[0]):
-        total = 0.0
-        for s in range(start[c], start[c + 1]):
-            total += volume[order[s]]
-        theta[c] = total * inv
+    n = theta.shape[0]
+    for t in prange(CHUNKS):
+        # blocks of BLOCK cells dealt round the chunks: each chunk has cells everywhere, so
+        # the work is even wherever the particles are
+        for b0 in range(t * BLOCK, n, CHUNKS * BLOCK):
+            for c in range(b0, min(b0 + BLOCK, n)):
+                total = 0.0
+                for s in range(start[c], start[c + 1]):
+                    total += volume[order[s]]
+                theta[c] = total * inv

@@ -21,8 +21,9 @@ import numpy as np
 from numba import njit, prange
 
 COARSEST = 64  # unknowns at which the hierarchy stops and a dense factor takes over
-PARALLEL_ROWS = 8192  # levels at least this large run their loops on all threads
+PARALLEL_ROWS = 4096  # levels at least this large run their loops on all threads
 CHUNKS = 64  # parallel loops and dot products split the rows into this many runs
+STRIPS = 16  # Galerkin products of large levels: strips of node rows
 
 
 @njit(cache=True)
@@ -71,8 +72,14 @@ def coarse_level(node, nnx, nny):
 
 
 @njit(cache=True)
-def galerkin(cols, vals, pcols, pw, cnode, nnx_c):
-    """Coarse operator P^T A P in ELL form (9 slots per row)."""
+def galerkin(cols, vals, pcols, pw, cnode, nnx_c, node, nnx):
+    """Coarse operator P^T A P in ELL form (9 slots per row).
+
+    Fine row r adds only to the coarse rows it interpolates from, which lie within half a
+    node row of it; so on large levels the fine rows are cut into strips of whole node rows
+    (at least 2 each), and strips 0, 2, 4, ... are summed in parallel, then 1, 3, 5, ...
+    (``node``, ``nnx``: the fine rows' nodes, ascending). The strips depend on the level
+    only, so the sums do not depend on the thread count."""
     nc = cnode.shape[0]
     ccols = -np.ones((nc, 9), dtype=np.int64)
     cvals = np.zeros((nc, 9))
@@ -82,7 +89,44 @@ def galerkin(cols, vals, pcols, pw, cnode, nnx_c):
         cx[I] = cnode[I] % nnx_c
         cy[I] = cnode[I] // nnx_c
     n = cols.shape[0]
-    for r in range(n):
+    if n < PARALLEL_ROWS:
+        _galerkin_rows(0, n, cols, vals, pcols, pw, cx, cy, ccols, cvals)
+        return ccols, cvals
+    bounds = _row_strips(node, nnx, STRIPS)
+    k = bounds.shape[0] - 1
+    for parity in range(2):
+        _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, cx, cy, ccols, cvals)
+    return ccols, cvals
+
+
+@njit(cache=True, parallel=True)
+def _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, cx, cy, ccols, cvals):
+    for t in prange((k - parity + 1) // 2):
+        u = 2 * t + parity
+        _galerkin_rows(bounds[u], bounds[u + 1], cols, vals, pcols, pw, cx, cy, ccols, cvals)
+
+
+@njit(cache=True)
+def _row_strips(node, nnx, nstrips):
+    """Row offsets of up to ``nstrips`` strips of whole node rows, at least 2 node rows each,
+    with about equal numbers of rows."""
+    n = node.shape[0]
+    y0 = node[0] // nnx
+    y1 = node[n - 1] // nnx + 1
+    k = max(1, min(nstrips, (y1 - y0) // 2))
+    ys = np.empty(k + 1, dtype=np.int64)
+    ys[0] = y0
+    for t in range(1, k):
+        y = node[t * n // k] // nnx
+        ys[t] = min(max(y, ys[t - 1] + 2), y1 - 2 * (k - t))
+    ys[k] = y1
+    return np.searchsorted(node, ys * nnx)
+
+
+@njit(cache=True)
+def _galerkin_rows(r0, r1, cols, vals, pcols, pw, cx, cy, ccols, cvals):
+    """The contributions of fine rows r0 to r1 - 1 to P^T A P."""
+    for r in range(r0, r1):
         for a in range(4):
             I = pcols[r, a]
             if I < 0:
@@ -100,7 +144,6 @@ def galerkin(cols, vals, pcols, pw, cnode, nnx_c):
                     slot = 3 * (cy[J] - cy[I] + 1) + (cx[J] - cx[I] + 1)
                     ccols[I, slot] = J
                     cvals[I, slot] += v * pw[j, b]
-    return ccols, cvals
 
 
 @njit(cache=True)
@@ -309,7 +352,7 @@ def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
         cnode, nnx_c, nny_c, crow, pcols, pw = coarse_level(node, nnx, nny)
         if cnode.shape[0] == 0:
             break
-        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, cnode, nnx_c)
+        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, cnode, nnx_c, node, nnx)
         pc_l.append(pcols)
         pw_l.append(pw)
         cols_l.append(ccols)

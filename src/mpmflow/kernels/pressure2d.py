@@ -24,26 +24,28 @@ CHUNKS = 64  # parallel loops over a list of rows hand out this many chunks
 def nodal_fraction_2d(ncx, ncy, theta, node_f):
     """Nodal volume fraction: mean of the node's in-domain cells' theta, each clipped to 1."""
     nnx = ncx + 1
-    for iy in prange(ncy + 1):
-        for ix in range(nnx):
-            fsum = 0.0
-            ncell = 0
-            for cy in range(max(iy - 1, 0), min(iy + 1, ncy)):
-                for cx in range(max(ix - 1, 0), min(ix + 1, ncx)):
-                    fsum += min(theta[cx + ncx * cy], 1.0)
-                    ncell += 1
-            node_f[ix + nnx * iy] = fsum / ncell
+    for t in prange(CHUNKS):
+        for iy in range(t, ncy + 1, CHUNKS):
+            for ix in range(nnx):
+                fsum = 0.0
+                ncell = 0
+                for cy in range(max(iy - 1, 0), min(iy + 1, ncy)):
+                    for cx in range(max(ix - 1, 0), min(ix + 1, ncx)):
+                        fsum += min(theta[cx + ncx * cy], 1.0)
+                        ncell += 1
+                node_f[ix + nnx * iy] = fsum / ncell
 
 
 @njit(cache=True, parallel=True)
 def enclosed_cells_2d(ncx, ncy, node_f, enclosed):
     """Cells whose four nodes all lie inside the fluid (f > 1/2)."""
     nnx = ncx + 1
-    for cy in prange(ncy):
-        for cx in range(ncx):
-            i = cx + nnx * cy
-            enclosed[cx + ncx * cy] = (node_f[i] > 0.5 and node_f[i + 1] > 0.5 and
-                                       node_f[i + nnx] > 0.5 and node_f[i + nnx + 1] > 0.5)
+    for t in prange(CHUNKS):
+        for cy in range(t, ncy, CHUNKS):
+            for cx in range(ncx):
+                i = cx + nnx * cy
+                enclosed[cx + ncx * cy] = (node_f[i] > 0.5 and node_f[i + 1] > 0.5 and
+                                           node_f[i + nnx] > 0.5 and node_f[i + nnx + 1] > 0.5)
 
 
 @njit(cache=True, parallel=True)
@@ -55,15 +57,16 @@ def classify_nodes_2d(ncx, ncy, cell_slot, node_f, subcell, node_row):
     """
     nnx = ncx + 1
     nny = ncy + 1
-    for iy in prange(nny):
-        for ix in range(nnx):
-            i = ix + nnx * iy
-            unknown = not (subcell and node_f[i] <= 0.5)
-            for cy in range(max(iy - 1, 0), min(iy + 1, ncy)):
-                for cx in range(max(ix - 1, 0), min(ix + 1, ncx)):
-                    if cell_slot[cx + ncx * cy] < 0:
-                        unknown = False
-            node_row[i] = 0 if unknown else -1
+    for t in prange(CHUNKS):
+        for iy in range(t, nny, CHUNKS):
+            for ix in range(nnx):
+                i = ix + nnx * iy
+                unknown = not (subcell and node_f[i] <= 0.5)
+                for cy in range(max(iy - 1, 0), min(iy + 1, ncy)):
+                    for cx in range(max(ix - 1, 0), min(ix + 1, ncx)):
+                        if cell_slot[cx + ncx * cy] < 0:
+                            unknown = False
+                node_row[i] = 0 if unknown else -1
     return _number(node_row)
 
 
@@ -142,51 +145,50 @@ def assemble_matrix_2d(ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_
     (p = 0 there). ``anchored[r]`` tells whether row r couples to such a node (a system with
     no anchored row is pure Neumann, hence singular).
     """
-    nny = ncy + 1
-    nchunks = min(CHUNKS, nny)
-    for t in prange(nchunks):
-        _matrix_rows(t * nny // nchunks, (t + 1) * nny // nchunks, ncx, ncy, cell_slot, K,
-                     node_row, node_f, subcell, theta_min, cols, vals, anchored)
+    for t in prange(CHUNKS):
+        _matrix_rows(t, ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols,
+                     vals, anchored)
 
 
 @njit(cache=True)
-def _matrix_rows(iy0, iy1, ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols,
-                 vals, anchored):
-    """The rows of the unknowns on node rows iy0 to iy1 - 1 (see ``assemble_matrix_2d``)."""
+def _matrix_rows(t, ncx, ncy, cell_slot, K, node_row, node_f, subcell, theta_min, cols, vals,
+                 anchored):
+    """The rows of the unknowns on node rows t, t + CHUNKS, t + 2 CHUNKS, ... (see
+    ``assemble_matrix_2d``; rows far apart share the work out evenly wherever the water is)."""
     nnx = ncx + 1
     S = np.empty((3, 3))
     slots = np.empty(4, dtype=np.int64)
     local = np.empty(4, dtype=np.int64)
     base = np.empty(4, dtype=np.int64)
-    for i in range(iy0 * nnx, iy1 * nnx):
-        r = node_row[i]
-        if r < 0:
-            continue
-        ix = i % nnx
-        iy = i // nnx
-        _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base)
-        anchored[r] = False
-        for dy in range(3):
-            for dx in range(3):
-                sv = S[dy, dx]
-                if (dy == 1 and dx == 1) or sv == 0.0:
-                    continue
-                j = (ix + dx - 1) + nnx * (iy + dy - 1)
-                if node_row[j] < 0:
-                    anchored[r] = True
-                    if subcell and sv < 0.0:
-                        S[1, 1] += sv * _ghost_factor(node_f[i], node_f[j], theta_min)
-                    S[dy, dx] = 0.0
-        for dy in range(3):
-            for dx in range(3):
-                slot = 3 * dy + dx
-                sv = S[dy, dx]
-                if sv == 0.0:
-                    cols[r, slot] = -1
-                    vals[r, slot] = 0.0
-                else:
-                    cols[r, slot] = node_row[(ix + dx - 1) + nnx * (iy + dy - 1)]
-                    vals[r, slot] = sv
+    for iy in range(t, ncy + 1, CHUNKS):
+        for ix in range(nnx):
+            i = ix + nnx * iy
+            r = node_row[i]
+            if r < 0:
+                continue
+            _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local, base)
+            anchored[r] = False
+            for dy in range(3):
+                for dx in range(3):
+                    sv = S[dy, dx]
+                    if (dy == 1 and dx == 1) or sv == 0.0:
+                        continue
+                    j = (ix + dx - 1) + nnx * (iy + dy - 1)
+                    if node_row[j] < 0:
+                        anchored[r] = True
+                        if subcell and sv < 0.0:
+                            S[1, 1] += sv * _ghost_factor(node_f[i], node_f[j], theta_min)
+                        S[dy, dx] = 0.0
+            for dy in range(3):
+                for dx in range(3):
+                    slot = 3 * dy + dx
+                    sv = S[dy, dx]
+                    if sv == 0.0:
+                        cols[r, slot] = -1
+                        vals[r, slot] = 0.0
+                    else:
+                        cols[r, slot] = node_row[(ix + dx - 1) + nnx * (iy + dy - 1)]
+                        vals[r, slot] = sv
 
 
 @njit(cache=True, parallel=True)
@@ -288,34 +290,35 @@ def ghost_pressures_2d(ncx, ncy, cell_slot, K, node_row, node_f, theta_min, p_no
     """
     nnx = ncx + 1
     nny = ncy + 1
-    for iy in prange(nny):
+    for t in prange(CHUNKS):
         S = np.empty((3, 3))
         slots = np.empty(4, dtype=np.int64)
         local = np.empty(4, dtype=np.int64)
         base = np.empty(4, dtype=np.int64)
-        for ix in range(nnx):
-            i = ix + nnx * iy
-            if node_row[i] >= 0:
-                continue
-            # no material around the node: none of its cells is in the system (a cell in
-            # the system holds particles or is enclosed by nodes with f > 1/2)
-            if node_f[i] == 0.0 or _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local,
-                                            base) == 0:
-                p_node[i] = 0.0
-                continue
-            num = 0.0
-            den = 0.0
-            for dy in range(3):
-                for dx in range(3):
-                    sv = S[dy, dx]
-                    if (dy == 1 and dx == 1) or sv >= 0.0:
-                        continue
-                    j = (ix + dx - 1) + nnx * (iy + dy - 1)
-                    if node_row[j] < 0:
-                        continue
-                    num -= sv * _ghost_factor(node_f[j], node_f[i], theta_min) * p_node[j]
-                    den -= sv
-            p_node[i] = num / den if den > 0.0 else 0.0
+        for iy in range(t, nny, CHUNKS):
+            for ix in range(nnx):
+                i = ix + nnx * iy
+                if node_row[i] >= 0:
+                    continue
+                # no material around the node: none of its cells is in the system (a cell in
+                # the system holds particles or is enclosed by nodes with f > 1/2)
+                if node_f[i] == 0.0 or _stencil(ix, iy, ncx, ncy, cell_slot, K, S, slots, local,
+                                                base) == 0:
+                    p_node[i] = 0.0
+                    continue
+                num = 0.0
+                den = 0.0
+                for dy in range(3):
+                    for dx in range(3):
+                        sv = S[dy, dx]
+                        if (dy == 1 and dx == 1) or sv >= 0.0:
+                            continue
+                        j = (ix + dx - 1) + nnx * (iy + dy - 1)
+                        if node_row[j] < 0:
+                            continue
+                        num -= sv * _ghost_factor(node_f[j], node_f[i], theta_min) * p_node[j]
+                        den -= sv
+                p_node[i] = num / den if den > 0.0 else 0.0
 
 
 @njit(cache=True, parallel=True)
@@ -326,25 +329,26 @@ def correct_velocity_2d(ncx, ncy, cell_slot, C, V, p_node, vstar, dt_over_rho, v
     """
     nnx = ncx + 1
     nny = ncy + 1
-    for iy in prange(nny):
+    for t in prange(CHUNKS):
         slots = np.empty(4, dtype=np.int64)
         local = np.empty(4, dtype=np.int64)
         base = np.empty(4, dtype=np.int64)
-        for ix in range(nnx):
-            i = ix + nnx * iy
-            vol = 0.0
-            g0 = 0.0
-            g1 = 0.0
-            for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
-                s, a = slots[k], local[k]
-                vol += V[s, a]
-                for b in range(4):
-                    pj = p_node[base[k] + (b & 1) + nnx * (b >> 1)]
-                    g0 += C[s, a, b, 0] * pj
-                    g1 += C[s, a, b, 1] * pj
-            if vol > 0.0:
-                v_new[i, 0] = vstar[i, 0] - dt_over_rho * g0 / vol
-                v_new[i, 1] = vstar[i, 1] - dt_over_rho * g1 / vol
-            else:
-                v_new[i, 0] = vstar[i, 0]
-                v_new[i, 1] = vstar[i, 1]
+        for iy in range(t, nny, CHUNKS):
+            for ix in range(nnx):
+                i = ix + nnx * iy
+                vol = 0.0
+                g0 = 0.0
+                g1 = 0.0
+                for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
+                    s, a = slots[k], local[k]
+                    vol += V[s, a]
+                    for b in range(4):
+                        pj = p_node[base[k] + (b & 1) + nnx * (b >> 1)]
+                        g0 += C[s, a, b, 0] * pj
+                        g1 += C[s, a, b, 1] * pj
+                if vol > 0.0:
+                    v_new[i, 0] = vstar[i, 0] - dt_over_rho * g0 / vol
+                    v_new[i, 1] = vstar[i, 1] - dt_over_rho * g1 / vol
+                else:
+                    v_new[i, 0] = vstar[i, 0]
+                    v_new[i, 1] = vstar[i, 1]
