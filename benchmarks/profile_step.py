@@ -23,17 +23,16 @@ ROOT = Path(__file__).resolve().parents[1]
 # function name -> phase; anything else counts as Python glue
 PHASES = {
     "transfers (P2G, G2P, binning, walls)": (
-        "particles_to_grid", "grid_to_particles", "nodal_velocity", "keep_inside",
-        "cell_index", "counting_sort", "cell_volume_fraction", "bin_particles",
-        "particle_pass", "grid_pass", "sort_particles"),
+        "particles_to_grid", "grid_to_particles", "cell_index", "counting_sort",
+        "cell_volume_fraction", "bin_particles"),
     "quadrature and assembly": (
         "particle_cell_tensors", "gauss_cell_tensors", "assemble_matrix", "assemble_rhs",
         "integrals"),
     "free surface": ("nodal_fraction", "enclosed_cells", "classify_nodes", "ghost_pressures"),
     "pressure solve (multigrid set-up)": ("build_hierarchy",),
     "pressure solve (PCG iterations)": ("pcg",),
-    "corrector and walls": ("correct_velocity", "apply_walls", "contact_release",
-                            "wall_contact_state"),
+    "corrector and walls": ("correct_velocity", "apply_walls", "start_contact",
+                            "release_contact"),
     "outputs (diagnostics, files)": (
         "_output", "measure", "pressure_noise", "write", "append", "front_and_height"),
 }

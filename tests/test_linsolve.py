@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from mpmflow.linsolve import LinearSolver, PressureMatrix
@@ -95,10 +94,12 @@ def test_large_multigrid_solve_is_right_and_independent_of_threads():
     assert m.nodes.size > multigrid.PARALLEL_ROWS
     b = np.random.default_rng(3).normal(size=m.nodes.size)
     exact = spla.spsolve(m.csr().tocsc(), b)
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread only: nothing to compare")
     answers = []
     before = numba.get_num_threads()
     try:
-        for threads in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+        for threads in (1, 2):
             numba.set_num_threads(threads)
             s = LinearSolver("multigrid", 1e-10, 200)
             s.prepare(m)

@@ -1,9 +1,10 @@
 """Particles to cells: cell index of each particle, counting sort, cell volume fractions."""
 
-import numpy as np
 from numba import njit, prange
 
-CHUNKS = 64  # parallel loops hand out this many chunks
+from . import CHUNKS
+from .transfer2d import cell_of
+
 BLOCK = 128  # cells per block of cell_volume_fraction
 
 
@@ -12,11 +13,7 @@ def cell_index_2d(x, h, ncx, ncy, out):
     """Flat cell index of every particle. Particles on the upper domain edge go to the last cell."""
     inv_h = 1.0 / h
     for p in prange(x.shape[0]):
-        cx = int(np.floor(x[p, 0] * inv_h))
-        cy = int(np.floor(x[p, 1] * inv_h))
-        cx = min(max(cx, 0), ncx - 1)
-        cy = min(max(cy, 0), ncy - 1)
-        out[p] = cx + ncx * cy
+        out[p] = cell_of(x[p, 0] * inv_h, ncx) + ncx * cell_of(x[p, 1] * inv_h, ncy)
 
 
 @njit(cache=True)

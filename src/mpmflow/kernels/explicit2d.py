@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from .transfer2d import _weights, flip_update, nodal_velocity, put_inside
-from .walls2d import apply_walls_2d
+from .walls2d import apply_walls_2d, outward
 
 
 @njit(cache=True)
@@ -23,8 +23,9 @@ def _walls(ncx, ncy, v, contact, no_slip):
             if 0 < ix < ncx and 0 < iy < ncy:
                 continue
             i = ix + nnx * iy
-            contact[i, 0] = (ix == 0 and v[i, 0] < 0.0) or (ix == ncx and v[i, 0] > 0.0)
-            contact[i, 1] = (iy == 0 and v[i, 1] < 0.0) or (iy == ncy and v[i, 1] > 0.0)
+            for k in range(2):
+                sign = outward(ix, iy, k, ncx, ncy)
+                contact[i, k] = sign != 0.0 and sign * v[i, k] > 0.0
     apply_walls_2d(ncx, ncy, v, contact, no_slip)
 
 

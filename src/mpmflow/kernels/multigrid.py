@@ -20,9 +20,10 @@ with rediscretised coarse operators.)
 import numpy as np
 from numba import njit, prange
 
+from . import CHUNKS
+
 COARSEST = 64  # unknowns at which the hierarchy stops and a dense factor takes over
 PARALLEL_ROWS = 4096  # levels at least this large run their loops on all threads
-CHUNKS = 64  # parallel loops and dot products split the rows into this many runs
 STRIPS = 16  # Galerkin products of large levels: strips of node rows
 
 

@@ -17,7 +17,8 @@ unknown set have p = 0 (the paper's free-surface nodes).
 import numpy as np
 from numba import njit, prange
 
-CHUNKS = 64  # parallel loops over a list of rows hand out this many chunks
+from . import CHUNKS
+
 
 
 @njit(cache=True, parallel=True)

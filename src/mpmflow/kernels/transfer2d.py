@@ -3,8 +3,21 @@
 import numpy as np
 from numba import njit, prange
 
-CHUNKS = 64  # parallel loops over particles hand out this many chunks
+from . import CHUNKS
+
 STRIPS = 16  # P2G cuts the grid into 2 STRIPS strips of cell rows
+
+
+@njit(cache=True, inline="always")
+def cell_of(s, n):
+    """The cell (0 to n - 1) holding grid coordinate s = x / h; points beyond the grid go to
+    the nearest cell. Clamped before the conversion to an integer, so NaN goes to cell 0
+    instead of an undefined index."""
+    if not s > 0.0:  # also NaN
+        return 0
+    if s >= n - 1.0:
+        return n - 1
+    return int(s)
 
 
 @njit(cache=True, inline="always")
@@ -12,8 +25,8 @@ def _weights(x0, x1, inv_h, ncx, ncy):
     """The four nodes of the cell holding a point and their bilinear weights N_a."""
     sx = x0 * inv_h
     sy = x1 * inv_h
-    cx = min(max(int(np.floor(sx)), 0), ncx - 1)
-    cy = min(max(int(np.floor(sy)), 0), ncy - 1)
+    cx = cell_of(sx, ncx)
+    cy = cell_of(sy, ncy)
     xi = sx - cx
     eta = sy - cy
     nnx = ncx + 1
@@ -87,13 +100,13 @@ def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity,
                           ncy, node_mass, node_mom, node_vol)
     for i in prange(nn):
         m = node_mass[i]
-        for k in range(2):
+        for d in range(2):
             if m > 0.0:
-                v_old[i, k] = node_mom[i, k] / m
-                v_star[i, k] = v_old[i, k] + dt * gravity[k]
+                v_old[i, d] = node_mom[i, d] / m
+                v_star[i, d] = v_old[i, d] + dt * gravity[d]
             else:
-                v_old[i, k] = 0.0
-                v_star[i, k] = 0.0
+                v_old[i, d] = 0.0
+                v_star[i, d] = 0.0
 
 
 @njit(cache=True)

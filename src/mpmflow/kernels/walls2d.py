@@ -3,6 +3,19 @@
 from numba import njit
 
 
+@njit(cache=True, inline="always")
+def outward(ix, iy, k, ncx, ncy):
+    """The outward normal (-1.0 or +1.0) of the wall normal to axis k through node (ix, iy),
+    0.0 if the node is not on such a wall."""
+    pos = ix if k == 0 else iy
+    top = ncx if k == 0 else ncy
+    if pos == 0:
+        return -1.0
+    if pos == top:
+        return 1.0
+    return 0.0
+
+
 @njit(cache=True)
 def apply_walls_2d(ncx, ncy, v, contact, no_slip):
     """Velocity conditions at wall nodes (in place).
@@ -19,11 +32,9 @@ def apply_walls_2d(ncx, ncy, v, contact, no_slip):
                 continue
             i = ix + nnx * iy
             for k in range(2):
-                pos = ix if k == 0 else iy
-                top = ncx if k == 0 else ncy
-                if pos != 0 and pos != top:
+                sign = outward(ix, iy, k, ncx, ncy)
+                if sign == 0.0:
                     continue
-                sign = -1.0 if pos == 0 else 1.0
                 if contact[i, k] or sign * v[i, k] > 0.0:
                     v[i, k] = 0.0
                     if no_slip and contact[i, k]:
@@ -45,11 +56,9 @@ def start_contact_2d(ncx, ncy, vstar, node_row, contact):
                 continue
             i = ix + nnx * iy
             for k in range(2):
-                pos = ix if k == 0 else iy
-                top = ncx if k == 0 else ncy
-                if pos != 0 and pos != top:
+                sign = outward(ix, iy, k, ncx, ncy)
+                if sign == 0.0:
                     continue
-                sign = -1.0 if pos == 0 else 1.0
                 contact[i, k] = node_row[i] >= 0 or sign * vstar[i, k] > 0.0
 
 
@@ -68,11 +77,9 @@ def release_contact_2d(ncx, ncy, vstar, node_row, p_node, contact):
             if node_row[i] < 0 or p_node[i] >= 0.0:
                 continue
             for k in range(2):
-                pos = ix if k == 0 else iy
-                top = ncx if k == 0 else ncy
-                if pos != 0 and pos != top:
+                sign = outward(ix, iy, k, ncx, ncy)
+                if sign == 0.0:
                     continue
-                sign = -1.0 if pos == 0 else 1.0
                 if contact[i, k] and sign * vstar[i, k] < 0.0:
                     contact[i, k] = False
                     released += 1
