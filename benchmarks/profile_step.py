@@ -20,11 +20,12 @@ import numba
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# function name -> phase; anything else counts as Python glue
+# function name -> phase; anything else counts as Python glue (keep_inside, nodal_velocity
+# and wall_contact are names of earlier versions, so that their profiles compare)
 PHASES = {
     "transfers (P2G, G2P, binning, walls)": (
         "particles_to_grid", "grid_to_particles", "cell_index", "counting_sort",
-        "cell_volume_fraction", "bin_particles"),
+        "cell_volume_fraction", "bin_particles", "keep_inside", "nodal_velocity"),
     "quadrature and assembly": (
         "particle_cell_tensors", "gauss_cell_tensors", "assemble_matrix", "assemble_rhs",
         "integrals"),

@@ -213,35 +213,37 @@ def assemble_rhs_2d(ncx, ncy, spacing, cell_slot, C, V, node_vol, row_nodes, vst
     n = row_nodes.shape[0]
     nchunks = min(CHUNKS, n)
     for chunk in prange(nchunks):
-        slots = np.empty(4, dtype=np.int64)
-        local = np.empty(4, dtype=np.int64)
-        base = np.empty(4, dtype=np.int64)
-        for r in range(chunk * n // nchunks, (chunk + 1) * n // nchunks):
-            i = row_nodes[r]
-            rhs[r] = rho_over_dt * _rhs_row(i % nnx, i // nnx, ncx, ncy, spacing, cell_slot, C,
-                                            V, node_vol, vstar, contact, wall_flux, expansion,
-                                            slots, local, base)
+        _rhs_rows(chunk * n // nchunks, (chunk + 1) * n // nchunks, ncx, ncy, spacing,
+                  cell_slot, C, V, node_vol, row_nodes, vstar, contact, wall_flux, expansion,
+                  rho_over_dt, rhs)
 
 
 @njit(cache=True)
-def _rhs_row(ix, iy, ncx, ncy, h, cell_slot, C, V, node_vol, vstar, contact, wall_flux,
-             expansion, slots, local, base):
-    """Row of node (ix, iy) of ``assemble_rhs_2d``, without the factor rho/dt."""
+def _rhs_rows(r0, r1, ncx, ncy, h, cell_slot, C, V, node_vol, row_nodes, vstar, contact,
+              wall_flux, expansion, rho_over_dt, rhs):
+    """Rows r0 to r1 - 1 of ``assemble_rhs_2d``."""
     nnx = ncx + 1
-    b = 0.0
-    vol = 0.0
-    for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
-        s, a = slots[k], local[k]
-        vol += V[s, a]
-        for bb in range(4):
-            j = base[k] + (bb & 1) + nnx * (bb >> 1)
-            b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
-    excess = node_vol[ix + nnx * iy] - vol
-    if expansion > 0.0 and excess > 0.0:
-        b += expansion * excess
-    if wall_flux:
-        b += _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact)
-    return b
+    slots = np.empty(4, dtype=np.int64)
+    local = np.empty(4, dtype=np.int64)
+    base = np.empty(4, dtype=np.int64)
+    for r in range(r0, r1):
+        i = row_nodes[r]
+        ix = i % nnx
+        iy = i // nnx
+        b = 0.0
+        vol = 0.0
+        for k in range(_cells_of_node(ix, iy, ncx, ncy, cell_slot, slots, local, base)):
+            s, a = slots[k], local[k]
+            vol += V[s, a]
+            for bb in range(4):
+                j = base[k] + (bb & 1) + nnx * (bb >> 1)
+                b -= C[s, a, bb, 0] * vstar[j, 0] + C[s, a, bb, 1] * vstar[j, 1]
+        excess = node_vol[i] - vol
+        if expansion > 0.0 and excess > 0.0:
+            b += expansion * excess
+        if wall_flux:
+            b += _wall_integral(ix, iy, ncx, ncy, h, cell_slot, vstar, contact)
+        rhs[r] = rho_over_dt * b
 
 
 @njit(cache=True)
