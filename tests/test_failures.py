@@ -16,6 +16,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.checkpoint import checkpoints, read
 from mpmflow.cli import main
 from mpmflow.output.timeseries import COLUMNS
+from mpmflow.particles import Particles
 from mpmflow.schemes.projection import ProjectionScheme
 
 from conftest import EXAMPLES, make_case
@@ -76,7 +77,7 @@ def test_sigint_checkpoints_and_the_restart_matches_an_uninterrupted_run(tmp_pat
     whole.run()
     arrays, meta = read(checkpoints(out)[-1])
     assert meta["time"] == whole.time == 1.0 and meta["steps"] == whole.steps
-    for name in ("x", "v", "pressure", "mass", "volume"):
+    for name in Particles.FIELDS:
         assert np.array_equal(arrays[name], getattr(whole.particles, name)), name
     for name in ("timeseries.csv", "particles.pvd"):
         assert (out / name).read_text() == (tmp_path / "whole" / name).read_text()

@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 
 from mpmflow import Simulation, load_case
-from mpmflow.checkpoint import checkpoints
+from mpmflow.checkpoint import CheckpointError, checkpoints, read
+from mpmflow.checkpoint import write as checkpoint_write
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
+from mpmflow.particles import Particles
 
 from conftest import EXAMPLES
 
@@ -21,7 +23,6 @@ SCHEMES = {
     "explicit": ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
                  "bodies.0.initial_pressure=hydrostatic"],
 }
-FIELDS = ("x", "v", "pressure", "mass", "volume")
 
 
 def _case(scheme, *more):
@@ -45,7 +46,7 @@ def _stop_at(sim, t):
 
 
 def _assert_same_run(a, b, out_a, out_b):
-    for name in FIELDS:
+    for name in Particles.FIELDS:
         assert np.array_equal(getattr(a.particles, name), getattr(b.particles, name)), name
     assert a.steps == b.steps and a.time == b.time
     for name in ("timeseries.csv", "particles.pvd"):
@@ -130,3 +131,62 @@ def test_checkpoints_keep_the_latest_two(uninterrupted):
     names = [p.name for p in checkpoints(whole_out)]
     assert len(names) == 2 and names[-1] == f"checkpoint_{whole.steps:09d}.npz"
     assert not list(whole_out.glob(".*.tmp"))
+
+
+def _cli_args(scheme, out):
+    args = ["run", str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", "--restart"]
+    for item in COMMON + SCHEMES[scheme]:
+        args += ["--set", item]
+    return args
+
+
+@pytest.mark.parametrize("damage", [b"", b"not a zip file", "truncated"])
+def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(uninterrupted, tmp_path,
+                                                                  capsys, damage):
+    """An empty or cut-short checkpoint (a crash before its data reached the disk) is passed
+    over with a notice; the run continues from the one before and ends as the whole run."""
+    scheme, whole, whole_out = uninterrupted
+    out = tmp_path / "copy"
+    shutil.copytree(whole_out, out)
+    older, final = checkpoints(out)  # at 0.09 s and at the end (0.1 s)
+    data = final.read_bytes()
+    final.write_bytes(data[:len(data) // 2] if damage == "truncated" else damage)
+    assert main(_cli_args(scheme, out)) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert f"checkpoint {final} cannot be read" in err
+    assert f"Continuing from the one before it, {older.name}" in err
+    arrays, meta = read(checkpoints(out)[-1])
+    assert meta["steps"] == whole.steps
+    for name in Particles.FIELDS:
+        assert np.array_equal(arrays[name], getattr(whole.particles, name)), name
+    for name in ("timeseries.csv", "particles.pvd"):
+        assert (out / name).read_text() == (whole_out / name).read_text(), name
+
+
+def test_no_readable_checkpoint_is_a_clear_error(uninterrupted, tmp_path, capsys):
+    scheme, _, whole_out = uninterrupted
+    out = tmp_path / "copy"
+    shutil.copytree(whole_out, out)
+    older, final = checkpoints(out)
+    older.write_bytes(b"")
+    final.write_bytes(b"")
+    assert main(_cli_args(scheme, out)) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.startswith("mpmflow: error: ")
+    assert f"no checkpoint in {out} can be read" in err
+    assert older.name in err and final.name in err and "--overwrite" in err
+    final.unlink()  # only one checkpoint, and it is damaged: its own message
+    assert main(_cli_args(scheme, out)) == 2
+    err = capsys.readouterr().err
+    assert f"Checkpoint {older} cannot be read (EOFError" in err and "Traceback" not in err
+
+
+def test_a_checkpoint_without_an_entry_is_a_case_error(uninterrupted, tmp_path):
+    scheme, _, whole_out = uninterrupted
+    arrays, meta = read(checkpoints(whole_out)[0])
+    del arrays["v"]
+    del meta["k_out"]
+    path = checkpoint_write(tmp_path, 1, arrays, meta)
+    with pytest.raises(CheckpointError, match="it lacks meta k_out, array v"):
+        Simulation.resume(_case(scheme, "time.end=0.2"), tmp_path, path)

@@ -173,9 +173,35 @@ def _resume_command(args):
     return " ".join(shlex.quote(str(w)) for w in words)
 
 
+def _resume(case, out):
+    """The run in ``out`` continued from its latest readable checkpoint: a damaged latest
+    one (e.g. cut short by a crash) is passed over with a notice."""
+    from .checkpoint import CheckpointError, checkpoints, latest
+    from .simulation import Simulation
+
+    latest(out)  # CaseError when there is none
+    damaged = []
+    for path in reversed(checkpoints(out)):
+        try:
+            sim = Simulation.resume(case, out, path)
+        except CheckpointError as err:
+            damaged.append(err)
+            continue
+        for err in damaged:
+            print(f"mpmflow: note: checkpoint {err.path} cannot be read ({err.why}); it is "
+                  f"damaged, e.g. cut short by a crash. Continuing from the one before it, "
+                  f"{path.name}.", file=sys.stderr)
+        return sim
+    if len(damaged) == 1:
+        raise damaged[0]
+    raise CaseError(f"--restart: no checkpoint in {out} can be read: "
+                    + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
+                    + ". They are damaged, e.g. cut short by a crash. Start the run again "
+                    "with --overwrite instead of --restart.")
+
+
 def _run(args):
     from .case import load_case
-    from .checkpoint import latest
     from .interrupts import exit_code, stop_on_signals
     from .simulation import Simulation
 
@@ -183,10 +209,9 @@ def _run(args):
     out = Path(args.out)
     _prepare_out(out, args)
     if args.restart:
-        path = latest(out)
-        sim = Simulation.resume(case, out, path)
-        print(f"mpmflow: continuing from {path} (t = {sim.time:.6g} s, step {sim.steps})",
-              file=sys.stderr)
+        sim = _resume(case, out)
+        print(f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
+              f"{sim.steps})", file=sys.stderr)
     else:
         sim = Simulation(case, out)
     for note in sim.notices:

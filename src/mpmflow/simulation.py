@@ -21,10 +21,11 @@ from ._version import __version__
 from .case import resolved
 from .cells import bin_particles
 from .diagnostics import front_and_height, kinetic_energy, potential_energy, pressure_noise
-from .errors import SimulationError
+from .errors import CaseError, SimulationError
 from .output.snapshots import SnapshotWriter
 from .output.summary import write_summary
 from .output.timeseries import COLUMNS, TimeSeriesWriter
+from .particles import Particles
 from .schemes import make_scheme
 from .setup_case import build_grid, build_particles
 from .stability import case_stable_time_step, sound_speed, time_step
@@ -54,8 +55,6 @@ class Simulation:
         self.grid = build_grid(case)
         self.particles = build_particles(case, self.grid)
         if self.particles.count == 0:
-            from .errors import CaseError
-
             raise CaseError("The bodies hold no particles: every box is thinner than one particle "
                             "spacing (grid.spacing / bodies.N.particles_per_cell). Enlarge the "
                             "boxes or raise particles_per_cell.")
@@ -92,9 +91,7 @@ class Simulation:
     # ------------------------------------------------------------------ checkpoints
     def _checkpoint(self):
         """Write a checkpoint of the current state (after its output row)."""
-        P = self.particles
-        arrays = {"x": P.x, "v": P.v, "pressure": P.pressure, "mass": P.mass,
-                  "volume": P.volume}
+        arrays = {name: getattr(self.particles, name) for name in Particles.FIELDS}
         arrays.update({f"scheme.{k}": v for k, v in self.scheme.state().items()})
         snaps = self._outputs.snapshots.entries if self._outputs.snapshots is not None else []
         meta = {"mpmflow_version": __version__, "case": resolved(self.case),
@@ -106,35 +103,43 @@ class Simulation:
                 "wall_seconds": self._wall_seconds()}
         self.last_checkpoint = checkpoint.write(self.out_dir, self.steps, arrays, meta)
 
+    _META = ("case", "time", "steps", "dt", "k_out", "k_snap", "k_checkpoint", "counters",
+             "rows", "snapshots", "mass0", "volume0", "count0", "wall_seconds")
+
     @classmethod
     def resume(cls, case, out_dir, path, progress=None):
         """The run of ``out_dir`` continued from checkpoint ``path``: same settings except
-        possibly a later time.end (CaseError otherwise)."""
+        possibly a later time.end (CaseError otherwise; ``checkpoint.CheckpointError`` when
+        the file is damaged or lacks an entry)."""
         arrays, meta = checkpoint.read(path)
+        missing = [f"meta {k}" for k in cls._META if k not in meta]
+        missing += [f"array {k}" for k in Particles.FIELDS if k not in arrays]
+        if missing:
+            raise checkpoint.CheckpointError(path, "it lacks " + ", ".join(missing))
         checkpoint.check_same_case(meta["case"], resolved(case), path)
         if meta["time"] >= case.time.end:
-            from .errors import CaseError
-
             raise CaseError(
                 f"--restart: checkpoint {path} is at t = {meta['time']:.6g} s, which already "
                 f"reaches time.end = {case.time.end:g} s. To extend the run give a later end, "
                 f"e.g. --set time.end={2 * case.time.end:g}.")
         sim = cls(case, out_dir, progress)
         P = sim.particles
-        for name in ("x", "v", "pressure", "mass", "volume"):
+        for name in Particles.FIELDS:
             saved = arrays[name]
             if saved.shape != getattr(P, name).shape:
-                from .errors import CaseError
-
                 raise CaseError(f"--restart: checkpoint {path} holds {saved.shape[0]} "
                                 f"particles, the case {P.count}; it belongs to another case.")
             np.copyto(getattr(P, name), saved)
-        sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
-                            if k.startswith("scheme.")})
+        try:
+            sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
+                                if k.startswith("scheme.")})
+            sim.counters = Counters(**meta["counters"])
+        except (KeyError, TypeError, ValueError) as err:
+            raise checkpoint.CheckpointError(path, f"its scheme state or counters do not fit: "
+                                        f"{type(err).__name__}: {err}") from None
         sim.time, sim.steps, sim.dt = meta["time"], meta["steps"], meta["dt"]
         sim.k_out, sim.k_snap = meta["k_out"], meta["k_snap"]
         sim.k_checkpoint = meta["k_checkpoint"]
-        sim.counters = Counters(**meta["counters"])
         sim.rows = meta["rows"]
         sim.snapshot_entries = meta["snapshots"]
         sim.mass0, sim.volume0, sim.count0 = meta["mass0"], meta["volume0"], meta["count0"]
