@@ -278,7 +278,9 @@ class Simulation:
         self.time = t_next
         if self.progress is not None:
             self.progress(self.time, self.steps, end)
-        self.k_out += 1
+        # recomputed, not incremented: after an end that is not an output time (0.105 with
+        # interval 0.01) the next output of an extended run is 0.11, not 0.12
+        self.k_out = int(np.floor(self.time / interval + 1e-9)) + 1
         snap = self.time >= self.k_snap * snap_interval - 1e-9 * dt or self.time >= end
         if snap:
             self.k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
