@@ -2,7 +2,8 @@
 
 Exit codes: 0 success; 2 invalid input (case file, settings, command line); 3 the
 simulation failed (pressure solve, blow-up); 130 interrupted by Ctrl-C (SIGINT), 143 by
-SIGTERM (a checkpoint was written: continue with --restart).
+SIGTERM (after the first signal a checkpoint is written: continue with --restart; a second
+signal stops at once without one).
 """
 
 import argparse
@@ -14,6 +15,7 @@ from pathlib import Path
 
 from ._version import __version__
 from .errors import CaseError, MpmflowError
+from .interrupts import StopNow, exit_code
 
 DESCRIPTION = """\
 mpmflow simulates incompressible free-surface flow (dam breaks, sloshing) with the material
@@ -47,8 +49,9 @@ examples:
   mpmflow keys
 
 exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
-summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (both leave a checkpoint:
-continue with --restart)."""
+summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (after the first signal a
+checkpoint is written: continue with --restart; a second signal stops at once without
+one)."""
 
 
 VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
@@ -202,7 +205,7 @@ def _resume(case, out):
 
 def _run(args):
     from .case import load_case
-    from .interrupts import exit_code, stop_on_signals
+    from .interrupts import stop_on_signals
     from .simulation import Simulation
 
     case = load_case(args.case, args.overrides)
@@ -333,6 +336,10 @@ def main(argv=None):
     except MpmflowError as err:
         print(f"mpmflow: error: {err}", file=sys.stderr)
         return err.exit_code
+    except StopNow as err:
+        print(f"mpmflow: stopped at once by a second {err.name}, without a new checkpoint "
+              "(the last one written is kept: --restart continues from it).", file=sys.stderr)
+        return exit_code(err.signum)
     except KeyboardInterrupt:
         print("mpmflow: interrupted.", file=sys.stderr)
         return 130

@@ -5,7 +5,8 @@ between two output times are equal and at most ``time.dt``, so output times are 
 Outputs go to ``out_dir`` (see ``mpmflow.output``); ``summary.json`` is written at the end,
 also when the run fails or is interrupted. Checkpoints (``mpmflow.checkpoint``) are written
 every ``checkpoint.interval``, at the end and when ``stop_signal`` is set (by the CLI's
-signal handlers); ``Simulation.resume(case, out_dir, path)`` continues from one.
+signal handlers; without ``out_dir`` the run stops without one);
+``Simulation.resume(case, out_dir, path)`` continues from one.
 """
 
 import signal
@@ -22,6 +23,7 @@ from .case import resolved
 from .cells import bin_particles
 from .diagnostics import front_and_height, kinetic_energy, potential_energy, pressure_noise
 from .errors import CaseError, SimulationError
+from .interrupts import StopNow
 from .output.snapshots import SnapshotWriter
 from .output.summary import write_summary
 from .output.timeseries import COLUMNS, TimeSeriesWriter
@@ -87,6 +89,8 @@ class Simulation:
         self.resumed_from = None  # the checkpoint this run continues, if any
         self.last_checkpoint = None
         self.stop_signal = None  # set (to a signal number) to stop at the next output time
+        self.stop_now = None  # set (to a signal number) to stop after the current chunk,
+        # without a checkpoint (the CLI's second signal: its StopNow may be lost in a __del__)
 
     # ------------------------------------------------------------------ checkpoints
     def _checkpoint(self):
@@ -227,12 +231,17 @@ class Simulation:
                 self._output(snapshot=True)
             while self.time < end:
                 self._chunk()
+                if self.stop_now is not None:
+                    raise StopNow(self.stop_now)
                 if self.stop_signal is not None and self.time < end:
-                    self._checkpoint()
                     status = "interrupted"
                     message = (f"interrupted by {signal.Signals(self.stop_signal).name} at "
-                               f"t = {self.time:.6g} s (step {self.steps}); checkpoint "
-                               f"{self.last_checkpoint.name} written")
+                               f"t = {self.time:.6g} s (step {self.steps}); ")
+                    if self.out_dir is not None:
+                        self._checkpoint()
+                        message += f"checkpoint {self.last_checkpoint.name} written"
+                    else:
+                        message += "no checkpoint: no output folder"
                     break
                 if (wall_budget is not None and self.time < end
                         and _time.perf_counter() - self._wall0 > wall_budget):
@@ -246,9 +255,11 @@ class Simulation:
         except SimulationError as err:
             message = str(err)
             raise
-        except KeyboardInterrupt:
-            status, message = "interrupted", ("interrupted by the user at once, without a "
-                                              "checkpoint")
+        except (KeyboardInterrupt, StopNow) as err:
+            status, message = "interrupted", (
+                f"stopped at once by a second {err.name}, without a checkpoint (the last one "
+                "written is kept)" if isinstance(err, StopNow) else
+                "stopped at once by KeyboardInterrupt (Ctrl-C), without a checkpoint")
             raise
         except OSError as err:
             message = f"Writing the outputs failed: {err}. Check the --out folder and free space."
