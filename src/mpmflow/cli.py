@@ -16,6 +16,7 @@ from pathlib import Path
 from ._version import __version__
 from .errors import CaseError, MpmflowError
 from .interrupts import StopNow, exit_code
+from .output import check_out_dir as _check_out_dir
 
 DESCRIPTION = """\
 mpmflow simulates incompressible free-surface flow (dam breaks, sloshing) with the material
@@ -107,7 +108,8 @@ def _parser():
         "Lobovsky et al. 2014, volume and particle distribution), compare each with its "
         "analytic or measured reference, and write DIR/README.md (summary table: case, "
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
-        "plots) and DIR/summary.csv. The full run takes about 2 minutes on 2 cores.",
+        "plots) and DIR/summary.csv; a README.md in DIR that it did not write is never replaced. "
+        "Needs matplotlib. The full run takes about 2 minutes on 2 cores.",
         epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
     v.add_argument("--quick", action="store_true",
@@ -144,8 +146,7 @@ def _prepare_out(out, args):
     """Check the output folder; with --overwrite delete an earlier run's files."""
     from .checkpoint import checkpoints
 
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    _check_out_dir(out, create=False)
     if args.restart:
         if args.overwrite:
             raise CaseError("--restart continues the run in --out and --overwrite replaces it; "
@@ -162,11 +163,7 @@ def _prepare_out(out, args):
         for old in [*out.glob("particles_*.vtu"), *checkpoints(out), out / "particles.pvd",
                     out / "timeseries.csv", out / "summary.json"]:
             old.unlink(missing_ok=True)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
-                        "can write to.") from None
+    _check_out_dir(out)
 
 
 def _resume_command(args):
@@ -245,8 +242,7 @@ def _study(args):
         raise CaseError(f"--budget {args.budget:g}: give a positive number of seconds, e.g. "
                         "--budget 240.")
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    _check_out_dir(out)
 
     def report(row):
         print(f"mpmflow: {row['label']} (aspect ratio {row['ar']}): {row['steps']} steps to "
@@ -268,6 +264,7 @@ def _plot(args):
 
 
 def _validate(args):
+    from .mpl import have_matplotlib
     from .reference import data_dir
 
     unknown = [c for c in args.cases if c not in VALIDATION_CASES]
@@ -275,18 +272,22 @@ def _validate(args):
         raise CaseError(f"--case {unknown[0]}: unknown validation case; choose from "
                         + ", ".join(VALIDATION_CASES) + ".")
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    _check_out_dir(out, create=False)
+    # everything the cases need, checked before minutes of runs: matplotlib (the plots),
+    # the reference data, the example case files, and a folder whose README.md is ours
+    have_matplotlib("mpmflow validate")
     try:
         data_dir()
     except FileNotFoundError as err:
         raise CaseError(str(err)) from None
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
-                        "can write to.") from None
-    from .validation import run_validation
+    from .validation import _missing_text, missing_examples, run_validation
+    from .validation.report import check_report_folder
+
+    missing = missing_examples(args.cases)
+    if missing:
+        raise CaseError(_missing_text(missing))
+    check_report_folder(out)
+    _check_out_dir(out)
 
     def report(res):
         misses = sum(r.status == "miss" for r in res.rows)
