@@ -109,7 +109,7 @@ def _parser():
         "analytic or measured reference, and write DIR/README.md (summary table: case, "
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
         "plots) and DIR/summary.csv; a README.md in DIR that it did not write is never replaced. "
-        "Needs matplotlib. The full run takes about 2 minutes on 2 cores.",
+        "Needs matplotlib. The full run takes about 1-2 minutes on 2 cores.",
         epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
     v.add_argument("--quick", action="store_true",
