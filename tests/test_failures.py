@@ -16,6 +16,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.checkpoint import checkpoints, read
 from mpmflow.cli import main
 from mpmflow.output.timeseries import COLUMNS
+from mpmflow.particles import Particles
 from mpmflow.schemes.projection import ProjectionScheme
 
 from conftest import EXAMPLES, make_case
@@ -76,7 +77,7 @@ def test_sigint_checkpoints_and_the_restart_matches_an_uninterrupted_run(tmp_pat
     whole.run()
     arrays, meta = read(checkpoints(out)[-1])
     assert meta["time"] == whole.time == 1.0 and meta["steps"] == whole.steps
-    for name in ("x", "v", "pressure", "mass", "volume"):
+    for name in Particles.FIELDS:
         assert np.array_equal(arrays[name], getattr(whole.particles, name)), name
     for name in ("timeseries.csv", "particles.pvd"):
         assert (out / name).read_text() == (tmp_path / "whole" / name).read_text()
@@ -164,3 +165,44 @@ def test_a_body_faster_than_the_bound_is_refused_before_the_run(tmp_path, capsys
     err = capsys.readouterr().err
     assert code == 2 and "bodies.0.velocity = [300.0, 400.0] m/s is 500 m/s fast" in err
     assert "solver.max_speed = 100 m/s" in err and not (tmp_path / "o").exists()
+
+
+def test_a_second_sigterm_stops_at_once_with_143(tmp_path):
+    """The first SIGTERM asks for a stop at the next output time; a second one, sent while
+    the long chunk to that output time runs, stops without a checkpoint: exit 143 (not
+    130), reported as SIGTERM, no traceback (also when the signal lands in a __del__ while
+    Numba loads the kernels: the run loop then stops after the chunk)."""
+    out = tmp_path / "o"
+    proc = _start(out, "--set", "output.interval=0.5", "--set", "checkpoint.interval=1.0")
+    _wait_for_rows(out / "timeseries.csv", 1, proc)  # the row at t = 0: stepping
+    proc.send_signal(signal.SIGTERM)
+    for line in proc.stderr:  # the handler's message: the first signal was handled
+        if "SIGTERM received: stopping at the next output time" in line:
+            break
+    else:
+        raise AssertionError("the first SIGTERM's message never came")
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err and "by the user" not in err, err
+    assert "stopped at once by a second SIGTERM, without a new checkpoint" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["time"] < 1.0
+    assert "second SIGTERM" in summary["message"] and summary["last_checkpoint"] is None
+    assert not checkpoints(out) and not list(out.glob(".*.tmp"))
+
+
+def test_a_stop_request_without_an_output_folder():
+    """``stop_signal`` is public: a library run without out_dir stops at the next output
+    time without a checkpoint (it used to fail in Path(None))."""
+    sim = Simulation(load_case(EXAMPLES / "hydrostatic.toml",
+                               ["time.end=0.05", "output.interval=0.01", "grid.spacing=0.02"]))
+
+    def hook(s):
+        if s.time >= 0.02 - 1e-12:
+            s.stop_signal = signal.SIGTERM
+    sim.on_output = hook
+    summary = sim.run()
+    assert summary["status"] == "interrupted" and summary["time"] == pytest.approx(0.02)
+    assert summary["message"] == ("interrupted by SIGTERM at t = 0.02 s (step "
+                                  f"{sim.steps}); no checkpoint: no output folder")

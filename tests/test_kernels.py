@@ -80,7 +80,7 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     np.testing.assert_allclose(p, 5 - 4 * x0[:, 0] + 7 * x0[:, 1], atol=1e-12)
 
 
-def test_keep_inside_puts_particles_back_and_counts_them():
+def test_grid_to_particles_puts_particles_back_inside_and_counts_them():
     x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
     v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
     still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move

@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 
 from mpmflow import Simulation, load_case
-from mpmflow.checkpoint import checkpoints
+from mpmflow.checkpoint import CheckpointError, checkpoints, read
+from mpmflow.checkpoint import write as checkpoint_write
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
+from mpmflow.particles import Particles
 
 from conftest import EXAMPLES
 
@@ -21,7 +23,6 @@ SCHEMES = {
     "explicit": ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
                  "bodies.0.initial_pressure=hydrostatic"],
 }
-FIELDS = ("x", "v", "pressure", "mass", "volume")
 
 
 def _case(scheme, *more):
@@ -45,13 +46,15 @@ def _stop_at(sim, t):
 
 
 def _assert_same_run(a, b, out_a, out_b):
-    for name in FIELDS:
+    for name in Particles.FIELDS:
         assert np.array_equal(getattr(a.particles, name), getattr(b.particles, name)), name
     assert a.steps == b.steps and a.time == b.time
     for name in ("timeseries.csv", "particles.pvd"):
         assert (out_a / name).read_text() == (out_b / name).read_text(), name
-    assert sorted(p.name for p in out_a.glob("particles_*.vtu")) == \
-        sorted(p.name for p in out_b.glob("particles_*.vtu"))
+    snaps = sorted(p.name for p in out_a.glob("particles_*.vtu"))
+    assert snaps and snaps == sorted(p.name for p in out_b.glob("particles_*.vtu"))
+    for name in snaps:  # VTU snapshots are written uncompressed: the bytes must agree
+        assert (out_a / name).read_bytes() == (out_b / name).read_bytes(), name
 
 
 def test_interrupted_then_restarted_run_is_bit_identical(uninterrupted, tmp_path):
@@ -130,3 +133,90 @@ def test_checkpoints_keep_the_latest_two(uninterrupted):
     names = [p.name for p in checkpoints(whole_out)]
     assert len(names) == 2 and names[-1] == f"checkpoint_{whole.steps:09d}.npz"
     assert not list(whole_out.glob(".*.tmp"))
+
+
+def _cli_args(scheme, out):
+    args = ["run", str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", "--restart"]
+    for item in COMMON + SCHEMES[scheme]:
+        args += ["--set", item]
+    return args
+
+
+@pytest.mark.parametrize("damage", [b"", b"not a zip file", "truncated"])
+def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(uninterrupted, tmp_path,
+                                                                  capsys, damage):
+    """An empty or cut-short checkpoint (a crash before its data reached the disk) is passed
+    over with a notice; the run continues from the one before and ends as the whole run."""
+    scheme, whole, whole_out = uninterrupted
+    out = tmp_path / "copy"
+    shutil.copytree(whole_out, out)
+    older, final = checkpoints(out)  # at 0.09 s and at the end (0.1 s)
+    data = final.read_bytes()
+    final.write_bytes(data[:len(data) // 2] if damage == "truncated" else damage)
+    assert main(_cli_args(scheme, out)) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert f"checkpoint {final} cannot be read" in err
+    assert f"Continuing from the one before it, {older.name}" in err
+    arrays, meta = read(checkpoints(out)[-1])
+    assert meta["steps"] == whole.steps
+    for name in Particles.FIELDS:
+        assert np.array_equal(arrays[name], getattr(whole.particles, name)), name
+    for name in ("timeseries.csv", "particles.pvd"):
+        assert (out / name).read_text() == (whole_out / name).read_text(), name
+
+
+def test_no_readable_checkpoint_is_a_clear_error(uninterrupted, tmp_path, capsys):
+    scheme, _, whole_out = uninterrupted
+    out = tmp_path / "copy"
+    shutil.copytree(whole_out, out)
+    older, final = checkpoints(out)
+    older.write_bytes(b"")
+    final.write_bytes(b"")
+    assert main(_cli_args(scheme, out)) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.startswith("mpmflow: error: ")
+    assert f"no checkpoint in {out} can be read" in err
+    assert older.name in err and final.name in err and "--overwrite" in err
+    final.unlink()  # only one checkpoint, and it is damaged: its own message
+    assert main(_cli_args(scheme, out)) == 2
+    err = capsys.readouterr().err
+    assert f"Checkpoint {older} cannot be read (EOFError" in err and "Traceback" not in err
+
+
+def test_a_checkpoint_without_an_entry_is_a_case_error(uninterrupted, tmp_path):
+    scheme, _, whole_out = uninterrupted
+    arrays, meta = read(checkpoints(whole_out)[0])
+    del arrays["v"]
+    del meta["k_out"]
+    path = checkpoint_write(tmp_path, 1, arrays, meta)
+    with pytest.raises(CheckpointError, match="it lacks meta k_out, array v"):
+        Simulation.resume(_case(scheme, "time.end=0.2"), tmp_path, path)
+
+
+def test_extending_a_run_whose_end_is_not_an_output_time(tmp_path):
+    """A run to 0.105 s (not a multiple of output.interval = 0.01 s) extended to 0.12 s
+    writes rows at 0.11 and 0.12 s, one per interval after the old end.
+
+    Against a run made to 0.12 s from the start: the extended run has the extra output (and
+    end snapshot) at 0.105 s, and its chunks 0.1-0.105-0.11 take the same 1 ms steps as the
+    chunk 0.1-0.11 of the other, but the step size is (t_next - t)/n, which rounds
+    differently (last bits), so the states agree to rounding, not bit for bit. The
+    comparable parts are compared: the steps, and the rows at the shared times."""
+    out = tmp_path / "o"
+    Simulation(_case("projection", "time.end=0.105"), out).run()
+    rest = Simulation.resume(_case("projection", "time.end=0.12"), out, checkpoints(out)[-1])
+    rest.run()
+    times = [round(float(r.split(",")[0]), 9) for r in
+             (out / "timeseries.csv").read_text().split()[1:]]
+    assert times == [round(0.01 * k, 9) for k in range(11)] + [0.105, 0.11, 0.12]
+    whole = Simulation(_case("projection", "time.end=0.12"))
+    whole.run()
+    assert rest.steps == whole.steps and rest.time == whole.time
+    shared = {round(r["time"], 9): r for r in whole.rows}
+    for row in rest.rows:
+        if round(row["time"], 9) in shared:
+            other = shared[round(row["time"], 9)]
+            assert row["step"] == other["step"]
+            for key in ("front", "height", "kinetic_energy", "max_pressure"):
+                assert row[key] == pytest.approx(other[key], rel=1e-6, abs=1e-9), key

@@ -8,10 +8,13 @@ import sys
 import numpy as np
 import pytest
 
+from mpmflow import validation
 from mpmflow.case import validate
+from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.setup_case import build_grid, build_particles
 from mpmflow.validation import run_validation
+from mpmflow.validation.report import TITLE, check_report_folder
 
 
 @pytest.fixture(scope="module")
@@ -155,3 +158,33 @@ def test_cosine_surface_body_holds_the_mean_depth_and_its_shape():
 def test_cosine_surface_bad_values_are_clear_errors(amplitude, top, height, words):
     with pytest.raises(CaseError, match=words):
         _case(amplitude, top, height)
+
+
+def test_validate_refuses_a_readme_it_did_not_write(tmp_path, capsys):
+    out = tmp_path / "project"
+    out.mkdir()
+    (out / "README.md").write_text("# My project\n\nprecious\n")
+    assert main(["validate", "--out", str(out), "--quick", "--case", "hydrostatic"]) == 2
+    err = capsys.readouterr().err
+    assert "holds a README.md that is not a validation report" in err and "Traceback" not in err
+    assert (out / "README.md").read_text() == "# My project\n\nprecious\n"
+    assert sorted(p.name for p in out.iterdir()) == ["README.md"]  # nothing was run
+    (out / "README.md").write_text(TITLE + "\n\nan earlier report\n")
+    check_report_folder(out)  # an earlier report may be replaced
+
+
+def test_validate_checks_matplotlib_and_the_examples_before_running(tmp_path, capsys,
+                                                                    monkeypatch):
+    """Both used to fail only after the runs (a traceback, or a CaseError per case)."""
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib fails
+    assert main(["validate", "--out", str(tmp_path / "a"), "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert "mpmflow validate needs matplotlib: pip install 'mpmflow[plot]'" in err
+    assert not (tmp_path / "a").exists()
+    monkeypatch.undo()
+    monkeypatch.setattr(validation, "EXAMPLES", tmp_path / "no_examples")
+    assert main(["validate", "--out", str(tmp_path / "b"), "--quick", "--case", "volume"]) == 2
+    err = capsys.readouterr().err
+    assert "runs the case files in the examples/ folder of a source checkout" in err
+    assert "sloshing.toml, " in err and "dam_break.toml are missing" in err  # volume's needs
+    assert "Traceback" not in err and not (tmp_path / "b").exists()

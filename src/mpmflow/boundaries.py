@@ -1,9 +1,11 @@
-"""Domain walls: which wall nodes hold the material, and their velocity conditions.
+"""Domain walls: the velocity conditions at wall nodes (``apply_walls``).
 
-A wall is a contact condition. Each step starts with the wall nodes that carry a pressure
-unknown in contact, and the others only where the material presses into the wall; the
-pressure step then releases the nodes where holding the material would need a negative
-pressure while it moves away from the wall (see ``pressure.PressureProjection.project``).
+A wall is a contact condition. Which wall nodes hold the material is decided in the
+pressure step, not here: ``pressure.PressureProjection.project`` calls
+``kernels.walls2d.start_contact_2d`` (each step starts with the wall nodes that carry a
+pressure unknown in contact, and the others only where the material presses into the wall)
+and ``kernels.walls2d.release_contact_2d`` (it releases the nodes where holding the material
+would need a negative pressure while it moves away from the wall).
 """
 
 from .kernels import walls2d

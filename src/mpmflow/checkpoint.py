@@ -4,11 +4,12 @@ A checkpoint holds everything a run needs to continue exactly as if it had not s
 particle arrays, the scheme's state carried between steps (``scheme.state()``), and in the
 meta the time, step, time step, output schedule, counters, the timeseries rows and snapshot
 list written so far, and the resolved case. mpmflow draws no random numbers, so there is no
-random state to keep. Files are written atomically and the latest ``KEEP`` are kept.
+random state to keep. Files are written atomically (and fsynced) and the latest ``KEEP`` are kept.
 """
 
 import json
 import re
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,17 @@ from .output.atomic import atomic_path
 FORMAT = 1
 KEEP = 2
 _NAME = re.compile(r"^checkpoint_(\d{9})\.npz$")
+
+
+class CheckpointError(CaseError):
+    """A checkpoint file cannot be read (damaged, cut short, or missing an entry)."""
+
+    def __init__(self, path, why):
+        self.path, self.why = Path(path), why
+        super().__init__(
+            f"Checkpoint {path} cannot be read ({why}); it is damaged, e.g. cut short by a "
+            "crash. Delete it to restart from the checkpoint before it, or start the run "
+            "again with --overwrite instead of --restart.")
 
 
 def path_for(folder, step):
@@ -36,7 +48,7 @@ def write(folder, step, arrays, meta):
     """Write one checkpoint atomically and delete all but the latest ``KEEP``; returns its
     path."""
     path = path_for(folder, step)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, durable=True) as tmp:
         with open(tmp, "wb") as f:  # a file object: np.savez would append .npz to a name
             np.savez(f, meta=np.array(json.dumps({"format": FORMAT, **meta})), **arrays)
     for old in checkpoints(folder)[:-KEEP]:
@@ -47,15 +59,23 @@ def write(folder, step, arrays, meta):
 def read(path):
     """(arrays, meta) of a checkpoint file."""
     try:
-        with np.load(path, allow_pickle=False) as data:
+        data = np.load(path, allow_pickle=False)
+        if not hasattr(data, "files"):
+            raise ValueError("not an .npz archive")
+        with data:
             meta = json.loads(str(data["meta"]))
             arrays = {k: data[k] for k in data.files if k != "meta"}
-    except (OSError, ValueError, KeyError) as err:
-        raise CaseError(f"Checkpoint {path} cannot be read ({err}); delete it to restart from "
-                        "the one before, or start the run again without --restart.") from None
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
+        # an empty file gives EOFError, a truncated one BadZipFile (a crash before the data
+        # reached the disk)
+        raise CheckpointError(path, f"{type(err).__name__}: {err}" if str(err)
+                              else type(err).__name__) from None
+    if not isinstance(meta, dict):
+        raise CheckpointError(path, "its meta entry is not a JSON object")
     if meta.get("format") != FORMAT:
         raise CaseError(f"Checkpoint {path} has format {meta.get('format')}, this mpmflow reads "
-                        f"format {FORMAT}; start the run again without --restart.")
+                        f"format {FORMAT}; start the run again with --overwrite instead of "
+                        "--restart.")
     return arrays, meta
 
 

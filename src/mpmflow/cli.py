@@ -2,7 +2,8 @@
 
 Exit codes: 0 success; 2 invalid input (case file, settings, command line); 3 the
 simulation failed (pressure solve, blow-up); 130 interrupted by Ctrl-C (SIGINT), 143 by
-SIGTERM (a checkpoint was written: continue with --restart).
+SIGTERM (after the first signal a checkpoint is written: continue with --restart; a second
+signal stops at once without one).
 """
 
 import argparse
@@ -14,6 +15,8 @@ from pathlib import Path
 
 from ._version import __version__
 from .errors import CaseError, MpmflowError
+from .interrupts import StopNow, exit_code
+from .output import check_out_dir as _check_out_dir
 
 DESCRIPTION = """\
 mpmflow simulates incompressible free-surface flow (dam breaks, sloshing) with the material
@@ -47,8 +50,9 @@ examples:
   mpmflow keys
 
 exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
-summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (both leave a checkpoint:
-continue with --restart)."""
+summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (after the first signal a
+checkpoint is written: continue with --restart; a second signal stops at once without
+one)."""
 
 
 VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
@@ -104,7 +108,8 @@ def _parser():
         "Lobovsky et al. 2014, volume and particle distribution), compare each with its "
         "analytic or measured reference, and write DIR/README.md (summary table: case, "
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
-        "plots) and DIR/summary.csv. The full run takes about 2 minutes on 2 cores.",
+        "plots) and DIR/summary.csv; a README.md in DIR that it did not write is never replaced. "
+        "Needs matplotlib. The full run takes about 1-2 minutes on 2 cores.",
         epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
     v.add_argument("--quick", action="store_true",
@@ -141,8 +146,7 @@ def _prepare_out(out, args):
     """Check the output folder; with --overwrite delete an earlier run's files."""
     from .checkpoint import checkpoints
 
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    _check_out_dir(out, create=False)
     if args.restart:
         if args.overwrite:
             raise CaseError("--restart continues the run in --out and --overwrite replaces it; "
@@ -159,11 +163,7 @@ def _prepare_out(out, args):
         for old in [*out.glob("particles_*.vtu"), *checkpoints(out), out / "particles.pvd",
                     out / "timeseries.csv", out / "summary.json"]:
             old.unlink(missing_ok=True)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
-                        "can write to.") from None
+    _check_out_dir(out)
 
 
 def _resume_command(args):
@@ -173,20 +173,45 @@ def _resume_command(args):
     return " ".join(shlex.quote(str(w)) for w in words)
 
 
+def _resume(case, out):
+    """The run in ``out`` continued from its latest readable checkpoint: a damaged latest
+    one (e.g. cut short by a crash) is passed over with a notice."""
+    from .checkpoint import CheckpointError, checkpoints, latest
+    from .simulation import Simulation
+
+    latest(out)  # CaseError when there is none
+    damaged = []
+    for path in reversed(checkpoints(out)):
+        try:
+            sim = Simulation.resume(case, out, path)
+        except CheckpointError as err:
+            damaged.append(err)
+            continue
+        for err in damaged:
+            print(f"mpmflow: note: checkpoint {err.path} cannot be read ({err.why}); it is "
+                  f"damaged, e.g. cut short by a crash. Continuing from the one before it, "
+                  f"{path.name}.", file=sys.stderr)
+        return sim
+    if len(damaged) == 1:
+        raise damaged[0]
+    raise CaseError(f"--restart: no checkpoint in {out} can be read: "
+                    + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
+                    + ". They are damaged, e.g. cut short by a crash. Start the run again "
+                    "with --overwrite instead of --restart.")
+
+
 def _run(args):
     from .case import load_case
-    from .checkpoint import latest
-    from .interrupts import exit_code, stop_on_signals
+    from .interrupts import stop_on_signals
     from .simulation import Simulation
 
     case = load_case(args.case, args.overrides)
     out = Path(args.out)
     _prepare_out(out, args)
     if args.restart:
-        path = latest(out)
-        sim = Simulation.resume(case, out, path)
-        print(f"mpmflow: continuing from {path} (t = {sim.time:.6g} s, step {sim.steps})",
-              file=sys.stderr)
+        sim = _resume(case, out)
+        print(f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
+              f"{sim.steps})", file=sys.stderr)
     else:
         sim = Simulation(case, out)
     for note in sim.notices:
@@ -217,8 +242,7 @@ def _study(args):
         raise CaseError(f"--budget {args.budget:g}: give a positive number of seconds, e.g. "
                         "--budget 240.")
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    _check_out_dir(out)
 
     def report(row):
         print(f"mpmflow: {row['label']} (aspect ratio {row['ar']}): {row['steps']} steps to "
@@ -240,6 +264,7 @@ def _plot(args):
 
 
 def _validate(args):
+    from .mpl import have_matplotlib
     from .reference import data_dir
 
     unknown = [c for c in args.cases if c not in VALIDATION_CASES]
@@ -247,18 +272,22 @@ def _validate(args):
         raise CaseError(f"--case {unknown[0]}: unknown validation case; choose from "
                         + ", ".join(VALIDATION_CASES) + ".")
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    _check_out_dir(out, create=False)
+    # everything the cases need, checked before minutes of runs: matplotlib (the plots),
+    # the reference data, the example case files, and a folder whose README.md is ours
+    have_matplotlib("mpmflow validate")
     try:
         data_dir()
     except FileNotFoundError as err:
         raise CaseError(str(err)) from None
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder you "
-                        "can write to.") from None
-    from .validation import run_validation
+    from .validation import _missing_text, missing_examples, run_validation
+    from .validation.report import check_report_folder
+
+    missing = missing_examples(args.cases)
+    if missing:
+        raise CaseError(_missing_text(missing))
+    check_report_folder(out)
+    _check_out_dir(out)
 
     def report(res):
         misses = sum(r.status == "miss" for r in res.rows)
@@ -308,6 +337,10 @@ def main(argv=None):
     except MpmflowError as err:
         print(f"mpmflow: error: {err}", file=sys.stderr)
         return err.exit_code
+    except StopNow as err:
+        print(f"mpmflow: stopped at once by a second {err.name}, without a new checkpoint "
+              "(the last one written is kept: --restart continues from it).", file=sys.stderr)
+        return exit_code(err.signum)
     except KeyboardInterrupt:
         print("mpmflow: interrupted.", file=sys.stderr)
         return 130

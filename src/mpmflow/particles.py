@@ -15,20 +15,20 @@ class Particles:
     mass: np.ndarray
     volume: np.ndarray
 
+    FIELDS = ("x", "v", "pressure", "mass", "volume")  # the arrays, in constructor order
+
     @property
     def count(self):
         return self.x.shape[0]
 
     @classmethod
     def concatenate(cls, parts):
-        return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in
-                     ("x", "v", "pressure", "mass", "volume")))
+        return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in cls.FIELDS))
 
 
 def subset(particles, keep):
     """The particles selected by the boolean mask ``keep`` (copies)."""
-    return Particles(*(getattr(particles, f)[keep] for f in
-                       ("x", "v", "pressure", "mass", "volume")))
+    return Particles(*(getattr(particles, f)[keep] for f in Particles.FIELDS))
 
 
 def lattice_in_box(lo, hi, spacing):

@@ -18,21 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from .errors import CaseError
-from .output.atomic import atomic_path
+from .mpl import pyplot, save
+from .output import check_out_dir
 
 DPI = 80
-
-
-def _pyplot():
-    try:
-        import matplotlib
-    except ImportError:
-        raise CaseError("mpmflow plot needs matplotlib: pip install 'mpmflow[plot]' (or "
-                        "pip install matplotlib).") from None
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def read_run(folder):
@@ -51,12 +40,6 @@ def read_run(folder):
         for d in ET.parse(pvd).getroot().find("Collection").findall("DataSet"):
             snaps.append((float(d.get("timestep")), folder / d.get("file")))
     return series, summary, snaps
-
-
-def _save(fig, path, plt):
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=DPI, format="png")
-    plt.close(fig)
 
 
 def plot_timeseries(series, summary, path, plt):
@@ -92,7 +75,7 @@ def plot_timeseries(series, summary, path, plt):
         a.set_xlabel("time [s]")
     fig.suptitle(summary.get("case", {}).get("title") or "mpmflow run", fontsize=10)
     fig.tight_layout()
-    _save(fig, path, plt)
+    save(fig, path, DPI)
 
 
 def _particles(path):
@@ -135,7 +118,7 @@ def plot_snapshots(snaps, summary, folder, plt):
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         out = folder / "snapshots" / (Path(f).stem + ".png")
-        _save(fig, out, plt)
+        save(fig, out, DPI)
         written.append(out)
     pick = np.unique(np.linspace(0, len(data) - 1, min(6, len(data))).round().astype(int))
     fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
@@ -143,7 +126,7 @@ def plot_snapshots(snaps, summary, folder, plt):
     for ax, k in zip(axes[0], pick):
         art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt)
     fig.colorbar(art, ax=axes[0].tolist(), label="pressure [Pa]")
-    _save(fig, folder / "snapshots.png", plt)
+    save(fig, folder / "snapshots.png", DPI)
     written.append(folder / "snapshots.png")
     fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
     art = _draw(ax, data[0][1], data[0][2], data[0][0], size, vmax, plt)
@@ -167,12 +150,9 @@ def plot_snapshots(snaps, summary, folder, plt):
 
 def plot_run(run_dir, out_dir=None):
     """All figures of the run in ``run_dir`` (into ``out_dir``, default run_dir/plots)."""
-    plt = _pyplot()
+    plt = pyplot("mpmflow plot")
     series, summary, snaps = read_run(run_dir)
     out = Path(out_dir) if out_dir is not None else Path(run_dir) / "plots"
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CaseError(f"--out {out} cannot be created: {err.strerror}.") from None
+    check_out_dir(out)
     plot_timeseries(series, summary, out / "timeseries.png", plt)
     return [out / "timeseries.png", *plot_snapshots(snaps, summary, out, plt)]

@@ -5,7 +5,8 @@ between two output times are equal and at most ``time.dt``, so output times are 
 Outputs go to ``out_dir`` (see ``mpmflow.output``); ``summary.json`` is written at the end,
 also when the run fails or is interrupted. Checkpoints (``mpmflow.checkpoint``) are written
 every ``checkpoint.interval``, at the end and when ``stop_signal`` is set (by the CLI's
-signal handlers); ``Simulation.resume(case, out_dir, path)`` continues from one.
+signal handlers; without ``out_dir`` the run stops without one);
+``Simulation.resume(case, out_dir, path)`` continues from one.
 """
 
 import signal
@@ -21,10 +22,12 @@ from ._version import __version__
 from .case import resolved
 from .cells import bin_particles
 from .diagnostics import front_and_height, kinetic_energy, potential_energy, pressure_noise
-from .errors import SimulationError
+from .errors import CaseError, SimulationError
+from .interrupts import StopNow
 from .output.snapshots import SnapshotWriter
 from .output.summary import write_summary
 from .output.timeseries import COLUMNS, TimeSeriesWriter
+from .particles import Particles
 from .schemes import make_scheme
 from .setup_case import build_grid, build_particles
 from .stability import case_stable_time_step, sound_speed, time_step
@@ -54,8 +57,6 @@ class Simulation:
         self.grid = build_grid(case)
         self.particles = build_particles(case, self.grid)
         if self.particles.count == 0:
-            from .errors import CaseError
-
             raise CaseError("The bodies hold no particles: every box is thinner than one particle "
                             "spacing (grid.spacing / bodies.N.particles_per_cell). Enlarge the "
                             "boxes or raise particles_per_cell.")
@@ -88,13 +89,13 @@ class Simulation:
         self.resumed_from = None  # the checkpoint this run continues, if any
         self.last_checkpoint = None
         self.stop_signal = None  # set (to a signal number) to stop at the next output time
+        self.stop_now = None  # set (to a signal number) to stop after the current chunk,
+        # without a checkpoint (the CLI's second signal: its StopNow may be lost in a __del__)
 
     # ------------------------------------------------------------------ checkpoints
     def _checkpoint(self):
         """Write a checkpoint of the current state (after its output row)."""
-        P = self.particles
-        arrays = {"x": P.x, "v": P.v, "pressure": P.pressure, "mass": P.mass,
-                  "volume": P.volume}
+        arrays = {name: getattr(self.particles, name) for name in Particles.FIELDS}
         arrays.update({f"scheme.{k}": v for k, v in self.scheme.state().items()})
         snaps = self._outputs.snapshots.entries if self._outputs.snapshots is not None else []
         meta = {"mpmflow_version": __version__, "case": resolved(self.case),
@@ -106,35 +107,43 @@ class Simulation:
                 "wall_seconds": self._wall_seconds()}
         self.last_checkpoint = checkpoint.write(self.out_dir, self.steps, arrays, meta)
 
+    _META = ("case", "time", "steps", "dt", "k_out", "k_snap", "k_checkpoint", "counters",
+             "rows", "snapshots", "mass0", "volume0", "count0", "wall_seconds")
+
     @classmethod
     def resume(cls, case, out_dir, path, progress=None):
         """The run of ``out_dir`` continued from checkpoint ``path``: same settings except
-        possibly a later time.end (CaseError otherwise)."""
+        possibly a later time.end (CaseError otherwise; ``checkpoint.CheckpointError`` when
+        the file is damaged or lacks an entry)."""
         arrays, meta = checkpoint.read(path)
+        missing = [f"meta {k}" for k in cls._META if k not in meta]
+        missing += [f"array {k}" for k in Particles.FIELDS if k not in arrays]
+        if missing:
+            raise checkpoint.CheckpointError(path, "it lacks " + ", ".join(missing))
         checkpoint.check_same_case(meta["case"], resolved(case), path)
         if meta["time"] >= case.time.end:
-            from .errors import CaseError
-
             raise CaseError(
                 f"--restart: checkpoint {path} is at t = {meta['time']:.6g} s, which already "
                 f"reaches time.end = {case.time.end:g} s. To extend the run give a later end, "
                 f"e.g. --set time.end={2 * case.time.end:g}.")
         sim = cls(case, out_dir, progress)
         P = sim.particles
-        for name in ("x", "v", "pressure", "mass", "volume"):
+        for name in Particles.FIELDS:
             saved = arrays[name]
             if saved.shape != getattr(P, name).shape:
-                from .errors import CaseError
-
                 raise CaseError(f"--restart: checkpoint {path} holds {saved.shape[0]} "
                                 f"particles, the case {P.count}; it belongs to another case.")
             np.copyto(getattr(P, name), saved)
-        sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
-                            if k.startswith("scheme.")})
+        try:
+            sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
+                                if k.startswith("scheme.")})
+            sim.counters = Counters(**meta["counters"])
+        except (KeyError, TypeError, ValueError) as err:
+            raise checkpoint.CheckpointError(path, f"its scheme state or counters do not fit: "
+                                        f"{type(err).__name__}: {err}") from None
         sim.time, sim.steps, sim.dt = meta["time"], meta["steps"], meta["dt"]
         sim.k_out, sim.k_snap = meta["k_out"], meta["k_snap"]
         sim.k_checkpoint = meta["k_checkpoint"]
-        sim.counters = Counters(**meta["counters"])
         sim.rows = meta["rows"]
         sim.snapshot_entries = meta["snapshots"]
         sim.mass0, sim.volume0, sim.count0 = meta["mass0"], meta["volume0"], meta["count0"]
@@ -222,12 +231,17 @@ class Simulation:
                 self._output(snapshot=True)
             while self.time < end:
                 self._chunk()
+                if self.stop_now is not None:
+                    raise StopNow(self.stop_now)
                 if self.stop_signal is not None and self.time < end:
-                    self._checkpoint()
                     status = "interrupted"
                     message = (f"interrupted by {signal.Signals(self.stop_signal).name} at "
-                               f"t = {self.time:.6g} s (step {self.steps}); checkpoint "
-                               f"{self.last_checkpoint.name} written")
+                               f"t = {self.time:.6g} s (step {self.steps}); ")
+                    if self.out_dir is not None:
+                        self._checkpoint()
+                        message += f"checkpoint {self.last_checkpoint.name} written"
+                    else:
+                        message += "no checkpoint: no output folder"
                     break
                 if (wall_budget is not None and self.time < end
                         and _time.perf_counter() - self._wall0 > wall_budget):
@@ -241,9 +255,11 @@ class Simulation:
         except SimulationError as err:
             message = str(err)
             raise
-        except KeyboardInterrupt:
-            status, message = "interrupted", ("interrupted by the user at once, without a "
-                                              "checkpoint")
+        except (KeyboardInterrupt, StopNow) as err:
+            status, message = "interrupted", (
+                f"stopped at once by a second {err.name}, without a checkpoint (the last one "
+                "written is kept)" if isinstance(err, StopNow) else
+                "stopped at once by KeyboardInterrupt (Ctrl-C), without a checkpoint")
             raise
         except OSError as err:
             message = f"Writing the outputs failed: {err}. Check the --out folder and free space."
@@ -273,7 +289,9 @@ class Simulation:
         self.time = t_next
         if self.progress is not None:
             self.progress(self.time, self.steps, end)
-        self.k_out += 1
+        # recomputed, not incremented: after an end that is not an output time (0.105 with
+        # interval 0.01) the next output of an extended run is 0.11, not 0.12
+        self.k_out = int(np.floor(self.time / interval + 1e-9)) + 1
         snap = self.time >= self.k_snap * snap_interval - 1e-9 * dt or self.time >= end
         if snap:
             self.k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1

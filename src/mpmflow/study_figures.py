@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .mpl import pyplot
 from .reference import G, MM_HEIGHT_AR2, VOF_AR2, load
 
 A = 0.114  # m, width of both columns
@@ -20,16 +21,7 @@ def _kind(row):
 
 
 def _plt():
-    try:
-        import matplotlib
-    except ImportError:  # pragma: no cover
-        from .errors import CaseError
-
-        raise CaseError("The study's figures need matplotlib: pip install 'mpmflow[plot]'.")
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot("mpmflow study (its figures)")
 
 
 def fig2(results, ar, path):

@@ -3,3 +3,20 @@
 Every file is written atomically (to a temporary file in the same folder, then renamed),
 so a run that is killed never leaves a half-written output behind.
 """
+
+from pathlib import Path
+
+from ..errors import CaseError
+
+
+def check_out_dir(out, create=True):
+    """CaseError when --out ``out`` is a file or (with ``create``) cannot be created."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+    if create:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder "
+                            "you can write to.") from None

@@ -15,9 +15,9 @@ sloshing and dam-break runs).
 import time as _time
 from pathlib import Path
 
-from ..errors import SimulationError
+from ..errors import CaseError, SimulationError
 from . import dam_break, hydrostatic, lobovsky, sloshing, volume
-from .common import CaseResult, Row
+from .common import EXAMPLES, CaseResult, Row
 
 CASES = {
     "hydrostatic": hydrostatic.run,
@@ -28,19 +28,47 @@ CASES = {
     "volume": volume.run,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
+EXAMPLE_FILES = {"hydrostatic": "hydrostatic.toml", "sloshing": "sloshing.toml",
+                 "dam_break": "dam_break.toml", "dam_break_ar1": "dam_break_ar1.toml",
+                 "lobovsky": "lobovsky.toml"}  # the examples/ case file each case runs
+
+
+def case_names(cases=None):
+    """The cases to run, in order: ``cases`` (all by default) and those they need."""
+    names = list(CASES) if not cases else [c for c in CASES if c in cases]
+    for name in list(names):
+        for need in NEEDS.get(name, ()):
+            if need not in names:
+                names.insert(names.index(name), need)
+    return names
+
+
+def missing_examples(cases=None):
+    """The example case files the cases would run that are not there."""
+    return [EXAMPLES / EXAMPLE_FILES[n] for n in case_names(cases)
+            if n in EXAMPLE_FILES and not (EXAMPLES / EXAMPLE_FILES[n]).is_file()]
+
+
+def _missing_text(missing):
+    return ("mpmflow validate runs the case files in the examples/ folder of a source "
+            f"checkout, and {', '.join(str(p) for p in missing)} "
+            f"{'is' if len(missing) == 1 else 'are'} missing. Run it from a checkout of "
+            "mpmflow installed with `pip install -e .` (as `make setup` does).")
 
 
 def run_validation(out, quick=False, cases=None, progress=None):
     """Run the cases (all by default) into ``out``; returns (results, counts)."""
     from .report import write_report
 
+    from .report import check_report_folder
+
     out = Path(out)
+    check_report_folder(out)
+    missing = missing_examples(cases)
+    if missing:
+        raise CaseError(_missing_text(missing))
     out.mkdir(parents=True, exist_ok=True)
-    names = list(CASES) if not cases else [c for c in CASES if c in cases]
-    for name in list(names):
-        for need in NEEDS.get(name, ()):
-            if need not in names:
-                names.insert(names.index(name), need)
+    names = case_names(cases)
     context, results = {}, []
     t0 = _time.perf_counter()
     for name in names:

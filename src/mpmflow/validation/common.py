@@ -6,12 +6,12 @@ the tolerance (a value that could not be measured, nan, fails).
 """
 
 import math
-import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .. import mpl
 from ..case import load_case
 from ..simulation import Simulation
 
@@ -86,13 +86,6 @@ def run_example(example, overrides=(), on_output=None):
     return sim
 
 
-def timed(fn):
-    """Call fn(); return (its result, wall seconds)."""
-    t0 = _time.perf_counter()
-    out = fn()
-    return out, _time.perf_counter() - t0
-
-
 def observed_order(h, e):
     """Least-squares slope of log(error) against log(spacing): the observed order."""
     h, e = np.asarray(h, float), np.asarray(e, float)
@@ -116,22 +109,14 @@ def markdown_table(header, rows):
     return "\n".join(lines)
 
 
+DPI = 90  # of the report's figures
+
+
 def pyplot():
-    """matplotlib.pyplot with the non-interactive backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    """matplotlib.pyplot (see ``mpmflow.mpl``)."""
+    return mpl.pyplot("mpmflow validate")
 
 
 def save(fig, path):
-    """Save a figure atomically and close it."""
-    from ..output.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
+    """Save a report figure atomically and close it."""
+    mpl.save(fig, path, DPI)
