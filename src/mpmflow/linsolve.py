@@ -13,7 +13,6 @@ called for several right-hand sides. Every solve reports its true relative resid
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .kernels import multigrid
 
@@ -38,6 +37,8 @@ class PressureMatrix:
     grid_nodes: tuple  # nodes per axis
 
     def csr(self):
+        import scipy.sparse as sp  # here: the default solver never needs SciPy (50 ms import)
+
         mask = self.cols >= 0
         indptr = np.concatenate(([0], np.cumsum(mask.sum(axis=1))))
         n = self.cols.shape[0]
