@@ -151,3 +151,24 @@ def test_contact_starts_where_material_presses_and_releases_under_tension():
     p_node[0] = -5.0  # tension, but v* does not leave the walls: kept
     assert walls2d.release_contact_2d(ncx, ncy, vstar, row, p_node, contact) == 1
     assert not contact[1, 1] and contact[0].all()
+
+
+@pytest.mark.parametrize("min_rows", [1, 2])
+def test_strips_cover_the_rows_with_room_between_and_balance_the_work(min_rows):
+    from mpmflow.kernels.parallel import strips
+
+    rng = np.random.default_rng(5)
+    for nrows in (1, 2, 3, 7, 40, 111):
+        work = rng.integers(0, 50, nrows)
+        work[: nrows // 3] = 0  # empty rows at the bottom
+        row_cum = np.concatenate(([0], np.cumsum(work)))
+        bounds = np.empty(17, dtype=np.int64)
+        k = strips(row_cum, 16, min_rows, bounds)
+        b = bounds[:k + 1]
+        assert k >= 1 and b[0] == 0 and b[-1] == nrows
+        if nrows >= min_rows:
+            assert np.all(np.diff(b) >= min_rows)  # strips two apart never touch
+        if nrows >= 16 * min_rows and row_cum[-1] > 0:
+            # no strip holds much more than its share plus the largest row
+            share = row_cum[-1] / k
+            assert np.all(np.diff(row_cum[b]) <= share + work.max())

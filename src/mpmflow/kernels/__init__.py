@@ -12,10 +12,5 @@ Conventions shared by all 2D kernels
 * The four nodes of a cell are numbered locally ``a = lx + 2*ly`` with ``lx, ly in {0, 1}``.
 * Bilinear shape functions: ``N_a(xi, eta) = (lx ? xi : 1-xi) * (ly ? eta : 1-eta)`` with
   local coordinates ``xi, eta`` in [0, 1].
-
-Parallel kernels split their loops into ``CHUNKS`` runs (more than any thread count, so a
-static schedule still balances), and every sum is taken in an order fixed by the data
-alone: results do not depend on the number of threads.
+* Parallel kernels follow ``parallel``: results do not depend on the number of threads.
 """
-
-CHUNKS = 64

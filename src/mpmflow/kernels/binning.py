@@ -2,7 +2,7 @@
 
 from numba import njit, prange
 
-from . import CHUNKS
+from .parallel import CHUNKS
 from .transfer2d import cell_of
 
 BLOCK = 128  # cells per block of cell_volume_fraction

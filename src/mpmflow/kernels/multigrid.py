@@ -20,7 +20,7 @@ with rediscretised coarse operators.)
 import numpy as np
 from numba import njit, prange
 
-from . import CHUNKS
+from .parallel import CHUNKS, strips
 
 COARSEST = 64  # unknowns at which the hierarchy stops and a dense factor takes over
 PARALLEL_ROWS = 4096  # levels at least this large run their loops on all threads
@@ -93,8 +93,14 @@ def galerkin(cols, vals, pcols, pw, cnode, nnx_c, node, nnx):
     if n < PARALLEL_ROWS:
         _galerkin_rows(0, n, cols, vals, pcols, pw, cx, cy, ccols, cvals)
         return ccols, cvals
-    bounds = _row_strips(node, nnx, STRIPS)
-    k = bounds.shape[0] - 1
+    # strips of whole node rows, 2 at least: fine rows 2 node rows apart reach no common
+    # coarse row; the work of a node row is its number of fine rows
+    y0 = node[0] // nnx
+    y1 = node[n - 1] // nnx + 1
+    row_cum = np.searchsorted(node, (y0 + np.arange(y1 - y0 + 1)) * nnx)
+    strip = np.empty(STRIPS + 1, dtype=np.int64)
+    k = strips(row_cum, STRIPS, 2, strip)
+    bounds = row_cum[strip[:k + 1]]
     for parity in range(2):
         _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, cx, cy, ccols, cvals)
     return ccols, cvals
@@ -105,23 +111,6 @@ def _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, cx, cy, ccols, cv
     for t in prange((k - parity + 1) // 2):
         u = 2 * t + parity
         _galerkin_rows(bounds[u], bounds[u + 1], cols, vals, pcols, pw, cx, cy, ccols, cvals)
-
-
-@njit(cache=True)
-def _row_strips(node, nnx, nstrips):
-    """Row offsets of up to ``nstrips`` strips of whole node rows, at least 2 node rows each,
-    with about equal numbers of rows."""
-    n = node.shape[0]
-    y0 = node[0] // nnx
-    y1 = node[n - 1] // nnx + 1
-    k = max(1, min(nstrips, (y1 - y0) // 2))
-    ys = np.empty(k + 1, dtype=np.int64)
-    ys[0] = y0
-    for t in range(1, k):
-        y = node[t * n // k] // nnx
-        ys[t] = min(max(y, ys[t - 1] + 2), y1 - 2 * (k - t))
-    ys[k] = y1
-    return np.searchsorted(node, ys * nnx)
 
 
 @njit(cache=True)

@@ -17,7 +17,7 @@ unknown set have p = 0 (the paper's free-surface nodes).
 import numpy as np
 from numba import njit, prange
 
-from . import CHUNKS
+from .parallel import CHUNKS
 
 
 

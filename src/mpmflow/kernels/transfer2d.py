@@ -3,7 +3,7 @@
 import numpy as np
 from numba import njit, prange
 
-from . import CHUNKS
+from .parallel import CHUNKS, strips
 
 STRIPS = 16  # P2G cuts the grid into 2 STRIPS strips of cell rows
 
@@ -53,26 +53,6 @@ def _scatter_rows(cy0, cy1, x, v, mass, volume, order, start, h, ncx, ncy, node_
             node_mom[i, 1] += wm * v[p, 1]
 
 
-@njit(cache=True)
-def strips(ncx, ncy, start, nstrips, bounds):
-    """Split the cell rows into ``nstrips`` strips of whole rows, at least one row each,
-    holding about equal numbers of particles: strip t is rows bounds[t] to bounds[t+1] - 1.
-    Returns the number of strips (fewer when there are fewer rows)."""
-    k = min(nstrips, ncy)
-    total = start[ncy * ncx]
-    bounds[0] = 0
-    for t in range(1, k):
-        target = total * t // k
-        # first row whose particles start at or after the target
-        lo, hi = bounds[t - 1] + 1, ncy - (k - t)
-        row = lo
-        while row < hi and start[row * ncx] < target:
-            row += 1
-        bounds[t] = row
-    bounds[k] = ncy
-    return k
-
-
 @njit(cache=True, parallel=True)
 def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity, dt, node_mass,
                          node_mom, node_vol, v_old, v_star):
@@ -92,7 +72,7 @@ def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity,
         node_mom[i, 0] = 0.0
         node_mom[i, 1] = 0.0
     bounds = np.empty(2 * STRIPS + 1, dtype=np.int64)
-    k = strips(ncx, ncy, start, 2 * STRIPS, bounds)
+    k = strips(start[::ncx], 2 * STRIPS, 1, bounds)  # start[r * ncx]: particles below row r
     for parity in range(2):
         for t in prange((k - parity + 1) // 2):
             u = 2 * t + parity
