@@ -10,22 +10,17 @@ import numpy as np
 from numba import njit
 
 from .transfer2d import _weights, flip_update, nodal_velocity, put_inside
-from .walls2d import apply_walls_2d, outward
+from .walls2d import apply_walls_2d, wall_pairs
 
 
 @njit(cache=True)
 def _walls(ncx, ncy, v, contact, no_slip):
     """Wall nodes where the velocity points into the wall are in contact: normal velocity 0
     (and tangential too for no-slip); elsewhere the material leaves the wall freely."""
-    nnx = ncx + 1
-    for iy in range(ncy + 1):
-        for ix in range(nnx):
-            if 0 < ix < ncx and 0 < iy < ncy:
-                continue
-            i = ix + nnx * iy
-            for k in range(2):
-                sign = outward(ix, iy, k, ncx, ncy)
-                contact[i, k] = sign != 0.0 and sign * v[i, k] > 0.0
+    contact[:] = False
+    node, axis, sign = wall_pairs(ncx, ncy)
+    for e in range(node.shape[0]):
+        contact[node[e], axis[e]] = sign[e] * v[node[e], axis[e]] > 0.0
     apply_walls_2d(ncx, ncy, v, contact, no_slip)
 
 
