@@ -209,7 +209,6 @@ def assemble_rhs_2d(ncx, ncy, spacing, cell_slot, C, V, node_vol, row_nodes, vst
     free surface has by nature, and pulling particles into a deficit elsewhere packs their
     neighbours instead (measured: the wetted volume then drifts by 11% in the dam break).
     """
-    nnx = ncx + 1
     n = row_nodes.shape[0]
     nchunks = min(CHUNKS, n)
     for chunk in prange(nchunks):
