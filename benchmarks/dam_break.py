@@ -39,6 +39,13 @@ def machine():
             "threads": os.environ.get("NUMBA_NUM_THREADS", "default")}
 
 
+def save(record):
+    """Print the machine and append the record to benchmarks/results.jsonl."""
+    print(f"machine: {record['machine']}")
+    with open(ROOT / "benchmarks" / "results.jsonl", "a") as f:
+        f.write(json.dumps(record) + "\n")
+
+
 def run_once(case, out, overrides):
     cmd = [sys.executable, "-m", "mpmflow.cli", "run", str(case), "--out", str(out), "--quiet",
            "--overwrite"]
@@ -76,9 +83,7 @@ def main():
           f"{record['process_max_s']:.2f}; {args.repeat} runs after a warm-up), time loop "
           f"{record['time_loop_median_s']:.2f} s, {record['steps']} steps, "
           f"{record['particles']} particles")
-    print(f"machine: {record['machine']}")
-    with open(ROOT / "benchmarks" / "results.jsonl", "a") as f:
-        f.write(json.dumps(record) + "\n")
+    save(record)
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine  # noqa: E402
+from dam_break import machine, save  # noqa: E402
 
 MESHES = [(0.004, 1e-3), (0.002, 5e-4), (0.001, 2.5e-4)]
 
@@ -98,9 +98,7 @@ def main():
         record["speedup"] = speedup
         print(f"speed-up from {min(args.threads)} to {top} threads at {largest} m: "
               f"{speedup:.2f}x")
-    print(f"machine: {record['machine']}")
-    with open(ROOT / "benchmarks" / "results.jsonl", "a") as f:
-        f.write(json.dumps(record) + "\n")
+    save(record)
 
 
 if __name__ == "__main__":
