@@ -173,7 +173,10 @@ def test_a_second_sigterm_stops_at_once_with_143(tmp_path):
     130), reported as SIGTERM, no traceback (also when the signal lands in a __del__ while
     Numba loads the kernels: the run loop then stops after the chunk)."""
     out = tmp_path / "o"
-    proc = _start(out, "--set", "output.interval=0.5", "--set", "checkpoint.interval=1.0")
+    # one chunk to t = 1 s at 0.004 m: seconds of stepping, so the second signal lands in
+    # it even on a fast machine (at 0.008 m to 0.5 s the chunk could end first)
+    proc = _start(out, "--set", "grid.spacing=0.004", "--set", "output.interval=1.0",
+                  "--set", "checkpoint.interval=1.0")
     _wait_for_rows(out / "timeseries.csv", 1, proc)  # the row at t = 0: stepping
     proc.send_signal(signal.SIGTERM)
     for line in proc.stderr:  # the handler's message: the first signal was handled
