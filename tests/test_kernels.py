@@ -59,6 +59,9 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     assert not v_old[~has].any() and not v_star[~has].any()
 
 
+NONE = np.zeros(0)  # no volume-correction displacement
+
+
 def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     grid = Grid(0.1, (10, 10))
     nodes = grid.node_coordinates()
@@ -73,7 +76,7 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     dt = 0.01
     exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
     moved = transfer2d.grid_to_particles_2d(x, v, p, 0.1, 10, 10, v_old, v_new, p_node, dt,
-                                            1.0, np.array([1.0, 1.0]), 1e-9)
+                                            1.0, np.array([1.0, 1.0]), 1e-9, NONE, NONE)
     assert moved == 0
     np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
     np.testing.assert_allclose(x, x0 + dt * exact, atol=1e-12)  # eq. 21 moves with v^{t+1}
@@ -86,7 +89,7 @@ def test_grid_to_particles_puts_particles_back_inside_and_counts_them():
     still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move
     moved = transfer2d.grid_to_particles_2d(x, v, np.zeros(4), 0.1, 10, 10, still, still,
                                             np.zeros(121), 0.01, 1.0, np.array([1.0, 1.0]),
-                                            1e-9)
+                                            1e-9, NONE, NONE)
     assert moved == 3
     assert np.all((x >= 0) & (x <= 1))
     np.testing.assert_allclose(x[0], [0.01, 0.5])  # mirrored back across the wall

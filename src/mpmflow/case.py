@@ -149,12 +149,15 @@ class Checkpoint(_Section):
         "bit for bit.")
 
 
-# The formulation presets: defaults of the five settings that separate mpmflow's projection
-# from the plain reading of the paper (measured against each other in docs/variants.md).
+# The formulation presets: defaults of the settings that separate mpmflow's projection from
+# the plain reading of the paper (measured against each other in docs/variants.md and, for the
+# volume correction and the sparse threshold, in docs/method.md).
 FORMULATIONS = {
     "mpmflow": {"free_surface": "subcell", "wall_flux": True, "partial_cell_quadrature": "gauss",
-                "density_correction": 0.2, "flip": 0.99},
+                "sparse_cell_threshold": 0.01, "volume_correction": 0.5,
+                "density_correction": 0.0, "flip": 0.99},
     "paper": {"free_surface": "node", "wall_flux": False, "partial_cell_quadrature": "particles",
+              "sparse_cell_threshold": 0.2, "volume_correction": 0.0,
               "density_correction": 0.0, "flip": 1.0},
 }
 
@@ -167,22 +170,27 @@ class Solver(_Section):
         "strain once per cell; material.bulk_modulus; time step limited by the sound speed).")
     formulation: Literal["mpmflow", "paper"] = Field(
         "mpmflow", description="Preset for free_surface, wall_flux, partial_cell_quadrature, "
-        "density_correction and flip: \"paper\" is the plain reading of Kularathna & Soga "
-        "(2017) (p = 0 at free-surface nodes, homogeneous Neumann walls, material-point "
-        "quadrature in partial cells, pure FLIP); \"mpmflow\" is the default, which keeps a "
-        "column at rest exactly at rest. Keys set explicitly override the preset.")
+        "sparse_cell_threshold, volume_correction, density_correction and flip: \"paper\" is "
+        "the plain reading of Kularathna & Soga (2017) (p = 0 at free-surface nodes, "
+        "homogeneous Neumann walls, material-point quadrature in partial cells, cells below "
+        "theta = 0.2 left out, no correction of the particles' volume, pure FLIP); "
+        "\"mpmflow\" is the default, which keeps a column at rest exactly at rest and the "
+        "material at its volume. Keys set explicitly override the preset.")
     flip: float = Field(None, ge=0, le=1, description="FLIP fraction of the particle velocity "
-                        "update: 1 = pure FLIP (the paper), 0 = pure PIC; values between blend. "
-                        "The default keeps 1% PIC, which stops the thin surge tip from running "
-                        "ahead on FLIP noise. For the explicit scheme it is the fraction per "
-                        "millisecond of simulated time (flip^(dt / 1 ms) per step), so its "
-                        "damping does not grow with the number of tiny steps.")
+                        "update per millisecond of simulated time: a step of dt blends FLIP and "
+                        "PIC with the fraction flip^(dt / 1 ms), so the PIC damping per second "
+                        "is the same whatever the time step and the scheme. 1 = pure FLIP "
+                        "(the paper), 0 = pure PIC. The default keeps 1% PIC per millisecond, "
+                        "which stops the thin surge tip from running ahead on FLIP noise.")
     full_cell_threshold: float = Field(
         0.9, gt=0, le=1, description="Cells with volume fraction theta at or above this are full "
         "and integrated with 2x2 Gauss points (paper: 0.9).")
     sparse_cell_threshold: float = Field(
-        0.2, gt=0, lt=1, description="Cells with theta below this are left out of the pressure "
-        "system (paper: 0.2).")
+        None, gt=0, lt=1, description="Cells with theta below this are left out of the "
+        "pressure system (paper: 0.2). With free_surface = \"subcell\" the surface is placed "
+        "by the nodal volume fraction, not by this threshold, and a low threshold keeps the "
+        "few particles above a surface that lies on a grid line inside the system (left out, "
+        "they fall freely until they rejoin it, which stirs the surface).")
     partial_cell_quadrature: Literal["gauss", "particles"] = Field(
         None, description="Quadrature of partial cells (sparse <= theta < full): "
         "\"particles\" integrates with the material points (the paper); \"gauss\" with Gauss "
@@ -199,11 +207,20 @@ class Solver(_Section):
         0.01, gt=0, le=1, description="Smallest fractional distance from an unknown node to the "
         "free surface used in the ghost extrapolation (subcell only); keeps the system well "
         "conditioned when the surface passes very close to a node.")
+    volume_correction: float = Field(
+        None, ge=0, le=1, description="Volume correction rate beta (dimensionless, per step): "
+        "the particles' volume fraction on the cell grid is brought back towards 1 by moving "
+        "the particles (never their velocity) along -grad q, -lap q = volume fraction - 1 on "
+        "the cells holding material (q = 0 in empty cells, no flux through walls; within one "
+        "cell of the free surface only an excess counts). It closes gaps and undoes packing, "
+        "removing the fraction beta of the volume error each step. 0 = off (the paper).")
     density_correction: float = Field(
-        None, ge=0, le=1, description="Density correction beta (dimensionless): where the "
-        "particles give a node more material volume than the node holds (vol_i > V_i, packed "
-        "by the approximate projection), the projection asks for div v = beta (vol_i/V_i - "
-        "1)/dt, so they spread out again. 0 = off (the paper).")
+        None, ge=0, le=1, description="The earlier, velocity-based density correction beta "
+        "(dimensionless): where the particles give a node more material volume than the node "
+        "holds (vol_i > V_i), the projection asks for div v = beta (vol_i/V_i - 1)/dt. It only "
+        "spreads packed particles and, under FLIP, adds kinetic energy (the water loosens and "
+        "a standing wave grows): kept for comparison, off by default; use "
+        "solver.volume_correction instead.")
     linear_solver: Literal["multigrid", "amg", "direct"] = Field(
         "multigrid", description="Pressure solver: \"multigrid\" = conjugate gradients "
         "preconditioned by geometric multigrid on the grid (compiled); \"amg\" = conjugate "

@@ -56,7 +56,7 @@ one)."""
 
 
 VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
-                    "volume")
+                    "volume", "long_run")
 
 
 def _parser():
@@ -105,11 +105,12 @@ def _parser():
         "validate", help="run the validation suite and write its report",
         description="Run the validation cases (hydrostatic column, standing-wave sloshing, "
         "dam breaks of aspect ratio 2 and 1 at the paper's meshes, time-step independence, "
-        "Lobovsky et al. 2014, volume and particle distribution), compare each with its "
+        "Lobovsky et al. 2014, volume and particle distribution, long runs: 20 s of sloshing and "
+        "10 s of dam break for volume and energy), compare each with its "
         "analytic or measured reference, and write DIR/README.md (summary table: case, "
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
         "plots) and DIR/summary.csv; a README.md in DIR that it did not write is never replaced. "
-        "Needs matplotlib. The full run takes about 1-2 minutes on 2 cores.",
+        "Needs matplotlib. The full run takes about 6 minutes on 2 cores.",
         epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
     v.add_argument("--quick", action="store_true",

@@ -50,6 +50,20 @@ def front_and_height(grid, theta):
     return float(front), float(height)
 
 
+WET = 0.5  # a cell at least half full is wetted (as for front and height)
+PACKED = 1.2  # a cell more than 20% over full is packed
+
+
+def volume_measures(theta, cell_volume, material_volume):
+    """``volume_ratio``: the volume of the wetted cells (f >= 1/2) over the material's volume,
+    uncapped (loosening shows as > 1, packing as < 1); ``packed_share``: the share of the cells
+    holding material with f > 1.2."""
+    holding = np.count_nonzero(theta > 0.0)
+    return {"volume_ratio": float(np.count_nonzero(theta >= WET) * cell_volume
+                                  / material_volume),
+            "packed_share": float(np.count_nonzero(theta > PACKED) / max(holding, 1))}
+
+
 def kinetic_energy(particles):
     return float(0.5 * np.sum(particles.mass * np.sum(particles.v**2, axis=1)))
 

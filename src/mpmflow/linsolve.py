@@ -70,25 +70,27 @@ class LinearSolver:
             self._setup = pyamg.smoothed_aggregation_solver(
                 self._A, symmetry="symmetric", max_coarse=400, coarse_solver="splu")
 
-    def solve(self, b, x0=None):
+    def solve(self, b, x0=None, tolerance=None):
+        """Solve the prepared system to ``tolerance`` (default: the solver's own)."""
+        tol = self.tolerance if tolerance is None else tolerance
         bnorm = np.linalg.norm(b)
         if bnorm == 0.0:
             return SolveResult(np.zeros_like(b), 0, 0.0, True)
         if self.method == "multigrid":
             x = np.zeros_like(b) if x0 is None else x0.copy()
-            iterations, residual = multigrid.pcg(*self._setup, b, x, self.tolerance,
-                                                 self.max_iterations, SMOOTHING_SWEEPS)
+            iterations, residual = multigrid.pcg(*self._setup, b, x, tol, self.max_iterations,
+                                                 SMOOTHING_SWEEPS)
         else:
             if self.method == "direct":
                 x = self._setup.solve(b)
                 iterations = 1
             else:
                 history = []
-                x = self._setup.solve(b, x0=x0, tol=self.tolerance, maxiter=self.max_iterations,
+                x = self._setup.solve(b, x0=x0, tol=tol, maxiter=self.max_iterations,
                                       accel="cg", residuals=history)
                 iterations = max(len(history) - 1, 0)
             residual = float(np.linalg.norm(b - self._A @ x) / bnorm)
-        ok = bool(np.isfinite(residual) and residual <= self.tolerance)
+        ok = bool(np.isfinite(residual) and residual <= tol)
         return SolveResult(x, int(iterations), float(residual), ok)
 
     def residual_vector(self, b, x):

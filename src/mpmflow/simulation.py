@@ -21,7 +21,8 @@ from . import checkpoint
 from ._version import __version__
 from .case import resolved
 from .cells import bin_particles
-from .diagnostics import front_and_height, kinetic_energy, potential_energy, pressure_noise
+from .diagnostics import (front_and_height, kinetic_energy, potential_energy, pressure_noise,
+                          volume_measures)
 from .errors import CaseError, SimulationError
 from .interrupts import StopNow
 from .output.snapshots import SnapshotWriter
@@ -181,8 +182,7 @@ class Simulation:
             "max_speed": float(speed.max()),
             "max_pressure": float(P.pressure.max()),
             "pressure_noise": pressure_noise(g, P),
-            "volume_ratio": float(np.minimum(bins.theta, 1.0).sum() * g.cell_volume
-                                  / self.volume0),
+            **volume_measures(bins.theta, g.cell_volume, self.volume0),
             "max_particles_per_cell": int(np.diff(bins.start).max()),
             "pressure_unknowns": int(self.scheme.last_unknowns),
             "solver_iterations": int(self.counters.iterations_since_output),

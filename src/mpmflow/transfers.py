@@ -4,6 +4,14 @@ import numpy as np
 
 from .kernels import transfer2d
 
+FLIP_TIME = 1e-3  # s: solver.flip is the FLIP fraction per this much simulated time
+
+
+def flip_per_step(flip, dt):
+    """The FLIP fraction of one step of dt: flip^(dt / 1 ms), the same PIC damping per second
+    whatever the step (both schemes)."""
+    return flip ** (dt / FLIP_TIME)
+
 
 def particles_to_grid(grid, particles, bins, gravity, dt, node_mass, node_mom, node_vol, v_old,
                       v_star):
@@ -17,11 +25,18 @@ def particles_to_grid(grid, particles, bins, gravity, dt, node_mass, node_mom, n
                                     node_mass, node_mom, node_vol, v_old, v_star)
 
 
-def grid_to_particles(grid, particles, v_old, v_new, p_node, dt, flip, margin_fraction=1e-6):
-    """FLIP/PIC velocity, position and pressure update of the particles (eqs. 19-21); the
-    particles that crossed a wall are put back inside the domain. Returns how many were."""
+NO_FACES = np.zeros(0)
+
+
+def grid_to_particles(grid, particles, v_old, v_new, p_node, dt, flip, faces=None,
+                      margin_fraction=1e-6):
+    """FLIP/PIC velocity, position and pressure update of the particles (eqs. 19-21), with
+    the volume correction's displacement ``faces`` (``VolumeCorrection.faces``) added to the
+    positions; the particles that crossed a wall are put back inside the domain. Returns how
+    many were."""
     nx, ny = grid.cells
     upper = np.asarray(grid.size, dtype=float)
+    dx_face, dy_face = faces if faces is not None else (NO_FACES, NO_FACES)
     return int(transfer2d.grid_to_particles_2d(
         particles.x, particles.v, particles.pressure, grid.spacing, nx, ny, v_old, v_new,
-        p_node, dt, flip, upper, margin_fraction * grid.spacing))
+        p_node, dt, flip, upper, margin_fraction * grid.spacing, dx_face, dy_face))

@@ -4,6 +4,7 @@ import numpy as np
 from numba import njit, prange
 
 from .parallel import CHUNKS, strips
+from .volume2d import displacement_at
 
 STRIPS = 16  # P2G cuts the grid into 2 STRIPS strips of cell rows
 
@@ -148,14 +149,20 @@ def put_inside(x, v, p, upper, margin):
 
 @njit(cache=True)
 def _gather_particles(lo, hi, x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip,
-                      upper, margin):
+                      upper, margin, dx_face, dy_face):
     """G2P of particles lo to hi - 1 (see ``grid_to_particles_2d``); returns how many were
     put back inside."""
     inv_h = 1.0 / h
     moved = 0
+    correct = dx_face.shape[0] > 0
     for p in range(lo, hi):
         nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
+        if correct:
+            d0, d1 = displacement_at(x[p, 0], x[p, 1], inv_h, ncx, ncy, dx_face, dy_face)
         flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip)
+        if correct:
+            x[p, 0] += d0
+            x[p, 1] += d1
         pp = 0.0
         for a in range(4):
             pp += w[a] * p_node[nodes[a]]
@@ -167,13 +174,15 @@ def _gather_particles(lo, hi, x, v, pressure, h, ncx, ncy, v_old, v_new, p_node,
 
 @njit(cache=True, parallel=True)
 def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip, upper,
-                         margin):
+                         margin, dx_face, dy_face):
     """Eqs. (19)-(21): FLIP/PIC velocity update, position update with v^{t+1}, pressure;
     then particles that left the box [0, upper] are put back inside (``put_inside``).
     Returns how many were put back.
 
-    ``flip`` is the FLIP fraction: 1 = pure FLIP (the paper), 0 = pure PIC.
-    Positions move with the interpolated new grid velocity (eq. 21), evaluated at x_p^t.
+    ``flip`` is the FLIP fraction of this step: 1 = pure FLIP (the paper), 0 = pure PIC.
+    Positions move with the interpolated new grid velocity (eq. 21), evaluated at x_p^t,
+    plus the volume correction's displacement interpolated from ``dx_face, dy_face`` (see
+    ``volume2d``; empty arrays: none).
     """
     n = x.shape[0]
     nchunks = min(CHUNKS, n)
@@ -181,7 +190,7 @@ def grid_to_particles_2d(x, v, pressure, h, ncx, ncy, v_old, v_new, p_node, dt, 
     for chunk in prange(nchunks):
         moved += _gather_particles(chunk * n // nchunks, (chunk + 1) * n // nchunks, x, v,
                                    pressure, h, ncx, ncy, v_old, v_new, p_node, dt, flip,
-                                   upper, margin)
+                                   upper, margin, dx_face, dy_face)
     return moved
 
 

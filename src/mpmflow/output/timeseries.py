@@ -16,6 +16,7 @@ COLUMNS = {
     "max_pressure": "Pa",
     "pressure_noise": "Pa",
     "volume_ratio": "-",
+    "packed_share": "-",
     "max_particles_per_cell": "-",
     "pressure_unknowns": "-",
     "solver_iterations": "-",

@@ -16,11 +16,9 @@ import numpy as np
 from ..errors import SimulationError
 from ..kernels import explicit2d
 from ..stability import sound_speed, stable_time_step
+from ..transfers import flip_per_step
 from . import register
 from .projection import StepReport
-
-
-FLIP_TIME = 1e-3  # s: solver.flip is the FLIP fraction per this much simulated time
 
 
 @register("explicit")
@@ -93,7 +91,7 @@ class ExplicitScheme:
         nx, ny = g.cells
         moved = explicit2d.explicit_steps_2d(
             nsteps, dt, P.x, P.v, P.pressure, P.mass, P.volume, self.density, self.bulk,
-            self.gravity[0], self.gravity[1], g.spacing, nx, ny, self.flip ** (dt / FLIP_TIME),
+            self.gravity[0], self.gravity[1], g.spacing, nx, ny, flip_per_step(self.flip, dt),
             self.no_slip, self.smoothing, self.full, self.upper, 1e-6 * g.spacing,
             self.node_mass, self.node_mom, self.v_old, self.v_new, self.contact, self.cell_j,
             self.cell_vol, self.cell_xi, self.cell_p, self.node_w, self.node_p)

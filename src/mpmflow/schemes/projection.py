@@ -10,6 +10,7 @@ from ..cells import bin_particles
 from ..free_surface import FreeSurface
 from ..pressure import PressureProjection
 from ..quadrature import Quadrature
+from ..volume_correction import VolumeCorrection
 from . import register
 
 
@@ -49,6 +50,8 @@ class ProjectionScheme:
                                              s.wall_flux, s.ghost_theta_min,
                                              s.density_correction, s.linear_solver,
                                              s.tolerance, s.max_iterations)
+        self.volume = (VolumeCorrection(grid, s.volume_correction) if s.volume_correction > 0
+                       else None)
         self.contact = np.zeros((grid.nnodes, grid.dim), dtype=np.bool_)
         n, d = grid.nnodes, grid.dim
         self.node_mass = np.zeros(n)
@@ -62,14 +65,20 @@ class ProjectionScheme:
 
     def state(self):
         """What the scheme carries from one step to the next beyond the particles: the nodal
-        pressure (the warm start of the next solve). Everything else is rebuilt each step."""
-        return {"p_node": self.projection.p_node.copy(),
-                "last_unknowns": np.array(self.last_unknowns)}
+        pressure and the volume correction's last solution (the warm starts of the next
+        solves). Everything else is rebuilt each step."""
+        state = {"p_node": self.projection.p_node.copy(),
+                 "last_unknowns": np.array(self.last_unknowns)}
+        if self.volume is not None:
+            state["volume_q"] = self.volume.state()
+        return state
 
     def restore(self, state):
         """Continue from ``state()`` (a checkpoint)."""
         self.projection.p_node = state["p_node"].copy()
         self.last_unknowns = int(state["last_unknowns"])
+        if self.volume is not None:
+            self.volume.restore(state["volume_q"])
 
     def advance(self, dt, nsteps, where=""):
         """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
@@ -95,9 +104,13 @@ class ProjectionScheme:
         stats = self.projection.project(integrals, nodes, self.node_vol, self.v_star,
                                         self.contact, dt, self.v_new, where)
         apply_walls(g, self.v_new, self.contact, self.walls)
-        # 7. grid-to-particle (eqs. 19-21) and pressure to particles
+        # 7. volume correction: a displacement of the particles back to the material's volume
+        faces = (self.volume.faces(P, self.bins, self.contact, where) if self.volume is not None
+                 else None)
+        # 8. grid-to-particle (eqs. 19-21), the correction's displacement, pressure to particles
         moved = transfers.grid_to_particles(g, P, self.v_old, self.v_new,
-                                            self.projection.p_node, dt, self.flip)
+                                            self.projection.p_node, dt,
+                                            transfers.flip_per_step(self.flip, dt), faces)
         self.last_unknowns = stats.unknowns
         return StepReport(stats.unknowns, stats.solves, stats.iterations, stats.iterations,
                           stats.residual, stats.released, moved)
