@@ -5,7 +5,7 @@ import pytest
 
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.kernels import quadrature2d, transfer2d, walls2d
+from mpmflow.kernels import quadrature2d, transfer2d, volume2d, walls2d
 from mpmflow.particles import Particles, lattice_in_box, seed_box
 
 
@@ -47,9 +47,15 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     v_old, v_star = np.zeros((grid.nnodes, 2)), np.zeros((grid.nnodes, 2))
     bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, vol))
     g, dt = np.array([0.5, -9.81]), 0.01
+    cvol = np.empty(grid.ncells)
     transfer2d.particles_to_grid_2d(x, v, m, vol, bins.order, bins.start, 0.1, 10, 10, g, dt,
-                                    mass, mom, nvol, v_old, v_star)
+                                    mass, mom, nvol, v_old, v_star, cvol)
     assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
+    # the volume on the cell centres (walls mirror): all of it, as the serial kernel has it
+    assert cvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
+    serial = np.empty(grid.ncells)
+    volume2d.cell_volume_2d(x, vol, 0.1, 10, 10, serial)
+    np.testing.assert_allclose(cvol, serial, rtol=1e-12, atol=1e-18)
     np.testing.assert_allclose(mom.sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=1e-12)
     assert nvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
     # nodal velocity and predictor: momentum / mass, + dt g where there is mass, else 0

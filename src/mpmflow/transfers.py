@@ -4,6 +4,7 @@ import numpy as np
 
 from .kernels import transfer2d
 
+NO_FACES = np.zeros(0)  # an empty array: no volume correction
 FLIP_TIME = 1e-3  # s: solver.flip is the FLIP fraction per this much simulated time
 
 
@@ -14,18 +15,17 @@ def flip_per_step(flip, dt):
 
 
 def particles_to_grid(grid, particles, bins, gravity, dt, node_mass, node_mom, node_vol, v_old,
-                      v_star):
+                      v_star, cell_vol=None):
     """Lumped nodal mass, momentum, material volume, velocity v_i^t and the predictor
-    v*_i = v_i^t + dt g (in place); ``bins``: the particles sorted by cell."""
+    v*_i = v_i^t + dt g (in place); ``bins``: the particles sorted by cell. ``cell_vol``
+    (optional): the particles' volume on the cell centres, for the volume correction."""
     if grid.dim != 2:
         raise NotImplementedError("only 2D grids are implemented")
     nx, ny = grid.cells
     transfer2d.particles_to_grid_2d(particles.x, particles.v, particles.mass, particles.volume,
                                     bins.order, bins.start, grid.spacing, nx, ny, gravity, dt,
-                                    node_mass, node_mom, node_vol, v_old, v_star)
-
-
-NO_FACES = np.zeros(0)
+                                    node_mass, node_mom, node_vol, v_old, v_star,
+                                    NO_FACES if cell_vol is None else cell_vol)
 
 
 def grid_to_particles(grid, particles, v_old, v_new, p_node, dt, flip, faces=None,

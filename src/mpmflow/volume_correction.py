@@ -8,7 +8,8 @@ that brings it back to 1 (after Kugelstadt et al. 2021, "Implicit density projec
 volume conserving liquids"):
 
 1. density: rho_c = sum_p N_c(x_p) V_p / h^d with the bilinear hat of the cell-centred grid,
-   particles mirrored at walls (``kernels.volume2d.dual_density_2d``); smooth, and exact for
+   particles mirrored at walls (``kernels.volume2d.scatter_cell_volume``, summed by the
+   particle-to-grid kernel in the same pass); smooth, and exact for
    a lattice of particles however it is shifted or strained (a per-cell count is not: a row of
    particles crossing a cell edge changes it by 1/4);
 2. a Poisson system on the cells holding material, -lap q = rho - 1, with q = 0 in empty
@@ -39,7 +40,7 @@ WET = 0.5  # a cell less than half full is surface, as for the front, height and
 
 
 class VolumeCorrection:
-    """``faces(particles, bins, contact)`` once per step, after the pressure step (whose wall
+    """``faces(cell_vol, theta, contact)`` once per step, after the pressure step (whose wall
     contact tells where the material has left a wall), gives the face displacements (m) that
     ``grid_to_particles`` adds to the particles' positions. ``state``/``restore``: the last
     solution, the warm start of the next solve (checkpoints carry it)."""
@@ -51,6 +52,7 @@ class VolumeCorrection:
         self.rate = rate  # beta: fraction of the volume error removed per step
         nx, ny = grid.cells
         n = grid.ncells
+        self.cell_vol = np.zeros(n)  # sum_p N_c V_p at the cell centres, from particles_to_grid
         self.density = np.zeros(n)
         self._row = np.empty(n, dtype=np.int64)
         self._cells = np.empty(n, dtype=np.int64)
@@ -62,12 +64,13 @@ class VolumeCorrection:
         self.dy_face = np.zeros(nx * (ny + 1))
         self.iterations = 0
 
-    def faces(self, particles, bins, contact, where=""):
+    def faces(self, cell_vol, theta, contact, where=""):
+        """``cell_vol``: the particles' volume on the cell centres (``particles_to_grid``
+        computes it into ``self.cell_vol``), ``theta``: the cell volume fractions."""
         g = self.grid
         nx, ny = g.cells
-        volume2d.dual_density_2d(particles.x, particles.volume, bins.order, bins.start,
-                                 g.spacing, nx, ny, self.density)
-        n, anchored = volume2d.assemble_2d(nx, ny, bins.theta, self.density, WET, contact,
+        np.multiply(cell_vol, 1.0 / g.cell_volume, out=self.density)
+        n, anchored = volume2d.assemble_2d(nx, ny, theta, self.density, WET, contact,
                                            self._row, self._cols, self._vals, self._rhs,
                                            self._cells)
         if n == 0 or not anchored:

@@ -4,7 +4,7 @@ import numpy as np
 from numba import njit, prange
 
 from .parallel import CHUNKS, strips
-from .volume2d import displacement_at
+from .volume2d import displacement_at, scatter_cell_volume
 
 STRIPS = 16  # P2G cuts the grid into 2 STRIPS strips of cell rows
 
@@ -39,9 +39,11 @@ def _weights(x0, x1, inv_h, ncx, ncy):
 
 @njit(cache=True)
 def _scatter_rows(cy0, cy1, x, v, mass, volume, order, start, h, ncx, ncy, node_mass, node_mom,
-                  node_vol):
-    """P2G of the particles of cell rows cy0 to cy1 - 1, cell by cell."""
+                  node_vol, cell_vol):
+    """P2G of the particles of cell rows cy0 to cy1 - 1, cell by cell; with ``cell_vol``
+    (non-empty) also their volume onto the cell centres (``volume2d.scatter_cell_volume``)."""
     inv_h = 1.0 / h
+    cells = cell_vol.shape[0] > 0
     for s in range(start[cy0 * ncx], start[cy1 * ncx]):
         p = order[s]
         nodes, w = _weights(x[p, 0], x[p, 1], inv_h, ncx, ncy)
@@ -52,19 +54,24 @@ def _scatter_rows(cy0, cy1, x, v, mass, volume, order, start, h, ncx, ncy, node_
             node_vol[i] += w[a] * volume[p]
             node_mom[i, 0] += wm * v[p, 0]
             node_mom[i, 1] += wm * v[p, 1]
+        if cells:
+            scatter_cell_volume(x[p, 0] * inv_h, x[p, 1] * inv_h, volume[p], ncx, ncy,
+                                cell_vol)
 
 
 @njit(cache=True, parallel=True)
 def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity, dt, node_mass,
-                         node_mom, node_vol, v_old, v_star):
+                         node_mom, node_vol, v_old, v_star, cell_vol):
     """Lumped nodal mass M_i = sum_p N_i(x_p) m_p, momentum sum_p N_i m_p v_p, material
     volume sum_p N_i V_p, velocity v_i = momentum / M_i and the predictor without pressure
-    v*_i = v_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere).
+    v*_i = v_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere); with ``cell_vol``
+    (non-empty) also the particles' volume on the cell centres for the volume correction.
 
     The particles come binned by cell (``order``, ``start``: see ``binning``). The cell rows
-    are cut into 2 STRIPS strips holding equal numbers of particles; strips 0, 2, 4, ... share
-    no node, so they are scattered in parallel, then strips 1, 3, 5, .... Every sum is taken
-    in the same order whatever the thread count, so results do not depend on it.
+    are cut into 2 STRIPS strips of at least 2 rows holding equal numbers of particles;
+    strips 0, 2, 4, ... share no node (nor cell centre), so they are scattered in parallel,
+    then strips 1, 3, 5, .... Every sum is taken in the same order whatever the thread count,
+    so results do not depend on it.
     """
     nn = node_mass.shape[0]
     for i in prange(nn):
@@ -72,13 +79,15 @@ def particles_to_grid_2d(x, v, mass, volume, order, start, h, ncx, ncy, gravity,
         node_vol[i] = 0.0
         node_mom[i, 0] = 0.0
         node_mom[i, 1] = 0.0
+    for c in prange(cell_vol.shape[0]):
+        cell_vol[c] = 0.0
     bounds = np.empty(2 * STRIPS + 1, dtype=np.int64)
-    k = strips(start[::ncx], 2 * STRIPS, 1, bounds)  # start[r * ncx]: particles below row r
+    k = strips(start[::ncx], 2 * STRIPS, 2, bounds)  # start[r * ncx]: particles below row r
     for parity in range(2):
         for t in prange((k - parity + 1) // 2):
             u = 2 * t + parity
             _scatter_rows(bounds[u], bounds[u + 1], x, v, mass, volume, order, start, h, ncx,
-                          ncy, node_mass, node_mom, node_vol)
+                          ncy, node_mass, node_mom, node_vol, cell_vol)
     for i in prange(nn):
         m = node_mass[i]
         for d in range(2):

@@ -9,62 +9,53 @@ entry ix + (ncx + 1) * cy of ``dx_face``; y-face (cx, iy) is entry cx + ncx * iy
 import numpy as np
 from numba import njit, prange
 
-from .parallel import strips
 
-STRIPS = 16  # the density scatter cuts the cell rows into 2 STRIPS strips
+
+@njit(cache=True, inline="always")
+def scatter_cell_volume(sx, sy, volume, ncx, ncy, cell_vol):
+    """Add a particle of volume ``volume`` at grid coordinates (sx, sy) = x / h to the cell
+    centres with the bilinear hat of the cell-centred grid. A wall mirrors the particles next
+    to it: the weight of a ghost cell beyond the wall goes to its mirror, the cell against
+    the wall, so a uniform material reads full up to the walls. Points beyond the grid (and
+    NaN) count at its edge, so no index leaves the arrays."""
+    if not sx >= 0.0:
+        sx = 0.0
+    elif sx > ncx:
+        sx = ncx
+    if not sy >= 0.0:
+        sy = 0.0
+    elif sy > ncy:
+        sy = ncy
+    sx -= 0.5
+    sy -= 0.5
+    i0 = int(sx + 1.0) - 1  # floor: sx > -1 inside the domain
+    j0 = int(sy + 1.0) - 1
+    fx = sx - i0
+    fy = sy - j0
+    i1 = i0 + 1
+    j1 = j0 + 1
+    if i0 < 0:
+        i0 = 0
+    if i1 > ncx - 1:
+        i1 = ncx - 1
+    if j0 < 0:
+        j0 = 0
+    if j1 > ncy - 1:
+        j1 = ncy - 1
+    cell_vol[i0 + ncx * j0] += (1.0 - fx) * (1.0 - fy) * volume
+    cell_vol[i1 + ncx * j0] += fx * (1.0 - fy) * volume
+    cell_vol[i0 + ncx * j1] += (1.0 - fx) * fy * volume
+    cell_vol[i1 + ncx * j1] += fx * fy * volume
 
 
 @njit(cache=True)
-def _mirror(k, n):
-    """Cell index k of a ghost cell beyond a wall folded back onto its mirror image."""
-    if k < 0:
-        return -k - 1
-    if k >= n:
-        return 2 * n - k - 1
-    return k
-
-
-@njit(cache=True)
-def _scatter_density(r0, r1, x, volume, order, start, inv_h, ncx, ncy, out):
-    """Dual-grid density of the particles of cell rows r0 to r1 - 1, cell by cell."""
-    for s in range(start[r0 * ncx], start[r1 * ncx]):
-        p = order[s]
-        sx = x[p, 0] * inv_h - 0.5
-        sy = x[p, 1] * inv_h - 0.5
-        i0 = int(np.floor(sx))
-        j0 = int(np.floor(sy))
-        fx = sx - i0
-        fy = sy - j0
-        for dj in range(2):
-            j = _mirror(j0 + dj, ncy)
-            wy = fy if dj == 1 else 1.0 - fy
-            for di in range(2):
-                i = _mirror(i0 + di, ncx)
-                wx = fx if di == 1 else 1.0 - fx
-                out[i + ncx * j] += wx * wy * volume[p]
-
-
-@njit(cache=True, parallel=True)
-def dual_density_2d(x, volume, order, start, h, ncx, ncy, out):
-    """Particle volume per cell volume, sampled at the cell centres with the bilinear hat of
-    the cell-centred grid: out_c = sum_p N_c(x_p) V_p / h^2. A wall mirrors the particles next
-    to it (a ghost cell's weight goes to its mirror cell), so a uniform material reads 1 up
-    to the walls. Particles come binned by cell (``order``, ``start``); cell rows are cut into
-    strips of at least 2 rows, even strips scattered in parallel, then odd ones (a particle
-    reaches one cell row up or down), so the sums do not depend on the thread count."""
+def cell_volume_2d(x, volume, h, ncx, ncy, out):
+    """sum_p N_c(x_p) V_p on every cell centre (``scatter_cell_volume``), over all particles;
+    the particle-to-grid kernel computes the same in its own pass during a step."""
+    out[:] = 0.0
     inv_h = 1.0 / h
-    for c in prange(out.shape[0]):
-        out[c] = 0.0
-    bounds = np.empty(2 * STRIPS + 1, dtype=np.int64)
-    k = strips(start[::ncx], 2 * STRIPS, 2, bounds)
-    for parity in range(2):
-        for t in prange((k - parity + 1) // 2):
-            u = 2 * t + parity
-            _scatter_density(bounds[u], bounds[u + 1], x, volume, order, start, inv_h, ncx,
-                             ncy, out)
-    scale = inv_h * inv_h
-    for c in prange(out.shape[0]):
-        out[c] *= scale
+    for p in range(x.shape[0]):
+        scatter_cell_volume(x[p, 0] * inv_h, x[p, 1] * inv_h, volume[p], ncx, ncy, out)
 
 
 @njit(cache=True, inline="always")
@@ -174,29 +165,35 @@ def face_displacements_2d(ncx, ncy, cell_row, q, scale, dmax, dx_face, dy_face):
 
 
 @njit(cache=True, inline="always")
-def _staggered(f, nx, ny, sx, sy):
-    """Bilinear interpolation of samples f[i + nx j] at integer points (i, j), clamped to the
-    outermost samples."""
-    i0 = int(np.floor(sx))
-    j0 = int(np.floor(sy))
-    fx = sx - i0
-    fy = sy - j0
-    acc = 0.0
-    for dj in range(2):
-        j = min(max(j0 + dj, 0), ny - 1)
-        wy = fy if dj == 1 else 1.0 - fy
-        for di in range(2):
-            i = min(max(i0 + di, 0), nx - 1)
-            wx = fx if di == 1 else 1.0 - fx
-            acc += wx * wy * f[i + nx * j]
-    return acc
+def _interpolate(f, sn, st, s_normal, n_normal, s_along, n_along):
+    """Bilinear interpolation of face samples f[sn k + st m]: normal position k (faces on the
+    cell edges, k = 0 to n_normal) and tangential position m + 1/2 (the cell rows, m = 0 to
+    n_along - 1), at (s_normal, s_along) in units of h, 0 <= s <= n; clamped to the outermost
+    row of faces along the tangent."""
+    k0 = int(s_normal)
+    if k0 > n_normal - 1:
+        k0 = n_normal - 1
+    a = s_normal - k0
+    t = s_along - 0.5
+    m0 = int(t + 1.0) - 1  # floor: t >= -1/2
+    b = t - m0
+    m1 = m0 + 1
+    if m0 < 0:
+        m0 = 0
+    if m1 > n_along - 1:
+        m1 = n_along - 1
+    r0 = sn * k0 + st * m0
+    r1 = sn * k0 + st * m1
+    return ((1.0 - b) * ((1.0 - a) * f[r0] + a * f[r0 + sn])
+            + b * ((1.0 - a) * f[r1] + a * f[r1 + sn]))
 
 
 @njit(cache=True, inline="always")
 def displacement_at(x0, x1, inv_h, ncx, ncy, dx_face, dy_face):
-    """The face displacements interpolated to the point (x0, x1) (m): each component from its
-    own faces (x-faces sit at (ix h, (cy + 1/2) h), y-faces at ((cx + 1/2) h, iy h))."""
-    sx = x0 * inv_h
-    sy = x1 * inv_h
-    return (_staggered(dx_face, ncx + 1, ncy, sx, sy - 0.5),
-            _staggered(dy_face, ncx, ncy + 1, sx - 0.5, sy))
+    """The face displacements interpolated to the point (x0, x1) (m), each component from its
+    own faces: x-face ix + (ncx + 1) cy sits at (ix h, (cy + 1/2) h), y-face cx + ncx iy at
+    ((cx + 1/2) h, iy h). Points beyond the domain count at its edge."""
+    sx = min(max(x0 * inv_h, 0.0), float(ncx))
+    sy = min(max(x1 * inv_h, 0.0), float(ncy))
+    return (_interpolate(dx_face, 1, ncx + 1, sx, ncx, sy, ncy),
+            _interpolate(dy_face, ncx, 1, sy, ncy, sx, ncx))

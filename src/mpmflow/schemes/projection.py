@@ -52,6 +52,8 @@ class ProjectionScheme:
                                              s.tolerance, s.max_iterations)
         self.volume = (VolumeCorrection(grid, s.volume_correction) if s.volume_correction > 0
                        else None)
+        self.volume_interval = s.volume_correction_interval
+        self.steps = 0  # steps taken: the volume correction runs on every interval-th
         self.contact = np.zeros((grid.nnodes, grid.dim), dtype=np.bool_)
         n, d = grid.nnodes, grid.dim
         self.node_mass = np.zeros(n)
@@ -68,7 +70,7 @@ class ProjectionScheme:
         pressure and the volume correction's last solution (the warm starts of the next
         solves). Everything else is rebuilt each step."""
         state = {"p_node": self.projection.p_node.copy(),
-                 "last_unknowns": np.array(self.last_unknowns)}
+                 "last_unknowns": np.array(self.last_unknowns), "steps": np.array(self.steps)}
         if self.volume is not None:
             state["volume_q"] = self.volume.state()
         return state
@@ -77,6 +79,7 @@ class ProjectionScheme:
         """Continue from ``state()`` (a checkpoint)."""
         self.projection.p_node = state["p_node"].copy()
         self.last_unknowns = int(state["last_unknowns"])
+        self.steps = int(state["steps"])
         if self.volume is not None:
             self.volume.restore(state["volume_q"])
 
@@ -90,11 +93,14 @@ class ProjectionScheme:
 
     def step(self, dt, where=""):
         g, P = self.grid, self.particles
+        self.steps += 1
+        correct = self.volume is not None and self.steps % self.volume_interval == 0
         # 1-2. particle-to-grid and the predictor with gravity (eqs. 10-12); wall conditions
         # are applied in step 5
         self.bins = bin_particles(g, P, self.bins)
         transfers.particles_to_grid(g, P, self.bins, self.gravity, dt, self.node_mass,
-                                    self.node_mom, self.node_vol, self.v_old, self.v_star)
+                                    self.node_mom, self.node_vol, self.v_old, self.v_star,
+                                    self.volume.cell_vol if correct else None)
         # 3. cell classification and quadrature (eqs. 8, 9)
         node_f = self.surface.nodal_fraction(self.bins.theta)
         integrals = self.quadrature.integrals(P, self.bins, self.surface.enclosed_cells(node_f))
@@ -105,8 +111,8 @@ class ProjectionScheme:
                                         self.contact, dt, self.v_new, where)
         apply_walls(g, self.v_new, self.contact, self.walls)
         # 7. volume correction: a displacement of the particles back to the material's volume
-        faces = (self.volume.faces(P, self.bins, self.contact, where) if self.volume is not None
-                 else None)
+        faces = (self.volume.faces(self.volume.cell_vol, self.bins.theta, self.contact, where)
+                 if correct else None)
         # 8. grid-to-particle (eqs. 19-21), the correction's displacement, pressure to particles
         moved = transfers.grid_to_particles(g, P, self.v_old, self.v_new,
                                             self.projection.p_node, dt,

@@ -77,9 +77,9 @@ class Record:
         bins = bin_particles(g, P)
         vm = volume_measures(bins.theta, g.cell_volume, sim.volume0)
         rho = np.empty(g.ncells)
-        volume2d.dual_density_2d(P.x, P.volume, bins.order, bins.start, g.spacing,
-                                 g.cells[0], g.cells[1], rho)
-        hat = np.count_nonzero(rho > 1.2) / max(np.count_nonzero(bins.theta > 0), 1)
+        volume2d.cell_volume_2d(P.x, P.volume, g.spacing, g.cells[0], g.cells[1], rho)
+        hat = (np.count_nonzero(rho > 1.2 * g.cell_volume)
+               / max(np.count_nonzero(bins.theta > 0), 1))
         f = np.clip(bins.theta, 0, 1).reshape(g.cells[1], g.cells[0])  # [cy, cx]
         levels = last_crossings(f, g.cell_centres(1), g.size[1])
         ke = 0.5 * float(np.sum(P.mass * np.sum(P.v**2, axis=1)))
