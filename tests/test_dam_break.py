@@ -34,14 +34,17 @@ def test_height_against_martin_moyce_table6(run_0008):
     assert err <= 0.08
 
 
-def test_dam_break_conserves_particles_and_mass(run_0008):
-    s = run_0008.summary
-    assert s["status"] == "completed"
-    assert s["particles_lost"] == 0
-    assert s["mass_relative_change"] == 0.0
-    P = run_0008.particles
-    size = run_0008.grid.size
-    assert np.all(P.x >= 0) and np.all(P.x <= size)
+def test_dam_break_keeps_its_volume_and_its_particles_inside(run_0008):
+    """The wetted region (cells at least half full) stays within 3% of the water's volume
+    through the collapse and the impact (the validation's dam-break tolerance: 0.06 a of
+    height), nothing is packed far beyond full, and every particle is inside the tank (the
+    volume correction's displacement never carries one through a wall)."""
+    sim = run_0008
+    assert sim.summary["status"] == "completed"
+    assert np.abs(sim.series("volume_ratio") - 1).max() <= 0.03
+    assert sim.summary["max_particles_per_cell"] < 2 * 16
+    P = sim.particles
+    assert np.all(P.x >= 0) and np.all(P.x <= sim.grid.size)
 
 
 def test_front_moves_and_height_falls_monotonically_early(run_0008):
@@ -53,14 +56,15 @@ def test_front_moves_and_height_falls_monotonically_early(run_0008):
 
 @pytest.mark.slow
 def test_paper_coarse_mesh_with_large_steps_runs_one_second():
-    """Table 1's coarse case: 0.0114 m, dt = 1e-2 s, 1.0 s: no NaN, nothing lost, mass exact,
-    and clumping well below the 150 particles per cell of the paper group's code."""
+    """Table 1's coarse case: 0.0114 m, dt = 1e-2 s (Courant number about 2), 1.0 s: no NaN,
+    clumping well below the 150 particles per cell of the paper group's code, and the water's
+    volume kept within 10% even at these steps (the default's drift at 1 ms is below 3%)."""
     case = load_case(EXAMPLES / "dam_break.toml",
                      ["grid.spacing=0.0114", "time.dt=0.01", "output.snapshots=false"])
     sim = Simulation(case)
     s = sim.run()
     assert s["status"] == "completed" and s["steps"] == 100
     assert np.isfinite(sim.particles.x).all() and np.isfinite(sim.particles.v).all()
-    assert s["particles_lost"] == 0 and s["mass_relative_change"] == 0.0
     assert s["max_particles_per_cell"] < 150
+    assert np.abs(sim.series("volume_ratio") - 1).max() <= 0.10
     assert sim.notices  # the walls moved out to whole cells, and the run says so

@@ -73,8 +73,13 @@ def test_column_at_rest_settles_to_hydrostatic():
     # it did ring: a single snapshot is far from hydrostatic, so the average is what settles
     snap = np.sqrt(np.sum((P.pressure - exact) ** 2) / np.sum(exact**2))
     assert snap > 5 * err
-    # mass is exact; the compressed volume matches the pressure: V/V0 = 1 - p/K on average
-    assert P.mass.sum() == pytest.approx(RHO * 0.1 * depth, rel=1e-12)
+    # the compressed volume matches the pressure: V/V0 = J = 1 - p/K on average, within 5% of
+    # the compression itself (p is reported smoothed through the nodes, J is per cell)
+    J = P.volume / (P.mass / RHO)
+    compression = 1 - J.mean()
+    assert compression > 0.003  # the column is compressed by its weight: ~rho g H / (2K)
+    assert abs(J.mean() - (1 - P.pressure.mean() / case.material.bulk_modulus)) \
+        < 0.05 * compression
 
 
 def test_hydrostatic_start_stays_at_rest():

@@ -214,11 +214,13 @@ class Solver(_Section):
         "the cells holding material (q = 0 in empty cells, no flux through walls; within one "
         "cell of the free surface only an excess counts). It closes gaps and undoes packing, "
         "removing the fraction beta of the volume error each step. 0 = off (the paper).")
-    volume_correction_interval: int = Field(
-        2, ge=1, le=1000, description="The volume correction runs every this many steps "
-        "(removing the fraction volume_correction of the volume error each time). One "
-        "correction costs about a fifth of a step; every second step halves that, with the "
-        "same volume, dam-break accuracy and sloshing energy (docs/method.md).")
+    volume_correction_interval: float = Field(
+        2e-3, gt=0, description="Simulated time between volume corrections (s): the "
+        "correction runs every round(interval / time.dt) steps, every step when time.dt is "
+        "this long or longer, removing the fraction volume_correction of the volume error "
+        "each time. A correction costs about a fifth of a step; at time.dt = 1 ms, every "
+        "second step halves that with the same volume, dam-break accuracy and sloshing "
+        "energy (docs/method.md).")
     density_correction: float = Field(
         None, ge=0, le=1, description="The earlier, velocity-based density correction beta "
         "(dimensionless): where the particles give a node more material volume than the node "

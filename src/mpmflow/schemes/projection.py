@@ -52,8 +52,8 @@ class ProjectionScheme:
                                              s.tolerance, s.max_iterations)
         self.volume = (VolumeCorrection(grid, s.volume_correction) if s.volume_correction > 0
                        else None)
-        self.volume_interval = s.volume_correction_interval
-        self.steps = 0  # steps taken: the volume correction runs on every interval-th
+        self.volume_interval = s.volume_correction_interval  # s
+        self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
         self.contact = np.zeros((grid.nnodes, grid.dim), dtype=np.bool_)
         n, d = grid.nnodes, grid.dim
         self.node_mass = np.zeros(n)
@@ -94,7 +94,8 @@ class ProjectionScheme:
     def step(self, dt, where=""):
         g, P = self.grid, self.particles
         self.steps += 1
-        correct = self.volume is not None and self.steps % self.volume_interval == 0
+        every = max(1, round(self.volume_interval / dt))  # steps
+        correct = self.volume is not None and self.steps % every == 0
         # 1-2. particle-to-grid and the predictor with gravity (eqs. 10-12); wall conditions
         # are applied in step 5
         self.bins = bin_particles(g, P, self.bins)
