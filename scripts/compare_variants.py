@@ -21,14 +21,19 @@ ROOT = Path(__file__).resolve().parents[1]
 A = 0.114
 PAPER = ["solver.formulation=paper"]
 SUBCELL = PAPER + ["solver.wall_flux=true", "solver.free_surface=subcell"]
+GAUSS = SUBCELL + ["solver.partial_cell_quadrature=gauss"]
 VARIANTS = [
     ("paper: plain reading", PAPER),
     ("paper + wall term", PAPER + ["solver.wall_flux=true"]),
-    ("+ sub-cell free surface", SUBCELL + ["solver.partial_cell_quadrature=gauss"]),
+    ("+ sub-cell free surface", GAUSS),
     ("sub-cell with particle quadrature", SUBCELL),
-    ("+ density correction 0.2", SUBCELL + ["solver.partial_cell_quadrature=gauss",
-                                            "solver.density_correction=0.2"]),
-    ("mpmflow default (+ 1% PIC)", []),
+    ("+ cells down to theta = 0.01 in the system", GAUSS + ["solver.sparse_cell_threshold=0.01"]),
+    ("+ volume correction 0.5", GAUSS + ["solver.sparse_cell_threshold=0.01",
+                                         "solver.volume_correction=0.5"]),
+    ("mpmflow default (+ 1% PIC per ms)", []),
+    ("the earlier default (velocity density correction 0.2, theta >= 0.2)",
+     ["solver.volume_correction=0", "solver.density_correction=0.2",
+      "solver.sparse_cell_threshold=0.2"]),
 ]
 
 

@@ -92,8 +92,9 @@ class PressureProjection:
                     v_c = self._v_c
                     np.copyto(v_c, vstar)
                     apply_walls(g, v_c, contact, self.walls)
-                pressure2d.assemble_rhs_2d(nx, ny, g.spacing, integrals.slot, integrals.C,
-                                           integrals.V, node_vol, rows, v_c, contact,
+                div_slot, C_div, V_div = integrals.divergence()
+                pressure2d.assemble_rhs_2d(nx, ny, g.spacing, div_slot, C_div, V_div, node_vol,
+                                           rows, v_c, contact,
                                            self.wall_flux, self.density_correction / dt,
                                            rho / dt, rhs)
                 result = self.solver.solve(rhs, x0)
