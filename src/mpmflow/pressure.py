@@ -92,8 +92,8 @@ class PressureProjection:
                     v_c = self._v_c
                     np.copyto(v_c, vstar)
                     apply_walls(g, v_c, contact, self.walls)
-                div_slot, C_div, V_div = integrals.divergence()
-                pressure2d.assemble_rhs_2d(nx, ny, g.spacing, div_slot, C_div, V_div, node_vol,
+                div_slot, C_div, V_cells = integrals.divergence()
+                pressure2d.assemble_rhs_2d(nx, ny, g.spacing, div_slot, C_div, V_cells, node_vol,
                                            rows, v_c, contact,
                                            self.wall_flux, self.density_correction / dt,
                                            rho / dt, rhs)
@@ -113,8 +113,8 @@ class PressureProjection:
                 pressure2d.ghost_pressures_2d(nx, ny, integrals.slot, integrals.K, nodes.row,
                                               nodes.f, self.theta_min, p_node)
         self._p_next, self.p_node = self.p_node, p_node
-        pressure2d.correct_velocity_2d(nx, ny, integrals.slot, integrals.C, integrals.V, p_node,
-                                       vstar, dt / rho, v_new)
+        slot, C, V = integrals.corrector()
+        pressure2d.correct_velocity_2d(nx, ny, slot, C, V, p_node, vstar, dt / rho, v_new)
         return stats
 
     def _fail(self, rhs, result, rows, where):

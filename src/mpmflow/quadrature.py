@@ -12,13 +12,15 @@ Cells are classified by their volume fraction theta:
 The element integrals of every cell in the system are returned as stacked arrays; slot 0
 holds the Gauss-point integrals shared by all Gauss cells.
 
-With ``divergence="particles"`` (and Gauss partial cells) the divergence of the predicted
-velocity (eq. 15, the right-hand side) is integrated over the material points in the
-partial cells that are not enclosed, the cells the free surface passes through: the
-velocity the grid carries in the air part of such a cell is an extrapolation that no
-equation constrains, and its divergence, integrated over the whole cell, did work against
-the extrapolated (ghost) pressure that nothing balanced (a standing wave gained energy;
-docs/method.md). The Laplacian and the corrector keep the Gauss integrals.
+With Gauss partial cells, ``surface`` chooses how the cells the free surface passes
+through (partial and not enclosed) are integrated besides the Laplacian, which keeps Gauss
+points: "gauss" (all of them), "divergence" (the divergence of the predicted velocity,
+eq. 15, over their material points: the velocity the grid carries in the air part of such
+a cell is an extrapolation that no equation constrains, and integrated over the whole cell
+its divergence did work against the extrapolated (ghost) pressure that nothing balanced, so
+a standing wave gained energy) or "consistent" (the corrector's gradient and volumes, eqs.
+16-18, too: divergence and gradient are then adjoint and the projection takes energy out
+only, at the price of more damping). docs/method.md, "Energy".
 """
 
 from dataclasses import dataclass
@@ -41,30 +43,40 @@ class CellIntegrals:
     K: np.ndarray  # (nslots, 2^d, 2^d)       grad N_a . grad N_b
     C: np.ndarray  # (nslots, 2^d, 2^d, d)    N_a dN_b/dx_k
     V: np.ndarray  # (nslots, 2^d)            N_a
-    # the divergence of the right-hand side: slots and C (V: the cell's, as in V above)
-    div_slot: np.ndarray = None
-    C_div: np.ndarray = None
-    V_div: np.ndarray = None
+    # the cells the free surface passes through, integrated over their material points:
+    # slot per cell (0: the Gauss tensors, -1: left out) and the stacked tensors
+    surface_slot: np.ndarray = None
+    C_surface: np.ndarray = None
+    V_surface: np.ndarray = None
+    V_cells: np.ndarray = None  # the Gauss V in every surface slot (the nodes' cell volumes)
+    surface: str = "gauss"
 
     def divergence(self):
-        """(slot, C, V) for the right-hand side's divergence."""
-        if self.div_slot is None:
+        """(slot, C, V) of the right-hand side: C for the divergence of v*, V for the nodes'
+        volumes (the density correction's V_i, always the cells')."""
+        if self.surface == "gauss":
             return self.slot, self.C, self.V
-        return self.div_slot, self.C_div, self.V_div
+        return self.surface_slot, self.C_surface, self.V_cells
+
+    def corrector(self):
+        """(slot, C, V) of the corrector's gradient and lumped volumes."""
+        if self.surface == "consistent":
+            return self.surface_slot, self.C_surface, self.V_surface
+        return self.slot, self.C, self.V
 
 
 class Quadrature:
     """Builds the cell integrals each step from the particle bins."""
 
-    def __init__(self, grid, full_threshold, sparse_threshold, partial, divergence="gauss"):
+    def __init__(self, grid, full_threshold, sparse_threshold, partial, surface="gauss"):
         if grid.dim != 2:
             raise NotImplementedError("only 2D grids are implemented")
         self.grid = grid
         self.full_threshold = full_threshold
         self.sparse_threshold = sparse_threshold
         self.partial = partial
-        self.divergence = divergence
-        self._div_slot = np.empty(grid.ncells, dtype=np.int64)
+        self.surface = surface if partial == "gauss" else "gauss"
+        self._surface_slot = np.empty(grid.ncells, dtype=np.int64)
         nv = 2**grid.dim
         self._K_ref = np.zeros((nv, nv))
         self._C_ref = np.zeros((nv, nv, grid.dim))
@@ -96,13 +108,13 @@ class Quadrature:
                 particles.x, particles.volume, bins.order, bins.start, partial,
                 self.grid.spacing, self.grid.cells[0], K[1:], C[1:], V[1:])
         result = CellIntegrals(slot, K, C, V)
-        if self.divergence == "particles" and self.partial == "gauss":
-            self._surface_divergence(result, particles, bins, counted, enclosed)
+        if self.surface != "gauss":
+            self._surface_cells(result, particles, bins, counted, enclosed)
         return result
 
-    def _surface_divergence(self, result, particles, bins, counted, enclosed):
-        """The divergence tensors of the cells the free surface passes through (partial and
-        not enclosed) from their material points; slot 0: the Gauss tensors."""
+    def _surface_cells(self, result, particles, bins, counted, enclosed):
+        """C and V of the cells the free surface passes through (partial and not enclosed)
+        from their material points; slot 0: the Gauss tensors."""
         theta = bins.theta
         surface = counted & (theta < self.full_threshold)
         if enclosed is not None:
@@ -113,13 +125,14 @@ class Quadrature:
         K = np.empty((n, nv, nv))
         C = np.empty((n, nv, nv, self.grid.dim))
         V = np.empty((n, nv))
-        C[0] = self._C_ref
-        div_slot = self._div_slot
-        np.minimum(result.slot, 0, out=div_slot)  # -1 left out, 0 Gauss
+        C[0], V[0] = self._C_ref, self._V_ref
+        surface_slot = self._surface_slot
+        np.minimum(result.slot, 0, out=surface_slot)  # -1 left out, 0 Gauss
         if cells.size:
-            div_slot[cells] = np.arange(1, n)
+            surface_slot[cells] = np.arange(1, n)
             quadrature2d.particle_cell_tensors_2d(
                 particles.x, particles.volume, bins.order, bins.start, cells,
                 self.grid.spacing, self.grid.cells[0], K[1:], C[1:], V[1:])
-        V[:] = self._V_ref  # the node volumes of the density correction stay the cells'
-        result.div_slot, result.C_div, result.V_div = div_slot, C, V
+        result.surface = self.surface
+        result.surface_slot, result.C_surface, result.V_surface = surface_slot, C, V
+        result.V_cells = np.broadcast_to(self._V_ref, V.shape)

@@ -44,7 +44,7 @@ class ProjectionScheme:
         self.walls = case.domain.walls
         self.flip = s.flip
         self.quadrature = Quadrature(grid, s.full_cell_threshold, s.sparse_cell_threshold,
-                                     s.partial_cell_quadrature, s.divergence_quadrature)
+                                     s.partial_cell_quadrature, s.surface_quadrature)
         self.surface = FreeSurface(grid, s.free_surface)
         self.projection = PressureProjection(grid, case.material.density, case.domain.walls,
                                              s.wall_flux, s.ghost_theta_min,
