@@ -34,8 +34,8 @@ PHASES = {
     "pressure solve (PCG iterations)": ("pcg",),
     "corrector and walls": ("correct_velocity", "apply_walls", "start_contact",
                             "release_contact"),
-    "volume correction (density, solve, displacements)": (
-        "faces", "dual_density", "assemble_2d", "face_displacements"),
+    "volume correction (system, solve, displacements)": (
+        "faces", "assemble_2d", "face_displacements"),
     "outputs (diagnostics, files)": (
         "_output", "measure", "pressure_noise", "write", "append", "front_and_height"),
 }

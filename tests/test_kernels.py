@@ -181,3 +181,21 @@ def test_strips_cover_the_rows_with_room_between_and_balance_the_work(min_rows):
             # no strip holds much more than its share plus the largest row
             share = row_cum[-1] / k
             assert np.all(np.diff(row_cum[b]) <= share + work.max())
+
+
+def test_particle_divergence_tensors_match_the_full_particle_tensors():
+    """The surface cells' C and V (the kernel that skips K) equal those of the full
+    material-point quadrature, cell for cell."""
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0, 1, (500, 2))
+    vol = rng.uniform(0.5, 1.0, 500)
+    grid = Grid(0.1, (10, 10))
+    bins = bin_particles(grid, Particles(x, 0 * x, 0 * vol, vol, vol))
+    cells = np.array([0, 5, 23, 99])
+    K, C, V = np.zeros((4, 4, 4)), np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
+    quadrature2d.particle_cell_tensors_2d(x, vol, bins.order, bins.start, cells, 0.1, 10, K, C, V)
+    C2, V2 = np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
+    quadrature2d.particle_cell_divergence_2d(x, vol, bins.order, bins.start, cells, 0.1, 10, C2, V2)
+    np.testing.assert_allclose(C2, C, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(V2, V, rtol=1e-13, atol=1e-15)
+    assert V.sum() > 0

@@ -122,7 +122,6 @@ class Quadrature:
         cells = np.flatnonzero(surface)
         n = cells.size + 1
         nv = self._V_ref.size
-        K = np.empty((n, nv, nv))
         C = np.empty((n, nv, nv, self.grid.dim))
         V = np.empty((n, nv))
         C[0], V[0] = self._C_ref, self._V_ref
@@ -130,9 +129,9 @@ class Quadrature:
         np.minimum(result.slot, 0, out=surface_slot)  # -1 left out, 0 Gauss
         if cells.size:
             surface_slot[cells] = np.arange(1, n)
-            quadrature2d.particle_cell_tensors_2d(
+            quadrature2d.particle_cell_divergence_2d(
                 particles.x, particles.volume, bins.order, bins.start, cells,
-                self.grid.spacing, self.grid.cells[0], K[1:], C[1:], V[1:])
+                self.grid.spacing, self.grid.cells[0], C[1:], V[1:])
         result.surface = self.surface
         result.surface_slot, result.C_surface, result.V_surface = surface_slot, C, V
         result.V_cells = np.broadcast_to(self._V_ref, V.shape)

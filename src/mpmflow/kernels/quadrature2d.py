@@ -8,7 +8,7 @@ The points are the 2x2 Gauss points of a full cell or the material points of a p
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 
 @njit(cache=True)
@@ -68,3 +68,49 @@ def particle_cell_tensors_2d(x, volume, order, start, cells, h, ncx, K, C, V):
             xi = min(max(x[p, 0] * inv_h - cx, 0.0), 1.0)
             eta = min(max(x[p, 1] * inv_h - cy, 0.0), 1.0)
             accumulate_point(xi, eta, volume[p], h, K[k], C[k], V[k])
+
+
+@njit(cache=True, parallel=True)
+def particle_cell_divergence_2d(x, volume, order, start, cells, h, ncx, C, V):
+    """C and V (not K) of the listed cells with their material points as quadrature points,
+    as ``particle_cell_tensors_2d``; cells in parallel (each writes its own slot)."""
+    inv_h = 1.0 / h
+    n = cells.shape[0]
+    for k in prange(n):
+        c = cells[k]
+        cx = c % ncx
+        cy = c // ncx
+        Ck = C[k]
+        Vk = V[k]
+        Ck[:] = 0.0
+        Vk[:] = 0.0
+        for s in range(start[c], start[c + 1]):
+            p = order[s]
+            xi = min(max(x[p, 0] * inv_h - cx, 0.0), 1.0)
+            eta = min(max(x[p, 1] * inv_h - cy, 0.0), 1.0)
+            w = volume[p]
+            N0 = (1.0 - xi) * (1.0 - eta)
+            N1 = xi * (1.0 - eta)
+            N2 = (1.0 - xi) * eta
+            N3 = xi * eta
+            # dN_b/dx, dN_b/dy
+            gx0 = -(1.0 - eta) * inv_h
+            gx1 = (1.0 - eta) * inv_h
+            gx2 = -eta * inv_h
+            gx3 = eta * inv_h
+            gy0 = -(1.0 - xi) * inv_h
+            gy1 = -xi * inv_h
+            gy2 = (1.0 - xi) * inv_h
+            gy3 = xi * inv_h
+            for a in range(4):
+                Na = N0 if a == 0 else (N1 if a == 1 else (N2 if a == 2 else N3))
+                wa = w * Na
+                Vk[a] += wa
+                Ck[a, 0, 0] += wa * gx0
+                Ck[a, 1, 0] += wa * gx1
+                Ck[a, 2, 0] += wa * gx2
+                Ck[a, 3, 0] += wa * gx3
+                Ck[a, 0, 1] += wa * gy0
+                Ck[a, 1, 1] += wa * gy1
+                Ck[a, 2, 1] += wa * gy2
+                Ck[a, 3, 1] += wa * gy3
