@@ -55,9 +55,9 @@ class LinearSolver:
     def prepare(self, matrix):
         self.matrix = matrix
         if self.method == "multigrid":
-            nnx, nny = matrix.grid_nodes
+            dims = np.asarray(matrix.grid_nodes, dtype=np.int64)
             self._setup = multigrid.build_hierarchy(matrix.cols, matrix.vals, matrix.nodes,
-                                                    nnx, nny, multigrid.COARSEST)
+                                                    dims, multigrid.COARSEST)
             return
         self._A = matrix.csr()
         if self.method == "direct":

@@ -82,8 +82,8 @@ class VolumeCorrection:
         cells = self._cells[:n]
         rhs = self._rhs[:n]
         q = self._q[cells]
-        setup = multigrid.build_hierarchy(self._cols[:n], self._vals[:n], cells, nx, ny,
-                                          multigrid.COARSEST)
+        setup = multigrid.build_hierarchy(self._cols[:n], self._vals[:n], cells,
+                                          np.array(g.cells, dtype=np.int64), multigrid.COARSEST)
         iterations, residual = multigrid.pcg(*setup, rhs, q, TOLERANCE, MAX_ITERATIONS, 1)
         if not residual <= TOLERANCE:
             raise SolverError(

@@ -2,10 +2,27 @@
 
 from numba import njit, prange
 
+from .geometry import cell_of
 from .parallel import CHUNKS
-from .transfer2d import cell_of
 
 BLOCK = 128  # cells per block of cell_volume_fraction
+
+
+@njit(cache=True, parallel=True)
+def cell_index(x, h, cells, out):
+    """Flat cell index of every particle (any dimension; ``cells``: the cell counts). Particles
+    on the upper domain edge go to the last cell, beyond the grid to the nearest cell."""
+    inv_h = 1.0 / h
+    n = x.shape[0]
+    nchunks = min(CHUNKS, max(n, 1))
+    for t in prange(nchunks):
+        for p in range(t * n // nchunks, (t + 1) * n // nchunks):
+            c = 0
+            stride = 1
+            for k in range(len(cells)):
+                c += cell_of(x[p, k] * inv_h, cells[k]) * stride
+                stride *= cells[k]
+            out[p] = c
 
 
 @njit(cache=True, parallel=True)

@@ -1,18 +1,18 @@
-"""Geometric multigrid-preconditioned conjugate gradients on the node grid (2D).
+"""Geometric multigrid-preconditioned conjugate gradients on the node grid (2D and 3D).
 
-Matrices are in ELL form: row r has up to 9 entries ``cols[r, s], vals[r, s]`` (col -1 =
-empty), slot ``s = 3*(dy+1) + (dx+1)`` for the neighbour at node offset (dx, dy), so the
+Matrices are in ELL form: row r has up to 3^D entries ``cols[r, s], vals[r, s]`` (col -1 =
+empty), slot ``s = sum_k (d_k + 1) 3^k`` for the neighbour at node offset d, so the
 structure of the grid is kept at every level. ``node[r]`` is the node of row r on its
-level's node grid (``nnx`` nodes per row of nodes).
+level's node grid, whose numbers of nodes per axis are ``dims`` (axis 0 fastest).
 
-Levels: a coarse node is an unknown when the fine node it coincides with (2I, 2J) is one;
-prolongation is bilinear interpolation from the coarse unknowns (missing ones count as
-zero), so P has full column rank and the Galerkin operator P^T A P stays symmetric
-positive definite. Smoothing is four-colour Gauss-Seidel (colour = node parity in x and y;
-in a 9-point stencil rows of one colour do not couple, so each colour is updated in
-parallel), colours 0-3 before and 3-0 after the coarse correction, which makes the
-V-cycle a symmetric preconditioner; the coarsest level is solved with a dense Cholesky
-factor. Levels of at least ``PARALLEL_ROWS`` rows run their row loops and dot products in
+Levels: a coarse node is an unknown when the fine node it coincides with (at twice its
+coordinates) is one; prolongation is multilinear interpolation from the coarse unknowns
+(missing ones count as zero), so P has full column rank and the Galerkin operator P^T A P
+stays symmetric positive definite. Smoothing is 2^D-colour Gauss-Seidel (colour = node
+parity along each axis; in a 3^D stencil rows of one colour do not couple, so each colour is
+updated in parallel), colours in order before and in reverse after the coarse correction,
+which makes the V-cycle a symmetric preconditioner; the coarsest level is solved with a
+dense Cholesky factor. Levels of at least ``PARALLEL_ROWS`` rows run their row loops and dot products in
 parallel; the arithmetic is the same whatever the thread count, so the results are too. (McAdams, Sifakis & Teran 2010 use the same structure
 with rediscretised coarse operators.)
 """
@@ -28,110 +28,149 @@ STRIPS = 16  # Galerkin products of large levels: strips of node rows
 
 
 @njit(cache=True)
-def coarse_level(node, nnx, nny):
-    """Coarse unknowns of a level: returns (coarse node per coarse row, nnx_c, nny_c,
-    row of each coarse node or -1, P columns (n, 4) and weights (n, 4))."""
-    nnx_c = nnx // 2 + 1
-    nny_c = nny // 2 + 1
-    crow = -np.ones(nnx_c * nny_c, dtype=np.int64)
+def _coords(i, dims, out):
+    for k in range(dims.shape[0]):
+        out[k] = i % dims[k]
+        i //= dims[k]
+
+
+@njit(cache=True)
+def coarse_level(node, dims):
+    """Coarse unknowns of a level: returns (coarse node per coarse row, coarse dims, row of
+    each coarse node or -1, coarse coordinates per row (n_c, D), P columns (n, 2^D) and
+    weights (n, 2^D))."""
+    D = dims.shape[0]
+    NC = 1 << D
+    cdims = dims // 2 + 1
+    ncn = 1
+    for k in range(D):
+        ncn *= cdims[k]
+    crow = -np.ones(ncn, dtype=np.int64)
     n = node.shape[0]
-    nc = 0
+    ix = np.empty(D, dtype=np.int64)
     for r in range(n):
-        ix = node[r] % nnx
-        iy = node[r] // nnx
-        if ix % 2 == 0 and iy % 2 == 0:
-            crow[(ix // 2) + nnx_c * (iy // 2)] = 0
-    cnode = np.empty(nnx_c * nny_c, dtype=np.int64)
-    for i in range(nnx_c * nny_c):
+        _coords(node[r], dims, ix)
+        even = True
+        c = 0
+        stride = 1
+        for k in range(D):
+            if ix[k] % 2 != 0:
+                even = False
+            c += (ix[k] // 2) * stride
+            stride *= cdims[k]
+        if even:
+            crow[c] = 0
+    cnode = np.empty(ncn, dtype=np.int64)
+    nc = 0
+    for i in range(ncn):
         if crow[i] == 0:
             crow[i] = nc
             cnode[nc] = i
             nc += 1
-    pcols = -np.ones((n, 4), dtype=np.int64)
-    pw = np.zeros((n, 4))
+    pcols = -np.ones((n, NC), dtype=np.int64)
+    pw = np.zeros((n, NC))
     for r in range(n):
-        ix = node[r] % nnx
-        iy = node[r] // nnx
-        k = 0
-        for ey in range(2):
-            if iy % 2 == 0 and ey == 1:
-                break
-            cy = iy // 2 + ey
-            wy = 1.0 if iy % 2 == 0 else 0.5
-            for ex in range(2):
-                if ix % 2 == 0 and ex == 1:
+        _coords(node[r], dims, ix)
+        m = 0
+        for combo in range(NC):  # axis 0 fastest, the order of the 2D kernel
+            c = 0
+            stride = 1
+            w = 1.0
+            ok = True
+            for k in range(D):
+                up = (combo >> k) & 1
+                if ix[k] % 2 == 0:
+                    if up:
+                        ok = False
+                        break
+                    ck = ix[k] // 2
+                else:
+                    ck = ix[k] // 2 + up
+                    w *= 0.5
+                if ck >= cdims[k]:
+                    ok = False
                     break
-                cx = ix // 2 + ex
-                wx = 1.0 if ix % 2 == 0 else 0.5
-                if cx < nnx_c and cy < nny_c:
-                    c = crow[cx + nnx_c * cy]
-                    if c >= 0:
-                        pcols[r, k] = c
-                        pw[r, k] = wx * wy
-                        k += 1
-    return cnode[:nc].copy(), nnx_c, nny_c, crow, pcols, pw
+                c += ck * stride
+                stride *= cdims[k]
+            if not ok:
+                continue
+            if crow[c] >= 0:
+                pcols[r, m] = crow[c]
+                pw[r, m] = w
+                m += 1
+    ccoord = np.empty((nc, D), dtype=np.int64)
+    for I in range(nc):
+        _coords(cnode[I], cdims, ix)
+        for k in range(D):
+            ccoord[I, k] = ix[k]
+    return cnode[:nc].copy(), cdims, crow, ccoord, pcols, pw
 
 
 @njit(cache=True)
-def galerkin(cols, vals, pcols, pw, cnode, nnx_c, node, nnx):
-    """Coarse operator P^T A P in ELL form (9 slots per row).
+def galerkin(cols, vals, pcols, pw, ccoord, node, dims):
+    """Coarse operator P^T A P in ELL form (3^D slots per row).
 
     Fine row r adds only to the coarse rows it interpolates from, which lie within half a
-    node row of it; so on large levels the fine rows are cut into strips of whole node rows
-    (at least 2 each), and strips 0, 2, 4, ... are summed in parallel, then 1, 3, 5, ...
-    (``node``, ``nnx``: the fine rows' nodes, ascending). The strips depend on the level
-    only, so the sums do not depend on the thread count."""
-    nc = cnode.shape[0]
-    ccols = -np.ones((nc, 9), dtype=np.int64)
-    cvals = np.zeros((nc, 9))
-    cx = np.empty(nc, dtype=np.int64)
-    cy = np.empty(nc, dtype=np.int64)
-    for I in range(nc):
-        cx[I] = cnode[I] % nnx_c
-        cy[I] = cnode[I] // nnx_c
+    slab of node (one index along the last axis) of it; so on large levels the fine rows are
+    cut into strips of whole slabs (at least 2 each), and strips 0, 2, 4, ... are summed in
+    parallel, then 1, 3, 5, ... (``node``, ``dims``: the fine rows' nodes, ascending). The
+    strips depend on the level only, so the sums do not depend on the thread count."""
+    nc = ccoord.shape[0]
+    NS = cols.shape[1]
+    ccols = -np.ones((nc, NS), dtype=np.int64)
+    cvals = np.zeros((nc, NS))
     n = cols.shape[0]
     if n < PARALLEL_ROWS:
-        _galerkin_rows(0, n, cols, vals, pcols, pw, cx, cy, ccols, cvals)
+        _galerkin_rows(0, n, cols, vals, pcols, pw, ccoord, ccols, cvals)
         return ccols, cvals
-    # strips of whole node rows, 2 at least: fine rows 2 node rows apart reach no common
-    # coarse row; the work of a node row is its number of fine rows
-    y0 = node[0] // nnx
-    y1 = node[n - 1] // nnx + 1
-    row_cum = np.searchsorted(node, (y0 + np.arange(y1 - y0 + 1)) * nnx)
+    D = dims.shape[0]
+    per = 1
+    for k in range(D - 1):
+        per *= dims[k]
+    y0 = node[0] // per
+    y1 = node[n - 1] // per + 1
+    row_cum = np.searchsorted(node, (y0 + np.arange(y1 - y0 + 1)) * per)
     strip = np.empty(STRIPS + 1, dtype=np.int64)
     k = strips(row_cum, STRIPS, 2, strip)
     bounds = row_cum[strip[:k + 1]]
     for parity in range(2):
-        _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, cx, cy, ccols, cvals)
+        _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, ccoord, ccols, cvals)
     return ccols, cvals
 
 
 @njit(cache=True, parallel=True)
-def _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, cx, cy, ccols, cvals):
+def _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, ccoord, ccols, cvals):
     for t in prange((k - parity + 1) // 2):
         u = 2 * t + parity
-        _galerkin_rows(bounds[u], bounds[u + 1], cols, vals, pcols, pw, cx, cy, ccols, cvals)
+        _galerkin_rows(bounds[u], bounds[u + 1], cols, vals, pcols, pw, ccoord, ccols, cvals)
 
 
 @njit(cache=True)
-def _galerkin_rows(r0, r1, cols, vals, pcols, pw, cx, cy, ccols, cvals):
+def _galerkin_rows(r0, r1, cols, vals, pcols, pw, ccoord, ccols, cvals):
     """The contributions of fine rows r0 to r1 - 1 to P^T A P."""
+    NP = pcols.shape[1]
+    NS = cols.shape[1]
+    D = ccoord.shape[1]
     for r in range(r0, r1):
-        for a in range(4):
+        for a in range(NP):
             I = pcols[r, a]
             if I < 0:
                 break  # P's entries of a row come first, then -1
             wa = pw[r, a]
-            for s in range(9):
+            for s in range(NS):
                 j = cols[r, s]
                 if j < 0:
                     continue
                 v = wa * vals[r, s]
-                for b in range(4):
+                for b in range(NP):
                     J = pcols[j, b]
                     if J < 0:
                         break
-                    slot = 3 * (cy[J] - cy[I] + 1) + (cx[J] - cx[I] + 1)
+                    slot = 0
+                    p3 = 1
+                    for k in range(D):
+                        slot += (ccoord[J, k] - ccoord[I, k] + 1) * p3
+                        p3 *= 3
                     ccols[I, slot] = J
                     cvals[I, slot] += v * pw[j, b]
 
@@ -141,7 +180,7 @@ def dense(cols, vals):
     n = cols.shape[0]
     A = np.zeros((n, n))
     for r in range(n):
-        for s in range(9):
+        for s in range(cols.shape[1]):
             if cols[r, s] >= 0:
                 A[r, cols[r, s]] += vals[r, s]
     return A
@@ -152,7 +191,7 @@ def _matvec_rows(cols, vals, x, b, y, lo, hi, subtract):
     """y = A x (or b - A x when ``subtract``) for rows lo to hi - 1."""
     for r in range(lo, hi):
         acc = 0.0
-        for s in range(9):
+        for s in range(cols.shape[1]):
             c = cols[r, s]
             if c >= 0:
                 acc += vals[r, s] * x[c]
@@ -239,15 +278,17 @@ def _dot_parts(a, b, part):
 @njit(cache=True)
 def _gs_rows(cols, vals, b, x, rows, lo, hi):
     """Gauss-Seidel update of rows[lo:hi] (rows of one colour: they do not couple); the
-    diagonal of every row is in slot 4 (offset 0, 0)."""
+    diagonal of every row is in the middle slot (offset 0)."""
+    NS = cols.shape[1]
+    centre = NS // 2
     for k in range(lo, hi):
         r = rows[k]
         acc = b[r]
-        for s in range(9):
+        for s in range(NS):
             c = cols[r, s]
-            if c >= 0 and s != 4:
+            if c >= 0 and s != centre:
                 acc -= vals[r, s] * x[c]
-        x[r] = acc / vals[r, 4]
+        x[r] = acc / vals[r, centre]
 
 
 @njit(cache=True, parallel=True)
@@ -259,11 +300,12 @@ def _gs_rows_parallel(cols, vals, b, x, rows, lo, hi):
 
 @njit(cache=True)
 def _gauss_seidel(cols, vals, b, x, rows, cstart, forward):
-    """One four-colour Gauss-Seidel sweep: colours 0-3 (forward) or 3-0; ``rows`` lists the
-    rows by colour, colour k is rows[cstart[k]:cstart[k+1]]."""
+    """One 2^D-colour Gauss-Seidel sweep: colours in order (forward) or in reverse; ``rows``
+    lists the rows by colour, colour k is rows[cstart[k]:cstart[k+1]]."""
     parallel = cols.shape[0] >= PARALLEL_ROWS
-    for k in range(4):
-        colour = k if forward else 3 - k
+    ncol = cstart.shape[0] - 1
+    for k in range(ncol):
+        colour = k if forward else ncol - 1 - k
         lo, hi = cstart[colour], cstart[colour + 1]
         if parallel:
             _gs_rows_parallel(cols, vals, b, x, rows, lo, hi)
@@ -272,17 +314,28 @@ def _gauss_seidel(cols, vals, b, x, rows, cstart, forward):
 
 
 @njit(cache=True)
-def _colour_rows(node, nnx, rows, cstart):
-    """Rows sorted by colour (ix mod 2) + 2 (iy mod 2) of their node; cstart: 5 offsets."""
+def _colour(i, dims):
+    """The colour of node i: sum_k (i_k mod 2) 2^k."""
+    c = 0
+    for k in range(dims.shape[0]):
+        c += ((i % dims[k]) % 2) << k
+        i //= dims[k]
+    return c
+
+
+@njit(cache=True)
+def _colour_rows(node, dims, rows, cstart):
+    """Rows sorted by the colour of their node; cstart: 2^D + 1 offsets."""
     n = node.shape[0]
+    ncol = cstart.shape[0] - 1
     cstart[:] = 0
     for r in range(n):
-        cstart[(node[r] % nnx) % 2 + 2 * ((node[r] // nnx) % 2) + 1] += 1
-    for k in range(4):
+        cstart[_colour(node[r], dims) + 1] += 1
+    for k in range(ncol):
         cstart[k + 1] += cstart[k]
-    fill = cstart[:4].copy()
+    fill = cstart[:ncol].copy()
     for r in range(n):
-        k = (node[r] % nnx) % 2 + 2 * ((node[r] // nnx) % 2)
+        k = _colour(node[r], dims)
         rows[fill[k]] = r
         fill[k] += 1
 
@@ -291,7 +344,7 @@ def _colour_rows(node, nnx, rows, cstart):
 def _restrict(pcols, pw, r_f, r_c):
     r_c[:] = 0.0
     for r in range(pcols.shape[0]):
-        for a in range(4):
+        for a in range(pcols.shape[1]):
             c = pcols[r, a]
             if c >= 0:
                 r_c[c] += pw[r, a] * r_f[r]
@@ -301,7 +354,7 @@ def _restrict(pcols, pw, r_f, r_c):
 def _prolong_add(pcols, pw, e_c, x_f):
     for r in range(pcols.shape[0]):
         acc = 0.0
-        for a in range(4):
+        for a in range(pcols.shape[1]):
             c = pcols[r, a]
             if c >= 0:
                 acc += pw[r, a] * e_c[c]
@@ -324,42 +377,44 @@ def _cholesky_solve(L, b, x):
 
 
 @njit(cache=True)
-def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
+def build_hierarchy(cols, vals, node, dims, coarsest):
     """All levels, flattened: level l has rows off[l]:off[l+1] of Acols/Avals (column indices
     local to the level) and, for l < nlev-1, the same rows of Pcols/Pw (columns local to
     level l+1). Returns (off, Acols, Avals, Pcols, Pw, L, rows, cstart) with L the Cholesky
     factor of the coarsest operator and rows[off[l]:off[l+1]] level l's rows by colour, colour
     k from cstart[l, k] to cstart[l, k+1]."""
+    D = dims.shape[0]
+    NS = cols.shape[1]
+    NP = 1 << D
     cols_l = [cols]
     vals_l = [vals]
     node_l = [node]
-    nnx_l = [nnx]
-    pc_l = [np.empty((0, 4), dtype=np.int64)]
-    pw_l = [np.empty((0, 4))]
+    dims_l = [dims]
+    pc_l = [np.empty((0, NP), dtype=np.int64)]
+    pw_l = [np.empty((0, NP))]
     pc_l.pop()
     pw_l.pop()
     while cols_l[-1].shape[0] > coarsest:
-        cnode, nnx_c, nny_c, crow, pcols, pw = coarse_level(node, nnx, nny)
+        cnode, cdims, crow, ccoord, pcols, pw = coarse_level(node, dims)
         if cnode.shape[0] == 0:
             break
-        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, cnode, nnx_c, node, nnx)
+        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, ccoord, node, dims)
         pc_l.append(pcols)
         pw_l.append(pw)
         cols_l.append(ccols)
         vals_l.append(cvals)
         node_l.append(cnode)
-        nnx_l.append(nnx_c)
+        dims_l.append(cdims)
         node = cnode
-        nnx = nnx_c
-        nny = nny_c
+        dims = cdims
     nlev = len(cols_l)
     off = np.zeros(nlev + 1, dtype=np.int64)
     for lv in range(nlev):
         off[lv + 1] = off[lv] + cols_l[lv].shape[0]
-    Acols = np.empty((off[nlev], 9), dtype=np.int64)
-    Avals = np.empty((off[nlev], 9))
-    Pcols = -np.ones((off[nlev], 4), dtype=np.int64)
-    Pw = np.zeros((off[nlev], 4))
+    Acols = np.empty((off[nlev], NS), dtype=np.int64)
+    Avals = np.empty((off[nlev], NS))
+    Pcols = -np.ones((off[nlev], NP), dtype=np.int64)
+    Pw = np.zeros((off[nlev], NP))
     for lv in range(nlev):
         Acols[off[lv]:off[lv + 1]] = cols_l[lv]
         Avals[off[lv]:off[lv + 1]] = vals_l[lv]
@@ -367,9 +422,9 @@ def build_hierarchy(cols, vals, node, nnx, nny, coarsest):
             Pcols[off[lv]:off[lv + 1]] = pc_l[lv]
             Pw[off[lv]:off[lv + 1]] = pw_l[lv]
     rows = np.empty(off[nlev], dtype=np.int64)
-    cstart = np.empty((nlev, 5), dtype=np.int64)
+    cstart = np.empty((nlev, NP + 1), dtype=np.int64)
     for lv in range(nlev):
-        _colour_rows(node_l[lv], nnx_l[lv], rows[off[lv]:off[lv + 1]], cstart[lv])
+        _colour_rows(node_l[lv], dims_l[lv], rows[off[lv]:off[lv + 1]], cstart[lv])
     L = np.linalg.cholesky(dense(cols_l[-1], vals_l[-1]))
     return off, Acols, Avals, Pcols, Pw, L, rows, cstart
 
