@@ -1,101 +1,127 @@
-"""Where the time of a step goes: the dam break profiled phase by phase.
+"""Where the time of a step goes: the dam break timed phase by phase.
 
-Runs a case in-process under cProfile (after a short warm-up run that loads Numba's
-cache) and sums the time of each compiled kernel and of the Python around it into the
-phases of a step. Prints a Markdown table of milliseconds per step.
+The step is one compiled call (``mpmflow.kernels.step``), which no Python profiler sees
+into. This script runs the case twice in-process (after a short warm-up that loads Numba's
+cache): once as it runs for users, and once with the compiled ``advance`` replaced by a
+Python loop that calls the same compiled phases one by one with a timer around each. The
+replay must give bit-identical particles (checked and printed); the difference between the
+two wall times is the cost of returning to Python between the phases.
 
-    python benchmarks/profile_step.py [--case examples/dam_break.toml] [--set key=value ...] [--cpu]
+    python benchmarks/profile_step.py [--case examples/dam_break.toml] [--set key=value ...]
 
-cProfile adds a few microseconds per Python call, so the "Python glue" row is an upper
-bound; the kernels' own times are not affected (each is one call).
+Prints a Markdown table of milliseconds per step.
 """
 
 import argparse
-import cProfile
-import pstats
 import time
 from pathlib import Path
 
 import numba
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# function name -> phase; anything else counts as Python glue (keep_inside, nodal_velocity
-# and wall_contact are names of earlier versions, so that their profiles compare)
-PHASES = {
-    "transfers (P2G, G2P, binning, walls)": (
-        "particles_to_grid", "grid_to_particles", "cell_index", "counting_sort",
-        "cell_volume_fraction", "bin_particles", "keep_inside", "nodal_velocity"),
-    "quadrature and assembly": (
-        "particle_cell_tensors", "gauss_cell_tensors", "assemble_matrix", "assemble_rhs",
-        "integrals"),
-    "free surface": ("nodal_fraction", "enclosed_cells", "classify_nodes", "ghost_pressures"),
-    "pressure solve (multigrid set-up)": ("build_hierarchy",),
-    "pressure solve (PCG iterations)": ("pcg",),
-    "corrector and walls": ("correct_velocity", "apply_walls", "start_contact",
-                            "release_contact"),
-    "volume correction (system, solve, displacements)": (
-        "faces", "assemble_2d", "face_displacements"),
-    "outputs (diagnostics, files)": (
-        "_output", "measure", "pressure_noise", "write", "append", "front_and_height"),
-}
+PHASES = ("binning", "particle to grid", "free surface (node fractions, classify)",
+          "cell integrals (quadrature)", "pressure (assembly, multigrid, PCG, walls)",
+          "corrector and walls", "volume correction", "grid to particle")
 
 
-def phase_of(name):
-    for phase, names in PHASES.items():
-        if any(name.startswith(n) for n in names):
-            return phase
-    return None
+def timed_advance(dim, totals):
+    """A drop-in for the compiled ``advance`` that times each phase into ``totals``."""
+    from mpmflow.kernels import corrector, step, walls
+    from mpmflow.kernels.transfer import kernels as transfer_kernels
+
+    p2g, g2p = transfer_kernels(dim)
+    clock = time.perf_counter
+
+    def advance(P, G, O, W, first, nsteps, report):
+        for k in range(nsteps):
+            report[step.R_STEP] = k
+            correct = O.volume_every > 0 and (first + k) % O.volume_every == 0
+            t0 = clock()
+            step.bin_particles(P, G, W)
+            t1 = clock()
+            p2g(P.x, P.v, P.mass, P.volume, W.order, W.start, G.h, G.cells, O.gravity, O.dt,
+                W.node_mass, W.node_mom, W.node_vol, W.v_old, W.v_star,
+                W.cell_vol if correct else W.cell_vol[:0])
+            t2 = clock()
+            step.node_fractions(G, O, W)
+            t3 = clock()
+            integrals = step.cell_integrals(P, G, O, W)
+            t4 = clock()
+            rows = step.classify_nodes(G, O, W, integrals[0])
+            t5 = clock()
+            report[step.R_UNKNOWNS] = max(report[step.R_UNKNOWNS], rows.shape[0])
+            report[step.R_LAST_UNKNOWNS] = rows.shape[0]
+            status = step.pressure_multigrid(G, O, W, integrals, rows, report)
+            t6 = clock()
+            if status != step.OK:
+                report[step.R_STATUS] = status
+                return k
+            corrector.correct_velocity(G.cells, integrals[5], integrals[6], integrals[7],
+                                       W.p_node, W.v_star, O.dt / O.rho, W.v_new)
+            walls.apply_walls(G.wall_node, G.wall_axis, G.wall_sign, W.v_new, W.contact,
+                              O.no_slip)
+            t7 = clock()
+            faces = W.no_faces
+            if correct:
+                status = step.volume_correction(G, O, W, report)
+                if status != step.OK:
+                    report[step.R_STATUS] = status
+                    return k
+                faces = W.faces
+            t8 = clock()
+            report[step.R_MOVED] += g2p(P.x, P.v, P.pressure, G.h, G.cells, W.v_old, W.v_new,
+                                        W.p_node, O.dt, O.flip, G.upper, G.margin, faces)
+            t9 = clock()
+            for name, dt in zip(PHASES, (t1 - t0, t2 - t1, (t3 - t2) + (t5 - t4), t4 - t3,
+                                         t6 - t5, t7 - t6, t8 - t7, t9 - t8)):
+                totals[name] += dt
+        return nsteps
+
+    return advance
 
 
-def profile(case_path, overrides, cpu=False):
+def run(case_path, overrides, replay):
     from mpmflow import Simulation, load_case
 
-    warm = load_case(case_path, [*overrides, "time.end=0.003", "output.interval=0.001"])
-    Simulation(warm).run()
-    case = load_case(case_path, overrides)
-    sim = Simulation(case)
-    clock = time.process_time if cpu else time.perf_counter
-    prof = cProfile.Profile(clock)
-    t0 = clock()
-    prof.enable()
-    sim.run()
-    prof.disable()
-    wall = clock() - t0
-    stats = pstats.Stats(prof).stats
-    # a phase's time: the inclusive time of its functions, over the calls that come from
-    # outside every phase (calls from within a phase are in that caller's time already)
+    sim = Simulation(load_case(case_path, overrides))
     totals = dict.fromkeys(PHASES, 0.0)
-    for (_, _, name), (_, _, _, _, callers) in stats.items():
-        phase = phase_of(name)
-        if phase is None:
-            continue
-        for caller, (_, _, _, cumtime) in callers.items():
-            if phase_of(caller[2]) is None:
-                totals[phase] += cumtime
-    steps = sim.steps
-    glue = wall - sum(totals.values())
-    return sim, wall, steps, totals, glue
+    if replay:
+        sim.scheme.compiled_advance = timed_advance(sim.grid.dim, totals)
+    t0 = time.perf_counter()
+    sim.run()
+    return sim, time.perf_counter() - t0, totals
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default=str(ROOT / "examples" / "dam_break.toml"))
     ap.add_argument("--set", action="append", default=[], dest="overrides")
-    ap.add_argument("--cpu", action="store_true",
-                    help="CPU time of the process instead of wall time (steadier on a busy "
-                         "machine; use with NUMBA_NUM_THREADS=1)")
     args = ap.parse_args()
-    sim, wall, steps, totals, glue = profile(args.case, args.overrides, args.cpu)
-    print(f"{Path(args.case).name} {' '.join(args.overrides)}: {sim.particles.count} "
-          f"particles, {steps} steps, time loop {wall:.2f} s ({'CPU' if args.cpu else 'wall'}) "
-          f"under cProfile, {numba.get_num_threads()} threads")
+    from mpmflow import Simulation, load_case
+
+    Simulation(load_case(args.case, [*args.overrides, "time.end=0.003",
+                                     "output.interval=0.001"])).run()
+    fused, wall_fused, _ = run(args.case, args.overrides, replay=False)
+    replayed, wall, totals = run(args.case, args.overrides, replay=True)
+    same = (np.array_equal(fused.particles.x, replayed.particles.x)
+            and np.array_equal(fused.particles.v, replayed.particles.v))
+    steps = replayed.steps
+    print(f"{Path(args.case).name} {' '.join(args.overrides)}: {replayed.particles.count} "
+          f"particles, {steps} steps, {numba.get_num_threads()} threads; the time loop takes "
+          f"{wall_fused:.2f} s fused, {wall:.2f} s replayed phase by phase (particles "
+          f"{'bit-identical' if same else 'DIFFERENT'})")
     print()
     print("| phase | ms per step | share |")
     print("|---|---|---|")
-    for phase, t in [*totals.items(), ("Python glue (the rest)", glue)]:
+    rest = wall - sum(totals.values())
+    for phase, t in [*totals.items(), ("outputs and Python between the phases", rest)]:
         print(f"| {phase} | {1e3 * t / steps:.3f} | {100 * t / wall:.0f}% |")
-    print(f"| total | {1e3 * wall / steps:.3f} | 100% |")
+    print(f"| total (replayed) | {1e3 * wall / steps:.3f} | 100% |")
+    print(f"| total (fused, as users run it) | {1e3 * wall_fused / steps:.3f} | |")
+    if not same:
+        raise SystemExit("the replay differs from the fused step: update timed_advance")
 
 
 if __name__ == "__main__":

@@ -5,14 +5,14 @@ import pytest
 
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.kernels import quadrature2d, transfer2d, volume2d, walls2d
+from mpmflow.kernels import quadrature, transfer, volume, walls
 from mpmflow.particles import Particles, lattice_in_box, seed_box
 
 
 def test_gauss_cell_integrals_are_the_bilinear_element_matrices():
     h = 0.3
     K, C, V = np.zeros((4, 4)), np.zeros((4, 4, 2)), np.zeros(4)
-    quadrature2d.gauss_cell_tensors_2d(h, K, C, V)
+    quadrature.gauss_cell_tensors(h, K, C, V)
     # Q1 stiffness on a square: 2/3 on the diagonal, -1/6 along edges, -1/3 across
     expected = np.array([[4, -1, -1, -2], [-1, 4, -2, -1], [-1, -2, 4, -1], [-2, -1, -1, 4]]) / 6
     np.testing.assert_allclose(K, expected, atol=1e-14)
@@ -22,6 +22,25 @@ def test_gauss_cell_integrals_are_the_bilinear_element_matrices():
     np.testing.assert_allclose(C.sum(axis=0)[:, 0], [-h / 2, h / 2, -h / 2, h / 2], atol=1e-15)
 
 
+def test_gauss_cell_integrals_in_3d_are_those_of_the_trilinear_element():
+    h = 0.2
+    K, C, V = np.zeros((8, 8)), np.zeros((8, 8, 3)), np.zeros(8)
+    quadrature.gauss_cell_tensors(h, K, C, V)
+    np.testing.assert_allclose(V, h**3 / 8)
+    np.testing.assert_allclose(K.sum(axis=1), 0.0, atol=1e-15)  # constants have no gradient
+    # Q1 stiffness of the cube: diagonal h/3, edge 0, face diagonal -h/12, body diagonal -h/12
+    for a in range(8):
+        for b in range(8):
+            hamming = bin(a ^ b).count("1")
+            assert K[a, b] == pytest.approx({0: h / 3, 1: 0.0, 2: -h / 12, 3: -h / 12}[hamming],
+                                            abs=1e-15)
+    np.testing.assert_allclose(C.sum(axis=1), 0.0, atol=1e-15)
+    # sum_a C[a, b, k] = int dN_b/dx_k = +-h^2/4 on the faces normal to k
+    for b in range(8):
+        for k in range(3):
+            assert C.sum(axis=0)[b, k] == pytest.approx((1 if b >> k & 1 else -1) * h * h / 4)
+
+
 def test_particle_quadrature_integrates_constants_exactly():
     # volumes sum to the cell area; sum_a V[a] = total weight, K of a constant field is 0
     h = 0.1
@@ -29,8 +48,8 @@ def test_particle_quadrature_integrates_constants_exactly():
     K, C, V = np.zeros((1, 4, 4)), np.zeros((1, 4, 4, 2)), np.zeros((1, 4))
     order = np.arange(len(pts))
     start = np.array([0, len(pts)])
-    quadrature2d.particle_cell_tensors_2d(pts, np.full(len(pts), (h / 4) ** 2), order, start,
-                                          np.array([0]), h, 1, K, C, V)
+    quadrature.particle_cell_tensors(pts, np.full(len(pts), (h / 4) ** 2), order, start,
+                                     np.array([0]), h, (1, 1), K, C, V)
     assert V.sum() == pytest.approx(h * h)
     np.testing.assert_allclose(K[0].sum(axis=1), 0.0, atol=1e-12)
 
@@ -48,13 +67,14 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, vol))
     g, dt = np.array([0.5, -9.81]), 0.01
     cvol = np.empty(grid.ncells)
-    transfer2d.particles_to_grid_2d(x, v, m, vol, bins.order, bins.start, 0.1, 10, 10, g, dt,
-                                    mass, mom, nvol, v_old, v_star, cvol)
+    particles_to_grid, _ = transfer.kernels(2)
+    particles_to_grid(x, v, m, vol, bins.order, bins.start, 0.1, (10, 10), g, dt, mass, mom,
+                      nvol, v_old, v_star, cvol)
     assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
     # the volume on the cell centres (walls mirror): all of it, as the serial kernel has it
     assert cvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
     serial = np.empty(grid.ncells)
-    volume2d.cell_volume_2d(x, vol, 0.1, 10, 10, serial)
+    volume.cell_volume(x, vol, 0.1, (10, 10), serial)
     np.testing.assert_allclose(cvol, serial, rtol=1e-12, atol=1e-18)
     np.testing.assert_allclose(mom.sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=1e-12)
     assert nvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
@@ -65,7 +85,7 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     assert not v_old[~has].any() and not v_star[~has].any()
 
 
-NONE = np.zeros(0)  # no volume-correction displacement
+NONE = (np.zeros(0), np.zeros(0))  # no volume-correction displacement
 
 
 def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
@@ -81,8 +101,9 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     p = np.zeros(200)
     dt = 0.01
     exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
-    moved = transfer2d.grid_to_particles_2d(x, v, p, 0.1, 10, 10, v_old, v_new, p_node, dt,
-                                            1.0, np.array([1.0, 1.0]), 1e-9, NONE, NONE)
+    _, grid_to_particles = transfer.kernels(2)
+    moved = grid_to_particles(x, v, p, 0.1, (10, 10), v_old, v_new, p_node, dt, 1.0,
+                              np.array([1.0, 1.0]), 1e-9, NONE)
     assert moved == 0
     np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
     np.testing.assert_allclose(x, x0 + dt * exact, atol=1e-12)  # eq. 21 moves with v^{t+1}
@@ -93,9 +114,9 @@ def test_grid_to_particles_puts_particles_back_inside_and_counts_them():
     x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
     v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
     still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move
-    moved = transfer2d.grid_to_particles_2d(x, v, np.zeros(4), 0.1, 10, 10, still, still,
-                                            np.zeros(121), 0.01, 1.0, np.array([1.0, 1.0]),
-                                            1e-9, NONE, NONE)
+    _, grid_to_particles = transfer.kernels(2)
+    moved = grid_to_particles(x, v, np.zeros(4), 0.1, (10, 10), still, still, np.zeros(121),
+                              0.01, 1.0, np.array([1.0, 1.0]), 1e-9, NONE)
     assert moved == 3
     assert np.all((x >= 0) & (x <= 1))
     np.testing.assert_allclose(x[0], [0.01, 0.5])  # mirrored back across the wall
@@ -124,7 +145,8 @@ def test_walls_are_one_sided_unless_in_contact():
     n = (ncx + 1) * (ncy + 1)
     v = np.tile([[-1.0, 1.0]], (n, 1))  # moving into the left and top walls
     released = np.zeros((n, 2), dtype=np.bool_)
-    walls2d.apply_walls_2d(ncx, ncy, v, released, False)
+    pairs = walls.wall_pairs((ncx, ncy))
+    walls.apply_walls(*pairs, v, released, False)
     left = [0, 3, 6]
     top = [6, 7, 8]
     assert np.all(v[left, 0] == 0.0) and np.all(v[top, 1] == 0.0)
@@ -132,12 +154,12 @@ def test_walls_are_one_sided_unless_in_contact():
     assert v[bottom_mid, 1] == 1.0
     # every node carries a pressure unknown: every wall node starts in contact
     contact = np.zeros((n, 2), dtype=np.bool_)
-    walls2d.start_contact_2d(ncx, ncy, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
+    walls.start_contact(*pairs, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
     ix, iy = np.arange(n) % (ncx + 1), np.arange(n) // (ncx + 1)
     np.testing.assert_array_equal(contact, np.stack([(ix == 0) | (ix == ncx),
                                                      (iy == 0) | (iy == ncy)], axis=1))
     v = np.tile([[1.0, 1.0]], (n, 1))
-    walls2d.apply_walls_2d(ncx, ncy, v, contact, True)  # in contact, no-slip: all zero
+    walls.apply_walls(*pairs, v, contact, True)  # in contact, no-slip: all zero
     assert np.all(v[bottom_mid] == 0.0)
     assert np.all(v[4] == 1.0)  # interior node untouched
 
@@ -152,13 +174,14 @@ def test_contact_starts_where_material_presses_and_releases_under_tension():
     vstar[5, 0] = -1.0  # right wall node without unknown leaving the wall
     vstar[1, 1] = 2.0  # bottom node with unknown leaving the floor
     contact = np.ones((n, 2), dtype=np.bool_)
-    walls2d.start_contact_2d(ncx, ncy, vstar, row, contact)
+    pairs = walls.wall_pairs((ncx, ncy))
+    walls.start_contact(*pairs, vstar, row, contact)
     assert contact[0].tolist() == [True, True] and contact[1].tolist() == [False, True]
     assert contact[3, 0] and not contact[5, 0] and not contact[4].any()
     p_node = np.zeros(n)
     p_node[1] = -5.0  # tension at the node that leaves the floor: released
     p_node[0] = -5.0  # tension, but v* does not leave the walls: kept
-    assert walls2d.release_contact_2d(ncx, ncy, vstar, row, p_node, contact) == 1
+    assert walls.release_contact(*pairs, vstar, row, p_node, contact) == 1
     assert not contact[1, 1] and contact[0].all()
 
 
@@ -184,7 +207,7 @@ def test_strips_cover_the_rows_with_room_between_and_balance_the_work(min_rows):
 
 
 def test_particle_divergence_tensors_match_the_full_particle_tensors():
-    """The surface cells' C and V (the kernel that skips K) equal those of the full
+    """The surface cells' C and V (the quadrature called without K) equal those of the full
     material-point quadrature, cell for cell."""
     rng = np.random.default_rng(1)
     x = rng.uniform(0, 1, (500, 2))
@@ -193,9 +216,10 @@ def test_particle_divergence_tensors_match_the_full_particle_tensors():
     bins = bin_particles(grid, Particles(x, 0 * x, 0 * vol, vol, vol))
     cells = np.array([0, 5, 23, 99])
     K, C, V = np.zeros((4, 4, 4)), np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
-    quadrature2d.particle_cell_tensors_2d(x, vol, bins.order, bins.start, cells, 0.1, 10, K, C, V)
+    quadrature.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10), K, C, V)
     C2, V2 = np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
-    quadrature2d.particle_cell_divergence_2d(x, vol, bins.order, bins.start, cells, 0.1, 10, C2, V2)
+    quadrature.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10),
+                                     np.zeros((0, 4, 4)), C2, V2)
     np.testing.assert_allclose(C2, C, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(V2, V, rtol=1e-13, atol=1e-15)
     assert V.sum() > 0

@@ -8,7 +8,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.case import validate
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.kernels import volume2d
+from mpmflow.kernels import volume
 from mpmflow.particles import seed_box
 
 from conftest import EXAMPLES, make_case
@@ -24,7 +24,7 @@ def test_dual_density_reads_one_for_a_shifted_lattice(shift):
     P = seed_box((0.0, 0.0), (0.6, 0.5), dp, 1000.0, (0.0, 0.0))
     P.x[:] = np.mod(P.x + shift * dp, [0.6, 0.5])  # a lattice shifted, wrapped into the box
     rho = np.empty(grid.ncells)
-    volume2d.cell_volume_2d(P.x, P.volume, 0.1, 6, 5, rho)
+    volume.cell_volume(P.x, P.volume, 0.1, (6, 5), rho)
     rho /= grid.cell_volume
     inner = rho.reshape(5, 6)[1:-1, 1:-1]
     np.testing.assert_allclose(inner, 1.0, atol=1e-12)
@@ -43,7 +43,7 @@ def test_dual_density_sees_a_strained_lattice_as_its_volume_not_its_rows():
     inside = np.all((P.x > 0.2) & (P.x < 0.6), axis=1)
     bins = bin_particles(grid, P)
     rho = np.empty(grid.ncells)
-    volume2d.cell_volume_2d(P.x, P.volume, 0.1, 8, 8, rho)
+    volume.cell_volume(P.x, P.volume, 0.1, (8, 8), rho)
     rho /= grid.cell_volume
     core = np.zeros((8, 8), dtype=bool)
     core[3:5, 3:5] = True

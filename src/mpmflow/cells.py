@@ -30,9 +30,7 @@ def bin_particles(grid, particles, bins=None):
             order=np.empty(n, dtype=np.int64),
             theta=np.empty(grid.ncells),
         )
-    if grid.dim != 2:
-        raise NotImplementedError("only 2D grids are implemented")
-    binning.cell_index_2d(particles.x, grid.spacing, grid.cells[0], grid.cells[1], bins.cell)
+    binning.cell_index(particles.x, grid.spacing, tuple(grid.cells), bins.cell)
     binning.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
     binning.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
                                  bins.theta)

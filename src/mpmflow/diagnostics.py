@@ -9,7 +9,7 @@ position if the last cell is at least half full); ``front`` is the largest over 
 
 import numpy as np
 
-from .kernels import transfer2d
+from .kernels import transfer
 
 
 def last_crossings(f, centres, wall):
@@ -76,6 +76,5 @@ def pressure_noise(grid, particles):
     """RMS difference between particle pressure and its grid-smoothed value (Pa)."""
     m = np.empty(grid.nnodes)
     mp = np.empty(grid.nnodes)
-    nx, ny = grid.cells
-    return float(transfer2d.pressure_noise_2d(particles.x, particles.mass, particles.pressure,
-                                              grid.spacing, nx, ny, m, mp))
+    return float(transfer.pressure_noise(particles.x, particles.mass, particles.pressure,
+                                         grid.spacing, tuple(grid.cells), m, mp))

@@ -25,14 +25,6 @@ def cell_index(x, h, cells, out):
             out[p] = c
 
 
-@njit(cache=True, parallel=True)
-def cell_index_2d(x, h, ncx, ncy, out):
-    """Flat cell index of every particle. Particles on the upper domain edge go to the last cell."""
-    inv_h = 1.0 / h
-    for p in prange(x.shape[0]):
-        out[p] = cell_of(x[p, 0] * inv_h, ncx) + ncx * cell_of(x[p, 1] * inv_h, ncy)
-
-
 @njit(cache=True)
 def counting_sort(cell, ncells, start, order):
     """Group particles by cell: particles of cell c are ``order[start[c]:start[c+1]]``.

@@ -11,8 +11,8 @@ from numba import njit
 
 
 # The bilinear weights, the FLIP/PIC update, the wall conditions and putting particles back
-# inside are this module's own copies (the same as the projection scheme's in transfer2d and
-# walls2d), so that the explicit comparator does not depend on those kernels' internals.
+# inside are this module's own 2D copies (the projection scheme's generic ones are in
+# transfer and walls), so that the explicit comparator does not depend on their internals.
 
 
 @njit(cache=True, inline="always")

@@ -6,6 +6,31 @@ For one cell the kernels accumulate, over points with weights w:
 * ``C[a, b, k] = sum w N_a d/dx_k N_b``               (divergence, eq. 15, and gradient, eq. 18)
 * ``V[a]       = sum w N_a``                          (row-sum lumped volume matrix, eq. 17)
 The points are the 2^D Gauss points of a full cell or the material points of a partial cell.
+
+Which cells get which points: the mixed quadrature of the paper (section 2.2), applied by
+``kernels.step.cell_integrals``.
+
+Cells are classified by their volume fraction theta:
+* theta >= full threshold (0.9): full cell, 2^D Gauss points;
+* sparse threshold (0.2) <= theta < full threshold: partial cell, integrated with its
+  material points (solver.partial_cell_quadrature = "particles", the paper) or, like a full cell, with Gauss
+  points ("gauss": the free surface is then placed inside the cell by the
+  sub-cell free-surface treatment, see ``surface``);
+* theta < sparse threshold: left out of the pressure system, unless the free-surface
+  treatment says the cell lies inside the fluid (``enclosed``): then it is a gap between
+  particle lines in continuous material, integrated like a full cell.
+The element integrals of the cells in the system come as stacked arrays with a slot per cell;
+slot 0 holds the Gauss-point integrals shared by all Gauss cells.
+
+With Gauss partial cells, solver.surface_quadrature chooses how the cells the free surface passes
+through (partial and not enclosed) are integrated besides the Laplacian, which keeps Gauss
+points: "gauss" (all of them), "divergence" (the divergence of the predicted velocity,
+eq. 15, over their material points: the velocity the grid carries in the air part of such
+a cell is an extrapolation that no equation constrains, and integrated over the whole cell
+its divergence did work against the extrapolated (ghost) pressure that nothing balanced, so
+a standing wave gained energy) or "consistent" (the corrector's gradient and volumes, eqs.
+16-18, too: divergence and gradient are then adjoint and the projection takes energy out
+only, at the price of more damping). docs/method.md, "Energy".
 """
 
 import numpy as np

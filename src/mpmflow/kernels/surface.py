@@ -6,6 +6,19 @@ i_k - 1 + ((b >> k) & 1) along axis k, and the node is that cell's corner
 sum_k (1 - ((b >> k) & 1)) 2^k. Loops over nodes deal slabs of nodes (one index along the
 last axis) round the parallel chunks, so every chunk gets nodes in the water and in the
 air alike, and each node's result depends on its neighbours only, not on the thread count.
+
+The free surface (which nodes carry a pressure unknown), ``solver.free_surface``:
+
+``node``   (the paper): every node of the cells in the system is an unknown unless it
+           borders a cell left out of the system (empty or sparse); those get p = 0.
+``subcell``: the surface is the level f = 1/2 of the nodal volume fraction f (mean theta
+           of the node's cells, each clipped to 1). Unknowns are the nodes with f > 1/2
+           all of whose cells are in the system; the others are ghost nodes whose pressure
+           extrapolates linearly to p = 0 at the surface (``ghost``).
+           For a flat surface at any height this places p = 0 exactly at the surface, not
+           at the nearest node row. A cell all of whose nodes lie inside the fluid stays in
+           the system even when few particles are left in it: a gap that opens between
+           particle lines inside the water is not a free surface (``quadrature``).
 """
 
 import numpy as np

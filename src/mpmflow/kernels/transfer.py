@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit, prange
 from numba.cpython.unsafe.tuple import tuple_setitem
 
-from .geometry import corner_offsets, weights_at
+from .geometry import corner_offsets, node_strides, weights_at
 from .parallel import CHUNKS, strips
 
 STRIPS = 16  # particle-to-grid cuts the slabs of cells into 2 STRIPS strips
@@ -127,6 +127,39 @@ def put_inside(x, v, p, upper, margin):
                 v[p, k] = 0.0
             out = True
     return out
+
+
+@njit(cache=True)
+def pressure_noise(x, mass, pressure, h, cells, work_m, work_mp):
+    """RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa).
+
+    The smoothed field is the particle-to-grid sum of m_p p_p divided by the nodal mass,
+    interpolated back: a smooth pressure field is kept (up to interpolation), a checkerboard
+    is not. ``work_m``, ``work_mp``: scratch of one value per node."""
+    D = len(cells)
+    ns = np.empty(D, dtype=np.int64)
+    node_strides(cells, ns)
+    off = np.empty(1 << D, dtype=np.int64)
+    corner_offsets(ns, off)
+    w = np.empty(1 << D)
+    work_m[:] = 0.0
+    work_mp[:] = 0.0
+    inv_h = 1.0 / h
+    for p in range(x.shape[0]):
+        base = weights_at(x, p, inv_h, cells, ns, w)
+        for a in range(1 << D):
+            work_m[base + off[a]] += w[a] * mass[p]
+            work_mp[base + off[a]] += w[a] * mass[p] * pressure[p]
+    total = 0.0
+    for p in range(x.shape[0]):
+        base = weights_at(x, p, inv_h, cells, ns, w)
+        smooth = 0.0
+        for a in range(1 << D):
+            if w[a] > 0.0:  # then the node has mass from this particle at least
+                smooth += w[a] * work_mp[base + off[a]] / work_m[base + off[a]]
+        d = pressure[p] - smooth
+        total += d * d
+    return np.sqrt(total / max(x.shape[0], 1))
 
 
 @lru_cache(maxsize=None)

@@ -11,7 +11,24 @@ interpolates them).
 import numpy as np
 from numba import njit, prange
 
+from .geometry import cell_strides
 from .parallel import CHUNKS
+from .transfer import scatter_cell_volume
+
+
+@njit(cache=True)
+def cell_volume(x, volume, h, cells, out):
+    """sum_p N_c(x_p) V_p on every cell centre (``transfer.scatter_cell_volume``), over all
+    particles; the particle-to-grid pass computes the same during a step."""
+    D = len(cells)
+    cs = np.empty(D, dtype=np.int64)
+    cell_strides(cells, cs)
+    frac = np.empty(D)
+    first = np.empty(D, dtype=np.int64)
+    out[:] = 0.0
+    inv_h = 1.0 / h
+    for p in range(x.shape[0]):
+        scatter_cell_volume(x, p, volume[p], inv_h, cells, cs, frac, first, out)
 
 
 @njit(cache=True)

@@ -1,17 +1,22 @@
-"""Chorin's projection in MPM (Kularathna & Soga 2017; one time step as in docs/method.md)."""
+"""Chorin's projection in MPM (Kularathna & Soga 2017; one time step as in docs/method.md).
+
+The step itself is compiled (``kernels.step``): this class owns its arrays, runs chunks of
+steps, and turns a failure reported by the compiled code into a message.
+"""
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from .. import transfers
-from ..boundaries import apply_walls
-from ..cells import bin_particles
-from ..free_surface import FreeSurface
-from ..pressure import PressureProjection
-from ..quadrature import Quadrature
-from ..volume_correction import VolumeCorrection
+from .. import pressure, volume_correction
+from ..errors import SolverError
+from ..kernels import quadrature, step, walls
+from ..linsolve import SMOOTHING_SWEEPS
+from ..transfers import flip_per_step
 from . import register
+
+MARGIN = 1e-6  # particles put back inside stay this fraction of a cell off the wall
+SURFACE = {"gauss": step.GAUSS, "divergence": step.DIVERGENCE, "consistent": step.CONSISTENT}
 
 
 @dataclass
@@ -33,91 +38,156 @@ class StepReport:
                           max(self.residual, other.residual), self.released + other.released,
                           self.moved_inside + other.moved_inside)
 
+    @classmethod
+    def of(cls, report):
+        """From the compiled step's ``report`` array."""
+        return cls(int(report[step.R_UNKNOWNS]), int(report[step.R_SOLVES]),
+                   int(report[step.R_ITERATIONS]), int(report[step.R_MAX_ITERATIONS]),
+                   float(report[step.R_RESIDUAL]), int(report[step.R_RELEASED]),
+                   int(report[step.R_MOVED]))
+
+
+def work_arrays(grid, count, volume_correction_on):
+    """The step's arrays (``kernels.step.Work``), allocated once."""
+    D, nn, nc = grid.dim, grid.nnodes, grid.ncells
+    NC, NS = 2**D, 3**D
+    K_ref, C_ref, V_ref = np.zeros((NC, NC)), np.zeros((NC, NC, D)), np.zeros(NC)
+    quadrature.gauss_cell_tensors(grid.spacing, K_ref, C_ref, V_ref)
+    nv = nc if volume_correction_on else 0  # the correction's arrays, when it runs
+    faces = []
+    for k in range(D):
+        shape = list(grid.cells)
+        shape[k] += 1
+        faces.append(np.zeros(int(np.prod(shape)) if volume_correction_on else 0))
+    return step.Work(
+        cell=np.empty(count, dtype=np.int64), start=np.empty(nc + 1, dtype=np.int64),
+        order=np.empty(count, dtype=np.int64), theta=np.zeros(nc),
+        node_mass=np.zeros(nn), node_mom=np.zeros((nn, D)), node_vol=np.zeros(nn),
+        v_old=np.zeros((nn, D)), v_star=np.zeros((nn, D)), v_c=np.zeros((nn, D)),
+        v_new=np.zeros((nn, D)), node_f=np.zeros(nn), enclosed=np.zeros(nc, dtype=np.bool_),
+        slot=np.empty(nc, dtype=np.int64), surface_slot=np.empty(nc, dtype=np.int64),
+        node_row=np.full(nn, -1, dtype=np.int64), contact=np.zeros((nn, D), dtype=np.bool_),
+        p_node=np.zeros(nn), K_ref=K_ref, C_ref=C_ref, V_ref=V_ref,
+        cell_vol=np.zeros(nv), density=np.zeros(nv), cell_row=np.empty(nv, dtype=np.int64),
+        vol_cols=np.empty((nv, NS), dtype=np.int64), vol_vals=np.empty((nv, NS)),
+        vol_rhs=np.empty(nv), vol_rows=np.empty(nv, dtype=np.int64), q=np.zeros(nv),
+        faces=tuple(faces), no_faces=tuple(np.zeros(0) for _ in range(D)))
+
 
 @register("projection")
 class ProjectionScheme:
     def __init__(self, case, grid, particles):
         s = case.solver
+        self.case = case
         self.grid = grid
         self.particles = particles
-        self.gravity = np.asarray(case.physics.gravity, dtype=float)
-        self.walls = case.domain.walls
-        self.flip = s.flip
-        self.quadrature = Quadrature(grid, s.full_cell_threshold, s.sparse_cell_threshold,
-                                     s.partial_cell_quadrature, s.surface_quadrature)
-        self.surface = FreeSurface(grid, s.free_surface)
-        self.projection = PressureProjection(grid, case.material.density, case.domain.walls,
-                                             s.wall_flux, s.ghost_theta_min,
-                                             s.density_correction, s.linear_solver,
-                                             s.tolerance, s.max_iterations)
-        self.volume = (VolumeCorrection(grid, s.volume_correction) if s.volume_correction > 0
-                       else None)
-        self.volume_interval = s.volume_correction_interval  # s
+        node, axis, sign = walls.wall_pairs(tuple(grid.cells))
+        self.G = step.Grid(float(grid.spacing), tuple(int(c) for c in grid.cells),
+                           float(grid.cell_volume), np.asarray(grid.size, dtype=float),
+                           MARGIN * grid.spacing, node, axis, sign)
+        self.W = work_arrays(grid, particles.count, s.volume_correction > 0)
+        self.predict, self.finish, self.compiled_advance = step.kernels(grid.dim)
+        self.python_pressure = (None if s.linear_solver == "multigrid"
+                                else pressure.PythonPressure(grid, s))
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
-        self.contact = np.zeros((grid.nnodes, grid.dim), dtype=np.bool_)
-        n, d = grid.nnodes, grid.dim
-        self.node_mass = np.zeros(n)
-        self.node_mom = np.zeros((n, d))
-        self.node_vol = np.zeros(n)
-        self.v_old = np.zeros((n, d))
-        self.v_star = np.zeros((n, d))
-        self.v_new = np.zeros((n, d))
-        self.bins = None
         self.last_unknowns = 0
+
+    @property
+    def p_node(self):
+        """The nodal pressure of the last step (Pa)."""
+        return self.W.p_node
+
+    def options(self, dt):
+        """The compiled step's settings for steps of dt (``kernels.step.Options``)."""
+        s, m = self.case.solver, self.case.material
+        every = (max(1, round(s.volume_correction_interval / dt))
+                 if s.volume_correction > 0 else 0)
+        particles = s.partial_cell_quadrature == "particles"
+        return step.Options(
+            dt=float(dt), gravity=np.asarray(self.case.physics.gravity, dtype=float),
+            rho=float(m.density), flip=float(flip_per_step(s.flip, dt)),
+            full=float(s.full_cell_threshold), sparse=float(s.sparse_cell_threshold),
+            partial_particles=particles,
+            surface=step.GAUSS if particles else SURFACE[s.surface_quadrature],
+            subcell=s.free_surface == "subcell", wall_flux=bool(s.wall_flux),
+            no_slip=self.case.domain.walls == "no_slip", theta_min=float(s.ghost_theta_min),
+            expansion=float(s.density_correction), tol=float(s.tolerance),
+            max_iterations=int(s.max_iterations), sweeps=SMOOTHING_SWEEPS,
+            volume_rate=float(s.volume_correction), volume_every=int(every),
+            volume_tol=volume_correction.TOLERANCE,
+            volume_max_iterations=volume_correction.MAX_ITERATIONS,
+            volume_dmax=volume_correction.MAX_DISPLACEMENT)
 
     def state(self):
         """What the scheme carries from one step to the next beyond the particles: the nodal
         pressure and the volume correction's last solution (the warm starts of the next
         solves). Everything else is rebuilt each step."""
-        state = {"p_node": self.projection.p_node.copy(),
+        state = {"p_node": self.W.p_node.copy(),
                  "last_unknowns": np.array(self.last_unknowns), "steps": np.array(self.steps)}
-        if self.volume is not None:
-            state["volume_q"] = self.volume.state()
+        if self.W.q.size:
+            state["volume_q"] = self.W.q.copy()
         return state
 
     def restore(self, state):
         """Continue from ``state()`` (a checkpoint)."""
-        self.projection.p_node = state["p_node"].copy()
+        np.copyto(self.W.p_node, state["p_node"])
         self.last_unknowns = int(state["last_unknowns"])
         self.steps = int(state["steps"])
-        if self.volume is not None:
-            self.volume.restore(state["volume_q"])
+        if self.W.q.size:
+            np.copyto(self.W.q, state["volume_q"])
 
     def advance(self, dt, nsteps, where=""):
         """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
         the steps (residual: the worst)."""
-        total = StepReport()
-        for k in range(nsteps):
-            total = total.merge(self.step(dt, where=where(k)))
-        return total
+        P = self.particles
+        if self.W.cell.shape[0] != P.count:
+            self.W = self.W._replace(cell=np.empty(P.count, dtype=np.int64),
+                                     order=np.empty(P.count, dtype=np.int64))
+        Pt = step.Particles(P.x, P.v, P.mass, P.volume, P.pressure)
+        O = self.options(dt)
+        report = np.zeros(step.REPORT_SIZE)
+        try:
+            if self.python_pressure is None:
+                done = self.compiled_advance(Pt, self.G, O, self.W, self.steps + 1, nsteps,
+                                             report)
+            else:
+                done = self._python_steps(Pt, O, nsteps, report, where)
+        except pressure.SETUP_ERRORS as err:
+            k = int(report[step.R_STEP])
+            self.steps += k
+            raise pressure.setup_failed(where(k), err, int(report[step.R_LAST_UNKNOWNS]))
+        self.steps += done
+        self.last_unknowns = int(report[step.R_LAST_UNKNOWNS])
+        if done < nsteps:
+            self._fail(report, where(done))
+        return StepReport.of(report)
 
-    def step(self, dt, where=""):
-        g, P = self.grid, self.particles
-        self.steps += 1
-        every = max(1, round(self.volume_interval / dt))  # steps
-        correct = self.volume is not None and self.steps % every == 0
-        # 1-2. particle-to-grid and the predictor with gravity (eqs. 10-12); wall conditions
-        # are applied in step 5
-        self.bins = bin_particles(g, P, self.bins)
-        transfers.particles_to_grid(g, P, self.bins, self.gravity, dt, self.node_mass,
-                                    self.node_mom, self.node_vol, self.v_old, self.v_star,
-                                    self.volume.cell_vol if correct else None)
-        # 3. cell classification and quadrature (eqs. 8, 9)
-        node_f = self.surface.nodal_fraction(self.bins.theta)
-        integrals = self.quadrature.integrals(P, self.bins, self.surface.enclosed_cells(node_f))
-        # 4. free surface
-        nodes = self.surface.classify(integrals, node_f)
-        # 5-6. pressure Poisson equation with contact walls, and corrector (eqs. 13-18)
-        stats = self.projection.project(integrals, nodes, self.node_vol, self.v_star,
-                                        self.contact, dt, self.v_new, where)
-        apply_walls(g, self.v_new, self.contact, self.walls)
-        # 7. volume correction: a displacement of the particles back to the material's volume
-        faces = (self.volume.faces(self.volume.cell_vol, self.bins.theta, self.contact, where)
-                 if correct else None)
-        # 8. grid-to-particle (eqs. 19-21), the correction's displacement, pressure to particles
-        moved = transfers.grid_to_particles(g, P, self.v_old, self.v_new,
-                                            self.projection.p_node, dt,
-                                            transfers.flip_per_step(self.flip, dt), faces)
-        self.last_unknowns = stats.unknowns
-        return StepReport(stats.unknowns, stats.solves, stats.iterations, stats.iterations,
-                          stats.residual, stats.released, moved)
+    def _python_steps(self, Pt, O, nsteps, report, where):
+        """The steps with the pressure solved in Python (``pressure.PythonPressure``)."""
+        for k in range(nsteps):
+            report[step.R_STEP] = k
+            correct = O.volume_every > 0 and (self.steps + k + 1) % O.volume_every == 0
+            integrals, rows = self.predict(Pt, self.G, O, self.W, correct)
+            report[step.R_UNKNOWNS] = max(report[step.R_UNKNOWNS], rows.size)
+            report[step.R_LAST_UNKNOWNS] = rows.size
+            self.python_pressure.solve(self.G, O, self.W, integrals, rows, report, where(k))
+            status = self.finish(Pt, self.G, O, self.W, integrals, correct, report)
+            if status != step.OK:
+                report[step.R_STATUS] = status
+                return k
+        return nsteps
+
+    def _fail(self, report, where):
+        status = int(report[step.R_STATUS])
+        n = int(report[step.R_FAIL_SIZE])
+        iterations = int(report[step.R_FAIL_ITERATIONS])
+        residual = float(report[step.R_FAIL_RESIDUAL])
+        worst = int(report[step.R_FAIL_NODE])
+        if status == step.SINGULAR:
+            raise pressure.singular(where)
+        if status == step.PRESSURE_NOT_CONVERGED:
+            raise pressure.not_converged(where, residual, iterations, self.case.solver, n,
+                                         self.grid.node_coordinates()[worst])
+        if status == step.VOLUME_NOT_CONVERGED:
+            raise volume_correction.not_converged(where, residual, iterations, n)
+        raise SolverError(f"The step failed{where} with status {status}.")

@@ -61,7 +61,7 @@ def checkerboard(sim, H):
     g = sim.grid
     nx, ny = g.cells
     theta = bin_particles(g, sim.particles).theta.reshape(ny, nx)  # [cy, cx]
-    p = sim.scheme.projection.p_node.reshape(ny + 1, nx + 1)  # [iy, ix]
+    p = sim.scheme.p_node.reshape(ny + 1, nx + 1)  # [iy, ix]
     full = theta >= 0.9
     inner = np.zeros((ny + 1, nx + 1), dtype=bool)
     inner[1:-1, 1:-1] = full[:-1, :-1] & full[1:, :-1] & full[:-1, 1:] & full[1:, 1:]

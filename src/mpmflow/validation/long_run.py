@@ -30,7 +30,7 @@ import numpy as np
 
 from ..cells import bin_particles
 from ..diagnostics import last_crossings, volume_measures
-from ..kernels import volume2d
+from ..kernels import volume
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .sloshing import period_and_decay, theory
 
@@ -77,7 +77,7 @@ class Record:
         bins = bin_particles(g, P)
         vm = volume_measures(bins.theta, g.cell_volume, sim.volume0)
         rho = np.empty(g.ncells)
-        volume2d.cell_volume_2d(P.x, P.volume, g.spacing, g.cells[0], g.cells[1], rho)
+        volume.cell_volume(P.x, P.volume, g.spacing, tuple(g.cells), rho)
         hat = (np.count_nonzero(rho > 1.2 * g.cell_volume)
                / max(np.count_nonzero(bins.theta > 0), 1))
         f = np.clip(bins.theta, 0, 1).reshape(g.cells[1], g.cells[0])  # [cy, cx]
