@@ -67,8 +67,7 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, vol))
     g, dt = np.array([0.5, -9.81]), 0.01
     cvol = np.empty(grid.ncells)
-    particles_to_grid, _ = transfer.kernels(2)
-    particles_to_grid(x, v, m, vol, bins.order, bins.start, 0.1, (10, 10), g, dt, mass, mom,
+    transfer.particles_to_grid(x, v, m, vol, bins.order, bins.start, 0.1, (10, 10), g, dt, mass, mom,
                       nvol, v_old, v_star, cvol)
     assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
     # the volume on the cell centres (walls mirror): all of it, as the serial kernel has it
@@ -101,8 +100,7 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     p = np.zeros(200)
     dt = 0.01
     exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
-    _, grid_to_particles = transfer.kernels(2)
-    moved = grid_to_particles(x, v, p, 0.1, (10, 10), v_old, v_new, p_node, dt, 1.0,
+    moved = transfer.grid_to_particles(x, v, p, 0.1, (10, 10), v_old, v_new, p_node, dt, 1.0,
                               np.array([1.0, 1.0]), 1e-9, NONE)
     assert moved == 0
     np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
@@ -114,8 +112,7 @@ def test_grid_to_particles_puts_particles_back_inside_and_counts_them():
     x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
     v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
     still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move
-    _, grid_to_particles = transfer.kernels(2)
-    moved = grid_to_particles(x, v, np.zeros(4), 0.1, (10, 10), still, still, np.zeros(121),
+    moved = transfer.grid_to_particles(x, v, np.zeros(4), 0.1, (10, 10), still, still, np.zeros(121),
                               0.01, 1.0, np.array([1.0, 1.0]), 1e-9, NONE)
     assert moved == 3
     assert np.all((x >= 0) & (x <= 1))

@@ -9,8 +9,8 @@ Conventions (``geometry`` has the details)
 * Uniform grid of square (cubic) cells of side ``h`` covering [0, cells[k] h] along each
   axis k. The grid comes to a kernel as ``cells``, the tuple of cell counts: its length D is
   part of the Numba type, so each kernel compiles once per dimension with constant-bound
-  loops over axes and corners. Kernels that must hold D-sized tuples in registers are built
-  per dimension by a factory ``kernels(D)`` closing over the constant tables.
+  loops over axes and corners; sums over D components start from ``geometry.zeros_of``.
+  (No factories closing over compiled functions: Numba cannot cache those across runs.)
 * Flat indices run along axis 0 fastest: node (i_0, ..., i_{D-1}) is sum_k i_k ns_k with
   ns_k the product of (cells[j] + 1) for j < k; cells likewise with cells[j].
 * The 2^D corners of a cell are numbered a = sum_k l_k 2^k, l_k in {0, 1}; the multilinear

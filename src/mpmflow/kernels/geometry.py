@@ -16,6 +16,19 @@ indices run along axis 0 fastest:
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
+
+
+def zeros_of(t):
+    """A tuple of float zeros as long as the tuple ``t`` (compiled code only): the start of a
+    per-particle sum over D components held in registers, D taken from ``cells``' type."""
+    raise NotImplementedError("zeros_of is for compiled code")
+
+
+@overload(zeros_of)
+def _zeros_of(t):
+    zero = (0.0,) * len(t)
+    return lambda t: zero
 
 
 @njit(cache=True)

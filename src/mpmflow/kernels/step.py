@@ -19,14 +19,13 @@ step at a time with the solve in Python (``mpmflow.pressure``): ``predict``,
 """
 
 from collections import namedtuple
-from functools import lru_cache
 
 import numba
 import numpy as np
 from numba import njit
 
-from . import assembly, binning, corrector, ghost, multigrid, quadrature, surface, volume, walls
-from .transfer import kernels as transfer_kernels
+from . import (assembly, binning, corrector, ghost, multigrid, quadrature, surface, transfer,
+               volume, walls)
 
 Grid = namedtuple("Grid", "h cells cell_volume upper margin wall_node wall_axis wall_sign")
 Particles = namedtuple("Particles", "x v mass volume pressure")
@@ -330,64 +329,63 @@ def volume_correction(G, O, W, report):
     return OK
 
 
-@lru_cache(maxsize=None)
-def kernels(D):
-    """The step of dimension D: (predict, finish, advance)."""
-    # Launch Numba's threading layer now: a function loaded from the cache that calls
-    # parallel kernels needs the layer's scheduler symbols, and loading it before any
-    # parallel kernel ran aborts the process ("LLVM ERROR: Symbol not found:
-    # allocate_sched", e.g. a restart whose first compiled call is advance).
+def launch_threads():
+    """Launch Numba's threading layer (call before the first step): a function loaded from
+    the cache that calls parallel kernels needs the layer's scheduler symbols, and loading
+    it before any parallel kernel ran aborts the process ("LLVM ERROR: Symbol not found:
+    allocate_sched", e.g. a restart whose first compiled call is advance)."""
     numba.get_num_threads()
-    p2g, g2p = transfer_kernels(D)
 
-    @njit(cache=True)
-    def predict(P, G, O, W, correct):
-        """Steps 1-4: binning, particle-to-grid with the predictor (eqs. 10-12; the particles'
-        volume on the cell centres too when the volume correction runs this step), cell
-        integrals, free surface. Returns (integrals, rows of the pressure unknowns)."""
-        bin_particles(P, G, W)
-        p2g(P.x, P.v, P.mass, P.volume, W.order, W.start, G.h, G.cells, O.gravity, O.dt,
-            W.node_mass, W.node_mom, W.node_vol, W.v_old, W.v_star,
-            W.cell_vol if correct else W.cell_vol[:0])
-        node_fractions(G, O, W)
-        integrals = cell_integrals(P, G, O, W)
-        rows = classify_nodes(G, O, W, integrals[0])
-        return integrals, rows
 
-    @njit(cache=True)
-    def finish(P, G, O, W, integrals, correct, report):
-        """Steps 6-8: corrector (eq. 16) and wall conditions, volume correction, grid-to-
-        particle (eqs. 19-21). Returns a status code."""
-        corrector.correct_velocity(G.cells, integrals[5], integrals[6], integrals[7], W.p_node,
-                                   W.v_star, O.dt / O.rho, W.v_new)
-        walls.apply_walls(G.wall_node, G.wall_axis, G.wall_sign, W.v_new, W.contact,
-                          O.no_slip)
-        faces = W.no_faces
-        if correct:
-            status = volume_correction(G, O, W, report)
-            if status != OK:
-                return status
-            faces = W.faces
-        report[R_MOVED] += g2p(P.x, P.v, P.pressure, G.h, G.cells, W.v_old, W.v_new, W.p_node,
-                               O.dt, O.flip, G.upper, G.margin, faces)
-        return OK
+@njit(cache=True)
+def predict(P, G, O, W, correct):
+    """Steps 1-4: binning, particle-to-grid with the predictor (eqs. 10-12; the particles'
+    volume on the cell centres too when the volume correction runs this step), cell
+    integrals, free surface. Returns (integrals, rows of the pressure unknowns)."""
+    bin_particles(P, G, W)
+    transfer.particles_to_grid(P.x, P.v, P.mass, P.volume, W.order, W.start, G.h, G.cells,
+                               O.gravity, O.dt, W.node_mass, W.node_mom, W.node_vol, W.v_old,
+                               W.v_star, W.cell_vol if correct else W.cell_vol[:0])
+    node_fractions(G, O, W)
+    integrals = cell_integrals(P, G, O, W)
+    rows = classify_nodes(G, O, W, integrals[0])
+    return integrals, rows
 
-    @njit(cache=True)
-    def advance(P, G, O, W, first, nsteps, report):
-        """``nsteps`` steps of size O.dt; ``first``: the number of the first (1-based, counted
-        from the start of the run). Stops at the first failure; returns the steps done."""
-        for k in range(nsteps):
-            report[R_STEP] = k
-            correct = O.volume_every > 0 and (first + k) % O.volume_every == 0
-            integrals, rows = predict(P, G, O, W, correct)
-            report[R_UNKNOWNS] = max(report[R_UNKNOWNS], rows.shape[0])
-            report[R_LAST_UNKNOWNS] = rows.shape[0]
-            status = pressure_multigrid(G, O, W, integrals, rows, report)
-            if status == OK:
-                status = finish(P, G, O, W, integrals, correct, report)
-            if status != OK:
-                report[R_STATUS] = status
-                return k
-        return nsteps
 
-    return predict, finish, advance
+@njit(cache=True)
+def finish(P, G, O, W, integrals, correct, report):
+    """Steps 6-8: corrector (eq. 16) and wall conditions, volume correction, grid-to-
+    particle (eqs. 19-21). Returns a status code."""
+    corrector.correct_velocity(G.cells, integrals[5], integrals[6], integrals[7], W.p_node,
+                               W.v_star, O.dt / O.rho, W.v_new)
+    walls.apply_walls(G.wall_node, G.wall_axis, G.wall_sign, W.v_new, W.contact,
+                      O.no_slip)
+    faces = W.no_faces
+    if correct:
+        status = volume_correction(G, O, W, report)
+        if status != OK:
+            return status
+        faces = W.faces
+    report[R_MOVED] += transfer.grid_to_particles(P.x, P.v, P.pressure, G.h, G.cells, W.v_old,
+                                                  W.v_new, W.p_node, O.dt, O.flip, G.upper,
+                                                  G.margin, faces)
+    return OK
+
+
+@njit(cache=True)
+def advance(P, G, O, W, first, nsteps, report):
+    """``nsteps`` steps of size O.dt; ``first``: the number of the first (1-based, counted
+    from the start of the run). Stops at the first failure; returns the steps done."""
+    for k in range(nsteps):
+        report[R_STEP] = k
+        correct = O.volume_every > 0 and (first + k) % O.volume_every == 0
+        integrals, rows = predict(P, G, O, W, correct)
+        report[R_UNKNOWNS] = max(report[R_UNKNOWNS], rows.shape[0])
+        report[R_LAST_UNKNOWNS] = rows.shape[0]
+        status = pressure_multigrid(G, O, W, integrals, rows, report)
+        if status == OK:
+            status = finish(P, G, O, W, integrals, correct, report)
+        if status != OK:
+            report[R_STATUS] = status
+            return k
+    return nsteps

@@ -1,8 +1,8 @@
 """Particle-grid transfers with multilinear shape functions, for 2D and 3D.
 
-``kernels(D)`` builds the kernels of dimension D from the one source below: they close over
-D and its constant tables (a zero vector as a tuple, so that per-particle sums live in
-registers), and the grid comes as ``cells``, the tuple of cell counts (``geometry``).
+The grid comes as ``cells``, the tuple of cell counts (``geometry``): its length D is part
+of the kernels' types, so each compiles once per dimension, with per-particle sums in
+D-tuples (``geometry.zeros_of``) that live in registers.
 
 particle-to-grid: nodal mass, momentum and material volume, the velocity and the predictor
 with gravity, and (for the volume correction) the particles' volume on the cell centres;
@@ -10,13 +10,11 @@ grid-to-particle: the FLIP/PIC velocity, the position moved with the new grid ve
 the volume correction's displacement, the pressure, and the wall put-back.
 """
 
-from functools import lru_cache
-
 import numpy as np
 from numba import njit, prange
 from numba.cpython.unsafe.tuple import tuple_setitem
 
-from .geometry import corner_offsets, node_strides, weights_at
+from .geometry import corner_offsets, node_strides, weights_at, zeros_of
 from .parallel import CHUNKS, strips
 
 STRIPS = 16  # particle-to-grid cuts the slabs of cells into 2 STRIPS strips
@@ -162,152 +160,155 @@ def pressure_noise(x, mass, pressure, h, cells, work_m, work_mp):
     return np.sqrt(total / max(x.shape[0], 1))
 
 
-@lru_cache(maxsize=None)
-def kernels(D):
-    """The transfer kernels of dimension D (2 or 3)."""
+@njit(cache=True)
+def scatter_slabs(r0, r1, x, v, mass, volume, order, start, inv_h, cells, ns, cs, node_mass,
+                  node_mom, node_vol, cell_vol):
+    """P2G of the particles of cell slabs r0 to r1 - 1 (a slab: the cells with one index
+    along the last axis), cell by cell."""
+    D = len(cells)
     NC = 1 << D
-    ZERO = (0.0,) * D
-
-    @njit(cache=True)
-    def scatter_slabs(r0, r1, x, v, mass, volume, order, start, inv_h, cells, ns, cs, node_mass,
-                      node_mom, node_vol, cell_vol):
-        """P2G of the particles of cell slabs r0 to r1 - 1 (a slab: the cells with one index
-        along the last axis), cell by cell."""
-        w = np.empty(NC)
-        off = np.empty(NC, dtype=np.int64)
-        corner_offsets(ns, off)
-        cfrac = np.empty(D)
-        first = np.empty(D, dtype=np.int64)
-        slab = cs[D - 1]
-        cells_too = cell_vol.shape[0] > 0
-        for s in range(start[r0 * slab], start[r1 * slab]):
-            p = order[s]
-            base = weights_at(x, p, inv_h, cells, ns, w)
-            m = mass[p]
-            vp = ZERO
-            for k in range(D):
-                vp = tuple_setitem(vp, k, v[p, k])
-            for a in range(NC):
-                i = base + off[a]
-                wm = w[a] * m
-                node_mass[i] += wm
-                node_vol[i] += w[a] * volume[p]
-                for k in range(D):
-                    node_mom[i, k] += wm * vp[k]
-            if cells_too:
-                scatter_cell_volume(x, p, volume[p], inv_h, cells, cs, cfrac, first, cell_vol)
-
-    @njit(cache=True, parallel=True)
-    def particles_to_grid(x, v, mass, volume, order, start, h, cells, gravity, dt, node_mass,
-                          node_mom, node_vol, v_old, v_star, cell_vol):
-        """Lumped nodal mass M_i = sum_p N_i(x_p) m_p, momentum sum_p N_i m_p v_p, material
-        volume sum_p N_i V_p, velocity v_i = momentum / M_i and the predictor without pressure
-        v*_i = v_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere); with ``cell_vol``
-        (non-empty) also the particles' volume on the cell centres (``scatter_cell_volume``).
-
-        The particles come binned by cell (``order``, ``start``: see ``binning``). The slabs
-        of cells along the last axis are cut into 2 STRIPS strips of at least 2 slabs holding
-        equal numbers of particles; strips 0, 2, 4, ... share no node (nor cell centre), so
-        they are scattered in parallel, then strips 1, 3, 5, .... Every sum is taken in the
-        same order whatever the thread count, so results do not depend on it.
-        """
-        ns = np.empty(D, dtype=np.int64)
-        cs = np.empty(D, dtype=np.int64)
-        nn = 1
-        nc = 1
+    ZERO = zeros_of(cells)
+    w = np.empty(NC)
+    off = np.empty(NC, dtype=np.int64)
+    corner_offsets(ns, off)
+    cfrac = np.empty(D)
+    first = np.empty(D, dtype=np.int64)
+    slab = cs[D - 1]
+    cells_too = cell_vol.shape[0] > 0
+    for s in range(start[r0 * slab], start[r1 * slab]):
+        p = order[s]
+        base = weights_at(x, p, inv_h, cells, ns, w)
+        m = mass[p]
+        vp = ZERO
         for k in range(D):
-            ns[k] = nn
-            cs[k] = nc
-            nn *= cells[k] + 1
-            nc *= cells[k]
-        for i in prange(nn):
-            node_mass[i] = 0.0
-            node_vol[i] = 0.0
+            vp = tuple_setitem(vp, k, v[p, k])
+        for a in range(NC):
+            i = base + off[a]
+            wm = w[a] * m
+            node_mass[i] += wm
+            node_vol[i] += w[a] * volume[p]
             for k in range(D):
-                node_mom[i, k] = 0.0
-        for c in prange(cell_vol.shape[0]):
-            cell_vol[c] = 0.0
-        inv_h = 1.0 / h
-        bounds = np.empty(2 * STRIPS + 1, dtype=np.int64)
-        nstrips = strips(start[::cs[D - 1]], 2 * STRIPS, 2, bounds)
-        for parity in range(2):
-            for t in prange((nstrips - parity + 1) // 2):
-                u = 2 * t + parity
-                scatter_slabs(bounds[u], bounds[u + 1], x, v, mass, volume, order, start, inv_h,
-                              cells, ns, cs, node_mass, node_mom, node_vol, cell_vol)
-        for i in prange(nn):
-            m = node_mass[i]
-            for k in range(D):
-                if m > 0.0:
-                    v_old[i, k] = node_mom[i, k] / m
-                    v_star[i, k] = v_old[i, k] + dt * gravity[k]
-                else:
-                    v_old[i, k] = 0.0
-                    v_star[i, k] = 0.0
+                node_mom[i, k] += wm * vp[k]
+        if cells_too:
+            scatter_cell_volume(x, p, volume[p], inv_h, cells, cs, cfrac, first, cell_vol)
 
-    @njit(cache=True)
-    def gather(lo, hi, x, v, pressure, inv_h, cells, ns, v_old, v_new, p_node, dt, flip, upper,
-               margin, faces):
-        """G2P of particles lo to hi - 1 (``grid_to_particles``); returns how many were put
-        back inside."""
-        w = np.empty(NC)
-        off = np.empty(NC, dtype=np.int64)
-        corner_offsets(ns, off)
-        normal = np.empty(D)
-        tangent = np.empty(D)
-        nlo = np.empty(D, dtype=np.int64)
-        tlo = np.empty(D, dtype=np.int64)
-        thi = np.empty(D, dtype=np.int64)
-        correct = faces[0].shape[0] > 0
-        moved = 0
-        for p in range(lo, hi):
-            base = weights_at(x, p, inv_h, cells, ns, w)
-            pic = ZERO
-            dv = ZERO
-            pp = 0.0
-            for a in range(NC):
-                i = base + off[a]
-                for k in range(D):
-                    pic = tuple_setitem(pic, k, pic[k] + w[a] * v_new[i, k])
-                    dv = tuple_setitem(dv, k, dv[k] + w[a] * (v_new[i, k] - v_old[i, k]))
-                pp += w[a] * p_node[i]
-            disp = ZERO
+
+@njit(cache=True, parallel=True)
+def particles_to_grid(x, v, mass, volume, order, start, h, cells, gravity, dt, node_mass,
+                      node_mom, node_vol, v_old, v_star, cell_vol):
+    """Lumped nodal mass M_i = sum_p N_i(x_p) m_p, momentum sum_p N_i m_p v_p, material
+    volume sum_p N_i V_p, velocity v_i = momentum / M_i and the predictor without pressure
+    v*_i = v_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere); with ``cell_vol``
+    (non-empty) also the particles' volume on the cell centres (``scatter_cell_volume``).
+
+    The particles come binned by cell (``order``, ``start``: see ``binning``). The slabs
+    of cells along the last axis are cut into 2 STRIPS strips of at least 2 slabs holding
+    equal numbers of particles; strips 0, 2, 4, ... share no node (nor cell centre), so
+    they are scattered in parallel, then strips 1, 3, 5, .... Every sum is taken in the
+    same order whatever the thread count, so results do not depend on it.
+    """
+    D = len(cells)
+    ns = np.empty(D, dtype=np.int64)
+    cs = np.empty(D, dtype=np.int64)
+    nn = 1
+    nc = 1
+    for k in range(D):
+        ns[k] = nn
+        cs[k] = nc
+        nn *= cells[k] + 1
+        nc *= cells[k]
+    for i in prange(nn):
+        node_mass[i] = 0.0
+        node_vol[i] = 0.0
+        for k in range(D):
+            node_mom[i, k] = 0.0
+    for c in prange(cell_vol.shape[0]):
+        cell_vol[c] = 0.0
+    inv_h = 1.0 / h
+    bounds = np.empty(2 * STRIPS + 1, dtype=np.int64)
+    nstrips = strips(start[::cs[D - 1]], 2 * STRIPS, 2, bounds)
+    for parity in range(2):
+        for t in prange((nstrips - parity + 1) // 2):
+            u = 2 * t + parity
+            scatter_slabs(bounds[u], bounds[u + 1], x, v, mass, volume, order, start, inv_h,
+                          cells, ns, cs, node_mass, node_mom, node_vol, cell_vol)
+    for i in prange(nn):
+        m = node_mass[i]
+        for k in range(D):
+            if m > 0.0:
+                v_old[i, k] = node_mom[i, k] / m
+                v_star[i, k] = v_old[i, k] + dt * gravity[k]
+            else:
+                v_old[i, k] = 0.0
+                v_star[i, k] = 0.0
+
+
+@njit(cache=True)
+def gather(lo, hi, x, v, pressure, inv_h, cells, ns, v_old, v_new, p_node, dt, flip, upper,
+           margin, faces):
+    """G2P of particles lo to hi - 1 (``grid_to_particles``); returns how many were put
+    back inside."""
+    D = len(cells)
+    NC = 1 << D
+    ZERO = zeros_of(cells)
+    w = np.empty(NC)
+    off = np.empty(NC, dtype=np.int64)
+    corner_offsets(ns, off)
+    normal = np.empty(D)
+    tangent = np.empty(D)
+    nlo = np.empty(D, dtype=np.int64)
+    tlo = np.empty(D, dtype=np.int64)
+    thi = np.empty(D, dtype=np.int64)
+    correct = faces[0].shape[0] > 0
+    moved = 0
+    for p in range(lo, hi):
+        base = weights_at(x, p, inv_h, cells, ns, w)
+        pic = ZERO
+        dv = ZERO
+        pp = 0.0
+        for a in range(NC):
+            i = base + off[a]
+            for k in range(D):
+                pic = tuple_setitem(pic, k, pic[k] + w[a] * v_new[i, k])
+                dv = tuple_setitem(dv, k, dv[k] + w[a] * (v_new[i, k] - v_old[i, k]))
+            pp += w[a] * p_node[i]
+        disp = ZERO
+        if correct:
+            face_samples(x, p, inv_h, cells, normal, nlo, tangent, tlo, thi)
+            for k in range(D):
+                disp = tuple_setitem(disp, k, face_displacement(cells, k, faces[k], normal,
+                                                                nlo, tangent, tlo, thi))
+        for k in range(D):
+            v[p, k] = flip * (v[p, k] + dv[k]) + (1.0 - flip) * pic[k]
+            x[p, k] += dt * pic[k]
             if correct:
-                face_samples(x, p, inv_h, cells, normal, nlo, tangent, tlo, thi)
-                for k in range(D):
-                    disp = tuple_setitem(disp, k, face_displacement(cells, k, faces[k], normal,
-                                                                    nlo, tangent, tlo, thi))
-            for k in range(D):
-                v[p, k] = flip * (v[p, k] + dv[k]) + (1.0 - flip) * pic[k]
-                x[p, k] += dt * pic[k]
-                if correct:
-                    x[p, k] += disp[k]
-            pressure[p] = pp
-            if put_inside(x, v, p, upper, margin):
-                moved += 1
-        return moved
+                x[p, k] += disp[k]
+        pressure[p] = pp
+        if put_inside(x, v, p, upper, margin):
+            moved += 1
+    return moved
 
-    @njit(cache=True, parallel=True)
-    def grid_to_particles(x, v, pressure, h, cells, v_old, v_new, p_node, dt, flip, upper,
-                          margin, faces):
-        """Eqs. (19)-(21): FLIP/PIC velocity update (``flip``: the FLIP fraction of this
-        step), position update with v^{t+1} evaluated at x_p^t plus the volume correction's
-        displacement (``faces``: one array per axis, see ``face_displacement``; empty arrays:
-        none), pressure; then particles that left the box [0, upper] are put back inside
-        (``put_inside``). Returns how many were put back."""
-        ns = np.empty(D, dtype=np.int64)
-        nn = 1
-        for k in range(D):
-            ns[k] = nn
-            nn *= cells[k] + 1
-        inv_h = 1.0 / h
-        n = x.shape[0]
-        nchunks = min(CHUNKS, max(n, 1))
-        moved = 0
-        for chunk in prange(nchunks):
-            moved += gather(chunk * n // nchunks, (chunk + 1) * n // nchunks, x, v, pressure,
-                            inv_h, cells, ns, v_old, v_new, p_node, dt, flip, upper, margin,
-                            faces)
-        return moved
 
-    return particles_to_grid, grid_to_particles
+@njit(cache=True, parallel=True)
+def grid_to_particles(x, v, pressure, h, cells, v_old, v_new, p_node, dt, flip, upper,
+                      margin, faces):
+    """Eqs. (19)-(21): FLIP/PIC velocity update (``flip``: the FLIP fraction of this
+    step), position update with v^{t+1} evaluated at x_p^t plus the volume correction's
+    displacement (``faces``: one array per axis, see ``face_displacement``; empty arrays:
+    none), pressure; then particles that left the box [0, upper] are put back inside
+    (``put_inside``). Returns how many were put back."""
+    D = len(cells)
+    ns = np.empty(D, dtype=np.int64)
+    nn = 1
+    for k in range(D):
+        ns[k] = nn
+        nn *= cells[k] + 1
+    inv_h = 1.0 / h
+    n = x.shape[0]
+    nchunks = min(CHUNKS, max(n, 1))
+    moved = 0
+    for chunk in prange(nchunks):
+        moved += gather(chunk * n // nchunks, (chunk + 1) * n // nchunks, x, v, pressure,
+                        inv_h, cells, ns, v_old, v_new, p_node, dt, flip, upper, margin,
+                        faces)
+    return moved

@@ -86,7 +86,8 @@ class ProjectionScheme:
                            float(grid.cell_volume), np.asarray(grid.size, dtype=float),
                            MARGIN * grid.spacing, node, axis, sign)
         self.W = work_arrays(grid, particles.count, s.volume_correction > 0)
-        self.predict, self.finish, self.compiled_advance = step.kernels(grid.dim)
+        step.launch_threads()
+        self.compiled_advance = step.advance
         self.python_pressure = (None if s.linear_solver == "multigrid"
                                 else pressure.PythonPressure(grid, s))
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
@@ -167,11 +168,11 @@ class ProjectionScheme:
         for k in range(nsteps):
             report[step.R_STEP] = k
             correct = O.volume_every > 0 and (self.steps + k + 1) % O.volume_every == 0
-            integrals, rows = self.predict(Pt, self.G, O, self.W, correct)
+            integrals, rows = step.predict(Pt, self.G, O, self.W, correct)
             report[step.R_UNKNOWNS] = max(report[step.R_UNKNOWNS], rows.size)
             report[step.R_LAST_UNKNOWNS] = rows.size
             self.python_pressure.solve(self.G, O, self.W, integrals, rows, report, where(k))
-            status = self.finish(Pt, self.G, O, self.W, integrals, correct, report)
+            status = step.finish(Pt, self.G, O, self.W, integrals, correct, report)
             if status != step.OK:
                 report[step.R_STATUS] = status
                 return k
