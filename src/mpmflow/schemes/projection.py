@@ -83,6 +83,19 @@ class ProjectionScheme:
         if self.volume is not None:
             self.volume.restore(state["volume_q"])
 
+    def check_free_surface(self):
+        """Raise SolverError ("singular") when the material as placed touches no free
+        surface: the first step's classification and assembly, without the solve (its
+        buffers are overwritten by the step). Lets a run refuse such a case before it
+        starts instead of failing at step 1."""
+        g, P = self.grid, self.particles
+        bins = bin_particles(g, P)
+        node_f = self.surface.nodal_fraction(bins.theta)
+        integrals = self.quadrature.integrals(P, bins, self.surface.enclosed_cells(node_f))
+        nodes = self.surface.classify(integrals, node_f)
+        if nodes.nrows:
+            self.projection._matrix(integrals, nodes, " at the start")
+
     def advance(self, dt, nsteps, where=""):
         """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
         the steps (residual: the worst)."""
