@@ -143,7 +143,7 @@ def overlap_message(bodies, spacing):
                 return head + f"bodies.{j} lies inside bodies.{i}: remove it."
             if _inside(a, b, tol):
                 return head + f"bodies.{i} lies inside bodies.{j}: remove it."
-            trims = _trims(j, b, a, tol) + _trims(i, a, b, tol)
+            trims = _trims(i, a, b, tol) + _trims(j, b, a, tol)
             if trims:
                 return head + ("To keep the same material, set " + trims[0]
                                + "".join(f" (or {t})" for t in trims[1:]) + ".")
