@@ -414,6 +414,11 @@ class Case(_Section):
                 "time.dt = \"auto\" is the stable step of the explicit scheme; the "
                 "projection scheme needs a number, e.g. time.dt = 1e-3 (s)")
         dt = time_step(self)
+        if self.time.end < dt * (1 - 1e-9):
+            raise ValueError(
+                f"time.end = {self.time.end:g} s is shorter than one time step of {dt:.3g} s "
+                f"(time.dt = {self.time.dt!r}); a run takes at least one step: give a later "
+                "time.end, or a smaller time.dt")
         steps = self.time.end / dt
         if not steps <= MAX_STEPS:
             raise ValueError(
@@ -589,7 +594,7 @@ def _format_error(err, source):
             desc = _describe(loc)
             lines.append(f"missing key `{loc}`{': ' + desc if desc else ''}")
             continue
-        msg = e["msg"].removeprefix("Value error, ")
+        msg = e["msg"].removeprefix("Value error, ").rstrip(".")
         key, entry = loc, ""
         while _generic(key) not in _REFERENCE and key.rsplit(".", 1)[-1].isdigit():
             key = key.rsplit(".", 1)[0]  # an entry of a list value: name the key

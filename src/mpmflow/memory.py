@@ -104,11 +104,19 @@ def _kernels_cached():
     return False
 
 
+def _as_float(n):
+    try:
+        return float(n)
+    except OverflowError:
+        return math.inf
+
+
 def estimate(case):
     """The Estimate of a validated case (no allocation: counts from the geometry)."""
     grid = Grid.covering(case.domain.size, case.grid.spacing)
     h = case.grid.spacing
-    particles = sum(geometry.particle_count(b, h) for b in case.bodies)
+    count = sum(geometry.particle_count(b, h) for b in case.bodies)  # exact, or inf
+    particles = _as_float(count)  # a count of 1e400 (grid.spacing = 1e-300) is inf here
     nodes = math.prod(float(n) for n in grid.nodes)
     # pressure unknowns: the nodes of the cells the material covers, with room to spread
     unknowns = 0.0
@@ -127,7 +135,7 @@ def estimate(case):
              if case.output.snapshots else 0)
     disk = (rows * (170 + 12 * len(case.probes)) + snaps * (120 * particles + 200)
             + 2 * (56 * particles + 16 * nodes))
-    return Estimate(particles=particles, nodes=int(nodes) if math.isfinite(nodes) else nodes,
+    return Estimate(particles=count if count < 10**15 else particles, nodes=int(nodes) if math.isfinite(nodes) else nodes,
                     unknowns=unknowns, rows=rows, program=program,
                     particle_bytes=PER_PARTICLE * particles, grid_bytes=PER_NODE * nodes,
                     solver_bytes=PER_UNKNOWN * unknowns, rows_bytes=PER_ROW * values * rows,
@@ -208,14 +216,17 @@ def check(case, est=None):
         return est
     settings = ("grid.spacing (memory grows as its inverse square), "
                 "bodies.N.particles_per_cell")
-    if case.output.snapshots:
+    if case.output.snapshots and math.isfinite(est.passing_bytes):
         settings += ", output.snapshots = false (a snapshot needs "  \
                     f"{size(est.passing_bytes)} while it is written)"
     count = (f"{est.particles:.3g}" if isinstance(est.particles, float)
              else f"{est.particles:,}")
     raise CaseError(
-        f"This case needs {est.text()} of memory: {count} particles, {est.nodes:.3g} grid "
-        f"nodes. This machine can give the run {size(budget)} ({source}), so it would be "
+        (f"This case needs {est.text()} of memory: {count} particles, {est.nodes:.3g} grid "
+         "nodes." if math.isfinite(est.total) else
+         "This case needs more memory than any machine has: its particles and grid nodes "
+         "are too many to count.")
+        + f" This machine can give the run {size(budget)} ({source}), so it would be "
         f"killed by the system when it runs out. Make the case smaller: {settings}; or run "
         "it on a machine with more memory. (MPMFLOW_MEMORY_LIMIT sets the memory a run may "
         "use, if the available memory is measured wrong here.)")
