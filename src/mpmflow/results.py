@@ -36,10 +36,16 @@ class Snapshot:
     def read(self):
         """The particle data: x (n, 2) m, velocity (n, 2) m/s, pressure (n,) Pa, mass (n,)
         kg/m. CaseError when the file is missing or damaged."""
-        import meshio
+        from meshio import vtu
 
+        if not self.path.is_file():
+            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
+                            "index particles.pvd lists it, but the file was deleted or "
+                            "moved.")
         try:
-            mesh = meshio.read(self.path)
+            # the VTU reader itself: meshio.read prints a damaged file's error and calls
+            # sys.exit(1) (mpmflow plot exited 1 on a truncated snapshot)
+            mesh = vtu.read(self.path)
             data = {"x": np.asarray(mesh.points[:, :2]),
                     "velocity": np.asarray(mesh.point_data["velocity"][:, :2]),
                     "pressure": np.asarray(mesh.point_data["pressure"]),
