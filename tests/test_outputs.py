@@ -158,3 +158,20 @@ def test_load_case_overrides_and_open_run_read_everything(tmp_path):
     np.testing.assert_allclose(last["pressure"], sim.particles.pressure)
     assert run.units["wall_p"] == "Pa" and run.units["gauge"] == "m"
     assert run.units["front"] == "m"
+
+
+def test_an_override_replaces_a_list_of_tables_whole():
+    """probes (and bodies) as one override: a dict value, or TOML on the command line;
+    the entries get the same checks as the file's."""
+    probe = {"name": "wall_p", "quantity": "pressure", "position": [0.1, 0.05]}
+    by_dict = load_case(EXAMPLES / "hydrostatic.toml", {"probes": [probe]})
+    by_set = load_case(EXAMPLES / "hydrostatic.toml", [
+        'probes=[{name = "wall_p", quantity = "pressure", position = [0.1, 0.05]}]'])
+    assert by_dict == by_set and by_dict.probes[0].position == [0.1, 0.05]
+    two = load_case(EXAMPLES / "hydrostatic.toml", {"bodies": [
+        {"min": [0.0, 0.0], "max": [0.05, 0.1]}, {"min": [0.05, 0.0], "max": [0.1, 0.1]}]})
+    assert len(two.bodies) == 2
+    with pytest.raises(CaseError, match="missing key `probes.0.quantity`"):
+        load_case(EXAMPLES / "hydrostatic.toml", {"probes": [{"name": "x", "position": [0, 0]}]})
+    with pytest.raises(CaseError, match="unknown case key `probe`"):
+        load_case(EXAMPLES / "hydrostatic.toml", {"probe": [probe]})

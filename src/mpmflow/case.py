@@ -524,6 +524,9 @@ def key_reference():
 
 _REFERENCE = {row["key"]: row for row in key_reference()}
 KNOWN_KEYS = list(_REFERENCE)
+# lists of tables an override may replace whole, e.g. {"probes": [{"name": ..., ...}]} or
+# --set 'probes=[{name = "p1", quantity = "pressure", position = [0.42, 0.01]}]'
+LIST_KEYS = ("bodies", "probes")
 
 
 def _generic(dotted):
@@ -577,7 +580,7 @@ def apply_overrides(data, overrides):
             if not isinstance(node, (dict, list)):
                 raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth + 1])}` is a value, not a "
                                 "section." + _suggest(key))
-        if _generic(key) not in KNOWN_KEYS:
+        if _generic(key) not in KNOWN_KEYS and key not in LIST_KEYS:
             raise CaseError(f"{label} {key}: unknown case key `{key}`.{_suggest(key)} "
                             "Run `mpmflow keys` for the list of keys.")
         node[parts[-1]] = _parse_value(value.strip()) if parse else value
