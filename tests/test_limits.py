@@ -28,7 +28,7 @@ def _cli(*args, env=None, timeout=120):
 
 
 def test_a_case_too_large_for_the_machine_is_refused_at_once(tmp_path):
-    """1.8e9 cells and 2.6e8 particles: no machine of today holds them. Refused in under
+    """1.8e9 grid nodes and 4.2e9 particles (1.4 TB): no machine of today holds them. Refused in under
     2 s (the whole command, start-up included), with the estimate and the settings."""
     res, wall = _cli("run", DAM, "--out", tmp_path / "o", "--set", "grid.spacing=1e-5")
     assert res.returncode == 2, res.stderr
