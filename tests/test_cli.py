@@ -2,8 +2,11 @@
 
 import csv
 import json
+import shlex
+import signal
 import subprocess
 import sys
+import time
 import xml.etree.ElementTree as ET
 
 import meshio
@@ -146,3 +149,48 @@ def test_progress_bar_says_when_kernels_compile_and_leaves_it_out_of_the_estimat
     assert not bar.desc  # back to the plain bar once steps run
     bar.close()
     bar.close()  # closing twice (tqdm closes again when collected) is harmless
+
+
+def test_keys_into_a_pipe_closed_early_exits_quietly():
+    """`mpmflow keys | head -1` raised BrokenPipeError with a traceback: the reader going
+    away now stops the command quietly with 141 (128 + SIGPIPE), as other tools do."""
+    proc = subprocess.Popen([sys.executable, "-m", "mpmflow.cli", "keys"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader is gone before the first line is written
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 141 and err == b"", err
+    res = subprocess.run(["bash", "-c", f"{shlex.quote(sys.executable)} -m mpmflow.cli keys "
+                          "| head -1; echo \"${PIPESTATUS[0]}\""],
+                         capture_output=True, text=True, timeout=60)
+    lines = res.stdout.splitlines()
+    assert lines[0].startswith("title  (") and lines[1] in ("0", "141"), res.stdout
+    assert res.stderr == ""
+
+
+@pytest.mark.parametrize("signum, delay", [(signal.SIGTERM, 0.25), (signal.SIGINT, 0.5),
+                                           (signal.SIGTERM, 1.0)])
+def test_a_signal_in_the_first_second_stops_with_a_message(tmp_path, signum, delay):
+    """SIGTERM during the first ~0.6 s (imports, loading, placing particles) killed the
+    command without a word: whenever it comes, the command now says what it did and exits
+    128 + the signal's number. (Where the command is at a given delay depends on the
+    machine's speed: before the time loop nothing was run; in it, a checkpoint is written.)"""
+    out = tmp_path / "o"
+    proc = subprocess.Popen([sys.executable, "-m", "mpmflow.cli", "run",
+                             str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q",
+                             "--set", "grid.spacing=0.001", "--set", "time.dt=2.5e-4"],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(delay)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=120)
+    name = signal.Signals(signum).name
+    assert proc.returncode == 128 + signum, (proc.returncode, err)
+    assert "Traceback" not in err
+    if "before the run started" in err:
+        assert err == f"mpmflow: stopped by {name} before the run started: nothing was run.\n"
+        assert not (out / "timeseries.csv").exists()
+    else:
+        assert f"mpmflow: {name} received: stopping at the next output time" in err, err
+        assert "mpmflow: interrupted at t = " in err and "--restart" in err
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["status"] == "interrupted"
+        assert (out / summary["last_checkpoint"]).is_file()

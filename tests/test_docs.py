@@ -32,3 +32,20 @@ def test_every_example_says_what_it_shows_and_how_long_it_takes():
         head = case.read_text().split("\n\n", 1)[0]
         assert head.startswith("#"), case.name
         assert "Shows:" in head and "Takes:" in head, case.name
+
+
+def test_the_readme_python_example_runs_as_written(tmp_path, monkeypatch):
+    """The Python API section's code, run as it stands (in a folder with the examples)."""
+    import re
+    import runpy
+
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Python API", 1)[1].split("\n## ", 1)[0]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    (tmp_path / "example.py").write_text(code)
+    monkeypatch.chdir(tmp_path)
+    names = runpy.run_path(str(tmp_path / "example.py"))
+    assert names["summary"]["status"] == "completed" and names["run"].status == "completed"
+    assert len(names["t"]) == 31 and names["snap"].time == 0.3
+    assert names["p"].shape == (31,) and names["data"]["x"].shape == (6498, 2)

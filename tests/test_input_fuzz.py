@@ -1,7 +1,12 @@
 """Property-based test of the input handling: 500 random or mutated case files, each run
 through the command line in-process. Every one must either run (its first steps) or stop
 with a clean error: exit 2 for bad input, or exit 3 for a run the settings make fail
-(a documented blow-up or solver message); never a traceback or another exit code."""
+(a documented blow-up or solver message); never a traceback or another exit code.
+
+Among the mutations: overlapping bodies, huge sizes (tiny grid spacings, vast domains, many
+particles per cell) and endless end times; the machine's memory is replaced by a small
+budget, so that the memory estimate refuses every case above it, as it refuses a case too
+large for the real machine."""
 
 import contextlib
 import copy
@@ -15,6 +20,7 @@ import hypothesis.strategies as st
 from hypothesis import HealthCheck, given, settings
 
 from mpmflow import case as case_module
+from mpmflow import memory
 from mpmflow.cli import main
 from mpmflow.simulation import Simulation
 
@@ -33,6 +39,8 @@ BASE = {
     "solver": {"scheme": "projection", "formulation": "mpmflow", "flip": 0.99,
                "max_iterations": 200, "tolerance": 1e-8, "max_speed": 100.0},
     "checkpoint": {"interval": 2e-3},
+    "probes": [{"name": "p1", "quantity": "pressure", "position": [0.1, 0.01]},
+               {"name": "h1", "quantity": "level", "position": [0.05, 0.0]}],
 }
 EXPLICIT = {"solver": {"scheme": "explicit"}, "material": {"bulk_modulus": 4e5},
             "time": {"dt": "auto"}}
@@ -109,8 +117,12 @@ VALID = {  # other allowed values, so that many mutated cases are accepted and r
     "flip": [0.0, 1.0], "density_correction": [0.0, 1.0], "velocity": [[0.5, -0.5]],
     "gravity": [[0.0, 0.0], [3.0, -9.81]], "snapshots": [False], "spacing": [0.01, 0.025],
     "max": [[0.1, 0.1]], "min": [[0.02, 0.03]], "end": [1e-3], "dt": [5e-4],
-    "pressure_smoothing": ["none"], "max_speed": [1e-3],
+    "pressure_smoothing": ["none"], "max_speed": [1e-3], "quantity": ["level"],
+    "position": [[0.0, 0.0], [0.1, 0.1]], "threads": [1, 2, "auto"],
 }
+HUGE = [("grid", "spacing", [1e-5, 1e-7, 1e-300]), ("domain", "size", [[1e6, 1e6], [1e300, 1.0]]),
+        ("time", "end", [1e300, 1e12, 1e9, 1e30]), ("time", "dt", [1e-300, 1e-12]),
+        ("output", "interval", [1e-300, 1e-9]), ("bodies.0", "particles_per_cell", [16])]
 known = sorted({p.split(".")[-1] for p in case_module.KNOWN_KEYS} | set(BASE))
 
 
@@ -127,6 +139,15 @@ def mutated_case(draw):
         for key in path[:-1]:
             parent = parent[key]
         parent[path[-1]] = copy.deepcopy(draw(st.sampled_from(VALID[path[-1]])))
+    if draw(st.integers(0, 4)) == 0:  # a second body, often overlapping the first
+        lo = [draw(st.sampled_from([0.0, 0.02, 0.04, 0.06])) for _ in range(2)]
+        hi = [a + draw(st.sampled_from([0.02, 0.04, 0.06])) for a in lo]
+        data["bodies"].append({"min": lo, "max": [min(h, 0.1) for h in hi],
+                               "particles_per_cell": draw(st.sampled_from([1, 2, 3]))})
+    if draw(st.integers(0, 4)) == 0:  # a huge size or an endless end time
+        section, key, values = draw(st.sampled_from(HUGE))
+        parent = data["bodies"][0] if section == "bodies.0" else data[section]
+        parent[key] = copy.deepcopy(draw(st.sampled_from(values)))
     for _ in range(draw(st.integers(0, 3))):  # anything
         path, value = draw(st.sampled_from(_paths(data)))
         *head, last = path
@@ -173,28 +194,41 @@ def test_any_case_file_runs_or_fails_cleanly(monkeypatch):
     """The property over 500 case files, then a check that both accepted and refused cases
     were among them (the property was not vacuous). One test, so that the check does not
     depend on the order or selection of tests (-k, --lf, xdist, random order)."""
-    # every accepted case stays small: at most this many cells and particles (a limit the
-    # validator enforces like the real one), and it is stopped after STEPS steps
-    monkeypatch.setattr(case_module, "MAX_CELLS", 2e4)
-    monkeypatch.setattr(case_module, "MAX_PARTICLES", 2e4)
+    # every accepted case stays small: the memory a run may use is the program's and 8 MB
+    # more (about 30k particles or 50k nodes; the estimate refuses the rest as it refuses a
+    # case larger than the machine), and it is stopped after STEPS steps
+    budget = memory.PROGRAM + memory.COMPILE + 8 * memory.MB
+    monkeypatch.setattr(memory, "available", lambda: (budget, "the test's budget"))
     monkeypatch.setattr(Simulation, "_advance", _capped)
+    monkeypatch.setenv("MPMFLOW_THREADS", "1")  # no sampling of the machine's load
     outcomes = {}
 
     @settings(max_examples=500, deadline=None, database=None,
               suppress_health_check=[HealthCheck.too_slow])
     @given(text=case_text)
     def one_case(text):
-        code = _run_case(text)
+        code, err = _run_case(text)
         outcomes[code] = outcomes.get(code, 0) + 1
+        for kind, words in REFUSALS.items():
+            if code == 2 and words in err:
+                outcomes[kind] = outcomes.get(kind, 0) + 1
 
     one_case()
     print(outcomes)
-    assert sum(outcomes.values()) >= 500
+    assert sum(v for k, v in outcomes.items() if not isinstance(k, str) or k == "ran") >= 500
     assert outcomes.get("ran", 0) + outcomes.get(0, 0) >= 25 and outcomes.get(2, 0) >= 100
+    # the new refusals were reached, each with its own message
+    for kind in ("overlap", "memory", "steps"):
+        assert outcomes.get(kind, 0) >= 3, (kind, outcomes)
+
+
+REFUSALS = {"overlap": "Bodies may touch but not overlap", "memory": "of memory",
+            "steps": "a run can take"}
 
 
 def _run_case(text):
-    """Run one case file through the command line; check the outcome; return it."""
+    """Run one case file through the command line; check the outcome; return it and the
+    message."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "case.toml"
         path.write_text(text)
@@ -212,4 +246,4 @@ def _run_case(text):
     if code == 3:
         assert any(cause in err for cause in ("The run blew up", "did not converge",
                                               "became unstable", "is singular")), err
-    return code
+    return code, err

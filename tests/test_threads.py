@@ -1,4 +1,10 @@
-"""Results do not depend on the number of threads (the parallel kernels sum in a fixed order)."""
+"""Threads: results do not depend on their number (the parallel kernels sum in a fixed
+order), and "auto" leaves to other programs the cores they keep busy."""
+
+import os
+import subprocess
+import sys
+import time
 
 import numba
 import numpy as np
@@ -6,18 +12,17 @@ import pytest
 from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
+from mpmflow import threads as threads_module
+from mpmflow.errors import CaseError
 
 
 def run(threads, settings):
-    before = numba.get_num_threads()
-    numba.set_num_threads(threads)
-    try:
-        case = load_case(EXAMPLES / "dam_break.toml", [*settings, "output.snapshots=false"])
-        sim = Simulation(case)
-        sim.run()
-        return sim.particles
-    finally:
-        numba.set_num_threads(before)
+    case = load_case(EXAMPLES / "dam_break.toml",
+                     [*settings, "output.snapshots=false", f"execution.threads={threads}"])
+    sim = Simulation(case)
+    summary = sim.run()
+    assert [c["threads"] for c in summary["threads"]["changes"]] == [threads]
+    return sim.particles
 
 
 @pytest.mark.parametrize("settings", [
@@ -32,3 +37,58 @@ def test_dam_break_is_bit_identical_on_one_and_two_threads(settings):
     one, two = run(1, settings), run(2, settings)
     for field in ("x", "v", "pressure"):
         assert np.array_equal(getattr(one, field), getattr(two, field)), field
+
+
+def test_numbas_threads_are_given_back_after_a_run():
+    before = numba.get_num_threads()
+    run(1, ["grid.spacing=0.02", "time.end=0.01"])
+    assert numba.get_num_threads() == before
+
+
+def test_the_setting_and_the_environment_variable(monkeypatch):
+    monkeypatch.setenv(threads_module.ENV, "1")
+    assert threads_module.setting_from("auto") == ("fixed", 1)
+    assert threads_module.setting_from(2 if numba.config.NUMBA_NUM_THREADS >= 2 else 1)[0] \
+        == "fixed"  # a number in the case wins over the variable
+    monkeypatch.setenv(threads_module.ENV, "many")
+    with pytest.raises(CaseError, match="MPMFLOW_THREADS = 'many' is not a number"):
+        threads_module.setting_from("auto")
+    monkeypatch.delenv(threads_module.ENV)
+    assert threads_module.setting_from("auto") == ("auto", None)
+    too_many = numba.config.NUMBA_NUM_THREADS + 1
+    with pytest.raises(CaseError, match=f"execution.threads = {too_many} is more threads"):
+        threads_module.setting_from(too_many)
+
+
+def test_auto_counts_the_cores_others_keep_busy(monkeypatch):
+    """The choice from the measured load: a core counts as free when 3/4 of it is idle."""
+    gov = threads_module.ThreadGovernor("auto")
+    gov.cores, gov.limit = 2, 2
+    assert [gov._choose(x) for x in (0.0, 0.2, 0.3, 1.0, 1.2, 2.0)] == [2, 2, 1, 1, 1, 0]
+    gov._set(gov._choose(2.5), 0.0, 2.5)  # never below one thread
+    assert gov.threads == 1
+    gov.stop()
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/stat") or len(os.sched_getaffinity(0)) < 2
+                    or numba.config.NUMBA_NUM_THREADS < 2, reason="needs Linux and 2 cores")
+def test_auto_runs_on_fewer_threads_beside_busy_programs():
+    """With a busy process on every core but one, "auto" starts on one thread, whatever
+    else the machine is doing (the other engineer's tests may add load: fewer free cores
+    only lower the choice)."""
+    cores = min(len(os.sched_getaffinity(0)), numba.config.NUMBA_NUM_THREADS)
+    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+            for _ in range(cores - 1)]
+    try:
+        time.sleep(0.3)
+        gov = threads_module.ThreadGovernor("auto")
+        gov.start()
+        assert gov.threads == 1, gov.changes
+        time.sleep(1.1)
+        gov.update(1.0)  # measured over the last second: still one
+        assert gov.threads == 1, gov.changes
+        gov.stop()
+    finally:
+        for p in busy:
+            p.kill()
+            p.wait()

@@ -1,13 +1,19 @@
 """mpmflow: incompressible free-surface flow with the material point method and Chorin's
 projection (Kularathna & Soga 2017). SI units throughout.
 
-    from mpmflow import load_case, Simulation
-    summary = Simulation(load_case("examples/dam_break.toml"), out_dir="run").run()
+    import mpmflow
+    case = mpmflow.load_case("examples/dam_break.toml", {"grid.spacing": 0.008})
+    summary = mpmflow.Simulation(case, out_dir="runs/db8").run()
+    run = mpmflow.open_run("runs/db8")
+    run.timeseries["front"], run.snapshots[-1].read()["pressure"]
+
+The README's "Python API" section says more.
 """
 
 from ._version import __version__
 
-__all__ = ["load_case", "Simulation", "__version__"]
+__all__ = ["load_case", "validate_case", "Simulation", "open_run", "CaseError",
+           "SimulationError", "__version__"]
 
 
 def __getattr__(name):
@@ -16,8 +22,20 @@ def __getattr__(name):
         from .case import load_case
 
         return load_case
+    if name == "validate_case":
+        from .case import validate_case
+
+        return validate_case
     if name == "Simulation":
         from .simulation import Simulation
 
         return Simulation
+    if name == "open_run":
+        from .results import open_run
+
+        return open_run
+    if name in ("CaseError", "SimulationError"):
+        from . import errors
+
+        return getattr(errors, name)
     raise AttributeError(f"module 'mpmflow' has no attribute {name!r}")

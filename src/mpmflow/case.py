@@ -10,19 +10,23 @@ from pathlib import Path
 from typing import Literal, Optional, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
+                      model_validator)
 
+from . import bodies as geometry
 from .errors import CaseError
-from .stability import case_stable_time_step, initial_speed, sound_speed
+from .grid import Grid
+from .stability import case_stable_time_step, initial_speed, sound_speed, time_step
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-
-MAX_CELLS = 5e7
-MAX_PARTICLES = 5e7
+# checkpoint files are numbered by step with 9 digits (checkpoint_NNNNNNNNN.npz): the most
+# steps a run can take. (At 2 ms per step, the cost of a small case, that is 23 days.)
+MAX_STEPS = 999_999_999
+MAX_CASE_BYTES = 16 * 2**20  # a case file is a page of TOML; anything larger is not one
 
 
 class _Section(BaseModel):
@@ -149,6 +153,43 @@ class Checkpoint(_Section):
         "bit for bit.")
 
 
+class Probe(_Section):
+    name: str = Field(
+        description="Name of the probe: its column in probes.csv (letters, digits, _ . + -).",
+        pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["sensor_1"])
+    quantity: Literal["pressure", "level"] = Field(
+        description="What the probe measures at every output time, into probes.csv: "
+        "\"pressure\" = the mean pressure (Pa) of the particles in a square window one grid "
+        "cell wide centred on position (moved inside the domain where it would cross a wall, "
+        "so a sensor on a wall sees the cells along it); 0 when no particle is in the window "
+        "(a dry sensor reads the atmosphere's gauge pressure). \"level\" = a water-level "
+        "gauge on the vertical line x = position[0]: the height y (m) where the cell volume "
+        "fraction, interpolated in x between the two cell columns around the line, first "
+        "drops below 1/2 going up from position[1] (the top of the water layer; position[1] "
+        "when the gauge's foot is dry, splashes above the layer are not counted).",
+        examples=["pressure"])
+    position: list[float] = Field(
+        description="Where the probe is (m): the sensor's point for \"pressure\", the foot of "
+        "the gauge for \"level\" (e.g. [x, 0] on the floor). Inside the domain.",
+        min_length=2, max_length=2, examples=[[0.42, 0.01]])
+
+
+class Execution(_Section):
+    threads: Union[Literal["auto"], int] = Field(
+        "auto", description="Threads of the compiled kernels: \"auto\" uses the cores that "
+        "other programs leave idle, measured when the run starts and again about every "
+        "second at output times (a run beside another busy program drops to fewer threads "
+        "instead of waiting for a shared core), or a number, fixed for the whole run. The "
+        "environment variable MPMFLOW_THREADS, when set, takes the place of \"auto\". "
+        "Results do not depend on the number of threads. May change on --restart.")
+
+    @model_validator(mode="after")
+    def _positive(self):
+        if self.threads != "auto" and self.threads < 1:
+            raise ValueError("execution.threads must be \"auto\" or at least 1")
+        return self
+
+
 # The formulation presets: defaults of the settings that separate mpmflow's projection from
 # the plain reading of the paper (measured against each other in docs/variants.md and, for the
 # volume correction and the sparse threshold, in docs/method.md).
@@ -264,15 +305,32 @@ class Solver(_Section):
         "volume-weighted average of the cells around it, interpolated to the particle) or "
         "as their cell's value with \"none\".")
 
-    @model_validator(mode="before")
+    _from_preset: set = PrivateAttr(default_factory=set)  # keys the preset gave
+
+    @model_validator(mode="wrap")
     @classmethod
-    def _preset(cls, data):
-        if isinstance(data, dict):
+    def _preset(cls, data, handler):
+        given = None
+        if isinstance(data, dict):  # not on assignment (then data is the model)
+            given = set(data)
             name = data.get("formulation", "mpmflow")
             preset = FORMULATIONS.get(name) if isinstance(name, str) else None
             if preset is not None:
                 data = {**preset, **data}
-        return data
+        model = handler(data)
+        if given is not None:
+            model._from_preset = set(FORMULATIONS["mpmflow"]) - given
+        return model
+
+    def __setattr__(self, name, value):
+        """Assigning formulation after loading applies its preset to the keys the preset
+        gave (not those set explicitly), as --set solver.formulation=... does."""
+        super().__setattr__(name, value)
+        if name == "formulation":
+            for key in sorted(self._from_preset):
+                super().__setattr__(key, FORMULATIONS[value][key])
+        elif name in FORMULATIONS["mpmflow"]:
+            self._from_preset.discard(name)
 
     @model_validator(mode="after")
     def _thresholds(self):
@@ -294,24 +352,15 @@ class Case(_Section):
     output: Output = Output()
     solver: Solver = Solver()
     checkpoint: Checkpoint = Checkpoint()
+    probes: list[Probe] = Field(
+        [], description="Probes ([[probes]] tables): pressure sensors and water-level gauges "
+        "sampled at every output time into probes.csv (a column per probe, named by "
+        "probes.N.name; time in s).")
+    execution: Execution = Execution()
 
     @model_validator(mode="after")
     def _consistent(self):
         size = self.domain.size
-        cells = 1.0
-        for s in size:
-            cells *= s / self.grid.spacing
-        if cells > MAX_CELLS:
-            raise ValueError(
-                f"grid.spacing = {self.grid.spacing:g} m gives {cells:.3g} cells, more than "
-                f"the {MAX_CELLS:.0e} mpmflow allows; choose a larger grid.spacing")
-        particles = sum(np.prod([(b - a) / self.grid.spacing * body.particles_per_cell
-                                 for a, b in zip(body.min, body.max)]) for body in self.bodies)
-        if particles > MAX_PARTICLES:
-            raise ValueError(
-                f"the bodies would hold {particles:.3g} particles, more than the "
-                f"{MAX_PARTICLES:.0e} mpmflow allows; use a larger grid.spacing or fewer "
-                "bodies.N.particles_per_cell")
         if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
@@ -329,6 +378,30 @@ class Case(_Section):
                     raise ValueError(
                         f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
                         f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
+        overlap = geometry.overlap_message(self.bodies, self.grid.spacing)
+        if overlap:
+            raise ValueError(overlap)
+        if self.solver.scheme == "projection":
+            grid = Grid.covering(size, self.grid.spacing)
+            if geometry.fills_grid(self.bodies, self.grid.spacing, grid.size):
+                used = " x ".join(f"{s:.6g}" for s in grid.size)
+                raise ValueError(
+                    f"the bodies fill the whole domain ({used} m on the grid), leaving no "
+                    "free surface: the projection scheme's incompressible material then has "
+                    "no pressure level (the pressure system is singular). Leave empty space "
+                    "above the material, at least one grid cell: lower the top of the bodies "
+                    "(bodies.N.max) or enlarge domain.size")
+        names = set()
+        for k, probe in enumerate(self.probes):
+            if probe.name in names:
+                raise ValueError(f"probes.{k}.name = {probe.name!r} is the name of an earlier "
+                                 "probe; give each probe its own name (its column in "
+                                 "probes.csv)")
+            names.add(probe.name)
+            if any(not 0 <= p <= s * (1 + 1e-12) for p, s in zip(probe.position, size)):
+                box = " x ".join(f"[0, {s:g}]" for s in size)
+                raise ValueError(f"probes.{k}.position = {probe.position} m lies outside the "
+                                 f"domain {box} m; move it inside")
         for k, body in enumerate(self.bodies):
             speed = float(np.hypot(*body.velocity))
             if not speed <= self.solver.max_speed:
@@ -336,6 +409,23 @@ class Case(_Section):
                     f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
                     f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
                     f"stop at once; give a slower velocity or raise solver.max_speed")
+        if self.time.dt == "auto" and self.solver.scheme != "explicit":
+            raise ValueError(
+                "time.dt = \"auto\" is the stable step of the explicit scheme; the "
+                "projection scheme needs a number, e.g. time.dt = 1e-3 (s)")
+        dt = time_step(self)
+        if self.time.end < dt * (1 - 1e-9):
+            raise ValueError(
+                f"time.end = {self.time.end:g} s is shorter than one time step of {dt:.3g} s "
+                f"(time.dt = {self.time.dt!r}); a run takes at least one step: give a later "
+                "time.end, or a smaller time.dt")
+        steps = self.time.end / dt
+        if not steps <= MAX_STEPS:
+            raise ValueError(
+                f"time.end = {self.time.end:g} s is {steps:.3g} steps of {dt:.3g} s, more than "
+                f"the {MAX_STEPS:,} a run can take (checkpoints are numbered by step with 9 "
+                "digits; at a few milliseconds per step that many steps take weeks): give a "
+                "shorter time.end, or a larger time.dt")
         if self.time.dt == "auto":
             if self.solver.scheme != "explicit":
                 raise ValueError(
@@ -365,10 +455,8 @@ class Case(_Section):
 def _read_toml(path):
     path = Path(path)
     try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError:
-        raise CaseError(f"Case file {path} is not a UTF-8 text file; give a TOML case file, "
-                        "e.g. examples/dam_break.toml.") from None
+        with open(path, "rb") as f:  # any file: also a pipe, e.g. <(sed ... case.toml)
+            raw = f.read(MAX_CASE_BYTES + 1)
     except FileNotFoundError:
         raise CaseError(f"Case file {path} does not exist. Give the path of a .toml case file, "
                         "e.g. examples/dam_break.toml.") from None
@@ -377,6 +465,18 @@ def _read_toml(path):
                         "file.") from None
     except OSError as err:
         raise CaseError(f"Case file {path} cannot be read: {err.strerror}.") from None
+    if len(raw) > MAX_CASE_BYTES:
+        raise CaseError(f"Case file {path} is larger than {MAX_CASE_BYTES // 2**20} MiB, so it "
+                        "is not a case file (a case is a page of TOML text); give the path of "
+                        "a .toml case file, e.g. examples/dam_break.toml.")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise CaseError(f"Case file {path} is not a UTF-8 text file; give a TOML case file, "
+                        "e.g. examples/dam_break.toml.") from None
+    if "\0" in text:
+        raise CaseError(f"Case file {path} holds NUL bytes, so it is not a text file; give a "
+                        "TOML case file, e.g. examples/dam_break.toml.")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -424,6 +524,9 @@ def key_reference():
 
 _REFERENCE = {row["key"]: row for row in key_reference()}
 KNOWN_KEYS = list(_REFERENCE)
+# lists of tables an override may replace whole, e.g. {"probes": [{"name": ..., ...}]} or
+# --set 'probes=[{name = "p1", quantity = "pressure", position = [0.42, 0.01]}]'
+LIST_KEYS = ("bodies", "probes")
 
 
 def _generic(dotted):
@@ -445,31 +548,42 @@ def _index(dotted):
 
 
 def apply_overrides(data, overrides):
-    """Apply ``key=value`` strings (dotted keys) to the raw case dict, in place."""
-    for item in overrides:
-        if "=" not in item:
-            raise CaseError(f"--set {item!r} is not of the form dotted.key=value, e.g. "
-                            "--set grid.spacing=0.008.")
-        key, text = item.split("=", 1)
+    """Apply overrides to the raw case dict, in place: ``key=value`` strings (dotted keys,
+    TOML values, as --set takes them) or a dict {dotted key: Python value}."""
+    if isinstance(overrides, dict):
+        items = [(str(k), v, False) for k, v in overrides.items()]
+    elif isinstance(overrides, str):
+        raise CaseError(f"overrides = {overrides!r}: give a list of \"key=value\" strings or "
+                        "a dict {\"dotted.key\": value}, e.g. {\"grid.spacing\": 0.008}.")
+    else:
+        items = []
+        for item in overrides:
+            if not isinstance(item, str) or "=" not in item:
+                raise CaseError(f"--set {item!r} is not of the form dotted.key=value, e.g. "
+                                "--set grid.spacing=0.008.")
+            key, text = item.split("=", 1)
+            items.append((key, text, True))
+    for key, value, parse in items:
         key = key.strip()
+        label = "--set" if parse else "override"
         parts = key.split(".")
         node = data
         for depth, part in enumerate(parts[:-1]):
             if isinstance(node, list):
                 if not part.isdigit() or int(part) >= len(node):
-                    raise CaseError(f"--set {key}: `{'.'.join(parts[:depth])}` has "
+                    raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth])}` has "
                                     f"{len(node)} entries; use an index from 0 to "
                                     f"{len(node) - 1}, e.g. --set bodies.0.max=[0.1, 0.2].")
                 node = node[int(part)]
             else:
                 node = node.setdefault(part, {})
             if not isinstance(node, (dict, list)):
-                raise CaseError(f"--set {key}: `{'.'.join(parts[:depth + 1])}` is a value, not a "
+                raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth + 1])}` is a value, not a "
                                 "section." + _suggest(key))
-        if _generic(key) not in KNOWN_KEYS:
-            raise CaseError(f"--set {key}: unknown case key `{key}`.{_suggest(key)} "
+        if _generic(key) not in KNOWN_KEYS and key not in LIST_KEYS:
+            raise CaseError(f"{label} {key}: unknown case key `{key}`.{_suggest(key)} "
                             "Run `mpmflow keys` for the list of keys.")
-        node[parts[-1]] = _parse_value(text.strip())
+        node[parts[-1]] = _parse_value(value.strip()) if parse else value
 
 
 def _format_error(err, source):
@@ -483,7 +597,7 @@ def _format_error(err, source):
             desc = _describe(loc)
             lines.append(f"missing key `{loc}`{': ' + desc if desc else ''}")
             continue
-        msg = e["msg"].removeprefix("Value error, ")
+        msg = e["msg"].removeprefix("Value error, ").rstrip(".")
         key, entry = loc, ""
         while _generic(key) not in _REFERENCE and key.rsplit(".", 1)[-1].isdigit():
             key = key.rsplit(".", 1)[0]  # an entry of a list value: name the key
@@ -539,10 +653,34 @@ def validate(data, source=""):
 
 
 def load_case(path, overrides=()):
-    """Read, override and validate a case file; raises CaseError with a user message."""
+    """Read, override and validate a case file; raises CaseError with a user message.
+
+    ``overrides``: what --set takes, as a list of "dotted.key=value" strings (TOML values),
+    or a dict {"dotted.key": value} of Python values, e.g. {"grid.spacing": 0.008,
+    "bodies.0.max": [0.1, 0.2]}. Either way the values pass the same checks as the file's."""
     data = _read_toml(path)
     apply_overrides(data, overrides)
     return validate(data, source=str(path))
+
+
+def validate_case(data):
+    """A case from a dict of sections (as the TOML file would hold them), or a Case to check
+    again as a whole (see ``revalidate``); CaseError with a user message."""
+    if isinstance(data, Case):
+        return revalidate(data)
+    if not isinstance(data, dict):
+        raise CaseError(f"expected a dict of case sections, got {type(data).__name__}.")
+    return validate(data)
+
+
+def revalidate(case):
+    """The case validated again as a whole: the cross-field checks (bodies in the domain and
+    apart, time step against end, ...) for a case whose fields were changed after loading
+    (an assignment checks only its own section). CaseError when it no longer holds."""
+    if not isinstance(case, Case):
+        raise CaseError(f"expected a case (mpmflow.load_case(...)), got {type(case).__name__}; "
+                        "load one with mpmflow.load_case(path, overrides).")
+    return validate(case.model_dump(), source="(changed after loading)")
 
 
 def resolved(case):

@@ -2,9 +2,13 @@
 
 A checkpoint holds everything a run needs to continue exactly as if it had not stopped: the
 particle arrays, the scheme's state carried between steps (``scheme.state()``), and in the
-meta the time, step, time step, output schedule, counters, the timeseries rows and snapshot
-list written so far, and the resolved case. mpmflow draws no random numbers, so there is no
-random state to keep. Files are written atomically (and fsynced) and the latest ``KEEP`` are kept.
+meta the time, step, time step, output schedule, counters, the resolved case, and where
+each output file ended when it was written (rows and bytes of timeseries.csv and
+probes.csv, the number of snapshots): state, not history, so a checkpoint's size does not
+grow with the run's length. A restart cuts the output files back to those positions.
+mpmflow draws no random numbers, so there is no random state to keep. Files are written
+atomically (and fsynced) and the latest ``KEEP`` are kept. Format 2 (format 1 carried every
+row written so far).
 """
 
 import json
@@ -17,7 +21,7 @@ import numpy as np
 from .errors import CaseError
 from .output.atomic import atomic_path
 
-FORMAT = 1
+FORMAT = 2
 KEEP = 2
 _NAME = re.compile(r"^checkpoint_(\d{9})\.npz$")
 
@@ -102,7 +106,7 @@ def _flatten(data, prefix=""):
     return {prefix[:-1]: data}
 
 
-def check_same_case(saved, current, path, may_change=("time.end",)):
+def check_same_case(saved, current, path, may_change=("time.end", "execution.threads")):
     """Refuse to continue a checkpoint with other settings than it was written with (only
     ``may_change`` may differ): CaseError naming the first differing key."""
     old, new = _flatten(saved), _flatten(current)
@@ -114,5 +118,6 @@ def check_same_case(saved, current, path, may_change=("time.end",)):
             f"--restart: the case differs from the one checkpoint {path} was written with: "
             f"`{key}` = {json.dumps(new.get(key, '(not set)'))} now, "
             f"{json.dumps(saved_value)} in the checkpoint. A restart must use the same "
-            f"settings except time.end (which may be later, to extend the run). Use "
+            f"settings except time.end (which may be later, to extend the run) and "
+            f"execution.threads. Use "
             f"--set {key}={json.dumps(saved_value)}, or start a new run in another folder.")

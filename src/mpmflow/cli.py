@@ -1,13 +1,16 @@
 """Command line: ``mpmflow run CASE.toml --out DIR [--set key=value ...]`` and friends.
 
-Exit codes: 0 success; 2 invalid input (case file, settings, command line); 3 the
-simulation failed (pressure solve, blow-up); 130 interrupted by Ctrl-C (SIGINT), 143 by
-SIGTERM (after the first signal a checkpoint is written: continue with --restart; a second
-signal stops at once without one).
+Exit codes: 0 success; 2 invalid input (case file, settings, command line, a case too large
+for the memory, an output folder in use by another run: nothing was run); 3 the simulation
+failed (pressure solve, blow-up); 130 interrupted by Ctrl-C (SIGINT), 143 by SIGTERM (after
+the first signal a checkpoint is written: continue with --restart; a second signal stops at
+once without one; before the run starts, a signal stops at once); 141 the reader of the
+output went away (a closed pipe).
 """
 
 import argparse
 import json
+import os
 import shlex
 import sys
 import textwrap
@@ -15,8 +18,12 @@ from pathlib import Path
 
 from ._version import __version__
 from .errors import CaseError, MpmflowError
-from .interrupts import StopNow, exit_code
+from .interrupts import EarlySignals, EarlyStop, StopNow, exit_code
 from .output import check_out_dir as _check_out_dir
+
+# Ctrl-C and SIGTERM from the moment the command starts: before the run's own handlers
+# (interrupts.stop_on_signals) take over, a signal stops at once with a message
+early = EarlySignals()
 
 DESCRIPTION = """\
 mpmflow simulates incompressible free-surface flow (dam breaks, sloshing) with the material
@@ -49,10 +56,11 @@ examples:
   mpmflow validate --out runs/validation
   mpmflow keys
 
-exit codes: 0 success, 2 invalid input (nothing was run), 3 the run failed (see
-summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (after the first signal a
-checkpoint is written: continue with --restart; a second signal stops at once without
-one)."""
+exit codes: 0 success, 2 invalid input (nothing was run: a bad case or setting, a case
+too large for this machine's memory, an output folder in use by another run), 3 the run
+failed (see summary.json), 130 interrupted by Ctrl-C, 143 by SIGTERM (after the first
+signal a checkpoint is written: continue with --restart; a second signal stops at once
+without one), 141 the output pipe was closed (mpmflow keys | head)."""
 
 
 VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
@@ -173,10 +181,22 @@ def _progress_bar(end, quiet, start=0.0):
     return bar, update
 
 
-def _prepare_out(out, args):
-    """Check the output folder; with --overwrite delete an earlier run's files."""
-    from .checkpoint import checkpoints
+def _resume_command(args):
+    words = ["mpmflow", "run", args.case, "--out", args.out, "--restart"]
+    for item in args.overrides:
+        words += ["--set", item]
+    return " ".join(shlex.quote(str(w)) for w in words)
 
+
+def _run(args):
+    from .case import load_case
+    from .interrupts import stop_on_signals
+    from .output.folder import CLI_HINTS
+    from .simulation import Simulation
+
+    case = load_case(args.case, args.overrides)
+    early.check()
+    out = Path(args.out)
     _check_out_dir(out, create=False)
     if args.restart:
         if args.overwrite:
@@ -185,76 +205,30 @@ def _prepare_out(out, args):
         if not out.is_dir():
             raise CaseError(f"--restart: --out {out} does not exist; give the folder of the "
                             "run to continue, or run without --restart.")
-        return
-    if out.is_dir() and ((out / "summary.json").exists() or checkpoints(out)):
-        if not args.overwrite:
-            raise CaseError(f"--out {out} already holds the results of a run. Choose another "
-                            "folder, add --restart to continue it from its latest checkpoint, "
-                            "or add --overwrite to replace it.")
-        for old in [*out.glob("particles_*.vtu"), *checkpoints(out), out / "particles.pvd",
-                    out / "timeseries.csv", out / "summary.json"]:
-            old.unlink(missing_ok=True)
-    _check_out_dir(out)
-
-
-def _resume_command(args):
-    words = ["mpmflow", "run", args.case, "--out", args.out, "--restart"]
-    for item in args.overrides:
-        words += ["--set", item]
-    return " ".join(shlex.quote(str(w)) for w in words)
-
-
-def _resume(case, out):
-    """The run in ``out`` continued from its latest readable checkpoint: a damaged latest
-    one (e.g. cut short by a crash) is passed over with a notice."""
-    from .checkpoint import CheckpointError, checkpoints, latest
-    from .simulation import Simulation
-
-    latest(out)  # CaseError when there is none
-    damaged = []
-    for path in reversed(checkpoints(out)):
-        try:
-            sim = Simulation.resume(case, out, path)
-        except CheckpointError as err:
-            damaged.append(err)
-            continue
-        for err in damaged:
-            print(f"mpmflow: note: checkpoint {err.path} cannot be read ({err.why}); it is "
-                  f"damaged, e.g. cut short by a crash. Continuing from the one before it, "
-                  f"{path.name}.", file=sys.stderr)
-        return sim
-    if len(damaged) == 1:
-        raise damaged[0]
-    raise CaseError(f"--restart: no checkpoint in {out} can be read: "
-                    + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
-                    + ". They are damaged, e.g. cut short by a crash. Start the run again "
-                    "with --overwrite instead of --restart.")
-
-
-def _run(args):
-    from .case import load_case
-    from .interrupts import stop_on_signals
-    from .simulation import Simulation
-
-    case = load_case(args.case, args.overrides)
-    out = Path(args.out)
-    _prepare_out(out, args)
-    if args.restart:
-        sim = _resume(case, out)
-        print(f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
-              f"{sim.steps})", file=sys.stderr)
+        sim = Simulation.resume(case, out, hints=CLI_HINTS)
     else:
-        sim = Simulation(case, out)
-    for note in sim.notices:
-        print(f"mpmflow: note: {note}", file=sys.stderr)
-    bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time)
-    sim.progress = update
-    try:
-        with stop_on_signals(sim):
-            summary = sim.run()
-    finally:
-        if bar is not None:
-            bar.close()
+        sim = Simulation(case, out, overwrite=args.overwrite)
+        early.check()
+        sim.claim(CLI_HINTS)
+    with sim:  # releases the folder if anything below fails before the run
+        if args.restart:
+            print(f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
+                  f"{sim.steps})", file=sys.stderr)
+        if not args.quiet:
+            for line in sim.describe():
+                print(f"mpmflow: {line}", file=sys.stderr)
+        for note in sim.notices:
+            print(f"mpmflow: note: {note}", file=sys.stderr)
+        early.check()
+        bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time)
+        sim.progress = update
+        try:
+            with stop_on_signals(sim):
+                summary = sim.run()
+        finally:
+            if bar is not None:
+                bar.close()
+            early.phase = "after"
     if summary["status"] == "interrupted":
         print(f"mpmflow: interrupted at t = {summary['time']:.6g} s (step {summary['steps']}); "
               f"checkpoint {out / summary['last_checkpoint']}. Resume with: "
@@ -289,7 +263,10 @@ def _study(args):
 def _plot(args):
     from .plots import plot_run
 
-    written = plot_run(args.run_dir, args.out)
+    notes = []
+    written = plot_run(args.run_dir, args.out, notes)
+    for note in notes:
+        print(f"mpmflow: note: {note}", file=sys.stderr)
     print(f"mpmflow: wrote {len(written)} figures to {written[0].parent}", file=sys.stderr)
     return 0
 
@@ -350,11 +327,25 @@ def _keys(args):
 
 
 def main(argv=None):
+    with early.installed():
+        try:
+            return _main(argv)
+        except BrokenPipeError:
+            # the reader of our output went away (mpmflow keys | head -1): stop quietly,
+            # as a command killed by SIGPIPE does; stdout is pointed at /dev/null so that
+            # the interpreter's last flush does not fail again
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            return 141
+
+
+def _main(argv):
     parser = _parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 2
+    early.check()
     try:
         if args.command == "run":
             return _run(args)
@@ -372,8 +363,11 @@ def main(argv=None):
         print(f"mpmflow: stopped at once by a second {err.name}, without a new checkpoint "
               "(the last one written is kept: --restart continues from it).", file=sys.stderr)
         return exit_code(err.signum)
+    except EarlyStop as err:
+        print(f"mpmflow: stopped by {err.name} {early.when()}.", file=sys.stderr)
+        return exit_code(err.signum)
     except KeyboardInterrupt:
-        print("mpmflow: interrupted.", file=sys.stderr)
+        print(f"mpmflow: stopped by SIGINT {early.when()}.", file=sys.stderr)
         return 130
 
 

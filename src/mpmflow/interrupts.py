@@ -3,8 +3,9 @@
 The first signal asks the run to stop (``Simulation.stop_signal``): it finishes the steps up
 to the next output time, writes that output and a checkpoint, and returns with status
 "interrupted". A second signal stops at once (``StopNow``, carrying the signal number),
-without a new checkpoint; the last one written is kept. The handlers are installed only
-while ``mpmflow run`` runs.
+without a new checkpoint; the last one written is kept. These handlers are installed only
+while ``mpmflow run`` runs its time loop; outside it (``EarlySignals``, from the start of
+the command) a signal stops at once with a message.
 """
 
 import os
@@ -68,3 +69,62 @@ def stop_on_signals(sim):
         sys.unraisablehook = previous_hook
         for s, old in previous.items():
             signal.signal(s, old)
+
+
+class EarlyStop(BaseException):
+    """SIGINT/SIGTERM outside the time loop (while the command starts or finishes)."""
+
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    @property
+    def name(self):
+        return signal.Signals(self.signum).name
+
+
+class EarlySignals:
+    """The command line's handlers for SIGINT and SIGTERM outside the time loop.
+
+    Without them SIGTERM during the first second of a command (imports, loading the case,
+    placing the particles) killed it without a word. A signal then raises EarlyStop, which
+    the command reports (exit 130 / 143). Should the exception be lost (raised inside a
+    __del__ while Numba loads its kernels), ``check()``, called between the phases of the
+    command, raises it again."""
+
+    def __init__(self):
+        self.pending = None
+        self.phase = "before"  # "after" once the run has ended
+
+    def _handler(self, signum, frame):
+        self.pending = signum
+        raise EarlyStop(signum)
+
+    def check(self):
+        if self.pending is not None:
+            raise EarlyStop(self.pending)
+
+    def when(self):
+        if self.phase == "after":
+            return "after the run ended (its outputs are written)"
+        return "before the run started: nothing was run"
+
+    @contextmanager
+    def installed(self):
+        def unraisable(info):
+            if not isinstance(info.exc_value, (EarlyStop, StopNow)):
+                previous_hook(info)
+
+        self.pending, self.phase = None, "before"
+        try:
+            previous = {s: signal.signal(s, self._handler) for s in SIGNALS}
+        except ValueError:  # not in the main thread (an embedding program): leave them
+            yield
+            return
+        previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
+        try:
+            yield
+        finally:
+            sys.unraisablehook = previous_hook
+            for s, old in previous.items():
+                signal.signal(s, old)

@@ -37,10 +37,11 @@ def lattice_in_box(lo, hi, spacing):
     The lattice is global, so particles of neighbouring boxes never overlap and a box that
     starts on a grid line gets exactly ``spacing``-spaced particles aligned with the cells.
     """
+    from .bodies import lattice_indices
+
     axes = []
     for a, b in zip(lo, hi):
-        k0 = int(np.ceil(a / spacing - 0.5 - 1e-9))
-        k1 = int(np.floor(b / spacing - 0.5 - 1e-9))
+        k0, k1 = lattice_indices(a, b, spacing)
         axes.append((np.arange(k0, k1 + 1) + 0.5) * spacing)
     mesh = np.meshgrid(*axes, indexing="ij")
     return np.stack([m.ravel(order="F") for m in mesh], axis=1)

@@ -10,9 +10,7 @@ writes into the plot folder:
 - ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter).
 """
 
-import json
 import os
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -20,26 +18,9 @@ import numpy as np
 from .errors import CaseError
 from .mpl import pyplot, save
 from .output import check_out_dir
+from .results import open_run
 
 DPI = 80
-
-
-def read_run(folder):
-    """(timeseries as a structured array, summary dict, [(time, vtu path)]) of a run."""
-    folder = Path(folder)
-    csv = folder / "timeseries.csv"
-    if not csv.is_file():
-        raise CaseError(f"{folder} holds no timeseries.csv; give the --out folder of a run "
-                        "(mpmflow run CASE --out DIR).")
-    series = np.atleast_1d(np.genfromtxt(csv, delimiter=",", names=True))
-    summary_path = folder / "summary.json"
-    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else {}
-    snaps = []
-    pvd = folder / "particles.pvd"
-    if pvd.is_file():
-        for d in ET.parse(pvd).getroot().find("Collection").findall("DataSet"):
-            snaps.append((float(d.get("timestep")), folder / d.get("file")))
-    return series, summary, snaps
 
 
 def plot_timeseries(series, summary, path, plt):
@@ -78,11 +59,6 @@ def plot_timeseries(series, summary, path, plt):
     save(fig, path, DPI)
 
 
-def _particles(path):
-    import meshio
-
-    mesh = meshio.read(path)
-    return mesh.points[:, :2], np.asarray(mesh.point_data["pressure"])
 
 
 def _draw(ax, xy, p, t, size, vmax, plt):
@@ -96,14 +72,24 @@ def _draw(ax, xy, p, t, size, vmax, plt):
     return art
 
 
-def plot_snapshots(snaps, summary, folder, plt):
-    """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths."""
+def plot_snapshots(snaps, summary, folder, plt, notes):
+    """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths.
+    Snapshots that cannot be read (missing, damaged) are left out with a note."""
     from matplotlib.animation import PillowWriter
 
+    data, readable = [], []
+    for snap in snaps:
+        try:
+            d = snap.read()
+        except CaseError as err:
+            notes.append(f"{err} It is left out of the figures.")
+            continue
+        data.append((snap.time, d["x"], d["pressure"]))
+        readable.append((snap.time, snap.path))
+    snaps = readable
     if not snaps:
         return []
     size = summary.get("grid", {}).get("domain_used")
-    data = [(t, *_particles(f)) for t, f in snaps]
     if size is None:
         size = np.max([xy.max(axis=0) for _, xy, _ in data], axis=0)
     # the colour scale: the 99.5th percentile over all snapshots, so that a few impact peaks
@@ -148,11 +134,20 @@ def plot_snapshots(snaps, summary, folder, plt):
     return written
 
 
-def plot_run(run_dir, out_dir=None):
-    """All figures of the run in ``run_dir`` (into ``out_dir``, default run_dir/plots)."""
+def plot_run(run_dir, out_dir=None, notes=None):
+    """All figures of the run in ``run_dir`` (into ``out_dir``, default run_dir/plots);
+    returns their paths. What could not be read is left out and said in ``notes`` (a list
+    to append to)."""
+    notes = notes if notes is not None else []
     plt = pyplot("mpmflow plot")
-    series, summary, snaps = read_run(run_dir)
+    run = open_run(run_dir)
+    notes += run.notes
+    if len(run.timeseries["time"]) == 0:
+        raise CaseError(f"{run.folder}/timeseries.csv holds no rows yet (the run has not "
+                        "written its first output, or was stopped before it); nothing to "
+                        "plot.")
     out = Path(out_dir) if out_dir is not None else Path(run_dir) / "plots"
     check_out_dir(out)
-    plot_timeseries(series, summary, out / "timeseries.png", plt)
-    return [out / "timeseries.png", *plot_snapshots(snaps, summary, out, plt)]
+    plot_timeseries(run.timeseries, run.summary, out / "timeseries.png", plt)
+    return [out / "timeseries.png", *plot_snapshots(run.snapshots, run.summary, out, plt,
+                                                    notes)]

@@ -2,6 +2,8 @@
 
 import numpy as np
 
+from .cells import bin_particles
+from .errors import CaseError
 from .grid import Grid
 from .particles import Particles, seed_box, subset
 
@@ -30,7 +32,41 @@ def build_particles(case, grid):
                 depth = cosine_surface(body.min, body.max, amplitude, part.x[:, 0]) - part.x[:, 1]
                 part.pressure[:] = rho * np.linalg.norm(down) * depth
         parts.append(part)
-    return Particles.concatenate(parts)
+    particles = Particles.concatenate(parts)
+    check_packing(case, grid, particles, [p.count for p in parts])
+    return particles
+
+
+def check_packing(case, grid, particles, counts):
+    """Refuse a start with more particles in a cell than the bodies there ask for, or with
+    more particle volume than the cell holds (CaseError). Bodies that overlap are refused by
+    the case's validation; this catches what remains: bodies with different
+    particles_per_cell meeting inside a cell, where their lattices overlap."""
+    if particles.count == 0:
+        return
+    bins = bin_particles(grid, particles)
+    dim = grid.dim
+    asked = np.zeros(grid.ncells, dtype=np.int64)  # the largest ppc^dim of the bodies there
+    body = np.repeat(np.arange(len(counts)), counts)
+    ppc = np.array([b.particles_per_cell ** dim for b in case.bodies], dtype=np.int64)
+    np.maximum.at(asked, bins.cell, ppc[body])
+    count = bins.counts()
+    over = (count > asked) | (bins.theta > 1.0 + 1e-9)
+    if not over.any():
+        return
+    c = int(np.argmax(np.where(over, bins.theta, -1.0)))
+    here = bins.order[bins.start[c]:bins.start[c + 1]]
+    names = sorted(set(body[here].tolist()))
+    centre = [(c % grid.cells[0] + 0.5) * grid.spacing, (c // grid.cells[0] + 0.5) * grid.spacing]
+    listed = " and ".join(f"bodies.{k} (particles_per_cell = {case.bodies[k].particles_per_cell})"
+                          for k in names)
+    raise CaseError(
+        f"The cell at ({centre[0]:.6g}, {centre[1]:.6g}) m would start with {int(count[c])} "
+        f"particles filling {bins.theta[c]:.3g} of its volume, more than one body packs into a "
+        f"cell ({int(asked[c])} particles, filling it once): {listed} meet inside this cell "
+        "and their particle lattices overlap there. Give bodies that touch the same "
+        "particles_per_cell, or let them meet on a grid line (a multiple of grid.spacing = "
+        f"{grid.spacing:g} m).")
 
 
 def cosine_surface(lo, hi, amplitude, x):

@@ -6,7 +6,14 @@ Outputs go to ``out_dir`` (see ``mpmflow.output``); ``summary.json`` is written 
 also when the run fails or is interrupted. Checkpoints (``mpmflow.checkpoint``) are written
 every ``checkpoint.interval``, at the end and when ``stop_signal`` is set (by the CLI's
 signal handlers; without ``out_dir`` the run stops without one);
-``Simulation.resume(case, out_dir, path)`` continues from one.
+``Simulation.resume(case, out_dir)`` continues from the latest readable one.
+
+The same rules hold however the run was started (command line or Python): the case is
+validated again as a whole (a field changed after loading is checked against the others),
+its memory estimate must fit the machine, the bodies must not overlap or leave the material
+without a free surface, and the output folder is claimed with a lock for the run's life
+(``output.folder``): a second run into it is refused, and a folder that holds another run
+is not reused unless ``overwrite=True``.
 """
 
 import signal
@@ -17,21 +24,24 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from . import checkpoint
+from . import checkpoint, memory, probes
 from ._version import __version__
-from .case import resolved
+from .case import resolved, revalidate
 from .cells import bin_particles
 from .diagnostics import (front_and_height, kinetic_energy, potential_energy, pressure_noise,
                           volume_measures)
-from .errors import CaseError, SimulationError
+from .errors import CaseError, SimulationError, SolverError
 from .interrupts import StopNow
+from .output.folder import API_HINTS, RunFolder
 from .output.snapshots import SnapshotWriter
 from .output.summary import write_summary
-from .output.timeseries import COLUMNS, TimeSeriesWriter
+from .output.timeseries import (COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter,
+                                read_table)
 from .particles import Particles
 from .schemes import make_scheme
 from .setup_case import build_grid, build_particles
 from .stability import case_stable_time_step, sound_speed, time_step
+from .threads import ThreadGovernor, setting_from
 
 
 @dataclass
@@ -49,12 +59,29 @@ class Counters:
 @dataclass
 class Outputs:
     timeseries: TimeSeriesWriter | None = None
+    probes: CsvAppender | None = None
     snapshots: SnapshotWriter | None = None
+
+    def close(self):
+        for w in (self.timeseries, self.probes):
+            if w is not None:
+                w.close()
 
 
 class Simulation:
-    def __init__(self, case, out_dir=None, progress=None):
+    """A run of ``case`` (from ``mpmflow.load_case``) writing into ``out_dir`` (None: no
+    files, results in memory only: ``series``, ``probe_series``, ``particles``).
+
+    ``overwrite``: replace the outputs of an earlier run in ``out_dir`` (otherwise such a
+    folder is refused when the run starts). ``progress``: callable(t, step, end) after each
+    output time. Raises CaseError (``mpmflow.errors``) for a case that cannot run here:
+    cross-field checks, memory, overlapping or too tightly packed bodies, no free surface."""
+
+    def __init__(self, case, out_dir=None, progress=None, overwrite=False):
+        case = revalidate(case)
         self.case = case
+        setting_from(case.execution.threads)  # a bad MPMFLOW_THREADS is refused here
+        self.memory = memory.check(case)
         self.grid = build_grid(case)
         self.particles = build_particles(case, self.grid)
         if self.particles.count == 0:
@@ -62,8 +89,20 @@ class Simulation:
                             "spacing (grid.spacing / bodies.N.particles_per_cell). Enlarge the "
                             "boxes or raise particles_per_cell.")
         self.scheme = make_scheme(case, self.grid, self.particles)
+        if hasattr(self.scheme, "check_free_surface"):
+            try:
+                self.scheme.check_free_surface()
+            except SolverError:
+                raise CaseError(
+                    "The material touches no free surface at the start: the bodies leave too "
+                    "little empty space in the domain (under about one grid cell next to the "
+                    "material), so the projection scheme's pressure has no level to refer to "
+                    "and its system is singular. Leave at least one grid cell of empty space "
+                    f"(grid.spacing = {case.grid.spacing:g} m) above the material: lower the "
+                    "top of the bodies (bodies.N.max) or enlarge domain.size.") from None
         self.dt = time_step(case)
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.overwrite = bool(overwrite)
         self.progress = progress
         self.time = 0.0
         self.steps = 0
@@ -79,15 +118,19 @@ class Simulation:
         self.volume0 = float(self.particles.volume.sum())
         self.count0 = self.particles.count
         self._outputs = Outputs()
+        self._opened = False
+        self._folder = None  # the claimed output folder (output.folder.RunFolder)
         self._wall0 = None
         self._wall_before = 0.0  # wall seconds of the runs this one continues
-        self.rows = []  # the timeseries rows, also kept in memory
+        self._series = SeriesBuffer(COLUMNS)  # the timeseries rows, also kept in memory
+        self._probes = SeriesBuffer(probes.columns(case)) if case.probes else None
         self.on_output = None  # optional callable(sim), called after each output row
         # the output schedule: the next output, snapshot and checkpoint are the k-th multiple
         # of their interval
         self.k_out = self.k_snap = self.k_checkpoint = 1
-        self.snapshot_entries = []  # (time, file) of the snapshots of a continued run
+        self._resume_outputs = None  # the positions of the output files in the checkpoint
         self.resumed_from = None  # the checkpoint this run continues, if any
+        self.threads = None  # the ThreadGovernor while a run goes
         self.last_checkpoint = None
         self.stop_signal = None  # set (to a signal number) to stop at the next output time
         self.stop_now = None  # set (to a signal number) to stop after the current chunk,
@@ -95,32 +138,81 @@ class Simulation:
 
     # ------------------------------------------------------------------ checkpoints
     def _checkpoint(self):
-        """Write a checkpoint of the current state (after its output row)."""
+        """Write a checkpoint of the current state (after its output row). It holds the
+        state, not the history: of the outputs written so far only where each file ends
+        (those files are fsynced first, so that what it counts is on the disk)."""
         arrays = {name: getattr(self.particles, name) for name in Particles.FIELDS}
         arrays.update({f"scheme.{k}": v for k, v in self.scheme.state().items()})
-        snaps = self._outputs.snapshots.entries if self._outputs.snapshots is not None else []
+        o = self._outputs
+        for w in (o.timeseries, o.probes, o.snapshots):
+            if w is not None:
+                w.sync()
+        outputs = {"timeseries": o.timeseries.position(),
+                   "probes": o.probes.position() if o.probes is not None else None,
+                   "snapshots": len(o.snapshots.entries) if o.snapshots is not None else None}
         meta = {"mpmflow_version": __version__, "case": resolved(self.case),
                 "time": self.time, "steps": self.steps, "dt": self.dt,
                 "k_out": self.k_out, "k_snap": self.k_snap,
                 "k_checkpoint": self.k_checkpoint, "counters": asdict(self.counters),
-                "rows": self.rows, "snapshots": snaps, "mass0": self.mass0,
+                "outputs": outputs, "mass0": self.mass0,
                 "volume0": self.volume0, "count0": self.count0,
                 "wall_seconds": self._wall_seconds()}
         self.last_checkpoint = checkpoint.write(self.out_dir, self.steps, arrays, meta)
 
     _META = ("case", "time", "steps", "dt", "k_out", "k_snap", "k_checkpoint", "counters",
-             "rows", "snapshots", "mass0", "volume0", "count0", "wall_seconds")
+             "outputs", "mass0", "volume0", "count0", "wall_seconds")
 
     @classmethod
-    def resume(cls, case, out_dir, path, progress=None):
-        """The run of ``out_dir`` continued from checkpoint ``path``: same settings except
-        possibly a later time.end (CaseError otherwise; ``checkpoint.CheckpointError`` when
-        the file is damaged or lacks an entry)."""
+    def resume(cls, case, out_dir, path=None, progress=None, hints=API_HINTS):
+        """The run of ``out_dir`` continued from a checkpoint: ``path``, or (None) the latest
+        readable one, passing over damaged ones with a notice (in ``notices``). Same
+        settings except a later time.end (to extend the run) and execution.*; CaseError
+        otherwise, ``checkpoint.CheckpointError`` when the file is damaged or lacks an
+        entry. The folder is claimed (locked) at once and stays so until the run ends or
+        ``close()``."""
+        folder = RunFolder.claim(out_dir, "restart", hints)
+        try:
+            if path is None:
+                sim = cls._resume_latest(case, out_dir, progress)
+            else:
+                sim = cls._resume_from(case, out_dir, path, progress)
+        except BaseException:
+            folder.release()
+            raise
+        sim._folder = folder
+        sim.notices[:0] = folder.notes
+        return sim
+
+    @classmethod
+    def _resume_latest(cls, case, out_dir, progress):
+        checkpoint.latest(out_dir)  # CaseError when there is none
+        damaged = []
+        for path in reversed(checkpoint.checkpoints(out_dir)):
+            try:
+                sim = cls._resume_from(case, out_dir, path, progress)
+            except checkpoint.CheckpointError as err:
+                damaged.append(err)
+                continue
+            sim.notices[:0] = [
+                f"checkpoint {err.path} cannot be read ({err.why}); it is damaged, e.g. cut "
+                f"short by a crash. Continuing from the one before it, {path.name}."
+                for err in damaged]
+            return sim
+        if len(damaged) == 1:
+            raise damaged[0]
+        raise CaseError(f"--restart: no checkpoint in {out_dir} can be read: "
+                        + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
+                        + ". They are damaged, e.g. cut short by a crash. Start the run again "
+                        "with --overwrite instead of --restart.")
+
+    @classmethod
+    def _resume_from(cls, case, out_dir, path, progress):
         arrays, meta = checkpoint.read(path)
         missing = [f"meta {k}" for k in cls._META if k not in meta]
         missing += [f"array {k}" for k in Particles.FIELDS if k not in arrays]
         if missing:
             raise checkpoint.CheckpointError(path, "it lacks " + ", ".join(missing))
+        case = revalidate(case)
         checkpoint.check_same_case(meta["case"], resolved(case), path)
         if meta["time"] >= case.time.end:
             raise CaseError(
@@ -145,8 +237,7 @@ class Simulation:
         sim.time, sim.steps, sim.dt = meta["time"], meta["steps"], meta["dt"]
         sim.k_out, sim.k_snap = meta["k_out"], meta["k_snap"]
         sim.k_checkpoint = meta["k_checkpoint"]
-        sim.rows = meta["rows"]
-        sim.snapshot_entries = meta["snapshots"]
+        sim._resume_outputs = meta["outputs"]
         sim.mass0, sim.volume0, sim.count0 = meta["mass0"], meta["volume0"], meta["count0"]
         sim._wall_before = meta["wall_seconds"]
         sim.resumed_from = Path(path)
@@ -156,20 +247,77 @@ class Simulation:
         now = _time.perf_counter() - self._wall0 if self._wall0 else 0.0
         return self._wall_before + now
 
+    def describe(self):
+        """The case summary the command line prints before a run (lines of text): what
+        runs, how many steps and outputs, and the memory estimate."""
+        case, g, est = self.case, self.grid, self.memory
+        steps = max(1, round((case.time.end - self.time) / self.dt))
+        cells = " x ".join(str(n) for n in g.cells)
+        snaps = (f", a snapshot every {case.output.snapshot_interval or case.output.interval:g}"
+                 " s" if case.output.snapshots else ", no snapshots")
+        title = f"{case.title}: " if case.title else ""
+        budget, source = memory.available()
+        return [
+            f"{title}{case.solver.scheme} scheme, {self.particles.count:,} particles, {cells} "
+            f"cells of {g.spacing:g} m; about {steps:,} steps of {self.dt:.3g} s to t = "
+            f"{case.time.end:g} s; a row every {case.output.interval:g} s{snaps}"
+            + (f", {len(case.probes)} probes" if case.probes else "")
+            + f" (about {memory.size(est.disk_bytes)} on disk)",
+            f"memory: {est.text()}; the machine can give {memory.size(budget)} ({source})",
+        ]
+
+    # ------------------------------------------------------------------ the output folder
+    def claim(self, hints=API_HINTS):
+        """Lock ``out_dir`` for this run and prepare it (see ``output.folder``); done by
+        ``run()`` if not before. CaseError (FolderBusy) when another run holds it, or when
+        it holds another run's outputs and ``overwrite`` is not set."""
+        if self.out_dir is None or self._folder is not None:
+            return
+        mode = "restart" if self.resumed_from else "overwrite" if self.overwrite else "new"
+        self._folder = RunFolder.claim(self.out_dir, mode, hints)
+        self.notices[:0] = self._folder.notes
+
+    def close(self):
+        """Close the output files and release the folder's lock (``run()`` does it when it
+        ends; needed only for a Simulation that is resumed or claimed and then not run)."""
+        self._outputs.close()
+        if self._folder is not None:
+            self._folder.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
     # ------------------------------------------------------------------ outputs
     def _open_outputs(self):
-        if self.out_dir is None:
+        if self.out_dir is None or self._opened:
             return
-        self.out_dir.mkdir(parents=True, exist_ok=True)
-        self._outputs.timeseries = TimeSeriesWriter(self.out_dir / "timeseries.csv", self.rows)
+        self._opened = True
+        res = self._resume_outputs or {}
+        folder = self.out_dir
+        self._outputs.timeseries = TimeSeriesWriter(folder / "timeseries.csv",
+                                                    res.get("timeseries"))
+        if self.case.probes:
+            self._outputs.probes = CsvAppender(folder / "probes.csv", probes.columns(self.case),
+                                               res.get("probes"))
         if self.case.output.snapshots:
-            self._outputs.snapshots = SnapshotWriter(self.out_dir,
-                                                     entries=self.snapshot_entries)
+            self._outputs.snapshots = SnapshotWriter(folder, resume=res.get("snapshots"))
+        if self._resume_outputs is not None:  # the earlier rows, for series()
+            self._series.extend(read_table(folder / "timeseries.csv")[0])
+            if self._probes is not None:
+                self._probes.extend(read_table(folder / "probes.csv")[0])
 
-    def measure(self):
+    @property
+    def rows(self):
+        """The timeseries rows so far, as dicts (built on each call; see ``series``)."""
+        return self._series.rows()
+
+    def measure(self, bins=None):
         """The diagnostics of one timeseries row at the current state."""
         P, g = self.particles, self.grid
-        bins = bin_particles(g, P)
+        bins = bins if bins is not None else bin_particles(g, P)
         front, height = front_and_height(g, bins.theta)
         speed = np.sqrt(np.sum(P.v**2, axis=1))
         return {
@@ -189,11 +337,18 @@ class Simulation:
         }
 
     def _output(self, snapshot):
-        row = self.measure()
-        self.rows.append(row)
+        bins = bin_particles(self.grid, self.particles)
+        row = self.measure(bins)
+        self._series.append(row)
         self.counters.iterations_since_output = 0
         if self._outputs.timeseries is not None:
             self._outputs.timeseries.append(row)
+        if self._probes is not None:
+            values = probes.measure(self.case, self.grid, self.particles, bins.theta, self.time)
+            self._probes.append(values)
+            if self._outputs.probes is not None:
+                self._outputs.probes.append(values)
+        del bins
         if snapshot and self._outputs.snapshots is not None:
             self._outputs.snapshots.write(self.time, self.particles)
         if self.on_output is not None:
@@ -202,7 +357,17 @@ class Simulation:
 
     def series(self, name):
         """One timeseries column as an array (see ``output.timeseries.COLUMNS``)."""
-        return np.array([row[name] for row in self.rows], dtype=float)
+        if name not in COLUMNS:
+            raise KeyError(f"{name!r} is not a timeseries column; the columns are "
+                           + ", ".join(COLUMNS))
+        return self._series.column(name)
+
+    def probe_series(self, name):
+        """One probe's values at the output times (``series("time")``)."""
+        if self._probes is None or name not in self._probes.columns:
+            raise KeyError(f"no probe named {name!r}; the case's probes are "
+                           + (", ".join(p.name for p in self.case.probes) or "none"))
+        return self._probes.column(name)
 
     # ------------------------------------------------------------------ time loop
     def run(self, wall_budget=None):
@@ -217,8 +382,17 @@ class Simulation:
         kernels use the cores through Numba's threads, and BLAS threads spinning after a
         NumPy call took them away (measured: 2 threads 4.4 times slower than 1 at 416k
         particles; with BLAS on one thread, 1.5 times faster)."""
-        with threadpool_limits(limits=1, user_api="blas"):
-            return self._run(wall_budget)
+        try:
+            self.claim()
+            self.threads = ThreadGovernor(self.case.execution.threads)
+            with threadpool_limits(limits=1, user_api="blas"):
+                self.threads.start(self.time)
+                try:
+                    return self._run(wall_budget)
+                finally:
+                    self.threads.stop()
+        finally:
+            self.close()
 
     def _run(self, wall_budget):
         case = self.case
@@ -296,6 +470,8 @@ class Simulation:
         if snap:
             self.k_snap = int(np.floor(self.time / snap_interval + 1e-9)) + 1
         self._output(snapshot=snap)
+        if self.threads is not None:
+            self.threads.update(self.time)
         every = case.checkpoint.interval
         if self.time >= self.k_checkpoint * every - 1e-9 * dt:
             self.k_checkpoint = int(np.floor(self.time / every + 1e-9)) + 1
@@ -381,7 +557,12 @@ class Simulation:
                                 "worst_relative_residual": c.worst_residual,
                                 "wall_nodes_released": c.released},
             "notices": self.notices,
+            "threads": self.threads.record() if self.threads is not None else None,
+            "memory_estimate_bytes": self.memory.as_dict(),
+            "probes": {p.name: {"quantity": p.quantity, "position": p.position,
+                                "unit": probes.UNITS[p.quantity]} for p in self.case.probes},
             "units": dict(COLUMNS, mass="kg/m", wall_seconds="s", domain_used="m", spacing="m",
-                          dt="s", sound_speed="m/s", stable_time_step="s"),
+                          dt="s", sound_speed="m/s", stable_time_step="s",
+                          memory_estimate_bytes="B"),
             "case": resolved(self.case),
         }

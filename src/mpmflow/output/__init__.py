@@ -9,14 +9,15 @@ from pathlib import Path
 from ..errors import CaseError
 
 
-def check_out_dir(out, create=True):
-    """CaseError when --out ``out`` is a file or (with ``create``) cannot be created."""
+def check_out_dir(out, create=True, name="--out"):
+    """CaseError when the output folder ``out`` (``name`` in messages: the option or
+    argument that gave it) is a file or (with ``create``) cannot be created."""
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise CaseError(f"--out {out} exists and is not a folder; give a folder path.")
+        raise CaseError(f"{name} {out} exists and is not a folder; give a folder path.")
     if create:
         try:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as err:
-            raise CaseError(f"--out {out} cannot be created: {err.strerror}. Give a folder "
+            raise CaseError(f"{name} {out} cannot be created: {err.strerror}. Give a folder "
                             "you can write to.") from None

@@ -1,8 +1,24 @@
-"""timeseries.csv: one row per output time; the header names the columns (units in the README
-and in summary.json)."""
+"""timeseries.csv (and probes.csv): one row per output time, appended as the run goes.
+
+The file is append-only, so its cost is linear in the run's length: the header is written
+once (atomically, when the run starts), and each row is one ``os.write`` of the whole line
+on a file opened with O_APPEND. A row is in the operating system's hands as soon as it is
+written (a killed process loses nothing written); before every checkpoint the file is
+fsynced, so that the rows a checkpoint counts survive a power loss too. After a power loss
+or a crash of the machine the last line may be cut short: ``read_table`` drops a last line
+without its newline (and says so), and ``--restart`` cuts the file back to the length the
+checkpoint recorded before appending.
+
+The columns and their units: COLUMNS (and the README).
+"""
 
 import math
+import os
+from pathlib import Path
 
+import numpy as np
+
+from ..errors import CaseError
 from .atomic import write_text
 
 COLUMNS = {
@@ -24,27 +40,174 @@ COLUMNS = {
 
 
 def _fmt(value):
-    if isinstance(value, int):
-        return str(value)
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "nan"
     return f"{value:.9g}"
 
 
-class TimeSeriesWriter:
-    """Keeps the rows and rewrites the whole (small) file atomically after each row."""
+def format_row(columns, row):
+    """One CSV line (with its newline) of the values of ``row`` (a dict) in column order."""
+    return ",".join(_fmt(row[c]) for c in columns) + "\n"
 
-    def __init__(self, path, rows=()):
-        """``rows``: those already written by the run being continued (from a checkpoint);
-        the file is rewritten with them at once, dropping any rows written after it."""
-        self.path = path
-        self.rows = [",".join(_fmt(row[c]) for c in COLUMNS) for row in rows]
-        if self.rows:
-            self._write()
+
+class CsvAppender:
+    """An append-only CSV file with a fixed header.
+
+    ``resume``: the position a checkpoint recorded ({"rows": n, "bytes": b}); the file is
+    checked to hold at least that much (CaseError otherwise) and cut back to it, dropping
+    the rows written after the checkpoint. Without it the file is created anew."""
+
+    def __init__(self, path, columns, resume=None):
+        self._fd = None
+        self.path = Path(path)
+        self.columns = list(columns)
+        header = ",".join(self.columns) + "\n"
+        if resume is None:
+            write_text(self.path, header)
+            self.rows, self.bytes = 0, len(header.encode())
+        else:
+            self.rows, self.bytes = int(resume["rows"]), int(resume["bytes"])
+            self._check(header)
+            os.truncate(self.path, self.bytes)
+        self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CLOEXEC)
+
+    def _check(self, header):
+        name = self.path.name
+        try:
+            with open(self.path, "rb") as f:
+                head = f.read(self.bytes)
+        except OSError as err:
+            raise CaseError(f"--restart: {self.path} cannot be read ({err.strerror}); the "
+                            "checkpoint needs the rows written before it. Start the run again "
+                            "with --overwrite.") from None
+        lines = head.count(b"\n")
+        if (len(head) < self.bytes or not head.endswith(b"\n") or lines != self.rows + 1
+                or not head.startswith(header.encode())):
+            raise CaseError(
+                f"--restart: {name} in {self.path.parent} does not hold the {self.rows} rows "
+                f"the checkpoint was written after (it holds {max(lines - 1, 0)} complete rows "
+                f"in its first {len(head)} bytes, or another header): it was changed or cut "
+                "short since. Start the run again with --overwrite, or restore the file.")
 
     def append(self, row):
-        self.rows.append(",".join(_fmt(row[c]) for c in COLUMNS))
-        self._write()
+        """Append one row (a dict with every column)."""
+        data = format_row(self.columns, row).encode()
+        written = os.write(self._fd, data)
+        while written < len(data):  # a regular file takes it whole; a full disk raises
+            written += os.write(self._fd, data[written:])
+        self.rows += 1
+        self.bytes += len(data)
 
-    def _write(self):
-        write_text(self.path, ",".join(COLUMNS) + "\n" + "\n".join(self.rows) + "\n")
+    def position(self):
+        """What a checkpoint records to continue this file."""
+        return {"rows": self.rows, "bytes": self.bytes}
+
+    def sync(self):
+        os.fsync(self._fd)
+
+    def close(self):
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+    def __del__(self):
+        self.close()
+
+
+class TimeSeriesWriter(CsvAppender):
+    def __init__(self, path, resume=None):
+        super().__init__(path, COLUMNS, resume)
+
+
+class SeriesBuffer:
+    """The rows of a run in memory, as one float array that doubles when full (8 bytes per
+    value: ``Simulation.series`` and the rows of a resumed run)."""
+
+    def __init__(self, columns):
+        self.columns = list(columns)
+        self._index = {c: k for k, c in enumerate(self.columns)}
+        self._data = np.empty((64, len(self.columns)))
+        self._n = 0
+
+    def __len__(self):
+        return self._n
+
+    def append(self, row):
+        if self._n == self._data.shape[0]:
+            self._data = np.concatenate([self._data, np.empty_like(self._data)])
+        self._data[self._n] = [np.nan if row[c] is None else row[c] for c in self.columns]
+        self._n += 1
+
+    def extend(self, table):
+        """Append the rows of a table read by ``read_table`` (a dict of columns)."""
+        n = len(table[self.columns[0]]) if table else 0
+        for k in range(n):
+            self.append({c: table[c][k] for c in self.columns})
+
+    def column(self, name):
+        return self._data[:self._n, self._index[name]].copy()
+
+    def rows(self):
+        """The rows as dicts (integer columns as int)."""
+        out = []
+        for values in self._data[:self._n]:
+            row = {}
+            for c, v in zip(self.columns, values):
+                row[c] = int(v) if c in _INTEGER and v == v else float(v)
+            out.append(row)
+        return out
+
+
+_INTEGER = {"step", "max_particles_per_cell", "pressure_unknowns", "solver_iterations"}
+
+
+def read_table(path, required=("time",)):
+    """Read an mpmflow CSV (timeseries.csv, probes.csv) as {column: array}, tolerating what a
+    crash can leave: a last line without its newline is dropped. Returns (table, notes).
+    CaseError when the file is not such a table (binary, another header, a damaged row)."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as err:
+        raise CaseError(f"{path} cannot be read: {err.strerror}.") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise CaseError(f"{path} is not a text file (it holds binary data), so it is not an "
+                        "mpmflow table; the run that wrote it may have been damaged. Run the "
+                        "case again.") from None
+    notes = []
+    lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()  # the newline that ends the last complete row
+    elif len(lines) > 1:
+        notes.append(f"the last line of {path.name} is cut short (a crash while writing it); "
+                     "it is left out")
+        lines.pop()
+    elif lines:
+        lines = lines[:1]
+    header = lines[0].split(",") if lines else []
+    missing = [c for c in required if c not in header]
+    if not header or missing or any(not c.isidentifier() and not _probe_name(c) for c in header):
+        first = (lines[0][:60] + "...") if lines and len(lines[0]) > 60 else \
+            (lines[0] if lines else "")
+        raise CaseError(f"{path} is not an mpmflow table: its first line should name the "
+                        f"columns (time, ...), it reads {first!r}. Give the folder of an "
+                        "mpmflow run, or run the case again.")
+    values = np.empty((len(lines) - 1, len(header)))
+    for k, line in enumerate(lines[1:]):
+        cells = line.split(",")
+        try:
+            if len(cells) != len(header):
+                raise ValueError(f"{len(cells)} values for {len(header)} columns")
+            values[k] = [float(c) for c in cells]
+        except ValueError as err:
+            raise CaseError(f"{path}, line {k + 2}, is damaged ({err}); the file was changed "
+                            "or damaged after the run wrote it. Run the case again.") from None
+    return {c: values[:, j].copy() for j, c in enumerate(header)}, notes
+
+
+def _probe_name(name):
+    return bool(name) and all(ch.isalnum() or ch in "_.+-" for ch in name)

@@ -137,6 +137,18 @@ class ProjectionScheme:
         if self.W.q.size:
             np.copyto(self.W.q, state["volume_q"])
 
+    def check_free_surface(self):
+        """Raise SolverError ("singular") when the material as placed touches no free
+        surface: the first step's classification and assembly, without the solve (its
+        buffers are overwritten by the step). Lets a run refuse such a case before it
+        starts instead of failing at step 1."""
+        P = self.particles
+        Pt = step.Particles(P.x, P.v, P.mass, P.volume, P.pressure)
+        O = self.options(1.0)  # the step size does not change which nodes are unknowns
+        integrals, rows = step.predict(Pt, self.G, O, self.W, False)
+        if rows.size and not step.pressure_matrix(self.G, O, self.W, integrals, rows)[2]:
+            raise pressure.singular(" at the start")
+
     def advance(self, dt, nsteps, where=""):
         """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
         the steps (residual: the worst)."""

@@ -1,0 +1,186 @@
+"""Geometry of the bodies of a case, before any particle exists: particle counts, overlaps,
+and whether the material would fill the whole grid.
+
+Each body is filled with particles on the global lattice (k + 1/2) * s, s = grid.spacing /
+particles_per_cell (``particles.lattice_in_box``): a particle stands for the square of side
+s around it. Bodies must not overlap (they may touch): overlapping boxes would place their
+particles on top of each other and create mass. The counts here are exact and cost one
+pass over the lattice columns of a body, not over its particles, so that a case can be
+sized (``mpmflow.memory``) in microseconds whatever its size.
+"""
+
+import math
+
+import numpy as np
+
+TOUCH = 1e-9  # overlaps thinner than this fraction of a grid cell are touching faces
+
+
+def lattice_indices(a, b, spacing):
+    """(k0, k1): the lattice points (k + 1/2) * spacing with k0 <= k <= k1 lie in [a, b)."""
+    k0 = math.ceil(a / spacing - 0.5 - 1e-9)
+    k1 = math.floor(b / spacing - 0.5 - 1e-9)
+    return k0, k1
+
+
+def cosine_top(body, x):
+    """The top of a body at x (m): max[1] + A cos(pi (x - min[0]) / width); max[1] if flat."""
+    if body.surface_amplitude == 0.0:
+        return np.full(np.shape(x), body.max[1], dtype=float)
+    width = body.max[0] - body.min[0]
+    return body.max[1] + body.surface_amplitude * np.cos(np.pi * (np.asarray(x) - body.min[0])
+                                                         / width)
+
+
+def particle_count(body, grid_spacing):
+    """The number of particles the body is seeded with (exact; ``setup_case`` seeds them);
+    inf when the count overflows a float."""
+    try:
+        return _count(body, grid_spacing)
+    except OverflowError:
+        return math.inf
+
+
+def _count(body, grid_spacing):
+    s = grid_spacing / body.particles_per_cell
+    k0, k1 = lattice_indices(body.min[0], body.max[0], s)
+    nx = max(0, k1 - k0 + 1)
+    if body.surface_amplitude == 0.0:
+        n = nx
+        for a, b in zip(body.min[1:], body.max[1:]):
+            j0, j1 = lattice_indices(a, b, s)
+            n *= max(0, j1 - j0 + 1)
+        return n
+    # cosine top: per lattice column, the rows below the surface (as seed_cosine_box keeps)
+    j0, j1 = lattice_indices(body.min[1], body.max[1] + abs(body.surface_amplitude), s)
+    if nx == 0 or j1 < j0:
+        return 0
+    if nx > 10**8:  # an absurd column count: bound it by the box instead
+        return nx * (j1 - j0 + 1)
+    x = (np.arange(k0, k1 + 1) + 0.5) * s
+    top = cosine_top(body, x)
+    y = (np.arange(j0, j1 + 1) + 0.5) * s
+    return int(np.searchsorted(y, top, side="left").sum())
+
+
+def region(body):
+    """The body's region as (x0, x1, y0, top(x)) with top a function of x."""
+    return body.min[0], body.max[0], body.min[1], lambda x: cosine_top(body, x)
+
+
+def overlap(a, b, tol):
+    """The intersection of two bodies' regions if its area is positive (more than ``tol``
+    across), as (x0, x1, y0, y1) bounds; None when they are apart or only touch."""
+    x0, x1 = max(a.min[0], b.min[0]), min(a.max[0], b.max[0])
+    if x1 - x0 <= tol:
+        return None
+    y0 = max(a.min[1], b.min[1])
+    xs = np.linspace(x0, x1, 257)[1:-1]  # the tops are monotone in x: samples suffice
+    top = np.minimum(cosine_top(a, xs), cosine_top(b, xs))
+    inside = top - y0 > tol
+    if not inside.any():
+        return None
+    return (float(xs[inside].min()) if a.surface_amplitude or b.surface_amplitude else x0,
+            float(xs[inside].max()) if a.surface_amplitude or b.surface_amplitude else x1,
+            y0, float(top[inside].max()))
+
+
+def _fmt(values):
+    return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
+
+
+def _trims(j, body, other, tol):
+    """Changes of ``body`` (bodies.j) that remove its overlap with ``other`` and keep the
+    union of the two: a face of body moved to other's face, where the overlap spans body
+    across the other axis. Flat boxes only."""
+    out = []
+    if body.surface_amplitude or other.surface_amplitude:
+        return out
+    for axis in (0, 1):
+        across = 1 - axis
+        spans = (other.min[across] <= body.min[across] + tol
+                 and other.max[across] >= body.max[across] - tol)
+        if not spans:
+            continue
+        if other.min[axis] <= body.min[axis] + tol and other.max[axis] < body.max[axis] - tol:
+            lo = list(body.min)
+            lo[axis] = other.max[axis]
+            out.append(f"bodies.{j}.min = {_fmt(lo)}")
+        if other.max[axis] >= body.max[axis] - tol and other.min[axis] > body.min[axis] + tol:
+            hi = list(body.max)
+            hi[axis] = other.min[axis]
+            out.append(f"bodies.{j}.max = {_fmt(hi)}")
+    return out
+
+
+def _inside(a, b, tol):
+    """Body a lies inside body b (flat boxes)."""
+    return (not a.surface_amplitude and not b.surface_amplitude
+            and all(bl <= al + tol and ah <= bh + tol
+                    for al, ah, bl, bh in zip(a.min, a.max, b.min, b.max)))
+
+
+def overlap_message(bodies, spacing):
+    """One paragraph naming the first pair of overlapping bodies and the fix; None if no two
+    bodies overlap."""
+    tol = TOUCH * spacing
+    for i in range(len(bodies)):
+        for j in range(i + 1, len(bodies)):
+            a, b = bodies[i], bodies[j]
+            box = overlap(a, b, tol)
+            if box is None:
+                continue
+            where = (f"they share the region x = {box[0]:.6g} to {box[1]:.6g} m, y = "
+                     f"{box[2]:.6g} to {box[3]:.6g} m")
+            head = (f"bodies.{i} (min {_fmt(a.min)}, max {_fmt(a.max)} m) and bodies.{j} (min "
+                    f"{_fmt(b.min)}, max {_fmt(b.max)} m) overlap: {where}. Bodies are "
+                    "filled with particles one by one, so an overlap would be filled twice, "
+                    "adding mass that is not there and packing the particles twice as close. "
+                    "Bodies may touch but not overlap. ")
+            if _inside(b, a, tol) and _inside(a, b, tol):
+                return head + f"The two are the same box: remove bodies.{j}."
+            if _inside(b, a, tol):
+                return head + f"bodies.{j} lies inside bodies.{i}: remove it."
+            if _inside(a, b, tol):
+                return head + f"bodies.{i} lies inside bodies.{j}: remove it."
+            trims = _trims(i, a, b, tol) + _trims(j, b, a, tol)
+            if trims:
+                return head + ("To keep the same material, set " + trims[0]
+                               + "".join(f" (or {t})" for t in trims[1:]) + ".")
+            return head + (f"Split bodies.{i} or bodies.{j} into boxes that only touch the "
+                           "other.")
+    return None
+
+
+def fills_grid(bodies, spacing, grid_size):
+    """True when the particles of the bodies (each the square of its lattice cell) cover the
+    whole grid, leaving no empty space (flat boxes; a cosine top always leaves some)."""
+    if any(b.surface_amplitude for b in bodies):
+        return False
+    rects = []
+    for body in bodies:
+        s = spacing / body.particles_per_cell
+        r = []
+        for a, b in zip(body.min, body.max):
+            k0, k1 = lattice_indices(a, b, s)
+            if k1 < k0:
+                break
+            r.append((k0 * s, (k1 + 1) * s))
+        else:
+            rects.append(r)
+    if not rects:
+        return False
+    # the union's area on the compressed coordinates of the rectangles' edges
+    xs = sorted({0.0, float(grid_size[0])} | {v for r in rects for v in r[0]})
+    ys = sorted({0.0, float(grid_size[1])} | {v for r in rects for v in r[1]})
+    tol = TOUCH * spacing
+    for xa, xb in zip(xs, xs[1:]):
+        if xb - xa <= tol or xa >= grid_size[0] - tol:
+            continue
+        for ya, yb in zip(ys, ys[1:]):
+            if yb - ya <= tol or ya >= grid_size[1] - tol:
+                continue
+            xm, ym = 0.5 * (xa + xb), 0.5 * (ya + yb)
+            if not any(r[0][0] <= xm <= r[0][1] and r[1][0] <= ym <= r[1][1] for r in rects):
+                return False
+    return True

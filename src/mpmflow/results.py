@@ -1,0 +1,135 @@
+"""Reading a run's results: ``mpmflow.open_run(DIR)``.
+
+    run = mpmflow.open_run("runs/db")
+    run.status                      # "completed", "failed", "interrupted", ... or "running"
+    run.timeseries["front"]         # numpy arrays by column (COLUMNS; "time" in s)
+    run.probes["sensor_1"]          # probes.csv columns ("time" too); {} without probes
+    snap = run.snapshots[-1]        # Snapshot(time, path)
+    data = snap.read()              # {"x": (n, 2), "velocity": (n, 2), "pressure", "mass"}
+    run.summary["wall_seconds"]     # summary.json as a dict ({} while the run goes)
+    run.case                        # the resolved case (dict) the run was made with
+    run.units                       # the unit of every column and summary value
+
+A run that is still going, or was killed, can be read too: a last row cut short by a
+crash is left out (``run.notes`` says so), and ``summary`` is empty until the run ends.
+Nothing here writes into the folder or needs its lock.
+"""
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CaseError
+from .output.snapshots import read_index
+from .output.timeseries import COLUMNS, read_table
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """One particle snapshot: its simulated time (s) and VTU file."""
+
+    time: float
+    path: Path
+
+    def read(self):
+        """The particle data: x (n, 2) m, velocity (n, 2) m/s, pressure (n,) Pa, mass (n,)
+        kg/m. CaseError when the file is missing or damaged."""
+        from meshio import vtu
+
+        if not self.path.is_file():
+            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
+                            "index particles.pvd lists it, but the file was deleted or "
+                            "moved.")
+        try:
+            # the VTU reader itself: meshio.read prints a damaged file's error and calls
+            # sys.exit(1) (mpmflow plot exited 1 on a truncated snapshot)
+            mesh = vtu.read(self.path)
+            data = {"x": np.asarray(mesh.points[:, :2]),
+                    "velocity": np.asarray(mesh.point_data["velocity"][:, :2]),
+                    "pressure": np.asarray(mesh.point_data["pressure"]),
+                    "mass": np.asarray(mesh.point_data["mass"])}
+        except FileNotFoundError:
+            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
+                            "index particles.pvd lists it, but the file was deleted or "
+                            "moved.") from None
+        except Exception as err:  # meshio raises many types for a damaged file
+            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) cannot be read "
+                            f"({type(err).__name__}: {err}); it is damaged, e.g. cut short."
+                            ) from None
+        if data["pressure"].shape[0] != data["x"].shape[0]:
+            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is damaged: its "
+                            "arrays have different lengths.")
+        return data
+
+
+class RunResults:
+    """The results in a run's folder (see the module docstring)."""
+
+    def __init__(self, folder):
+        self.folder = Path(folder)
+        if not self.folder.is_dir():
+            raise CaseError(f"{self.folder} is not a folder; give the --out folder of a run.")
+        csv = self.folder / "timeseries.csv"
+        if not csv.is_file():
+            raise CaseError(f"{self.folder} holds no timeseries.csv; give the --out folder of a "
+                            "run (mpmflow run CASE --out DIR).")
+        self.notes = []
+        self.timeseries, notes = read_table(csv, required=tuple(COLUMNS)[:3])
+        self.notes += notes
+        probes = self.folder / "probes.csv"
+        self.probes = {}
+        if probes.is_file():
+            self.probes, notes = read_table(probes)
+            self.notes += notes
+        self.summary = self._summary()
+        self.snapshots = []
+        pvd = self.folder / "particles.pvd"
+        if pvd.is_file():
+            entries, complete = read_index(pvd)
+            self.snapshots = [Snapshot(t, self.folder / f) for t, f in entries]
+            if not complete and entries:
+                self.notes.append("particles.pvd is cut short after its last whole entry")
+
+    def _summary(self):
+        path = self.folder / "summary.json"
+        if not path.is_file():
+            return {}
+        try:
+            summary = json.loads(path.read_text())
+        except (OSError, ValueError, UnicodeDecodeError) as err:
+            self.notes.append(f"summary.json cannot be read ({type(err).__name__}); it is "
+                              "left out")
+            return {}
+        if not isinstance(summary, dict):
+            self.notes.append("summary.json is not a JSON object; it is left out")
+            return {}
+        return summary
+
+    @property
+    def status(self):
+        """The run's status from summary.json; "running" (or killed) while it has none."""
+        return self.summary.get("status", "running")
+
+    @property
+    def case(self):
+        return self.summary.get("case", {})
+
+    @property
+    def units(self):
+        units = dict(COLUMNS)
+        units.update(self.summary.get("units", {}))
+        for name, probe in self.summary.get("probes", {}).items():
+            units[name] = probe.get("unit")
+        return units
+
+    def __repr__(self):
+        n = len(self.timeseries.get("time", []))
+        return (f"<mpmflow run {self.folder}: {self.status}, {n} rows, "
+                f"{len(self.snapshots)} snapshots, {max(len(self.probes) - 1, 0)} probes>")
+
+
+def open_run(folder):
+    """The results of the run in ``folder`` (RunResults); CaseError when it holds none."""
+    return RunResults(folder)
