@@ -91,13 +91,14 @@ def size(nbytes):
 
 
 def _kernels_cached():
-    """Whether Numba's cache holds compiled kernels (else the first run compiles them)."""
+    """Whether Numba's cache holds the compiled step (else the first run compiles it and the
+    kernels it calls, the bulk of the compilation)."""
     folder = os.environ.get("NUMBA_CACHE_DIR")
     here = Path(__file__).parent / "kernels"
     places = [Path(folder)] if folder else [here / "__pycache__"]
     for place in places:
         try:
-            if any(place.rglob("*.nbi")):
+            if any(place.rglob("step.advance-*.nbi")):
                 return True
         except OSError:
             pass
