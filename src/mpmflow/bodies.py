@@ -9,6 +9,7 @@ pass over the lattice columns of a body, not over its particles, so that a case 
 sized (``mpmflow.memory``) in microseconds whatever its size.
 """
 
+import itertools
 import math
 
 import numpy as np
@@ -69,20 +70,23 @@ def region(body):
 
 
 def overlap(a, b, tol):
-    """The intersection of two bodies' regions if its area is positive (more than ``tol``
-    across), as (x0, x1, y0, y1) bounds; None when they are apart or only touch."""
-    x0, x1 = max(a.min[0], b.min[0]), min(a.max[0], b.max[0])
+    """The intersection of two bodies' regions if its extent is positive (more than ``tol``
+    across every axis), as (lo, hi) corner lists; None when they are apart or only touch.
+    Bodies with a cosine top (2D) are sampled along x."""
+    lo = [max(p, q) for p, q in zip(a.min, b.min)]
+    hi = [min(p, q) for p, q in zip(a.max, b.max)]
+    if not a.surface_amplitude and not b.surface_amplitude:
+        return None if any(h - l <= tol for l, h in zip(lo, hi)) else (lo, hi)
+    x0, x1 = lo[0], hi[0]
     if x1 - x0 <= tol:
         return None
-    y0 = max(a.min[1], b.min[1])
+    y0 = lo[1]
     xs = np.linspace(x0, x1, 257)[1:-1]  # the tops are monotone in x: samples suffice
     top = np.minimum(cosine_top(a, xs), cosine_top(b, xs))
     inside = top - y0 > tol
     if not inside.any():
         return None
-    return (float(xs[inside].min()) if a.surface_amplitude or b.surface_amplitude else x0,
-            float(xs[inside].max()) if a.surface_amplitude or b.surface_amplitude else x1,
-            y0, float(top[inside].max()))
+    return ([float(xs[inside].min()), y0], [float(xs[inside].max()), float(top[inside].max())])
 
 
 def _fmt(values):
@@ -96,10 +100,10 @@ def _trims(j, body, other, tol):
     out = []
     if body.surface_amplitude or other.surface_amplitude:
         return out
-    for axis in (0, 1):
-        across = 1 - axis
-        spans = (other.min[across] <= body.min[across] + tol
-                 and other.max[across] >= body.max[across] - tol)
+    D = len(body.min)
+    for axis in range(D):
+        spans = all(other.min[k] <= body.min[k] + tol and other.max[k] >= body.max[k] - tol
+                    for k in range(D) if k != axis)
         if not spans:
             continue
         if other.min[axis] <= body.min[axis] + tol and other.max[axis] < body.max[axis] - tol:
@@ -130,8 +134,8 @@ def overlap_message(bodies, spacing):
             box = overlap(a, b, tol)
             if box is None:
                 continue
-            where = (f"they share the region x = {box[0]:.6g} to {box[1]:.6g} m, y = "
-                     f"{box[2]:.6g} to {box[3]:.6g} m")
+            where = "they share the region " + ", ".join(
+                f"{name} = {lo:.6g} to {hi:.6g} m" for name, lo, hi in zip("xyz", *box))
             head = (f"bodies.{i} (min {_fmt(a.min)}, max {_fmt(a.max)} m) and bodies.{j} (min "
                     f"{_fmt(b.min)}, max {_fmt(b.max)} m) overlap: {where}. Bodies are "
                     "filled with particles one by one, so an overlap would be filled twice, "
@@ -170,17 +174,16 @@ def fills_grid(bodies, spacing, grid_size):
             rects.append(r)
     if not rects:
         return False
-    # the union's area on the compressed coordinates of the rectangles' edges
-    xs = sorted({0.0, float(grid_size[0])} | {v for r in rects for v in r[0]})
-    ys = sorted({0.0, float(grid_size[1])} | {v for r in rects for v in r[1]})
+    # the union's measure on the compressed coordinates of the boxes' edges: every cell of
+    # that irregular grid (inside the domain) must lie in some box
+    D = len(grid_size)
     tol = TOUCH * spacing
-    for xa, xb in zip(xs, xs[1:]):
-        if xb - xa <= tol or xa >= grid_size[0] - tol:
-            continue
-        for ya, yb in zip(ys, ys[1:]):
-            if yb - ya <= tol or ya >= grid_size[1] - tol:
-                continue
-            xm, ym = 0.5 * (xa + xb), 0.5 * (ya + yb)
-            if not any(r[0][0] <= xm <= r[0][1] and r[1][0] <= ym <= r[1][1] for r in rects):
-                return False
+    cuts = []
+    for k in range(D):
+        edges = sorted({0.0, float(grid_size[k])} | {v for r in rects for v in r[k]})
+        cuts.append([0.5 * (p + q) for p, q in zip(edges, edges[1:])
+                     if q - p > tol and p < grid_size[k] - tol])
+    for mid in itertools.product(*cuts):
+        if not any(all(r[k][0] <= mid[k] <= r[k][1] for k in range(D)) for r in rects):
+            return False
     return True

@@ -35,9 +35,11 @@ class _Section(BaseModel):
 
 class Domain(_Section):
     size: list[float] = Field(
-        description="Extent of the rectangular domain (m), one value per axis (2D for now); "
-        "the domain is [0, size]. Its boundaries are walls.",
-        examples=[[0.42, 0.44]], min_length=2, max_length=2)
+        description="Extent of the rectangular domain (m), one value per axis: 2 entries for "
+        "a 2D case (x, y; y up), 3 for a 3D case (x, y, z; z up). The domain is [0, size]; "
+        "its boundaries are walls. Every other vector of the case (bodies' min, max and "
+        "velocity, gravity, probe positions) has as many entries.",
+        examples=[[0.42, 0.44]], min_length=2, max_length=3)
     walls: Literal["slip", "no_slip"] = Field(
         "slip", description="Wall condition on all domain boundaries. Walls are contact "
         "conditions: a wall holds the material where it presses against it and lets go where "
@@ -62,14 +64,15 @@ class GridSettings(_Section):
 class Box(_Section):
     type: Literal["box"] = Field("box", description="Shape of the body: an axis-aligned box.")
     min: list[float] = Field(description="Lower corner of the box (m).", examples=[[0.0, 0.0]],
-                             min_length=2, max_length=2)
+                             min_length=2, max_length=3)
     max: list[float] = Field(description="Upper corner of the box (m).",
-                             examples=[[0.114, 0.228]], min_length=2, max_length=2)
+                             examples=[[0.114, 0.228]], min_length=2, max_length=3)
     particles_per_cell: int = Field(
         2, ge=1, le=16, description="Material points per cell along each axis (4 gives 16 per "
-        "cell in 2D). Points sit on a lattice aligned with the grid.")
-    velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s).",
-                                  min_length=2, max_length=2)
+        "cell in 2D, 64 in 3D). Points sit on a lattice aligned with the grid.")
+    velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s); "
+                                  "at rest by default, in 2D and 3D.",
+                                  min_length=2, max_length=3)
     initial_pressure: Literal["zero", "hydrostatic"] = Field(
         "zero", description="Initial particle pressure: \"zero\", or \"hydrostatic\" = "
         "density * |g| * depth below the box's top (its highest corner against gravity). The "
@@ -107,8 +110,9 @@ class Material(_Section):
 
 
 class Physics(_Section):
-    gravity: list[float] = Field([0.0, -9.81], description="Gravitational acceleration (m/s^2).",
-                                 min_length=2, max_length=2)
+    gravity: list[float] = Field([0.0, -9.81], description="Gravitational acceleration (m/s^2); "
+                                 "the default points down the last axis, [0, 0, -9.81] in 3D.",
+                                 min_length=2, max_length=3)
 
 
 class Time(_Section):
@@ -171,7 +175,7 @@ class Probe(_Section):
     position: list[float] = Field(
         description="Where the probe is (m): the sensor's point for \"pressure\", the foot of "
         "the gauge for \"level\" (e.g. [x, 0] on the floor). Inside the domain.",
-        min_length=2, max_length=2, examples=[[0.42, 0.01]])
+        min_length=2, max_length=3, examples=[[0.42, 0.01]])
 
 
 class Execution(_Section):
@@ -358,16 +362,54 @@ class Case(_Section):
         "probes.N.name; time in s).")
     execution: Execution = Execution()
 
+    def _same_dimension(self):
+        """Every vector has one entry per axis of domain.size; the defaults (gravity down
+        the last axis, bodies at rest) follow the dimension."""
+        D = len(self.domain.size)
+        if "gravity" not in self.physics.model_fields_set and len(self.physics.gravity) != D:
+            object.__setattr__(self.physics, "gravity", [0.0] * (D - 1) + [-9.81])
+        for body in self.bodies:
+            if "velocity" not in body.model_fields_set and len(body.velocity) != D:
+                object.__setattr__(body, "velocity", [0.0] * D)
+        vectors = [("physics.gravity", self.physics.gravity)]
+        for k, body in enumerate(self.bodies):
+            vectors += [(f"bodies.{k}.min", body.min), (f"bodies.{k}.max", body.max),
+                        (f"bodies.{k}.velocity", body.velocity)]
+        vectors += [(f"probes.{k}.position", p.position) for k, p in enumerate(self.probes)]
+        for name, value in vectors:
+            if len(value) != D:
+                raise ValueError(
+                    f"{name} = {value} has {len(value)} entries but domain.size = "
+                    f"{self.domain.size} has {D}: a {D}D case needs {D} entries in every "
+                    f"vector; give {name} {D} entries, or domain.size {len(value)}")
+        if D == 3:
+            for k, body in enumerate(self.bodies):
+                if body.surface_amplitude:
+                    raise ValueError(
+                        f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
+                        "cosine top surface is defined for 2D cases only so far; use a flat "
+                        "box in 3D (surface_amplitude = 0)")
+            for k, probe in enumerate(self.probes):
+                if probe.quantity == "level":
+                    raise ValueError(
+                        f"probes.{k} is a level gauge: gauges are 2D only so far; in 3D use "
+                        "pressure probes")
+            if self.solver.scheme != "projection":
+                raise ValueError(
+                    f"solver.scheme = {self.solver.scheme!r} runs in 2D only so far; 3D cases "
+                    "run with solver.scheme = \"projection\"")
+
     @model_validator(mode="after")
     def _consistent(self):
         size = self.domain.size
+        self._same_dimension()
         if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
                 f"({size} m); the grid needs at least two cells per side")
         for k, body in enumerate(self.bodies):
             crest = body.max[1] + abs(body.surface_amplitude)
-            if crest > size[1] * (1 + 1e-12):
+            if body.surface_amplitude and crest > size[1] * (1 + 1e-12):
                 raise ValueError(
                     f"bodies.{k}: the cosine surface reaches max[1] + |surface_amplitude| = "
                     f"{crest:g} m, above the domain's top at {size[1]:g} m; lower "
@@ -403,7 +445,7 @@ class Case(_Section):
                 raise ValueError(f"probes.{k}.position = {probe.position} m lies outside the "
                                  f"domain {box} m; move it inside")
         for k, body in enumerate(self.bodies):
-            speed = float(np.hypot(*body.velocity))
+            speed = float(np.linalg.norm(body.velocity))
             if not speed <= self.solver.max_speed:
                 raise ValueError(
                     f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "

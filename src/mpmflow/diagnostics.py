@@ -4,7 +4,8 @@
 per-cell particle volume fraction f (clipped to [0, 1]), along each row of cells, the x
 where f last crosses 1/2 going right (linear interpolation between cell centres; the wall
 position if the last cell is at least half full); ``front`` is the largest over rows.
-``height`` is the same in y along the column of cells touching the left wall (x = 0).
+``height`` is the same in y along the column of cells touching the left wall (x = 0). In 3D
+the vertical is z, and both run over every row (column) of cells across the width.
 """
 
 import numpy as np
@@ -34,19 +35,22 @@ def last_crossing(f, centres, wall):
 
 
 def volume_fraction_field(grid, theta):
-    """Cell volume fractions as an array indexed [cx, cy], clipped to [0, 1]."""
+    """Cell volume fractions as an array indexed [cx, cy] ([cx, cy, cz] in 3D), clipped to
+    [0, 1]."""
     return np.clip(theta, 0.0, 1.0).reshape(grid.cells[::-1]).T
 
 
 def front_and_height(grid, theta):
-    """(front, height) in metres from the cell volume fractions theta (flat cell order)."""
-    f = volume_fraction_field(grid, theta)
-    xc = grid.cell_centres(0)
-    yc = grid.cell_centres(1)
-    lx, ly = grid.size
-    fronts = last_crossings(f, xc, lx)
+    """(front, height) in metres from the cell volume fractions theta (flat cell order).
+    In 3D the front is the largest over all rows of cells along x, and the height the mean
+    over the vertical columns of cells along the wall x = 0 (the vertical is the last axis)."""
+    f = volume_fraction_field(grid, theta)  # [c_0, ..., c_{D-1}]
+    fronts = last_crossings(f.reshape(f.shape[0], -1), grid.cell_centres(0), grid.size[0])
     front = np.nanmax(fronts) if np.isfinite(fronts).any() else np.nan
-    height = last_crossing(f[0, :], yc, ly)
+    wall = np.moveaxis(f[0], -1, 0)  # the cells against x = 0, vertical axis first
+    heights = last_crossings(wall.reshape(wall.shape[0], -1), grid.cell_centres(grid.dim - 1),
+                             grid.size[-1])
+    height = np.nanmean(heights) if np.isfinite(heights).any() else np.nan
     return float(front), float(height)
 
 

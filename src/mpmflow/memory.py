@@ -122,8 +122,9 @@ def estimate(case):
     # pressure unknowns: the nodes of the cells the material covers, with room to spread
     unknowns = 0.0
     for body in case.bodies:
-        top = body.max[1] + abs(body.surface_amplitude)
-        unknowns += ((body.max[0] - body.min[0]) / h + 1) * ((top - body.min[1]) / h + 1)
+        hi = list(body.max)
+        hi[1] += abs(body.surface_amplitude)  # a cosine top (2D) reaches above max[1]
+        unknowns += math.prod((b - a) / h + 1 for a, b in zip(body.min, hi))
     unknowns = min(nodes, SPREAD * unknowns)
     rows = case.time.end / case.output.interval + 2
     values = len(case.probes) + 1 + 14  # probes.csv and timeseries.csv

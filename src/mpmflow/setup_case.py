@@ -57,11 +57,14 @@ def check_packing(case, grid, particles, counts):
     c = int(np.argmax(np.where(over, bins.theta, -1.0)))
     here = bins.order[bins.start[c]:bins.start[c + 1]]
     names = sorted(set(body[here].tolist()))
-    centre = [(c % grid.cells[0] + 0.5) * grid.spacing, (c // grid.cells[0] + 0.5) * grid.spacing]
+    centre, r = [], c
+    for n in grid.cells:
+        centre.append((r % n + 0.5) * grid.spacing)
+        r //= n
     listed = " and ".join(f"bodies.{k} (particles_per_cell = {case.bodies[k].particles_per_cell})"
                           for k in names)
     raise CaseError(
-        f"The cell at ({centre[0]:.6g}, {centre[1]:.6g}) m would start with {int(count[c])} "
+        f"The cell at ({', '.join(f'{v:.6g}' for v in centre)}) m would start with {int(count[c])} "
         f"particles filling {bins.theta[c]:.3g} of its volume, more than one body packs into a "
         f"cell ({int(asked[c])} particles, filling it once): {listed} meet inside this cell "
         "and their particle lattices overlap there. Give bodies that touch the same "
