@@ -75,3 +75,26 @@ def test_front_and_height_of_an_extruded_field_are_the_2d_ones():
     f2, h2 = front_and_height(g2, theta2.ravel())
     f3, h3 = front_and_height(g3, theta3.ravel())
     assert f3 == pytest.approx(f2, abs=1e-15) and h3 == pytest.approx(h2, abs=1e-15)
+
+
+def test_3d_outputs_read_back_and_plot(tmp_path):
+    """Snapshots keep z, energies are in J (not J/m), and `mpmflow plot` draws the x-z slice
+    through the middle of the width."""
+    pytest.importorskip("matplotlib")
+    from mpmflow import open_run
+    from mpmflow.plots import plot_run, side_view
+
+    case = load_case(EXAMPLES / "hydrostatic_3d.toml", ["time.end=0.02"])
+    sim = Simulation(case, tmp_path / "o")
+    sim.run()
+    run = open_run(tmp_path / "o")
+    assert run.units["kinetic_energy"] == "J" and run.units["potential_energy"] == "J"
+    snap = run.snapshots[-1].read()
+    np.testing.assert_allclose(snap["x"], sim.particles.x, rtol=1e-6)
+    xz, p, plane, names, caption = side_view(snap["x"], snap["pressure"], [0.1, 0.05, 0.3], 0.01)
+    assert names == ("x", "z") and plane == [0.1, 0.3] and "y = 0.025" in caption
+    in_slice = np.abs(snap["x"][:, 1] - 0.025) <= 0.005
+    assert 0 < len(xz) == in_slice.sum() < len(snap["x"])  # a slice, not everything
+    np.testing.assert_array_equal(xz, snap["x"][in_slice][:, [0, 2]])
+    figures = plot_run(tmp_path / "o", tmp_path / "plots")
+    assert any(f.name == "snapshots.png" for f in figures)

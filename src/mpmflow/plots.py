@@ -34,7 +34,7 @@ def plot_timeseries(series, summary, path, plt):
                   label="potential - initial")
     ax[0, 1].plot(t, series["kinetic_energy"] + series["potential_energy"]
                   - series["potential_energy"][0], "k--", label="total - initial")
-    ax[0, 1].set_ylabel("J/m")
+    ax[0, 1].set_ylabel(summary.get("units", {}).get("kinetic_energy", "J/m"))
     ax[1, 0].plot(t, series["max_speed"], label="largest particle speed [m/s]")
     right = ax[1, 0].twinx()
     right.plot(t, series["max_pressure"], "C3", label="largest pressure [Pa]")
@@ -59,6 +59,18 @@ def plot_timeseries(series, summary, path, plt):
     save(fig, path, DPI)
 
 
+
+
+def side_view(x, p, size, spacing):
+    """What a snapshot figure shows: in 2D the particles on the x-y plane; in 3D the slice
+    one grid cell thick through the middle of the width (y), on the x-z plane (z up).
+    Returns (points, pressures, the plane's extent, axis names, a caption)."""
+    if len(size) < 3:
+        return x[:, :2], p, list(size[:2]), ("x", "y"), ""
+    mid = 0.5 * size[1]
+    keep = np.abs(x[:, 1] - mid) <= 0.5 * spacing
+    return (x[keep][:, [0, 2]], p[keep], [size[0], size[2]], ("x", "z"),
+            f"slice y = {mid:.4g} m +- {0.5 * spacing:.3g} m")
 
 
 def _draw(ax, xy, p, t, size, vmax, plt):
@@ -92,6 +104,13 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
     size = summary.get("grid", {}).get("domain_used")
     if size is None:
         size = np.max([xy.max(axis=0) for _, xy, _ in data], axis=0)
+        size = size[:2] if not np.any([xy[:, 2:].any() for _, xy, _ in data]) else size
+    spacing = summary.get("grid", {}).get("spacing") or float(np.max(size)) / 20
+    caption = ""
+    for k, (t, x, p) in enumerate(data):
+        xy, pv, plane, names, caption = side_view(x, p, size, spacing)
+        data[k] = (t, xy, pv)
+    size = plane
     # the colour scale: the 99.5th percentile over all snapshots, so that a few impact peaks
     # do not leave the rest of the run dark
     vmax = float(np.percentile(np.concatenate([p for _, _, p in data]), 99.5)) or 1.0
@@ -101,8 +120,8 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
         art = _draw(ax, xy, p, t, size, vmax, plt)
         fig.colorbar(art, ax=ax, label="pressure [Pa]")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
+        ax.set_ylabel(f"{names[1]} [m]")
         out = folder / "snapshots" / (Path(f).stem + ".png")
         save(fig, out, DPI)
         written.append(out)

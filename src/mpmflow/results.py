@@ -32,10 +32,11 @@ class Snapshot:
 
     time: float
     path: Path
+    dim: int = 2  # the run's dimension (VTU points always have 3 coordinates)
 
     def read(self):
-        """The particle data: x (n, 2) m, velocity (n, 2) m/s, pressure (n,) Pa, mass (n,)
-        kg/m. CaseError when the file is missing or damaged."""
+        """The particle data: x (n, dim) m, velocity (n, dim) m/s, pressure (n,) Pa, mass
+        (n,) kg/m in 2D, kg in 3D. CaseError when the file is missing or damaged."""
         from meshio import vtu
 
         if not self.path.is_file():
@@ -46,8 +47,8 @@ class Snapshot:
             # the VTU reader itself: meshio.read prints a damaged file's error and calls
             # sys.exit(1) (mpmflow plot exited 1 on a truncated snapshot)
             mesh = vtu.read(self.path)
-            data = {"x": np.asarray(mesh.points[:, :2]),
-                    "velocity": np.asarray(mesh.point_data["velocity"][:, :2]),
+            data = {"x": np.asarray(mesh.points[:, :self.dim]),
+                    "velocity": np.asarray(mesh.point_data["velocity"][:, :self.dim]),
                     "pressure": np.asarray(mesh.point_data["pressure"]),
                     "mass": np.asarray(mesh.point_data["mass"])}
         except FileNotFoundError:
@@ -88,7 +89,8 @@ class RunResults:
         pvd = self.folder / "particles.pvd"
         if pvd.is_file():
             entries, complete = read_index(pvd)
-            self.snapshots = [Snapshot(t, self.folder / f) for t, f in entries]
+            dim = len(self.summary.get("grid", {}).get("cells", [0, 0]))
+            self.snapshots = [Snapshot(t, self.folder / f, dim) for t, f in entries]
             if not complete and entries:
                 self.notes.append("particles.pvd is cut short after its last whole entry")
 

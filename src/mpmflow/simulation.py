@@ -37,6 +37,7 @@ from .output.snapshots import SnapshotWriter
 from .output.summary import write_summary
 from .output.timeseries import (COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter,
                                 read_table)
+from .output.timeseries import units as timeseries_units
 from .particles import Particles
 from .schemes import make_scheme
 from .setup_case import build_grid, build_particles
@@ -561,7 +562,8 @@ class Simulation:
             "memory_estimate_bytes": self.memory.as_dict(),
             "probes": {p.name: {"quantity": p.quantity, "position": p.position,
                                 "unit": probes.UNITS[p.quantity]} for p in self.case.probes},
-            "units": dict(COLUMNS, mass="kg/m", wall_seconds="s", domain_used="m", spacing="m",
+            "units": dict(timeseries_units(self.grid.dim),
+                          mass="kg/m" if self.grid.dim == 2 else "kg", wall_seconds="s", domain_used="m", spacing="m",
                           dt="s", sound_speed="m/s", stable_time_step="s",
                           memory_estimate_bytes="B"),
             "case": resolved(self.case),

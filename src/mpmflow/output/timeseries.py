@@ -39,6 +39,14 @@ COLUMNS = {
 }
 
 
+def units(dim):
+    """The columns' units for a run of dimension ``dim``: energies per metre of depth in 2D
+    (J/m), absolute in 3D (J)."""
+    if dim == 2:
+        return dict(COLUMNS)
+    return {c: ("J" if u == "J/m" else u) for c, u in COLUMNS.items()}
+
+
 def _fmt(value):
     if isinstance(value, (int, np.integer)):
         return str(int(value))
