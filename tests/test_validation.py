@@ -138,6 +138,23 @@ def test_long_runs_keep_volume_energy_and_period(quick):
         assert row(rows, "long_run", q).status == "pass", q
 
 
+def test_3d_rows_the_quick_meshes_decide(quick):
+    """The 3D column at rest is exact; the 3D dam break carries the 2D run's energy per
+    metre of width (its front and height rows are in the report, pass or miss)."""
+    _, rows, _ = quick
+    for q in ("column at rest, surface half a cell off the grid: pressure",
+              "column at rest, surface half a cell off the grid: speed",
+              "column at rest, surface on a grid line: pressure",
+              "dam break 0.008 m: peak kinetic energy per width against 2D"):
+        assert row(rows, "3D", q).status == "pass", q
+
+
+def test_the_cli_names_every_validation_case():
+    from mpmflow.cli import VALIDATION_CASES
+
+    assert VALIDATION_CASES == tuple(validation.CASES)
+
+
 def test_validate_command_rejects_bad_input(tmp_path):
     afile = tmp_path / "file"
     afile.write_text("x")
