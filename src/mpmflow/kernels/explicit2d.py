@@ -9,19 +9,115 @@ few over the grid.
 import numpy as np
 from numba import njit
 
-from .transfer2d import _weights, flip_update, nodal_velocity, put_inside
-from .walls2d import apply_walls_2d, wall_pairs
+
+# The bilinear weights, the FLIP/PIC update, the wall conditions and putting particles back
+# inside are this module's own copies (the same as the projection scheme's in transfer2d and
+# walls2d), so that the explicit comparator does not depend on those kernels' internals.
+
+
+@njit(cache=True, inline="always")
+def cell_of(s, n):
+    """The cell (0 to n - 1) holding grid coordinate s = x / h; points beyond the grid go to
+    the nearest cell; NaN goes to cell 0."""
+    if not s > 0.0:  # also NaN
+        return 0
+    if s >= n - 1.0:
+        return n - 1
+    return int(s)
+
+
+@njit(cache=True, inline="always")
+def _weights(x0, x1, inv_h, ncx, ncy):
+    """The four nodes of the cell holding a point and their bilinear weights N_a."""
+    sx = x0 * inv_h
+    sy = x1 * inv_h
+    cx = cell_of(sx, ncx)
+    cy = cell_of(sy, ncy)
+    xi = sx - cx
+    eta = sy - cy
+    nnx = ncx + 1
+    base = cx + nnx * cy
+    nodes = (base, base + 1, base + nnx, base + nnx + 1)
+    w = ((1.0 - xi) * (1.0 - eta), xi * (1.0 - eta), (1.0 - xi) * eta, xi * eta)
+    return nodes, w
+
+
+@njit(cache=True, inline="always")
+def flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip):
+    """Particle p's FLIP/PIC velocity (FLIP fraction ``flip``) and its position moved with
+    the interpolated new grid velocity, from its four nodes and weights."""
+    pic0 = 0.0
+    pic1 = 0.0
+    dv0 = 0.0
+    dv1 = 0.0
+    for a in range(4):
+        i = nodes[a]
+        pic0 += w[a] * v_new[i, 0]
+        pic1 += w[a] * v_new[i, 1]
+        dv0 += w[a] * (v_new[i, 0] - v_old[i, 0])
+        dv1 += w[a] * (v_new[i, 1] - v_old[i, 1])
+    v[p, 0] = flip * (v[p, 0] + dv0) + (1.0 - flip) * pic0
+    v[p, 1] = flip * (v[p, 1] + dv1) + (1.0 - flip) * pic1
+    x[p, 0] += dt * pic0
+    x[p, 1] += dt * pic1
+
+
+@njit(cache=True, inline="always")
+def put_inside(x, v, p, upper, margin):
+    """Put particle p back inside the box [0, upper] if it left it; True if it was moved.
+    A particle beyond a wall is mirrored back across it (at least ``margin`` inside) and its
+    velocity component into the wall is removed."""
+    out = False
+    for k in range(x.shape[1]):
+        lo = margin
+        hi = upper[k] - margin
+        if x[p, k] < 0.0:
+            x[p, k] = min(max(-x[p, k], lo), hi)
+            if v[p, k] < 0.0:
+                v[p, k] = 0.0
+            out = True
+        elif x[p, k] > upper[k]:
+            x[p, k] = max(min(2.0 * upper[k] - x[p, k], hi), lo)
+            if v[p, k] > 0.0:
+                v[p, k] = 0.0
+            out = True
+    return out
 
 
 @njit(cache=True)
-def _walls(ncx, ncy, v, contact, no_slip):
+def _wall_pairs(ncx, ncy):
+    """Every wall node with its wall: (node, axis of the normal, outward sign); a corner node
+    appears once for each of its two walls."""
+    nnx = ncx + 1
+    n = 2 * (ncy + 1) + 2 * (ncx + 1)
+    node = np.empty(n, dtype=np.int64)
+    axis = np.empty(n, dtype=np.int64)
+    sign = np.empty(n, dtype=np.float64)
+    e = 0
+    for iy in range(ncy + 1):
+        for ix, s in ((0, -1.0), (ncx, 1.0)):
+            node[e], axis[e], sign[e] = ix + nnx * iy, 0, s
+            e += 1
+    for ix in range(ncx + 1):
+        for iy, s in ((0, -1.0), (ncy, 1.0)):
+            node[e], axis[e], sign[e] = ix + nnx * iy, 1, s
+            e += 1
+    return node, axis, sign
+
+
+@njit(cache=True)
+def _walls(node, axis, sign, v, contact, no_slip):
     """Wall nodes where the velocity points into the wall are in contact: normal velocity 0
     (and tangential too for no-slip); elsewhere the material leaves the wall freely."""
     contact[:] = False
-    node, axis, sign = wall_pairs(ncx, ncy)
     for e in range(node.shape[0]):
         contact[node[e], axis[e]] = sign[e] * v[node[e], axis[e]] > 0.0
-    apply_walls_2d(ncx, ncy, v, contact, no_slip)
+    for e in range(node.shape[0]):
+        i, k = node[e], axis[e]
+        if contact[i, k] or sign[e] * v[i, k] > 0.0:
+            v[i, k] = 0.0
+            if no_slip and contact[i, k]:
+                v[i, 1 - k] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -153,6 +249,7 @@ def explicit_steps_2d(nsteps, dt, x, v, pressure, mass, volume, density, bulk, g
     n = x.shape[0]
     nnode = node_mass.shape[0]
     moved = 0
+    wnode, waxis, wsign = _wall_pairs(ncx, ncy)
     for _ in range(nsteps):
         # (1) particle to grid
         node_mass[:] = 0.0
@@ -179,15 +276,18 @@ def explicit_steps_2d(nsteps, dt, x, v, pressure, mass, volume, density, bulk, g
                     for a in range(4):
                         v_new[nodes[a], 0] += vp * dx[a]
                         v_new[nodes[a], 1] += vp * dy[a]
-        nodal_velocity(node_mass, node_mom, v_old)
         for i in range(nnode):
             if node_mass[i] > 0.0:
+                v_old[i, 0] = node_mom[i, 0] / node_mass[i]
+                v_old[i, 1] = node_mom[i, 1] / node_mass[i]
                 v_new[i, 0] = v_old[i, 0] + dt * v_new[i, 0] / node_mass[i]
                 v_new[i, 1] = v_old[i, 1] + dt * v_new[i, 1] / node_mass[i]
             else:
+                v_old[i, 0] = 0.0
+                v_old[i, 1] = 0.0
                 v_new[i, 0] = 0.0
                 v_new[i, 1] = 0.0
-        _walls(ncx, ncy, v_new, contact, no_slip)
+        _walls(wnode, waxis, wsign, v_new, contact, no_slip)
         for cy in range(ncy):
             for cx in range(ncx):
                 c = cx + ncx * cy
