@@ -264,6 +264,28 @@ class Solver(_Section):
         "volume-weighted average of the cells around it, interpolated to the particle) or "
         "as their cell's value with \"none\".")
 
+    explicit_mass_cutoff: float = Field(
+        0.0, ge=0, lt=1, description="Explicit scheme: a node whose mass is below this "
+        "fraction of a full node's (density * grid.spacing^2 per unit depth) takes gravity "
+        "only, no internal force, so that nearly empty nodes do not receive huge "
+        "accelerations (0 = every node with mass).")
+    explicit_bulk_viscosity: list[float] = Field(
+        [0.0, 0.0], min_length=2, max_length=2, description="Explicit scheme: artificial "
+        "bulk viscosity [linear, quadratic] (dimensionless), as in explicit hydrocodes: a "
+        "compressing cell (div v = D < 0) adds q = rho (linear c h |D| + quadratic h^2 D^2) to "
+        "its pressure (c the sound speed, h the grid spacing); the stable step then becomes "
+        "h / (|v| + Q + sqrt(Q^2 + c^2)), Q = linear c + quadratic h |D|.")
+    explicit_cell_threshold: float = Field(
+        0.1, ge=0, lt=1, description="Explicit scheme: a cell whose particles' reference "
+        "volume fills less than this fraction of it is too empty to define a volumetric "
+        "strain: it holds no pressure and its particles keep their reference volume "
+        "(0 = every cell with a particle). The default, 0.1, leaves out a cell holding a "
+        "single particle of the usual 16 (1/16 of the cell): without it, at K = 2.2 GPa, "
+        "splashes of lone particles reached 100-500 m/s and stopped the dam break at 0.31 s.")
+    explicit_tension: float = Field(
+        0.0, ge=0, description="Explicit scheme: the largest tension (Pa) the material holds, "
+        "p >= -explicit_tension (0 = none: free water holds no tension).")
+
     @model_validator(mode="before")
     @classmethod
     def _preset(cls, data):
