@@ -135,13 +135,13 @@ class ExplicitScheme:
             xy = ", ".join(f"{c:.4g}" for c in P.x[fastest])
             step = "time.safety_factor" if self.auto else "time.dt"
             raise SimulationError(
-                f"The explicit run blew up at step {int(self.clock[1])} "
-                f"(t = {self.clock[0]:.6g} s): particle {fastest} at ({xy}) m moves at "
-                f"{vmax:.4g} m/s, above solver.max_speed = {self.max_speed:g} m/s. Try a "
-                f"smaller {step}, a larger solver.explicit_cell_threshold (now "
-                f"{self.sparse:g}) or an artificial bulk viscosity "
-                "(solver.explicit_bulk_viscosity), or raise solver.max_speed if such speeds "
-                "are real.")
+                f"The run blew up at step {int(self.clock[1])} (t = {self.clock[0]:.6g} s, "
+                f"explicit scheme): particle {fastest} at ({xy}) m moves at {vmax:.4g} m/s, "
+                f"above solver.max_speed = {self.max_speed:g} m/s. The outputs written so far "
+                f"are kept. Try a smaller {step}, a larger solver.explicit_cell_threshold "
+                f"(now {self.sparse:g}) or solver.explicit_bulk_viscosity (now "
+                f"[{self.q_lin:g}, {self.q_quad:g}]), or raise solver.max_speed if such "
+                "speeds are real.")
         if not self.auto:
             limit = self.stable_time_step()
             if not dt <= limit:  # also catches NaN speeds
