@@ -94,30 +94,69 @@ def test_hydrostatic_start_stays_at_rest():
     assert np.sqrt(np.sum((P.pressure - exact) ** 2) / np.sum(exact**2)) < 0.02
 
 
-def _series(overrides):
+def _series(overrides, end=0.3):
     sim = Simulation(load_case(EXAMPLES / "dam_break.toml", [
-        "grid.spacing=0.008", "time.end=0.3", "output.snapshots=false", *overrides]))
+        "grid.spacing=0.008", f"time.end={end}", "output.snapshots=false", *overrides]))
     sim.run()
     return sim.series("time"), sim.series("front"), sim.series("height")
 
 
-def test_reduced_k_dam_break_matches_projection_and_vof():
-    """Acceptance (short version: 0.3 s): explicit with K for a sound speed ten times the
-    free-fall speed, at 0.008 m: front (t <= 0.2 s) and height within 0.08 a of the
-    projection scheme and within 0.10 a of the VOF reference."""
-    a = 0.114
+@pytest.fixture(scope="module")
+def reduced_k_runs():
+    """The dam break at 0.008 m to 0.4 s, projection and explicit with K for a sound speed ten
+    times the free-fall speed (default settings): (t, front, height) of each."""
     k = reduced_bulk_modulus(load_case(EXAMPLES / "dam_break.toml"))
     assert math.sqrt(k / RHO) == pytest.approx(10 * math.sqrt(2 * G * 0.228))
-    t, f_p, h_p = _series([])
-    t_e, f_e, h_e = _series(["solver.scheme=explicit", "time.dt=auto",
-                             f"material.bulk_modulus={k}",
-                             "bodies.0.initial_pressure=hydrostatic"])
-    assert np.array_equal(t, t_e)
+    projection = _series([], end=0.4)
+    explicit = _series(["solver.scheme=explicit", "time.dt=auto", f"material.bulk_modulus={k}",
+                        "bodies.0.initial_pressure=hydrostatic"], end=0.4)
+    assert np.array_equal(projection[0], explicit[0])
+    return projection, explicit
+
+
+def test_reduced_k_dam_break_is_within_the_vof_tolerance_at_every_output(reduced_k_runs):
+    """Acceptance (issue 13): front (t <= 0.2 s) and height (t <= 0.4 s) of the explicit run
+    within 0.08 a of the VOF reference at every output (measured 0.065 a and 0.068 a)."""
+    _, (t_e, f_e, h_e) = reduced_k_runs
+    err = errors_against_vof(t_e, f_e, h_e, 0.114, 0.2, 0.4)
+    assert err["front"] <= 0.08 and err["height"] <= 0.08
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "issue 13 is blocked on this criterion: the explicit front is 0.087 a and the height "
+    "0.074 a from the projection's (0.06 a asked). The projection's surge tip runs ahead as a "
+    "sheet one or two particles thick at a slightly negative pressure; the explicit tip, whose "
+    "pressure cannot go below zero, stays blunt. The gap shrinks with the mesh (0.094, 0.087, "
+    "0.050 a at 0.0114, 0.008, 0.004 m) and no explicit cure measured closes it "
+    "(docs/method.md, 'The explicit comparator')."))
+def test_reduced_k_dam_break_matches_the_projection_at_every_output(reduced_k_runs):
+    """Acceptance (issue 13): front (t <= 0.2 s) and height (t <= 0.4 s) within 0.06 a of the
+    projection scheme on the same mesh at every output."""
+    (t, f_p, h_p), (_, f_e, h_e) = reduced_k_runs
+    a = 0.114
     early = t <= 0.2 + 1e-9
-    assert np.max(np.abs(f_e - f_p)[early]) / a <= 0.08
-    assert np.max(np.abs(h_e - h_p)) / a <= 0.08
-    err = errors_against_vof(t_e, f_e, h_e, a, 0.2, 0.3)
-    assert err["front"] <= 0.10 and err["height"] <= 0.10
+    assert np.max(np.abs(f_e - f_p)[early]) / a <= 0.06
+    assert np.max(np.abs(h_e - h_p)) / a <= 0.06
+
+
+def test_real_k_dam_break_survives_the_wall_impact():
+    """Issue 13: at K = 2.2 GPa (0.0114 m, time.dt = "auto") lone particles splashing off the
+    right wall at ~0.3 s drove the run to 500 m/s and stopped it at 0.31 s; with cells too
+    empty to define a volumetric strain left out (solver.explicit_cell_threshold, default
+    0.1) it passes the impact, its fastest particles those of the jet up the wall."""
+    sim = Simulation(load_case(EXAMPLES / "dam_break.toml", EXPLICIT + [
+        "grid.spacing=0.0114", "time.end=0.4", "time.dt=auto", "material.bulk_modulus=2.2e9",
+        "bodies.0.initial_pressure=hydrostatic"]))
+    sim.run()
+    assert sim.time == pytest.approx(0.4)
+    # the jet up the right wall reaches ~6 m/s (three times the free-fall speed sqrt(2 g H),
+    # as at the reduced K); the runs that blew up reached 100-500 m/s
+    assert np.max(sim.series("max_speed")) < 10.0
+    # time.dt = "auto": every step at most safety_factor (0.5) of h / (c + |v|), and not
+    # needlessly small (the steps of one output interval are equal, so at most twice as many)
+    c = math.sqrt(2.2e9 / RHO)
+    fewest = 0.4 / (0.5 * 0.0114 / c)
+    assert fewest <= sim.steps < 2 * fewest
 
 
 def test_study_quick(tmp_path):

@@ -489,7 +489,7 @@ class Simulation:
         span = (f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
                 if n > 1 else where(0))
         report = self.scheme.advance(dt, n, where=where)
-        self.steps += n
+        self.steps += getattr(report, "steps", n)  # time.dt = "auto": the steps it took
         self.time = t0 + n * dt
         c = self.counters
         c.moved_inside += report.moved_inside
