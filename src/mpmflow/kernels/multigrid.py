@@ -38,8 +38,14 @@ def _coords(i, dims, out):
 def coarse_level(node, dims):
     """Coarse unknowns of a level: returns (coarse node per coarse row, coarse dims, row of
     each coarse node or -1, coarse coordinates per row (n_c, D), P columns (n, 2^D) and
-    weights (n, 2^D))."""
-    D = dims.shape[0]
+    weights (n, 2^D)). D is a constant of each branch, so that the loops over axes unroll."""
+    if dims.shape[0] == 2:
+        return _coarse_level_of(node, dims, 2)
+    return _coarse_level_of(node, dims, 3)
+
+
+@njit(cache=True, inline="always")
+def _coarse_level_of(node, dims, D):
     NC = 1 << D
     cdims = dims // 2 + 1
     ncn = 1
@@ -107,21 +113,51 @@ def coarse_level(node, dims):
 
 
 @njit(cache=True)
-def galerkin(cols, vals, pcols, pw, ccoord, node, dims):
+def slot_table(dims):
+    """The stencil slot of a neighbour from the difference of flat node numbers on a grid of
+    ``dims`` nodes: table[diff + (len - 1) / 2]. Empty when two offsets share a difference
+    (an axis of fewer than 3 nodes): then the slots come from the coordinates."""
+    D = dims.shape[0]
+    stride = np.empty(D, dtype=np.int64)
+    m = 0
+    n = 1
+    for k in range(D):
+        stride[k] = n
+        m += n
+        n *= dims[k]
+    table = -np.ones(2 * m + 1, dtype=np.int64)
+    ns = 1
+    for k in range(D):
+        ns *= 3
+    for s in range(ns):
+        off = 0
+        r = s
+        for k in range(D):
+            off += (r % 3 - 1) * stride[k]
+            r //= 3
+        if table[off + m] >= 0:
+            return table[:0]
+        table[off + m] = s
+    return table
+
+
+@njit(cache=True)
+def galerkin(cols, vals, pcols, pw, ccoord, cnode, table, node, dims):
     """Coarse operator P^T A P in ELL form (3^D slots per row).
 
     Fine row r adds only to the coarse rows it interpolates from, which lie within half a
     slab of node (one index along the last axis) of it; so on large levels the fine rows are
     cut into strips of whole slabs (at least 2 each), and strips 0, 2, 4, ... are summed in
     parallel, then 1, 3, 5, ... (``node``, ``dims``: the fine rows' nodes, ascending). The
-    strips depend on the level only, so the sums do not depend on the thread count."""
+    strips depend on the level only, so the sums do not depend on the thread count.
+    ``table``: the coarse grid's ``slot_table`` (the slots from ``ccoord`` if empty)."""
     nc = ccoord.shape[0]
     NS = cols.shape[1]
     ccols = -np.ones((nc, NS), dtype=np.int64)
     cvals = np.zeros((nc, NS))
     n = cols.shape[0]
     if n < PARALLEL_ROWS:
-        _galerkin_rows(0, n, cols, vals, pcols, pw, ccoord, ccols, cvals)
+        _galerkin_rows(0, n, cols, vals, pcols, pw, ccoord, cnode, table, ccols, cvals)
         return ccols, cvals
     D = dims.shape[0]
     per = 1
@@ -134,23 +170,37 @@ def galerkin(cols, vals, pcols, pw, ccoord, node, dims):
     k = strips(row_cum, STRIPS, 2, strip)
     bounds = row_cum[strip[:k + 1]]
     for parity in range(2):
-        _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, ccoord, ccols, cvals)
+        _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, ccoord, cnode, table, ccols,
+                         cvals)
     return ccols, cvals
 
 
 @njit(cache=True, parallel=True)
-def _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, ccoord, ccols, cvals):
+def _galerkin_strips(parity, bounds, k, cols, vals, pcols, pw, ccoord, cnode, table, ccols,
+                     cvals):
     for t in prange((k - parity + 1) // 2):
         u = 2 * t + parity
-        _galerkin_rows(bounds[u], bounds[u + 1], cols, vals, pcols, pw, ccoord, ccols, cvals)
+        _galerkin_rows(bounds[u], bounds[u + 1], cols, vals, pcols, pw, ccoord, cnode, table,
+                       ccols, cvals)
 
 
 @njit(cache=True)
-def _galerkin_rows(r0, r1, cols, vals, pcols, pw, ccoord, ccols, cvals):
-    """The contributions of fine rows r0 to r1 - 1 to P^T A P."""
-    NP = pcols.shape[1]
-    NS = cols.shape[1]
-    D = ccoord.shape[1]
+def _galerkin_rows(r0, r1, cols, vals, pcols, pw, ccoord, cnode, table, ccols, cvals):
+    """The contributions of fine rows r0 to r1 - 1 to P^T A P (the sizes of P's rows and of
+    the stencil constants of each branch, so that their loops unroll)."""
+    if cols.shape[1] == 9:
+        _galerkin_rows_of(r0, r1, cols, vals, pcols, pw, ccoord, cnode, table, ccols, cvals,
+                          4, 9, 2)
+    else:
+        _galerkin_rows_of(r0, r1, cols, vals, pcols, pw, ccoord, cnode, table, ccols, cvals,
+                          8, 27, 3)
+
+
+@njit(cache=True, inline="always")
+def _galerkin_rows_of(r0, r1, cols, vals, pcols, pw, ccoord, cnode, table, ccols, cvals, NP,
+                      NS, D):
+    lookup = table.shape[0] > 0
+    mid = (table.shape[0] - 1) // 2
     for r in range(r0, r1):
         for a in range(NP):
             I = pcols[r, a]
@@ -166,11 +216,14 @@ def _galerkin_rows(r0, r1, cols, vals, pcols, pw, ccoord, ccols, cvals):
                     J = pcols[j, b]
                     if J < 0:
                         break
-                    slot = 0
-                    p3 = 1
-                    for k in range(D):
-                        slot += (ccoord[J, k] - ccoord[I, k] + 1) * p3
-                        p3 *= 3
+                    if lookup:
+                        slot = table[cnode[J] - cnode[I] + mid]
+                    else:
+                        slot = 0
+                        p3 = 1
+                        for k in range(D):
+                            slot += (ccoord[J, k] - ccoord[I, k] + 1) * p3
+                            p3 *= 3
                     ccols[I, slot] = J
                     cvals[I, slot] += v * pw[j, b]
 
@@ -186,16 +239,25 @@ def dense(cols, vals):
     return A
 
 
-@njit(cache=True)
-def _matvec_rows(cols, vals, x, b, y, lo, hi, subtract):
-    """y = A x (or b - A x when ``subtract``) for rows lo to hi - 1."""
+@njit(cache=True, inline="always")
+def _matvec_rows_of(cols, vals, x, b, y, lo, hi, subtract, NS):
     for r in range(lo, hi):
         acc = 0.0
-        for s in range(cols.shape[1]):
+        for s in range(NS):
             c = cols[r, s]
             if c >= 0:
                 acc += vals[r, s] * x[c]
         y[r] = b[r] - acc if subtract else acc
+
+
+@njit(cache=True)
+def _matvec_rows(cols, vals, x, b, y, lo, hi, subtract):
+    """y = A x (or b - A x when ``subtract``) for rows lo to hi - 1 (the stencil's size a
+    constant of each branch, as in ``_gs_rows``)."""
+    if cols.shape[1] == 9:
+        _matvec_rows_of(cols, vals, x, b, y, lo, hi, subtract, 9)
+    else:
+        _matvec_rows_of(cols, vals, x, b, y, lo, hi, subtract, 27)
 
 
 @njit(cache=True, parallel=True)
@@ -275,11 +337,8 @@ def _dot_parts(a, b, part):
         part[t] = acc
 
 
-@njit(cache=True)
-def _gs_rows(cols, vals, b, x, rows, lo, hi):
-    """Gauss-Seidel update of rows[lo:hi] (rows of one colour: they do not couple); the
-    diagonal of every row is in the middle slot (offset 0)."""
-    NS = cols.shape[1]
+@njit(cache=True, inline="always")
+def _gs_rows_of(cols, vals, b, x, rows, lo, hi, NS):
     centre = NS // 2
     for k in range(lo, hi):
         r = rows[k]
@@ -289,6 +348,18 @@ def _gs_rows(cols, vals, b, x, rows, lo, hi):
             if c >= 0 and s != centre:
                 acc -= vals[r, s] * x[c]
         x[r] = acc / vals[r, centre]
+
+
+@njit(cache=True)
+def _gs_rows(cols, vals, b, x, rows, lo, hi):
+    """Gauss-Seidel update of rows[lo:hi] (rows of one colour: they do not couple); the
+    diagonal of every row is in the middle slot (offset 0). The stencil's size is a
+    constant of each branch (9 in 2D, 27 in 3D), so that its loop is unrolled: the hot loop
+    of the pressure solve."""
+    if cols.shape[1] == 9:
+        _gs_rows_of(cols, vals, b, x, rows, lo, hi, 9)
+    else:
+        _gs_rows_of(cols, vals, b, x, rows, lo, hi, 27)
 
 
 @njit(cache=True, parallel=True)
@@ -340,25 +411,43 @@ def _colour_rows(node, dims, rows, cstart):
         fill[k] += 1
 
 
-@njit(cache=True)
-def _restrict(pcols, pw, r_f, r_c):
+@njit(cache=True, inline="always")
+def _restrict_of(pcols, pw, r_f, r_c, NP):
     r_c[:] = 0.0
     for r in range(pcols.shape[0]):
-        for a in range(pcols.shape[1]):
+        for a in range(NP):
             c = pcols[r, a]
             if c >= 0:
                 r_c[c] += pw[r, a] * r_f[r]
 
 
 @njit(cache=True)
-def _prolong_add(pcols, pw, e_c, x_f):
+def _restrict(pcols, pw, r_f, r_c):
+    """r_c = P^T r_f (P's 2^D entries per row a constant of each branch)."""
+    if pcols.shape[1] == 4:
+        _restrict_of(pcols, pw, r_f, r_c, 4)
+    else:
+        _restrict_of(pcols, pw, r_f, r_c, 8)
+
+
+@njit(cache=True, inline="always")
+def _prolong_add_of(pcols, pw, e_c, x_f, NP):
     for r in range(pcols.shape[0]):
         acc = 0.0
-        for a in range(pcols.shape[1]):
+        for a in range(NP):
             c = pcols[r, a]
             if c >= 0:
                 acc += pw[r, a] * e_c[c]
         x_f[r] += acc
+
+
+@njit(cache=True)
+def _prolong_add(pcols, pw, e_c, x_f):
+    """x_f += P e_c."""
+    if pcols.shape[1] == 4:
+        _prolong_add_of(pcols, pw, e_c, x_f, 4)
+    else:
+        _prolong_add_of(pcols, pw, e_c, x_f, 8)
 
 
 @njit(cache=True)
@@ -398,7 +487,8 @@ def build_hierarchy(cols, vals, node, dims, coarsest):
         cnode, cdims, crow, ccoord, pcols, pw = coarse_level(node, dims)
         if cnode.shape[0] == 0:
             break
-        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, ccoord, node, dims)
+        ccols, cvals = galerkin(cols_l[-1], vals_l[-1], pcols, pw, ccoord, cnode,
+                                slot_table(cdims), node, dims)
         pc_l.append(pcols)
         pw_l.append(pw)
         cols_l.append(ccols)
