@@ -9,21 +9,13 @@ few over the grid.
 import numpy as np
 from numba import njit
 
+from .geometry import cell_of
+from .transfer import put_inside
+from .walls import apply_walls, wall_pairs
 
-# The bilinear weights, the FLIP/PIC update, the wall conditions and putting particles back
-# inside are this module's own 2D copies (the projection scheme's generic ones are in
-# transfer and walls), so that the explicit comparator does not depend on their internals.
-
-
-@njit(cache=True, inline="always")
-def cell_of(s, n):
-    """The cell (0 to n - 1) holding grid coordinate s = x / h; points beyond the grid go to
-    the nearest cell; NaN goes to cell 0."""
-    if not s > 0.0:  # also NaN
-        return 0
-    if s >= n - 1.0:
-        return n - 1
-    return int(s)
+# The bilinear weights and the FLIP/PIC update are written out for 2D here (the explicit
+# step is cheap and runs hundreds of thousands of times); the cell index, the wall pairs and
+# conditions and the put-back are the projection scheme's own kernels.
 
 
 @njit(cache=True, inline="always")
@@ -62,49 +54,6 @@ def flip_update(x, v, p, nodes, w, v_old, v_new, dt, flip):
     x[p, 1] += dt * pic1
 
 
-@njit(cache=True, inline="always")
-def put_inside(x, v, p, upper, margin):
-    """Put particle p back inside the box [0, upper] if it left it; True if it was moved.
-    A particle beyond a wall is mirrored back across it (at least ``margin`` inside) and its
-    velocity component into the wall is removed."""
-    out = False
-    for k in range(x.shape[1]):
-        lo = margin
-        hi = upper[k] - margin
-        if x[p, k] < 0.0:
-            x[p, k] = min(max(-x[p, k], lo), hi)
-            if v[p, k] < 0.0:
-                v[p, k] = 0.0
-            out = True
-        elif x[p, k] > upper[k]:
-            x[p, k] = max(min(2.0 * upper[k] - x[p, k], hi), lo)
-            if v[p, k] > 0.0:
-                v[p, k] = 0.0
-            out = True
-    return out
-
-
-@njit(cache=True)
-def _wall_pairs(ncx, ncy):
-    """Every wall node with its wall: (node, axis of the normal, outward sign); a corner node
-    appears once for each of its two walls."""
-    nnx = ncx + 1
-    n = 2 * (ncy + 1) + 2 * (ncx + 1)
-    node = np.empty(n, dtype=np.int64)
-    axis = np.empty(n, dtype=np.int64)
-    sign = np.empty(n, dtype=np.float64)
-    e = 0
-    for iy in range(ncy + 1):
-        for ix, s in ((0, -1.0), (ncx, 1.0)):
-            node[e], axis[e], sign[e] = ix + nnx * iy, 0, s
-            e += 1
-    for ix in range(ncx + 1):
-        for iy, s in ((0, -1.0), (ncy, 1.0)):
-            node[e], axis[e], sign[e] = ix + nnx * iy, 1, s
-            e += 1
-    return node, axis, sign
-
-
 @njit(cache=True)
 def _walls(node, axis, sign, v, contact, no_slip):
     """Wall nodes where the velocity points into the wall are in contact: normal velocity 0
@@ -112,12 +61,7 @@ def _walls(node, axis, sign, v, contact, no_slip):
     contact[:] = False
     for e in range(node.shape[0]):
         contact[node[e], axis[e]] = sign[e] * v[node[e], axis[e]] > 0.0
-    for e in range(node.shape[0]):
-        i, k = node[e], axis[e]
-        if contact[i, k] or sign[e] * v[i, k] > 0.0:
-            v[i, k] = 0.0
-            if no_slip and contact[i, k]:
-                v[i, 1 - k] = 0.0
+    apply_walls(node, axis, sign, v, contact, no_slip)
 
 
 @njit(cache=True, inline="always")
@@ -279,7 +223,7 @@ def explicit_steps_2d(span, nsteps, safety, x, v, pressure, mass, volume, densit
     nnode = node_mass.shape[0]
     ncell = ncx * ncy
     moved = 0
-    wnode, waxis, wsign = _wall_pairs(ncx, ncy)
+    wnode, waxis, wsign = wall_pairs((ncx, ncy))
     done = 0.0
     steps = 0
     smallest = np.inf

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit, prange
 from numba.cpython.unsafe.tuple import tuple_setitem
 
-from .geometry import corner_offsets, node_strides, weights_at, zeros_of
+from .geometry import cell_strides, corner_offsets, node_strides, weights_at, zeros_of
 from .parallel import CHUNKS, strips
 
 STRIPS = 16  # particle-to-grid cuts the slabs of cells into 2 STRIPS strips
@@ -210,13 +210,8 @@ def particles_to_grid(x, v, mass, volume, order, start, h, cells, gravity, dt, n
     D = len(cells)
     ns = np.empty(D, dtype=np.int64)
     cs = np.empty(D, dtype=np.int64)
-    nn = 1
-    nc = 1
-    for k in range(D):
-        ns[k] = nn
-        cs[k] = nc
-        nn *= cells[k] + 1
-        nc *= cells[k]
+    nn = node_strides(cells, ns)
+    cell_strides(cells, cs)
     for i in prange(nn):
         node_mass[i] = 0.0
         node_vol[i] = 0.0
@@ -299,10 +294,7 @@ def grid_to_particles(x, v, pressure, h, cells, v_old, v_new, p_node, dt, flip, 
     (``put_inside``). Returns how many were put back."""
     D = len(cells)
     ns = np.empty(D, dtype=np.int64)
-    nn = 1
-    for k in range(D):
-        ns[k] = nn
-        nn *= cells[k] + 1
+    node_strides(cells, ns)
     inv_h = 1.0 / h
     n = x.shape[0]
     nchunks = min(CHUNKS, max(n, 1))

@@ -11,7 +11,7 @@ interpolates them).
 import numpy as np
 from numba import njit, prange
 
-from .geometry import cell_strides
+from .geometry import cell_strides, node_strides
 from .parallel import CHUNKS
 from .transfer import scatter_cell_volume
 
@@ -73,13 +73,8 @@ def assemble(cells, theta, density, wet, contact, cell_row, cols, vals, rhs, row
     centre = NS // 2
     ns = np.empty(D, dtype=np.int64)
     cs = np.empty(D, dtype=np.int64)
-    nn = 1
-    nc = 1
-    for k in range(D):
-        ns[k] = nn
-        cs[k] = nc
-        nn *= cells[k] + 1
-        nc *= cells[k]
+    node_strides(cells, ns)
+    nc = cell_strides(cells, cs)
     n = 0
     for c in range(nc):
         if theta[c] > 0.0:

@@ -7,16 +7,15 @@ appears once for each of its walls."""
 import numpy as np
 from numba import njit
 
+from .geometry import node_strides
+
 
 @njit(cache=True)
 def wall_pairs(cells):
     """(node, axis, sign) arrays of every wall node and wall."""
     D = len(cells)
     ns = np.empty(D, dtype=np.int64)
-    nn = 1
-    for k in range(D):
-        ns[k] = nn
-        nn *= cells[k] + 1
+    nn = node_strides(cells, ns)
     total = 0
     for k in range(D):
         total += 2 * (nn // (cells[k] + 1))
