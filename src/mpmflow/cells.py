@@ -20,8 +20,9 @@ class CellBins:
         return np.diff(self.start)
 
 
-def bin_particles(grid, particles, bins=None):
-    """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell."""
+def bin_particles(grid, particles, bins=None, open_=None):
+    """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell
+    (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.obstacles``)."""
     n = particles.count
     if bins is None or bins.cell.shape[0] != n:
         bins = CellBins(
@@ -32,6 +33,8 @@ def bin_particles(grid, particles, bins=None):
         )
     binning.cell_index(particles.x, grid.spacing, tuple(grid.cells), bins.cell)
     binning.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
+    if open_ is None:
+        open_ = np.ones(grid.ncells)
     binning.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
-                                 bins.theta)
+                                 open_, bins.theta)
     return bins

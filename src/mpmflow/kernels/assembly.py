@@ -74,12 +74,14 @@ def assemble_matrix(cells, cell_slot, K, node_row, node_f, subcell, theta_min, c
 
 
 @njit(cache=True)
-def wall_integral(ix, i, cells, ns, cs, h, cell_slot, vstar, contact):
+def wall_integral(ix, i, cells, ns, cs, h, cell_slot, static_slot, Wf, vstar, contact):
     """sum over the wetted wall faces through node i of int N_i (v*.n) ds, counting only the
     nodes in contact (a node whose wall released the material contributes zero: natural
     condition). On a face v*.n is interpolated multilinearly from its 2^(D-1) nodes, whose
     mass matrix has h^(D-1) / prod(3 or 6) entries (the corner itself: 3 per axis, a
-    neighbour along the face: 6)."""
+    neighbour along the face: 6). In a cell an obstacle cuts (``static_slot`` >= 1) only the
+    fluid part of the face counts: ``Wf[s, 2 k + side]`` is its mass matrix
+    (``cutcells``)."""
     D = len(cells)
     total = 0.0
     for k in range(D):
@@ -108,6 +110,18 @@ def wall_integral(ix, i, cells, ns, cs, h, cell_slot, vstar, contact):
                         a += 1 << m
                 if not inside or cell_slot[c] < 0:
                     continue
+                ss = static_slot[c]
+                if ss >= 1:
+                    face = 0.0
+                    for corner in range(1 << D):
+                        jn = first
+                        for m in range(D):
+                            if (corner >> m) & 1:
+                                jn += ns[m]
+                        if contact[jn, k]:
+                            face += Wf[ss, 2 * k + side, a, corner] * sign * vstar[jn, k]
+                    total += face
+                    continue
                 face = 0.0
                 for corner in range(1 << D):
                     if ((corner >> k) & 1) != on:
@@ -126,8 +140,43 @@ def wall_integral(ix, i, cells, ns, cs, h, cell_slot, vstar, contact):
 
 
 @njit(cache=True)
+def obstacle_integral(ix, cells, ns, cs, cell_slot, static_slot, F, vstar, ocontact):
+    """sum over the node's cut cells in the system of int N_i (v*.n) ds over the obstacle's
+    face, counting the obstacle nodes in contact (``F``: ``cutcells``)."""
+    D = len(cells)
+    total = 0.0
+    for b in range(1 << D):
+        c = 0
+        first = 0
+        a = 0
+        inside = True
+        for m in range(D):
+            bit = (b >> m) & 1
+            j = ix[m] - 1 + bit
+            if j < 0 or j >= cells[m]:
+                inside = False
+                break
+            c += j * cs[m]
+            first += j * ns[m]
+            if bit == 0:
+                a += 1 << m
+        if not inside or cell_slot[c] < 0 or static_slot[c] < 1:
+            continue
+        s = static_slot[c]
+        for corner in range(1 << D):
+            jn = first
+            for m in range(D):
+                if (corner >> m) & 1:
+                    jn += ns[m]
+            if ocontact[jn]:
+                for k in range(D):
+                    total += F[s, a, corner, k] * vstar[jn, k]
+    return total
+
+
+@njit(cache=True)
 def _rhs_rows(r0, r1, cells, h, cell_slot, C, V, node_vol, row_nodes, vstar, contact,
-              wall_flux, expansion, rho_over_dt, rhs):
+              wall_flux, expansion, rho_over_dt, static_slot, F, Wf, ocontact, rhs):
     """Rows r0 to r1 - 1 of ``assemble_rhs``."""
     D = len(cells)
     ns, cs, slot, offset = tables(cells)
@@ -161,19 +210,26 @@ def _rhs_rows(r0, r1, cells, h, cell_slot, C, V, node_vol, row_nodes, vstar, con
         if expansion > 0.0 and excess > 0.0:
             b += expansion * excess
         if wall_flux:
-            b += wall_integral(ix, i, cells, ns, cs, h, cell_slot, vstar, contact)
+            b += wall_integral(ix, i, cells, ns, cs, h, cell_slot, static_slot, Wf, vstar,
+                               contact)
+            if F.shape[0] > 1:
+                b += obstacle_integral(ix, cells, ns, cs, cell_slot, static_slot, F, vstar,
+                                       ocontact)
         rhs[r] = rho_over_dt * b
 
 
 @njit(cache=True, parallel=True)
 def assemble_rhs(cells, h, cell_slot, C, V, node_vol, row_nodes, vstar, contact, wall_flux,
-                 expansion, rho_over_dt, rhs):
+                 expansion, rho_over_dt, static_slot, F, Wf, ocontact, rhs):
     """Right-hand side of eq. (13) for every unknown (``row_nodes[r]``: the node of row r).
 
     rhs_i = -(rho/dt) sum_e C_e[a_i, b, k] v*_{b,k}                (divergence, eq. 15)
             + (rho/dt) int_{wetted walls in contact} N_i v*.n ds   (if wall_flux)
+            + (rho/dt) int_{obstacle faces in contact} N_i v*.n ds (if wall_flux)
             + (rho/dt) expansion * max(vol_i - V_i, 0)
-    ``contact[i, k]`` marks wall nodes whose wall normal to axis k holds the material.
+    ``contact[i, k]`` marks wall nodes whose wall normal to axis k holds the material,
+    ``ocontact[i]`` obstacle nodes that hold it; ``static_slot``, ``F``, ``Wf``: the cut
+    cells' slots and face terms (``mpmflow.obstacles``).
     ``vol_i`` = sum_p N_i V_p is the material volume the particles give node i and
     V_i = sum_e V_e[a_i] the node's volume in the system: the last term is the earlier
     (velocity) density correction, div v = expansion (vol_i/V_i - 1) where particles are
@@ -183,4 +239,5 @@ def assemble_rhs(cells, h, cell_slot, C, V, node_vol, row_nodes, vstar, contact,
     nchunks = min(CHUNKS, max(n, 1))
     for chunk in prange(nchunks):
         _rhs_rows(chunk * n // nchunks, (chunk + 1) * n // nchunks, cells, h, cell_slot, C, V,
-                  node_vol, row_nodes, vstar, contact, wall_flux, expansion, rho_over_dt, rhs)
+                  node_vol, row_nodes, vstar, contact, wall_flux, expansion, rho_over_dt,
+                  static_slot, F, Wf, ocontact, rhs)

@@ -44,9 +44,10 @@ def counting_sort(cell, ncells, start, order):
 
 
 @njit(cache=True, parallel=True)
-def cell_volume_fraction(order, start, volume, cell_volume, theta):
+def cell_volume_fraction(order, start, volume, cell_volume, open_, theta):
     """theta_e = sum of particle volumes in cell e / cell volume (eqs. 8-9 of the paper),
-    from the sorted particles (each cell summed in particle order)."""
+    from the sorted particles (each cell summed in particle order); in a cell an obstacle
+    cuts, over its fluid part (``open_``: the fluid fraction, ``mpmflow.obstacles``)."""
     inv = 1.0 / cell_volume
     n = theta.shape[0]
     for t in prange(CHUNKS):
@@ -58,3 +59,5 @@ def cell_volume_fraction(order, start, volume, cell_volume, theta):
                 for s in range(start[c], start[c + 1]):
                     total += volume[order[s]]
                 theta[c] = total * inv
+                if 0.0 < open_[c] < 1.0:
+                    theta[c] /= open_[c]

@@ -24,10 +24,15 @@ import numba
 import numpy as np
 from numba import njit
 
-from . import (assembly, binning, corrector, ghost, multigrid, quadrature, surface, transfer,
-               volume, walls)
+from . import (assembly, binning, corrector, cutcells, ghost, multigrid, quadrature, surface,
+               transfer, volume, walls)
 
-Grid = namedtuple("Grid", "h cells cell_volume upper margin wall_node wall_axis wall_sign")
+# the obstacles' tables (``mpmflow.obstacles``): phi at the nodes (empty: none), the cells'
+# fluid fraction and static slot, the static element integrals by slot (0: a whole cell),
+# the obstacle nodes with their normals and no-slip flags
+Grid = namedtuple(
+    "Grid", "h cells cell_volume upper margin wall_node wall_axis wall_sign phi open "
+    "static_slot K_static C_static V_static F_static Wf_static onode onormal ono_slip")
 Particles = namedtuple("Particles", "x v mass volume pressure")
 # flip: the FLIP fraction of one step; volume_every: the volume correction runs on the steps
 # whose number (counted from the start of the run) is a multiple of it, 0 = never
@@ -39,7 +44,7 @@ Options = namedtuple(
 Work = namedtuple(
     "Work",
     "cell start order theta node_mass node_mom node_vol v_old v_star v_c v_new node_f "
-    "enclosed slot surface_slot node_row contact p_node K_ref C_ref V_ref cell_vol density "
+    "enclosed slot surface_slot node_row contact ocontact p_node cell_vol density "
     "cell_row vol_cols vol_vals vol_rhs vol_rows q faces no_faces")
 
 # surface quadrature (solver.surface_quadrature)
@@ -89,7 +94,7 @@ def bin_particles(P, G, W):
     """Step 1a: particles sorted by cell and the cell volume fractions theta (eqs. 8, 9)."""
     binning.cell_index(P.x, G.h, G.cells, W.cell)
     binning.counting_sort(W.cell, W.theta.shape[0], W.start, W.order)
-    binning.cell_volume_fraction(W.order, W.start, P.volume, G.cell_volume, W.theta)
+    binning.cell_volume_fraction(W.order, W.start, P.volume, G.cell_volume, G.open, W.theta)
 
 
 @njit(cache=True)
@@ -97,59 +102,63 @@ def cell_integrals(P, G, O, W):
     """Step 3: which cells take part in the pressure system and their element integrals
     (``mpmflow.quadrature`` describes the rules). Returns (slot, K, rhs_slot, rhs_C,
     rhs_V, cor_slot, cor_C, cor_V): the Laplacian's, the right-hand side's and the
-    corrector's slots and tensors (slot 0: the Gauss tensors, -1: left out)."""
+    corrector's slots and tensors (slot 0: the Gauss tensors, 1 to nstatic - 1: the cells
+    obstacles cut, then the cells' own particle tensors; -1: left out)."""
     cells = G.cells
     D = len(cells)
     NC = 1 << D
-    theta, enclosed, slot = W.theta, W.enclosed, W.slot
+    theta, enclosed, slot, static = W.theta, W.enclosed, W.slot, G.static_slot
     nc = theta.shape[0]
+    ns = G.K_static.shape[0]
     npartial = 0
     nsurface = 0
     for c in range(nc):
         counted = theta[c] >= O.sparse
-        slot[c] = 0 if counted or enclosed[c] else -1
-        if counted and theta[c] < O.full:
+        slot[c] = static[c] if (counted or enclosed[c]) and static[c] >= 0 else -1
+        if counted and theta[c] < O.full and static[c] >= 0:
             if O.partial_particles:
                 npartial += 1
             elif not enclosed[c]:
                 nsurface += 1
     partial = np.empty(npartial, dtype=np.int64)
-    K = np.empty((npartial + 1, NC, NC))
-    C = np.empty((npartial + 1, NC, NC, D))
-    V = np.empty((npartial + 1, NC))
-    K[0] = W.K_ref
-    C[0] = W.C_ref
-    V[0] = W.V_ref
+    K = np.empty((npartial + ns, NC, NC))
+    C = np.empty((npartial + ns, NC, NC, D))
+    V = np.empty((npartial + ns, NC))
+    K[:ns] = G.K_static
+    C[:ns] = G.C_static
+    V[:ns] = G.V_static
     if npartial:
         m = 0
         for c in range(nc):
-            if theta[c] >= O.sparse and theta[c] < O.full:
+            if theta[c] >= O.sparse and theta[c] < O.full and static[c] >= 0:
+                slot[c] = ns + m
+                partial[m] = c
                 m += 1
-                slot[c] = m
-                partial[m - 1] = c
         quadrature.particle_cell_tensors(P.x, P.volume, W.order, W.start, partial, G.h, cells,
-                                         K[1:], C[1:], V[1:])
+                                         K[ns:], C[ns:], V[ns:])
     if O.surface == GAUSS or O.partial_particles:
         return slot, K, slot, C, V, slot, C, V
     surface_slot = W.surface_slot
     listed = np.empty(nsurface, dtype=np.int64)
     m = 0
     for c in range(nc):
-        surface_slot[c] = min(slot[c], 0)
-        if theta[c] >= O.sparse and theta[c] < O.full and not enclosed[c]:
+        surface_slot[c] = slot[c]
+        if (theta[c] >= O.sparse and theta[c] < O.full and not enclosed[c]
+                and static[c] >= 0):
+            surface_slot[c] = ns + m
+            listed[m] = c
             m += 1
-            surface_slot[c] = m
-            listed[m - 1] = c
-    Cs = np.empty((nsurface + 1, NC, NC, D))
-    Vs = np.empty((nsurface + 1, NC))
-    Vcells = np.empty((nsurface + 1, NC))
-    Cs[0] = W.C_ref
-    Vs[0] = W.V_ref
-    for s in range(nsurface + 1):
-        Vcells[s] = W.V_ref
+    Cs = np.empty((nsurface + ns, NC, NC, D))
+    Vs = np.empty((nsurface + ns, NC))
+    Vcells = np.empty((nsurface + ns, NC))
+    Cs[:ns] = G.C_static
+    Vs[:ns] = G.V_static
+    Vcells[:ns] = G.V_static
+    for s in range(ns, nsurface + ns):
+        Vcells[s] = G.V_static[0]
     if nsurface:
         quadrature.particle_cell_tensors(P.x, P.volume, W.order, W.start, listed, G.h, cells,
-                                         np.empty((0, NC, NC)), Cs[1:], Vs[1:])
+                                         np.empty((0, NC, NC)), Cs[ns:], Vs[ns:])
     if O.surface == CONSISTENT:
         return slot, K, surface_slot, Cs, Vcells, surface_slot, Cs, Vs
     return slot, K, surface_slot, Cs, Vcells, slot, C, V
@@ -160,7 +169,7 @@ def classify_nodes(G, O, W, slot):
     """Step 4: the free surface. The nodal volume fraction is in ``W.node_f`` (computed
     before the integrals, which need the enclosed cells); numbers the pressure unknowns in
     ``W.node_row`` and returns their nodes."""
-    n = surface.classify_nodes(G.cells, slot, W.node_f, O.subcell, W.node_row)
+    n = surface.classify_nodes(G.cells, slot, G.static_slot, W.node_f, O.subcell, W.node_row)
     rows = np.empty(n, dtype=np.int64)
     for i in range(W.node_row.shape[0]):
         r = W.node_row[i]
@@ -173,7 +182,7 @@ def classify_nodes(G, O, W, slot):
 def node_fractions(G, O, W):
     """Step 3a: the nodal volume fraction and, with the sub-cell free surface, the cells
     enclosed by the material."""
-    surface.nodal_fraction(G.cells, W.theta, W.node_f)
+    surface.nodal_fraction(G.cells, W.theta, G.open, W.node_f)
     if O.subcell:
         surface.enclosed_cells(G.cells, W.node_f, W.enclosed)
     else:
@@ -187,6 +196,7 @@ def pressure_matrix(G, O, W, integrals, rows):
     free surface (singular)."""
     slot, K = integrals[0], integrals[1]
     walls.start_contact(G.wall_node, G.wall_axis, G.wall_sign, W.v_star, W.node_row, W.contact)
+    walls.start_obstacles(G.onode, G.onormal, W.v_star, W.node_row, W.ocontact)
     n = rows.shape[0]
     NS = 1
     for k in range(len(G.cells)):
@@ -209,9 +219,11 @@ def pressure_rhs(G, O, W, integrals, rows, rhs):
         v_c = W.v_c
         v_c[:] = W.v_star
         walls.apply_walls(G.wall_node, G.wall_axis, G.wall_sign, v_c, W.contact, O.no_slip)
+        walls.apply_obstacles(G.onode, G.onormal, G.ono_slip, v_c, W.ocontact)
     assembly.assemble_rhs(G.cells, G.h, integrals[2], integrals[3], integrals[4], W.node_vol,
                           rows, v_c, W.contact, O.wall_flux, O.expansion / O.dt,
-                          O.rho / O.dt, rhs)
+                          O.rho / O.dt, G.static_slot, G.F_static, G.Wf_static, W.ocontact,
+                          rhs)
 
 
 @njit(cache=True)
@@ -220,8 +232,10 @@ def release_walls(G, W, rows, x):
     holding the material would need a negative pressure; returns how many."""
     for r in range(rows.shape[0]):
         W.p_node[rows[r]] = x[r]
-    return walls.release_contact(G.wall_node, G.wall_axis, G.wall_sign, W.v_star, W.node_row,
-                                 W.p_node, W.contact)
+    return (walls.release_contact(G.wall_node, G.wall_axis, G.wall_sign, W.v_star,
+                                  W.node_row, W.p_node, W.contact)
+            + walls.release_obstacles(G.onode, G.onormal, W.v_star, W.node_row, W.p_node,
+                                      W.ocontact))
 
 
 @njit(cache=True)
@@ -293,8 +307,8 @@ def volume_correction(G, O, W, report):
     inv = 1.0 / G.cell_volume
     for c in range(W.density.shape[0]):
         W.density[c] = W.cell_vol[c] * inv
-    n, anchored = volume.assemble(cells, W.theta, W.density, WET, W.contact, W.cell_row,
-                                  W.vol_cols, W.vol_vals, W.vol_rhs, W.vol_rows)
+    n, anchored = volume.assemble(cells, W.theta, W.density, WET, W.contact, G.static_slot,
+                                  W.cell_row, W.vol_cols, W.vol_vals, W.vol_rhs, W.vol_rows)
     if n == 0 or not anchored:
         # nothing, or material filling the whole domain: its volume cannot change
         for k in range(len(cells)):
@@ -324,8 +338,8 @@ def volume_correction(G, O, W, report):
     W.q[:] = 0.0
     for r in range(n):
         W.q[rows[r]] = q[r]
-    volume.face_displacements(cells, W.cell_row, q, O.volume_rate * G.h, O.volume_dmax * G.h,
-                              W.faces)
+    volume.face_displacements(cells, W.cell_row, G.static_slot, q, O.volume_rate * G.h,
+                              O.volume_dmax * G.h, W.faces)
     return OK
 
 
@@ -360,6 +374,7 @@ def finish(P, G, O, W, integrals, correct, report):
                                W.v_star, O.dt / O.rho, W.v_new)
     walls.apply_walls(G.wall_node, G.wall_axis, G.wall_sign, W.v_new, W.contact,
                       O.no_slip)
+    walls.apply_obstacles(G.onode, G.onormal, G.ono_slip, W.v_new, W.ocontact)
     faces = W.no_faces
     if correct:
         status = volume_correction(G, O, W, report)
@@ -369,6 +384,8 @@ def finish(P, G, O, W, integrals, correct, report):
     report[R_MOVED] += transfer.grid_to_particles(P.x, P.v, P.pressure, G.h, G.cells, W.v_old,
                                                   W.v_new, W.p_node, O.dt, O.flip, G.upper,
                                                   G.margin, faces)
+    if G.phi.shape[0] > 0:
+        report[R_MOVED] += cutcells.push_out(P.x, P.v, G.phi, G.h, G.cells, G.margin)
     return OK
 
 

@@ -74,8 +74,10 @@ def _layout(cells):
 
 
 @njit(cache=True, parallel=True)
-def nodal_fraction(cells, theta, node_f):
-    """Nodal volume fraction: the mean of the node's in-domain cells' theta, each clipped to 1."""
+def nodal_fraction(cells, theta, open_, node_f):
+    """Nodal volume fraction: the mean of the node's in-domain cells' theta, each clipped to 1,
+    weighted by the cells' fluid fraction ``open_`` (1 but in cells an obstacle cuts; a
+    cell inside a solid does not count, as a cell beyond a wall)."""
     D = len(cells)
     cs, per, nslabs = _layout(cells)
     for t in prange(CHUNKS):
@@ -84,13 +86,13 @@ def nodal_fraction(cells, theta, node_f):
             _first_of_slab(slab, cells, ix)
             for i in range(slab * per, (slab + 1) * per):
                 fsum = 0.0
-                ncell = 0
+                ncell = 0.0
                 for b in range(1 << D):
                     c = cell_of_node(ix, b, cells, cs)
-                    if c >= 0:
-                        fsum += min(theta[c], 1.0)
-                        ncell += 1
-                node_f[i] = fsum / ncell
+                    if c >= 0 and open_[c] > 0.0:
+                        fsum += open_[c] * min(theta[c], 1.0)
+                        ncell += open_[c]
+                node_f[i] = fsum / ncell if ncell > 0.0 else 0.0
                 _next(ix, cells, 1)
 
 
@@ -130,10 +132,11 @@ def enclosed_cells(cells, node_f, enclosed):
 
 
 @njit(cache=True, parallel=True)
-def classify_nodes(cells, cell_slot, node_f, subcell, node_row):
+def classify_nodes(cells, cell_slot, static_slot, node_f, subcell, node_row):
     """Number the pressure unknowns; returns their count. A node is an unknown when all its
-    in-domain cells take part in the system (``cell_slot`` >= 0) and, with ``subcell``, its
-    volume fraction exceeds 1/2. Unknowns are numbered in node order."""
+    in-domain cells outside solids (``static_slot`` >= 0) take part in the system
+    (``cell_slot`` >= 0) and, with ``subcell``, its volume fraction exceeds 1/2. Unknowns
+    are numbered in node order."""
     D = len(cells)
     cs, per, nslabs = _layout(cells)
     for t in prange(CHUNKS):
@@ -144,7 +147,7 @@ def classify_nodes(cells, cell_slot, node_f, subcell, node_row):
                 unknown = not (subcell and node_f[i] <= 0.5)
                 for b in range(1 << D):
                     c = cell_of_node(ix, b, cells, cs)
-                    if c >= 0 and cell_slot[c] < 0:
+                    if c >= 0 and cell_slot[c] < 0 and static_slot[c] >= 0:
                         unknown = False
                 node_row[i] = 0 if unknown else -1
                 _next(ix, cells, 1)

@@ -57,7 +57,8 @@ def _wall_released(cx, cells, ns, contact):
 
 
 @njit(cache=True)
-def assemble(cells, theta, density, wet, contact, cell_row, cols, vals, rhs, rows):
+def assemble(cells, theta, density, wet, contact, static_slot, cell_row, cols, vals, rhs,
+             rows):
     """The Poisson system of the correction on the cells holding material (theta > 0).
 
     Numbers those cells (``cell_row``, -1 elsewhere; ``rows[r]``: the cell of row r) and
@@ -67,7 +68,10 @@ def assemble(cells, theta, density, wet, contact, cell_row, cols, vals, rhs, row
     density reads low because part of the kernel lies in air, so only an excess counts in a
     cell whose 3^D neighbourhood holds a cell with theta < ``wet``, or that lies against a wall
     the material has left (``contact``: the pressure step's wall contact of each node and wall
-    axis). Returns (number of rows, whether any row touches air)."""
+    axis). A cell inside an obstacle (``static_slot`` < 0) is a wall; in a cell an obstacle
+    cuts, or next to one, only an excess counts too: the hat-kernel density reads low there
+    (part of the kernel lies in the solid), and a deficit would pull particles into the
+    obstacle. Returns (number of rows, whether any row touches air)."""
     D = len(cells)
     NS = cols.shape[1]
     centre = NS // 2
@@ -77,7 +81,7 @@ def assemble(cells, theta, density, wet, contact, cell_row, cols, vals, rhs, row
     nc = cell_strides(cells, cs)
     n = 0
     for c in range(nc):
-        if theta[c] > 0.0:
+        if theta[c] > 0.0 and static_slot[c] >= 0:
             cell_row[c] = n
             rows[n] = c
             n += 1
@@ -99,8 +103,8 @@ def assemble(cells, theta, density, wet, contact, cell_row, cols, vals, rhs, row
         for k in range(D):
             for step in (1, -1):
                 j = cx[k] + step
-                if j < 0 or j >= cells[k]:
-                    continue  # a wall: no flux
+                if j < 0 or j >= cells[k] or static_slot[c + step * cs[k]] < 0:
+                    continue  # a wall or a solid: no flux
                 diag += 1.0
                 nb = cell_row[c + step * cs[k]]
                 if nb >= 0:
@@ -125,7 +129,7 @@ def assemble(cells, theta, density, wet, contact, cell_row, cols, vals, rhs, row
                         inside = False
                         break
                     j += jk * cs[k]
-                if inside and theta[j] < wet:
+                if inside and (theta[j] < wet or static_slot[j] != 0):
                     surface = True
                     break
         excess = density[c] - 1.0
@@ -164,20 +168,21 @@ def _face_cells(face, k, cells, cs):
 
 
 @njit(cache=True)
-def _faces(lo, hi, k, cells, cs, cell_row, q, scale, dmax, f):
+def _faces(lo, hi, k, cells, cs, cell_row, static_slot, q, scale, dmax, f):
     """Faces lo to hi - 1 normal to axis k (``face_displacements``)."""
     for idx in range(lo, hi):
         ik, c = _face_cells(idx, k, cells, cs)
-        if ik == 0 or ik == cells[k]:
+        b = c + ik * cs[k]
+        if ik == 0 or ik == cells[k] or static_slot[b] < 0 or static_slot[b - cs[k]] < 0:
             f[idx] = 0.0
         else:
-            b = c + ik * cs[k]
             f[idx] = _face(cell_row, q, b - cs[k], b, scale, dmax)
 
 
 @njit(cache=True, parallel=True)
-def face_displacements(cells, cell_row, q, scale, dmax, faces):
-    """d = -scale grad q on the inner faces normal to each axis (m), 0 on the walls;
+def face_displacements(cells, cell_row, static_slot, q, scale, dmax, faces):
+    """d = -scale grad q on the inner faces normal to each axis (m), 0 on the walls and on
+    the faces of cells inside obstacles (``static_slot`` < 0);
     ``faces[k]``: the faces normal to axis k."""
     D = len(cells)
     cs = np.empty(D, dtype=np.int64)
@@ -189,5 +194,5 @@ def face_displacements(cells, cell_row, q, scale, dmax, faces):
         f = faces[k]
         n = f.shape[0]
         for t in prange(CHUNKS):
-            _faces(t * n // CHUNKS, (t + 1) * n // CHUNKS, k, cells, cs, cell_row, q, scale,
-                   dmax, f)
+            _faces(t * n // CHUNKS, (t + 1) * n // CHUNKS, k, cells, cs, cell_row, static_slot,
+                   q, scale, dmax, f)

@@ -79,3 +79,56 @@ def release_contact(node, axis, sign, vstar, node_row, p_node, contact):
             contact[i, k] = False
             released += 1
     return released
+
+
+# Obstacles (``mpmflow.obstacles``): the same contact conditions at the obstacle nodes, each
+# with its unit normal into the solid; ``ocontact`` is per node.
+
+
+@njit(cache=True)
+def apply_obstacles(onode, onormal, no_slip, v, ocontact):
+    """Velocity conditions at the obstacle nodes (in place), as ``apply_walls``: the normal
+    velocity is removed where the obstacle holds the material, elsewhere only a velocity into
+    the solid; a no-slip obstacle zeroes the whole velocity where it holds."""
+    D = v.shape[1]
+    for e in range(onode.shape[0]):
+        i = onode[e]
+        vn = 0.0
+        for k in range(D):
+            vn += v[i, k] * onormal[e, k]
+        if ocontact[i] and no_slip[e]:
+            for k in range(D):
+                v[i, k] = 0.0
+        elif ocontact[i] or vn > 0.0:
+            for k in range(D):
+                v[i, k] -= vn * onormal[e, k]
+
+
+@njit(cache=True)
+def start_obstacles(onode, onormal, vstar, node_row, ocontact):
+    """The obstacle nodes that hold the material as the pressure step starts (in place): a
+    pressure unknown, or v* pressing into the solid."""
+    D = vstar.shape[1]
+    for e in range(onode.shape[0]):
+        i = onode[e]
+        vn = 0.0
+        for k in range(D):
+            vn += vstar[i, k] * onormal[e, k]
+        ocontact[i] = node_row[i] >= 0 or vn > 0.0
+
+
+@njit(cache=True)
+def release_obstacles(onode, onormal, vstar, node_row, p_node, ocontact):
+    """Release the obstacle nodes in contact whose pressure came out negative while v* leaves
+    the solid (in place); returns how many."""
+    D = vstar.shape[1]
+    released = 0
+    for e in range(onode.shape[0]):
+        i = onode[e]
+        vn = 0.0
+        for k in range(D):
+            vn += vstar[i, k] * onormal[e, k]
+        if node_row[i] >= 0 and p_node[i] < 0.0 and ocontact[i] and vn < 0.0:
+            ocontact[i] = False
+            released += 1
+    return released

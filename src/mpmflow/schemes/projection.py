@@ -8,9 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import pressure, volume_correction
+from .. import obstacles, pressure, volume_correction
 from ..errors import SolverError
-from ..kernels import quadrature, step, walls
+from ..kernels import step, walls
 from ..linsolve import SMOOTHING_SWEEPS
 from ..transfers import flip_per_step
 from . import register
@@ -50,9 +50,7 @@ class StepReport:
 def work_arrays(grid, count, volume_correction_on):
     """The step's arrays (``kernels.step.Work``), allocated once."""
     D, nn, nc = grid.dim, grid.nnodes, grid.ncells
-    NC, NS = 2**D, 3**D
-    K_ref, C_ref, V_ref = np.zeros((NC, NC)), np.zeros((NC, NC, D)), np.zeros(NC)
-    quadrature.gauss_cell_tensors(grid.spacing, K_ref, C_ref, V_ref)
+    NS = 3**D
     nv = nc if volume_correction_on else 0  # the correction's arrays, when it runs
     faces = []
     for k in range(D):
@@ -67,7 +65,7 @@ def work_arrays(grid, count, volume_correction_on):
         v_new=np.zeros((nn, D)), node_f=np.zeros(nn), enclosed=np.zeros(nc, dtype=np.bool_),
         slot=np.empty(nc, dtype=np.int64), surface_slot=np.empty(nc, dtype=np.int64),
         node_row=np.full(nn, -1, dtype=np.int64), contact=np.zeros((nn, D), dtype=np.bool_),
-        p_node=np.zeros(nn), K_ref=K_ref, C_ref=C_ref, V_ref=V_ref,
+        ocontact=np.zeros(nn, dtype=np.bool_), p_node=np.zeros(nn),
         cell_vol=np.zeros(nv), density=np.zeros(nv), cell_row=np.empty(nv, dtype=np.int64),
         vol_cols=np.empty((nv, NS), dtype=np.int64), vol_vals=np.empty((nv, NS)),
         vol_rhs=np.empty(nv), vol_rows=np.empty(nv, dtype=np.int64), q=np.zeros(nv),
@@ -82,9 +80,13 @@ class ProjectionScheme:
         self.grid = grid
         self.particles = particles
         node, axis, sign = walls.wall_pairs(tuple(grid.cells))
+        self.solids = obstacles.of_case(case, grid)
+        o = self.solids
         self.G = step.Grid(float(grid.spacing), tuple(int(c) for c in grid.cells),
                            float(grid.cell_volume), np.asarray(grid.size, dtype=float),
-                           MARGIN * grid.spacing, node, axis, sign)
+                           MARGIN * grid.spacing, node, axis, sign, o.phi, o.open,
+                           o.static_slot, o.K, o.C, o.V, o.F, o.Wf, o.node, o.normal,
+                           o.no_slip)
         self.W = work_arrays(grid, particles.count, s.volume_correction > 0)
         step.launch_threads()
         self.compiled_advance = step.advance

@@ -1,0 +1,259 @@
+"""Cells cut by fixed obstacles, 2D and 3D: their element integrals over the fluid part, and
+the integrals over the obstacle's face that enter the pressure system.
+
+The obstacles are given by their signed distance phi at the grid nodes (negative inside a
+solid), interpolated multilinearly inside each cell, so the surface lies where the
+interpolated phi is 0, off the grid lines. Each cut cell is divided into n^D sub-cells; a
+sub-cell is fluid when phi at its centre is positive. On that staircase fluid region the
+integrals are exact: 2^D Gauss points per fluid sub-cell give
+
+* ``K[a, b]    = int grad N_a . grad N_b``,  ``C[a, b, k] = int N_a dN_b/dx_k``,
+  ``V[a] = int N_a`` (as ``quadrature`` for a full cell, over the fluid part only),
+
+and the divergence theorem on the staircase gives the obstacle's face term exactly,
+
+* ``F[a, b, k] = int_{obstacle face in the cell} N_a N_b n_k ds``
+  ``          = int (N_a dN_b/dx_k + N_b dN_a/dx_k) dV - sum over the cell's faces``,
+
+where a face piece is subtracted when it is fluid on both sides (an inner face) or fluid on
+this side and on the domain's boundary (a wall, whose own term is ``Wf``). n points out of
+the fluid, into the solid. With these, the column at rest is exact around an obstacle: the
+discrete Laplacian of a linear pressure equals the face terms of uniform gravity on the same
+staircase (docs/method.md, "Obstacles"). The surface is placed to within h / n.
+
+* ``Wf[f, a, b] = int_{fluid part of cell face f} N_a N_b ds`` for the faces f = 2 k + side
+  on the domain's boundary (the walls' term of the right-hand side).
+"""
+
+import numpy as np
+from numba import njit, prange
+
+from .quadrature import accumulate_point
+
+
+@njit(cache=True)
+def phi_at(phi_node, local, first, ns):
+    """phi interpolated multilinearly at local coordinates ``local`` of the cell whose first
+    node is ``first``."""
+    D = local.shape[0]
+    val = 0.0
+    for a in range(1 << D):
+        w = 1.0
+        i = first
+        for k in range(D):
+            if (a >> k) & 1:
+                w *= local[k]
+                i += ns[k]
+            else:
+                w *= 1.0 - local[k]
+        val += w * phi_node[i]
+    return val
+
+
+@njit(cache=True)
+def _face_point(local, w, M, N):
+    """Add a face quadrature point: M[a, b] += w N_a N_b."""
+    D = local.shape[0]
+    NC = 1 << D
+    for a in range(NC):
+        n = 1.0
+        for k in range(D):
+            n *= local[k] if (a >> k) & 1 else 1.0 - local[k]
+        N[a] = n
+    for a in range(NC):
+        for b in range(NC):
+            M[a, b] += w * N[a] * N[b]
+
+
+@njit(cache=True, parallel=True)
+def cut_cell_tensors(phi_node, h, cells, candidates, nsub, K, C, V, F, Wf, solid_parts):
+    """The integrals of the candidate cells (flat indices ``candidates[m]``) into K[m], C[m],
+    V[m], F[m], Wf[m] (module docstring); ``solid_parts[m]``: the number of solid sub-cells
+    plus the solid sub-faces seen across the cell's inner faces (0: the cell is not cut)."""
+    D = len(cells)
+    NC = 1 << D
+    ns = np.empty(D, dtype=np.int64)
+    n = 1
+    for k in range(D):
+        ns[k] = n
+        n *= cells[k] + 1
+    g = 0.5 / np.sqrt(3.0)
+    sub = h / nsub
+    for m in prange(candidates.shape[0]):
+        c = candidates[m]
+        cx = np.empty(D, dtype=np.int64)
+        r = c
+        first = 0
+        for k in range(D):
+            cx[k] = r % cells[k]
+            r //= cells[k]
+            first += cx[k] * ns[k]
+        local = np.empty(D)
+        centre = np.empty(D)
+        N = np.empty(NC)
+        dN = np.empty((NC, D))
+        M = np.empty((NC, NC))
+        K[m] = 0.0
+        C[m] = 0.0
+        V[m] = 0.0
+        F[m] = 0.0
+        Wf[m] = 0.0
+        solid = 0
+        si = np.empty(D, dtype=np.int64)
+        total = 1
+        for k in range(D):
+            total *= nsub
+        # volume: 2^D Gauss points in each fluid sub-cell
+        for q in range(total):
+            rq = q
+            for k in range(D):
+                si[k] = rq % nsub
+                rq //= nsub
+                centre[k] = (si[k] + 0.5) / nsub
+            if not phi_at(phi_node, centre, first, ns) > 0.0:
+                solid += 1
+                continue
+            for gp in range(NC):
+                for k in range(D):
+                    local[k] = centre[k] + (g if (gp >> k) & 1 else -g) / nsub
+                accumulate_point(local, sub**D / NC, h, K[m], C[m], V[m], N, dN)
+        # faces: 2^(D-1) Gauss points on each sub-face
+        nface = total // nsub
+        for k in range(D):
+            for side in range(2):
+                j = cx[k] + (1 if side == 1 else -1)
+                wall = j < 0 or j >= cells[k]
+                other_first = first + (ns[k] if side == 1 else -ns[k])
+                sign = 1.0 if side == 1 else -1.0
+                for q in range(nface):
+                    rq = q
+                    for kk in range(D):
+                        if kk == k:
+                            centre[kk] = 0.5 / nsub if side == 0 else 1.0 - 0.5 / nsub
+                        else:
+                            centre[kk] = (rq % nsub + 0.5) / nsub
+                            rq //= nsub
+                    if not phi_at(phi_node, centre, first, ns) > 0.0:
+                        continue  # solid on this side: part of the obstacle's face, or no face
+                    if not wall:
+                        centre[k] = 1.0 - centre[k]  # the mirrored sub-cell across the face
+                        fluid_other = phi_at(phi_node, centre, other_first, ns) > 0.0
+                        if not fluid_other:
+                            solid += 1
+                            continue  # fluid here, solid there: a piece of obstacle face
+                    M[:] = 0.0
+                    for gp in range(1 << (D - 1)):
+                        bit = 0
+                        for kk in range(D):
+                            if kk == k:
+                                local[kk] = float(side)
+                            else:
+                                local[kk] = centre[kk] + (g if (gp >> bit) & 1 else -g) / nsub
+                                bit += 1
+                        _face_point(local, sub ** (D - 1) / (1 << (D - 1)), M, N)
+                    for a in range(NC):
+                        for b in range(NC):
+                            F[m, a, b, k] -= sign * M[a, b]
+                            if wall:
+                                Wf[m, 2 * k + side, a, b] += M[a, b]
+        for a in range(NC):
+            for b in range(NC):
+                for k in range(D):
+                    F[m, a, b, k] += C[m, a, b, k] + C[m, b, a, k]
+        solid_parts[m] = solid
+
+
+@njit(cache=True)
+def face_mass(h, D, Wf):
+    """``Wf[f, a, b]`` of a whole cell (every face fluid): int N_a N_b over face f."""
+    NC = 1 << D
+    Wf[:] = 0.0
+    g = 0.5 / np.sqrt(3.0)
+    local = np.empty(D)
+    N = np.empty(NC)
+    for k in range(D):
+        for side in range(2):
+            for gp in range(1 << (D - 1)):
+                bit = 0
+                for kk in range(D):
+                    if kk == k:
+                        local[kk] = float(side)
+                    else:
+                        local[kk] = 0.5 + (g if (gp >> bit) & 1 else -g)
+                        bit += 1
+                _face_point(local, h ** (D - 1) / (1 << (D - 1)), Wf[2 * k + side], N)
+
+
+@njit(cache=True)
+def interpolate_phi(phi_node, x, p, inv_h, cells, ns, grad):
+    """phi and its gradient (into ``grad``) at particle p, multilinear in its cell."""
+    D = len(cells)
+    first = 0
+    local = np.empty(D)
+    for k in range(D):
+        s = x[p, k] * inv_h
+        j = min(max(int(np.floor(s)), 0), cells[k] - 1)
+        local[k] = s - j
+        first += j * ns[k]
+    val = 0.0
+    for k in range(D):
+        grad[k] = 0.0
+    for a in range(1 << D):
+        i = first
+        w = 1.0
+        for k in range(D):
+            if (a >> k) & 1:
+                w *= local[k]
+                i += ns[k]
+            else:
+                w *= 1.0 - local[k]
+        val += w * phi_node[i]
+        for k in range(D):
+            dw = inv_h if (a >> k) & 1 else -inv_h
+            for kk in range(D):
+                if kk != k:
+                    dw *= local[kk] if (a >> kk) & 1 else 1.0 - local[kk]
+            grad[k] += dw * phi_node[i]
+    return val
+
+
+@njit(cache=True, parallel=True)
+def push_out(x, v, phi_node, h, cells, margin):
+    """Particles inside an obstacle (interpolated phi < margin) moved out along the gradient
+    of phi to phi = margin (a few Newton steps), their velocity into the solid removed.
+    Returns how many were moved."""
+    D = len(cells)
+    ns = np.empty(D, dtype=np.int64)
+    n = 1
+    for k in range(D):
+        ns[k] = n
+        n *= cells[k] + 1
+    inv_h = 1.0 / h
+    moved = 0
+    for p in prange(x.shape[0]):
+        grad = np.empty(D)
+        phi = interpolate_phi(phi_node, x, p, inv_h, cells, ns, grad)
+        if phi >= margin:
+            continue
+        moved += 1
+        for it in range(4):
+            g2 = 0.0
+            for k in range(D):
+                g2 += grad[k] * grad[k]
+            if g2 == 0.0:
+                break
+            step = (margin - phi) / g2
+            for k in range(D):
+                x[p, k] += step * grad[k]
+            phi = interpolate_phi(phi_node, x, p, inv_h, cells, ns, grad)
+            if phi >= margin:
+                break
+        g2 = 0.0
+        vn = 0.0
+        for k in range(D):
+            g2 += grad[k] * grad[k]
+            vn += v[p, k] * grad[k]
+        if g2 > 0.0 and vn < 0.0:
+            for k in range(D):
+                v[p, k] -= vn * grad[k] / g2
+    return moved

@@ -1,0 +1,175 @@
+"""Fixed rigid obstacles on the grid: what the step needs to know about them, built once.
+
+An obstacle enters the step through the signed distance phi (m, negative inside a solid) at
+the grid nodes, the minimum over the case's obstacles, interpolated multilinearly inside each
+cell: the solid is where that interpolant is negative, so faces lie at their true position,
+not on grid lines (corners and edges are rounded within a cell). From phi:
+
+* cells wholly inside a solid are left out of everything, like cells beyond the domain;
+* cells the surface cuts get their own element integrals over the fluid part, the obstacle's
+  face term, and the fluid part of their faces on the domain's walls
+  (``kernels.cutcells``): the "static" slots 1, 2, ... of the step's element integrals,
+  slot 0 being the whole cell;
+* ``open``: the fluid fraction of each cell, by which a cut cell's particle volume is
+  divided to give its volume fraction theta (a cut cell full of water has theta = 1);
+* the obstacle nodes: the nodes of cut cells, each with the unit normal int N_i n ds /
+  |int N_i n ds| of the obstacle's face around it (pointing into the solid). They are
+  contact conditions like the domain walls (``kernels.walls``): a node holds the material
+  where it presses into the solid and lets go where holding it would need suction.
+
+Particles that end a step inside a solid are moved out along grad phi
+(``kernels.cutcells.push_out``).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kernels import cutcells, quadrature
+
+SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
+
+
+@dataclass
+class Tables:
+    """The obstacles' fixed tables on the grid (empty arrays where there are none)."""
+
+    phi: np.ndarray  # (nnodes,) signed distance at the nodes (m); empty: no obstacle
+    open: np.ndarray  # (ncells,) fluid fraction of each cell
+    static_slot: np.ndarray  # (ncells,) 0 whole cell, s >= 1 cut cell's slot, -1 solid
+    K: np.ndarray  # (1 + ncut, 2^D, 2^D) element integrals by static slot
+    C: np.ndarray  # (1 + ncut, 2^D, 2^D, D)
+    V: np.ndarray  # (1 + ncut, 2^D)
+    F: np.ndarray  # (1 + ncut, 2^D, 2^D, D) obstacle face term (slot 0: zero)
+    Wf: np.ndarray  # (1 + ncut, 2D, 2^D, 2^D) fluid part of the cell faces (wall terms)
+    node: np.ndarray  # (m,) obstacle nodes
+    normal: np.ndarray  # (m, D) their unit normals, into the solid
+    no_slip: np.ndarray  # (m,) whether the node's obstacle is no-slip
+
+    @property
+    def present(self):
+        return self.phi.shape[0] > 0
+
+
+def build(grid, phi=None, no_slip_of=None):
+    """The tables for signed distances ``phi`` at the nodes (None: no obstacle).
+    ``no_slip_of(node_indices) -> bool array`` says which obstacle nodes are no-slip."""
+    D, nc = grid.dim, grid.ncells
+    NC = 2**D
+    cells = tuple(int(c) for c in grid.cells)
+    K0, C0, V0 = np.zeros((NC, NC)), np.zeros((NC, NC, D)), np.zeros(NC)
+    quadrature.gauss_cell_tensors(grid.spacing, K0, C0, V0)
+    W0 = np.zeros((2 * D, NC, NC))
+    cutcells.face_mass(grid.spacing, D, W0)
+    open_ = np.ones(nc)
+    static_slot = np.zeros(nc, dtype=np.int64)
+    if phi is None:
+        return Tables(np.zeros(0), open_, static_slot, K0[None], C0[None], V0[None],
+                      np.zeros((1, NC, NC, D)), W0[None], np.zeros(0, dtype=np.int64),
+                      np.zeros((0, D)), np.zeros(0, dtype=np.bool_))
+    phi = np.ascontiguousarray(phi, dtype=float)
+    corners = _cell_corner_phi(grid, phi)  # (ncells, 2^D)
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    solid = hi <= 0.0
+    touching = (lo <= 0.0) & ~solid
+    # candidates: cells touching a solid and their face neighbours (a face of a fluid cell
+    # may be the obstacle's face while none of its nodes is inside)
+    cand = touching.reshape(cells[::-1]).copy()
+    grown = cand.copy()
+    for axis in range(D):
+        grown |= np.roll(cand, 1, axis=axis) & _not_first(cand.shape, axis)
+        grown |= np.roll(cand, -1, axis=axis) & _not_last(cand.shape, axis)
+    candidates = np.flatnonzero(grown.ravel() & ~solid)
+    m = candidates.size
+    K = np.zeros((m, NC, NC))
+    C = np.zeros((m, NC, NC, D))
+    V = np.zeros((m, NC))
+    F = np.zeros((m, NC, NC, D))
+    Wf = np.zeros((m, 2 * D, NC, NC))
+    parts = np.zeros(m, dtype=np.int64)
+    cutcells.cut_cell_tensors(phi, float(grid.spacing), cells, candidates, SUBCELLS, K, C, V,
+                              F, Wf, parts)
+    cut = parts > 0
+    cut_cells = candidates[cut]
+    static_slot[solid] = -1
+    static_slot[cut_cells] = 1 + np.arange(cut_cells.size)
+    open_[solid] = 0.0
+    open_[cut_cells] = V[cut].sum(axis=1) / grid.cell_volume
+    # obstacle nodes and their normals: int N_b n ds summed over the cut cells
+    ns = np.cumprod([1] + [c + 1 for c in cells[:-1]])
+    nvec = np.zeros((grid.nnodes, D))
+    Fn = F[cut].sum(axis=1)  # (ncut, 2^D, D): int N_b n ds in each cut cell
+    first = _first_nodes(cut_cells, cells, ns)
+    for a in range(NC):
+        off = sum(ns[k] for k in range(D) if (a >> k) & 1)
+        np.add.at(nvec, first + off, Fn[:, a])
+    size = np.linalg.norm(nvec, axis=1)
+    node = np.flatnonzero(size > 1e-9 * grid.spacing ** (D - 1))
+    normal = nvec[node] / size[node, None]
+    no_slip = (no_slip_of(node) if no_slip_of is not None
+               else np.zeros(node.size, dtype=np.bool_))
+    return Tables(phi, open_, static_slot, np.concatenate([K0[None], K[cut]]),
+                  np.concatenate([C0[None], C[cut]]), np.concatenate([V0[None], V[cut]]),
+                  np.concatenate([np.zeros((1, NC, NC, D)), F[cut]]),
+                  np.concatenate([W0[None], Wf[cut]]), node.astype(np.int64), normal,
+                  np.asarray(no_slip, dtype=np.bool_))
+
+
+def _first_nodes(cells_flat, cells, ns):
+    """The first node of each cell (flat indices, axis 0 fastest)."""
+    first = np.zeros(cells_flat.size, dtype=np.int64)
+    r = cells_flat.copy()
+    for k, n in enumerate(cells):
+        first += (r % n) * ns[k]
+        r //= n
+    return first
+
+
+def _cell_corner_phi(grid, phi):
+    """phi at the 2^D corners of every cell, (ncells, 2^D)."""
+    cells = tuple(int(c) for c in grid.cells)
+    D = len(cells)
+    ns = np.cumprod([1] + [c + 1 for c in cells[:-1]])
+    first = _first_nodes(np.arange(grid.ncells), cells, ns)
+    out = np.empty((grid.ncells, 2**D))
+    for a in range(2**D):
+        off = sum(ns[k] for k in range(D) if (a >> k) & 1)
+        out[:, a] = phi[first + off]
+    return out
+
+
+def _not_first(shape, axis):
+    """Mask, False at index 0 along ``axis`` (arrays indexed last axis first)."""
+    m = np.ones(shape, dtype=bool)
+    idx = [slice(None)] * len(shape)
+    idx[axis] = 0
+    m[tuple(idx)] = False
+    return m
+
+
+def _not_last(shape, axis):
+    m = np.ones(shape, dtype=bool)
+    idx = [slice(None)] * len(shape)
+    idx[axis] = -1
+    m[tuple(idx)] = False
+    return m
+
+
+
+
+def of_case(case, grid):
+    """The tables of the case's ``[[obstacles]]`` (none: empty tables)."""
+    specs = getattr(case, "obstacles", None) or []
+    if not specs:
+        return build(grid)
+    from . import shapes
+    dim = grid.dim
+    solids = [shapes.from_spec(o, dim, getattr(case, "base_dir", None)) for o in specs]
+    x = grid.node_coordinates()
+    dist = np.array([s.signed_distance(x) for s in solids])  # (nobstacles, nnodes)
+    phi = dist.min(axis=0)
+    nearest = dist.argmin(axis=0)
+    walls = [case.domain.walls if getattr(o, "walls", "domain") == "domain" else o.walls
+             for o in specs]
+    no_slip = np.array([w == "no_slip" for w in walls], dtype=bool)
+    return build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
