@@ -28,7 +28,7 @@ PHASES = ("binning", "particle to grid", "free surface (node fractions, classify
 
 def timed_advance(totals):
     """A drop-in for the compiled ``advance`` that times each phase into ``totals``."""
-    from mpmflow.kernels import corrector, step, walls
+    from mpmflow.kernels import corrector, cutcells, step, walls
     from mpmflow.kernels.transfer import grid_to_particles as g2p
     from mpmflow.kernels.transfer import particles_to_grid as p2g
 
@@ -62,6 +62,7 @@ def timed_advance(totals):
                                        W.p_node, W.v_star, O.dt / O.rho, W.v_new)
             walls.apply_walls(G.wall_node, G.wall_axis, G.wall_sign, W.v_new, W.contact,
                               O.no_slip)
+            walls.apply_obstacles(G.onode, G.onormal, G.ono_slip, W.v_new, W.ocontact)
             t7 = clock()
             faces = W.no_faces
             if correct:
@@ -73,6 +74,9 @@ def timed_advance(totals):
             t8 = clock()
             report[step.R_MOVED] += g2p(P.x, P.v, P.pressure, G.h, G.cells, W.v_old, W.v_new,
                                         W.p_node, O.dt, O.flip, G.upper, G.margin, faces)
+            if G.phi.shape[0] > 0:
+                report[step.R_MOVED] += cutcells.push_out(P.x, P.v, G.phi, G.h, G.cells,
+                                                          G.margin)
             t9 = clock()
             for name, dt in zip(PHASES, (t1 - t0, t2 - t1, (t3 - t2) + (t5 - t4), t4 - t3,
                                          t6 - t5, t7 - t6, t8 - t7, t9 - t8)):

@@ -58,13 +58,15 @@ WET = 0.5  # a cell at least half full is wetted (as for front and height)
 PACKED = 1.2  # a cell more than 20% over full is packed
 
 
-def volume_measures(theta, cell_volume, material_volume):
+def volume_measures(theta, cell_volume, material_volume, open_=None):
     """``volume_ratio``: the volume of the wetted cells (f >= 1/2) over the material's volume,
-    uncapped (loosening shows as > 1, packing as < 1); ``packed_share``: the share of the cells
-    holding material with f > 1.2."""
+    uncapped (loosening shows as > 1, packing as < 1), counting the fluid part of cells that
+    obstacles cut (``open_``); ``packed_share``: the share of the cells holding material
+    with f > 1.2."""
     holding = np.count_nonzero(theta > 0.0)
-    return {"volume_ratio": float(np.count_nonzero(theta >= WET) * cell_volume
-                                  / material_volume),
+    wet = theta >= WET
+    wetted = np.count_nonzero(wet) if open_ is None else float(open_[wet].sum())
+    return {"volume_ratio": float(wetted * cell_volume / material_volume),
             "packed_share": float(np.count_nonzero(theta > PACKED) / max(holding, 1))}
 
 

@@ -318,7 +318,7 @@ class Simulation:
     def measure(self, bins=None):
         """The diagnostics of one timeseries row at the current state."""
         P, g = self.particles, self.grid
-        bins = bins if bins is not None else bin_particles(g, P)
+        bins = bins if bins is not None else self._bins()
         front, height = front_and_height(g, bins.theta)
         speed = np.sqrt(np.sum(P.v**2, axis=1))
         return {
@@ -331,14 +331,23 @@ class Simulation:
             "max_speed": float(speed.max()),
             "max_pressure": float(P.pressure.max()),
             "pressure_noise": pressure_noise(g, P),
-            **volume_measures(bins.theta, g.cell_volume, self.volume0),
+            **volume_measures(bins.theta, g.cell_volume, self.volume0, self._open()),
             "max_particles_per_cell": int(np.diff(bins.start).max()),
             "pressure_unknowns": int(self.scheme.last_unknowns),
             "solver_iterations": int(self.counters.iterations_since_output),
         }
 
+    def _open(self):
+        """The cells' fluid fractions when obstacles cut cells (None: no obstacle)."""
+        solids = getattr(self.scheme, "solids", None)
+        return solids.open if solids is not None and solids.present else None
+
+    def _bins(self):
+        """Particles binned by cell, theta over the cells' fluid part."""
+        return bin_particles(self.grid, self.particles, open_=self._open())
+
     def _output(self, snapshot):
-        bins = bin_particles(self.grid, self.particles)
+        bins = self._bins()
         row = self.measure(bins)
         self._series.append(row)
         self.counters.iterations_since_output = 0
@@ -529,7 +538,7 @@ class Simulation:
     def _summary(self, status, message):
         P, c = self.particles, self.counters
         wall = self._wall_seconds()
-        bins = bin_particles(self.grid, P)
+        bins = self._bins()
         mass = float(P.mass.sum())
         return {
             "status": status,

@@ -16,7 +16,7 @@ import time as _time
 from pathlib import Path
 
 from ..errors import CaseError, SimulationError
-from . import dam_break, hydrostatic, lobovsky, long_run, sloshing, three_d, volume
+from . import dam_break, hydrostatic, lobovsky, long_run, sloshing, spheric, three_d, volume
 from .common import EXAMPLES, CaseResult, Row
 
 CASES = {
@@ -28,13 +28,15 @@ CASES = {
     "volume": volume.run,
     "long_run": long_run.run,
     "three_d": three_d.run,
+    "spheric": spheric.run,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {"hydrostatic": ("hydrostatic.toml",), "sloshing": ("sloshing.toml",),
                  "dam_break": ("dam_break.toml",), "dam_break_ar1": ("dam_break_ar1.toml",),
                  "lobovsky": ("lobovsky.toml",),
                  "long_run": ("sloshing.toml", "dam_break.toml"),
-                 "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml")}  # the examples/ files each runs
+                 "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml"),
+                 "spheric": ("spheric_test2.toml",)}  # the examples/ files each runs
 
 
 def case_names(cases=None):
