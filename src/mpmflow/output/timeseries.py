@@ -220,6 +220,23 @@ def read_table(path, required=("time",)):
     return {c: values[:, j].copy() for j, c in enumerate(header)}, notes
 
 
+def header_units(path):
+    """The units a CSV's header gives its columns ({name: unit}, ``wall_p [Pa]`` -> "Pa");
+    {} when it cannot be read. probes.csv states them, so a run still going (no summary.json
+    yet) has them too."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            first = f.readline().rstrip("\n")
+    except (OSError, UnicodeDecodeError):
+        return {}
+    out = {}
+    for label in first.split(","):
+        name = _strip_unit(label)
+        if name != label:
+            out[name] = label[len(name) + 2:-1]
+    return out
+
+
 def _strip_unit(label):
     """A column's name without the unit its header may give: ``wall_p [Pa]`` -> ``wall_p``."""
     name, sep, unit = label.partition(" [")
