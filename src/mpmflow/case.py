@@ -11,7 +11,7 @@ from typing import Literal, Optional, Union
 
 import numpy as np
 from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
-                      model_validator)
+                      ValidationInfo, model_validator)
 
 from . import bodies as geometry
 from .errors import CaseError
@@ -157,25 +157,58 @@ class Checkpoint(_Section):
         "bit for bit.")
 
 
+class ProbeData(_Section):
+    path: str = Field(
+        description="The measured series' CSV file (a header line naming the columns, then "
+        "rows of numbers separated by commas), relative to the case file's folder (to the "
+        "working folder for a case built in Python). Checked when the case is loaded.",
+        examples=["../shared/data/validation/spheric_test2_kleefsman2005_marin_exp_P1-P8_H1-H4.csv"])
+    column: str = Field(
+        description="The header of the file's column that holds the measured values, in the "
+        "probe's unit (Pa for pressure, m for level).", examples=["P1 [Pa]"])
+    time_column: str = Field(
+        "time [s]", description="The header of the file's column of times (s).")
+
+
 class Probe(_Section):
     name: str = Field(
         description="Name of the probe: its column in probes.csv (letters, digits, _ . + -).",
         pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["sensor_1"])
     quantity: Literal["pressure", "level"] = Field(
         description="What the probe measures at every output time, into probes.csv: "
-        "\"pressure\" = the mean pressure (Pa) of the particles in a square window one grid "
-        "cell wide centred on position (moved inside the domain where it would cross a wall, "
-        "so a sensor on a wall sees the cells along it); 0 when no particle is in the window "
-        "(a dry sensor reads the atmosphere's gauge pressure). \"level\" = a water-level "
-        "gauge on the vertical line x = position[0]: the height y (m) where the cell volume "
-        "fraction, interpolated in x between the two cell columns around the line, first "
-        "drops below 1/2 going up from position[1] (the top of the water layer; position[1] "
-        "when the gauge's foot is dry, splashes above the layer are not counted).",
+        "\"pressure\" = the water's pressure (Pa) at position, from the particles in a "
+        "window (a square, in 3D a cube, of side probes.N.window) around it: centred on "
+        "position, except that along an axis where position lies on a wall the window lies "
+        "on the water's side (one window in from the wall), and cut at any other wall; read "
+        "as probes.N.estimate says; 0 when no particle is in the window (a dry sensor reads "
+        "the atmosphere's gauge pressure). \"level\" = a water-level gauge on the vertical "
+        "line through position (x in 2D; x and y in 3D): the level (m) above the gauge's foot "
+        "position, where the cell volume fraction, interpolated linearly (bilinearly in 3D) "
+        "between the cell columns around the line, first drops below 1/2 going up from the "
+        "foot, minus the foot's height (the top of the water layer; 0 when the foot is dry, "
+        "splashes above the layer are not counted).",
         examples=["pressure"])
     position: list[float] = Field(
         description="Where the probe is (m): the sensor's point for \"pressure\", the foot of "
-        "the gauge for \"level\" (e.g. [x, 0] on the floor). Inside the domain.",
+        "the gauge for \"level\" (e.g. [x, 0] on the floor in 2D, [x, y, 0] in 3D). Inside "
+        "the domain.",
         min_length=2, max_length=3, examples=[[0.42, 0.01]])
+    window: Optional[float] = Field(
+        None, gt=0, description="Side of a pressure probe's window (m); none = one grid cell "
+        "(grid.spacing). A larger window averages more particles (less noise, less "
+        "resolution).")
+    estimate: Literal["fit", "mean"] = Field(
+        "fit", description="How a pressure probe reads its window's particles: \"fit\" = "
+        "the value at position of the plane p = a + b.(x - position) fitted to them by least "
+        "squares, the pressure AT the point (exact on a hydrostatic column, also for a sensor "
+        "on a wall, whose window lies beside it; falls back to the mean with too few "
+        "particles or particles in one layer, and reads 0 for a negative value among "
+        "pressures that are not); \"mean\" = their mean pressure, the pressure at their "
+        "centre (half a window from a wall sensor: rho g window/2 low on the column at "
+        "rest).")
+    data: Optional[ProbeData] = Field(
+        None, description="The measured series to compare with ([probes.data] table: path, "
+        "column, time_column): `mpmflow plot` draws it beside the probe's.")
 
 
 class Execution(_Section):
@@ -414,20 +447,19 @@ class Case(_Section):
                         f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
                         "cosine top surface is defined for 2D cases only so far; use a flat "
                         "box in 3D (surface_amplitude = 0)")
-            for k, probe in enumerate(self.probes):
-                if probe.quantity == "level":
-                    raise ValueError(
-                        f"probes.{k} is a level gauge: gauges are 2D only so far; in 3D use "
-                        "pressure probes")
             if self.solver.scheme != "projection":
                 raise ValueError(
                     f"solver.scheme = {self.solver.scheme!r} runs in 2D only so far; 3D cases "
                     "run with solver.scheme = \"projection\"")
 
     @model_validator(mode="after")
-    def _consistent(self):
+    def _consistent(self, info: ValidationInfo):
         size = self.domain.size
         self._same_dimension()
+        folder = (info.context or {}).get("folder") if info is not None else None
+        for k, probe in enumerate(self.probes):
+            if probe.data is not None:
+                _check_probe_data(k, probe, folder)
         if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
@@ -712,9 +744,43 @@ def _example(row):
         if isinstance(value, bool) else str(value)
 
 
-def validate(data, source=""):
+def _check_probe_data(k, probe, folder):
+    """probes.k.data: its file exists and names its columns (ValueError otherwise); the path
+    is made absolute (relative to ``folder``, the case file's, else the working folder), so
+    that the resolved case in summary.json finds it from anywhere."""
+    data = probe.data
+    path = Path(data.path).expanduser()
+    if not path.is_absolute():
+        path = (Path(folder) if folder is not None else Path.cwd()) / path
+    path = path.resolve()
+    key = f"probes.{k}.data"
     try:
-        return Case.model_validate(data)
+        with open(path, encoding="utf-8") as f:
+            first = f.readline()
+    except OSError as err:
+        raise ValueError(
+            f"{key}.path = {data.path!r}: the file {path} cannot be read ({err.strerror}); give "
+            "the path of the measured series' CSV file, relative to the case file's folder")
+    except UnicodeDecodeError:
+        raise ValueError(f"{key}.path = {data.path!r}: {path} is not a text file; give the "
+                         "path of the measured series' CSV file (a header line, then numbers)")
+    names = [c.strip().strip('"') for c in first.rstrip("\r\n").split(",")]
+    for field in ("time_column", "column"):
+        name = getattr(data, field)
+        if name not in names:
+            raise ValueError(
+                f"{key}.{field} = {name!r} is not a column of {path.name}, whose header names "
+                + ", ".join(repr(n) for n in names[:20]) + (" ..." if len(names) > 20 else "")
+                + f"; set {key}.{field} to one of them, exactly as written")
+    object.__setattr__(data, "path", str(path))
+
+
+def validate(data, source=""):
+    folder = None
+    if source and not source.startswith("("):
+        folder = str(Path(source).resolve().parent)
+    try:
+        return Case.model_validate(data, context={"folder": folder})
     except ValidationError as err:
         raise _format_error(err, source) from None
 

@@ -102,10 +102,12 @@ def _parser():
     st.add_argument("--quick", action="store_true",
                     help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)")
     pl = sub.add_parser(
-        "plot", help="plot a run's time series, particle snapshots and an animation",
+        "plot", help="plot a run's time series, probes, particle snapshots and an animation",
         description="Plot the outputs of a run (needs matplotlib: pip install "
         "'mpmflow[plot]'): timeseries.png (front and height, energies, largest speed and "
-        "pressure, pressure noise, volume ratio), snapshots/particles_NNNNNN.png and "
+        "pressure, pressure noise, volume ratio), probes.png (with [[probes]]: pressures and "
+        "levels against time, over the measured series named by probes.N.data), "
+        "snapshots/particles_NNNNNN.png and "
         "snapshots.png (particles coloured by pressure) and animation.gif (the snapshots; "
         "set output.snapshot_interval for more frames).")
     pl.add_argument("run_dir", metavar="DIR", help="the --out folder of a run")

@@ -1,10 +1,13 @@
 """``mpmflow plot DIR``: figures of a run's outputs (matplotlib, PNG and an animated GIF).
 
-Reads ``timeseries.csv``, ``summary.json`` and the snapshots listed in ``particles.pvd``;
+Reads ``timeseries.csv``, ``probes.csv``, ``summary.json`` and the snapshots listed in ``particles.pvd``;
 writes into the plot folder:
 
 - ``timeseries.png``   front and column height, energies, largest speed and pressure,
                        pressure noise and wetted volume ratio against time;
+- ``probes.png``       (with probes) the probes' series, one panel per quantity (pressures
+                       in Pa, levels in m), each over the measured series the case names
+                       (``probes.N.data``), drawn dashed in the probe's colour;
 - ``snapshots/particles_NNNNNN.png``   each snapshot, particles coloured by pressure;
 - ``snapshots.png``    up to six snapshots side by side (an overview);
 - ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter).
@@ -59,6 +62,56 @@ def plot_timeseries(series, summary, path, plt):
     save(fig, path, DPI)
 
 
+
+QUANTITY = {"Pa": ("pressure", "pressure [Pa]"), "m": ("level", "water level [m]")}
+
+
+def measured_series(data):
+    """(time, values) of a probe's measured series, ``probes.N.data`` as the resolved case
+    holds it ({"path", "column", "time_column"}); CaseError when the file cannot be read."""
+    path = Path(data["path"])
+    try:
+        with open(path, encoding="utf-8") as f:
+            names = [c.strip().strip('"') for c in f.readline().rstrip("\r\n").split(",")]
+        cols = (names.index(data["time_column"]), names.index(data["column"]))
+        values = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=cols, ndmin=2)
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        raise CaseError(f"the measured series {path} (column {data['column']!r}) cannot be "
+                        f"read ({type(err).__name__}: {err})") from None
+    keep = np.all(np.isfinite(values), axis=1)
+    return values[keep, 0], values[keep, 1]
+
+
+def plot_probes(probes, summary, units, path, plt, notes):
+    """probes.png: one panel per quantity, each probe's series and its measured series.
+    ``probes``: probes.csv's columns; ``units``: {probe: "Pa" | "m"}."""
+    t = probes["time"]
+    names = [n for n in probes if n != "time"]
+    data = {p.get("name"): p.get("data") for p in summary.get("case", {}).get("probes", [])}
+    panels = [u for u in QUANTITY if any(units.get(n) == u for n in names)]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 3.2 * len(panels) + 0.6),
+                             sharex=True, squeeze=False)
+    for ax, unit in zip(axes[:, 0], panels):
+        for k, name in enumerate(n for n in names if units.get(n) == unit):
+            line, = ax.plot(t, probes[name], color=f"C{k % 10}", label=name)
+            ref = data.get(name)
+            if ref:
+                try:
+                    te, ve = measured_series(ref)
+                except CaseError as err:
+                    notes.append(f"{err}; probes.png shows {name} without it.")
+                    continue
+                ax.plot(te, ve, "--", color=line.get_color(), lw=0.8, alpha=0.8,
+                        label=f"{name}, measured ({ref['column']})")
+        ax.set_ylabel(QUANTITY[unit][1])
+        ax.legend(fontsize=7, loc="best", ncol=2)
+        ax.grid(alpha=0.3)
+        ax.set_xlim(t[0] if len(t) else 0.0, t[-1] if len(t) > 1 else 1.0)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle((summary.get("case", {}).get("title") or "mpmflow run") + ": probes",
+                 fontsize=10)
+    fig.tight_layout()
+    save(fig, path, DPI)
 
 
 def side_view(x, p, size, spacing):
@@ -168,5 +221,10 @@ def plot_run(run_dir, out_dir=None, notes=None):
     out = Path(out_dir) if out_dir is not None else Path(run_dir) / "plots"
     check_out_dir(out)
     plot_timeseries(run.timeseries, run.summary, out / "timeseries.png", plt)
-    return [out / "timeseries.png", *plot_snapshots(run.snapshots, run.summary, out, plt,
-                                                    notes)]
+    written = [out / "timeseries.png"]
+    units = run.units
+    if len(run.probes) > 1 and len(run.probes["time"]):
+        if any(units.get(n) in QUANTITY for n in run.probes if n != "time"):
+            plot_probes(run.probes, run.summary, units, out / "probes.png", plt, notes)
+            written.append(out / "probes.png")
+    return [*written, *plot_snapshots(run.snapshots, run.summary, out, plt, notes)]

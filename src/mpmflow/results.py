@@ -23,7 +23,7 @@ import numpy as np
 
 from .errors import CaseError
 from .output.snapshots import read_index
-from .output.timeseries import COLUMNS, read_table
+from .output.timeseries import COLUMNS, header_units, read_table
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,7 @@ class RunResults:
     def units(self):
         units = dict(COLUMNS)
         units.update(self.summary.get("units", {}))
+        units.update(header_units(self.folder / "probes.csv"))
         for name, probe in self.summary.get("probes", {}).items():
             units[name] = probe.get("unit")
         return units

@@ -302,7 +302,7 @@ class Simulation:
                                                     res.get("timeseries"))
         if self.case.probes:
             self._outputs.probes = CsvAppender(folder / "probes.csv", probes.columns(self.case),
-                                               res.get("probes"))
+                                               res.get("probes"), probes.header(self.case))
         if self.case.output.snapshots:
             self._outputs.snapshots = SnapshotWriter(folder, resume=res.get("snapshots"))
         if self._resume_outputs is not None:  # the earlier rows, for series()
@@ -354,7 +354,7 @@ class Simulation:
         if self._outputs.timeseries is not None:
             self._outputs.timeseries.append(row)
         if self._probes is not None:
-            values = probes.measure(self.case, self.grid, self.particles, bins.theta, self.time)
+            values = probes.measure(self.case, self.grid, self.particles, bins, self.time)
             self._probes.append(values)
             if self._outputs.probes is not None:
                 self._outputs.probes.append(values)
@@ -570,7 +570,11 @@ class Simulation:
             "threads": self.threads.record() if self.threads is not None else None,
             "memory_estimate_bytes": self.memory.as_dict(),
             "probes": {p.name: {"quantity": p.quantity, "position": p.position,
-                                "unit": probes.UNITS[p.quantity]} for p in self.case.probes},
+                                "unit": probes.UNITS[p.quantity],
+                                **({"window": probes.window(p, self.grid),
+                                    "estimate": p.estimate}
+                                   if p.quantity == "pressure" else {})}
+                       for p in self.case.probes},
             "units": dict(timeseries_units(self.grid.dim),
                           mass="kg/m" if self.grid.dim == 2 else "kg", wall_seconds="s", domain_used="m", spacing="m",
                           dt="s", sound_speed="m/s", stable_time_step="s",

@@ -65,13 +65,15 @@ class CsvAppender:
 
     ``resume``: the position a checkpoint recorded ({"rows": n, "bytes": b}); the file is
     checked to hold at least that much (CaseError otherwise) and cut back to it, dropping
-    the rows written after the checkpoint. Without it the file is created anew."""
+    the rows written after the checkpoint. Without it the file is created anew.
+    ``labels``: the header's names of the columns when they differ from the row's keys
+    (probes.csv: ``name [unit]``)."""
 
-    def __init__(self, path, columns, resume=None):
+    def __init__(self, path, columns, resume=None, labels=None):
         self._fd = None
         self.path = Path(path)
         self.columns = list(columns)
-        header = ",".join(self.columns) + "\n"
+        header = ",".join(labels if labels is not None else self.columns) + "\n"
         if resume is None:
             write_text(self.path, header)
             self.rows, self.bytes = 0, len(header.encode())
@@ -172,7 +174,8 @@ _INTEGER = {"step", "max_particles_per_cell", "pressure_unknowns", "solver_itera
 
 
 def read_table(path, required=("time",)):
-    """Read an mpmflow CSV (timeseries.csv, probes.csv) as {column: array}, tolerating what a
+    """Read an mpmflow CSV (timeseries.csv, probes.csv) as {column: array}, the columns named
+    without the units a header gives (``time [s]`` -> ``time``), tolerating what a
     crash can leave: a last line without its newline is dropped. Returns (table, notes).
     CaseError when the file is not such a table (binary, another header, a damaged row)."""
     path = Path(path)
@@ -196,7 +199,7 @@ def read_table(path, required=("time",)):
         lines.pop()
     elif lines:
         lines = lines[:1]
-    header = lines[0].split(",") if lines else []
+    header = [_strip_unit(c) for c in lines[0].split(",")] if lines else []
     missing = [c for c in required if c not in header]
     if not header or missing or any(not c.isidentifier() and not _probe_name(c) for c in header):
         first = (lines[0][:60] + "...") if lines and len(lines[0]) > 60 else \
@@ -215,6 +218,29 @@ def read_table(path, required=("time",)):
             raise CaseError(f"{path}, line {k + 2}, is damaged ({err}); the file was changed "
                             "or damaged after the run wrote it. Run the case again.") from None
     return {c: values[:, j].copy() for j, c in enumerate(header)}, notes
+
+
+def header_units(path):
+    """The units a CSV's header gives its columns ({name: unit}, ``wall_p [Pa]`` -> "Pa");
+    {} when it cannot be read. probes.csv states them, so a run still going (no summary.json
+    yet) has them too."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            first = f.readline().rstrip("\n")
+    except (OSError, UnicodeDecodeError):
+        return {}
+    out = {}
+    for label in first.split(","):
+        name = _strip_unit(label)
+        if name != label:
+            out[name] = label[len(name) + 2:-1]
+    return out
+
+
+def _strip_unit(label):
+    """A column's name without the unit its header may give: ``wall_p [Pa]`` -> ``wall_p``."""
+    name, sep, unit = label.partition(" [")
+    return name if sep and unit.endswith("]") and "[" not in unit else label
 
 
 def _probe_name(name):

@@ -4,16 +4,18 @@ examples/lobovsky.toml: a column 0.6 m x 0.3 m at the left end of a tank 1.61 m 
 (tank height 0.92 m, not given by the sources; it holds the run-up), released at once
 (the experiment lifts a gate at about 3.5 m/s), 1.25 s (t sqrt(g/H) = 7.1), dt = 1 ms,
 outputs every step. Times and values are compared in the data's units t sqrt(g/H), h/H and
-p/(rho g H).
+p/(rho g H). The gauges and sensors are the example's ``[[probes]]`` (levels H1-H4,
+pressures sensor_1-4 with ``estimate = "mean"``), read from the run's probes.
 
-* **Water level** at a gauge x_g: the height where the cell volume fraction profile,
+* **Water level** at a gauge x_g (a level probe with its foot on the floor): the height where the cell volume fraction profile,
   interpolated linearly in x between the two cell columns around x_g, first drops below
   1/2 going up from the floor: the top of the water layer on the floor (0 when dry).
   Splashes and drops above the layer are not counted (taking the highest f = 1/2 crossing
   instead puts single-sample spikes of up to 2.5 H into the series). Error: RMS of
   (h_sim - h_exp)/H over the measured samples up to the run's end. Where the data hold two repetitions (H2, H3, H4)
   the reference is their mean; their own RMS difference is the data's scatter.
-* **Wall pressure** at a sensor at height y_s on the right wall: the mean pressure of the
+* **Wall pressure** at a sensor at height y_s on the right wall (a pressure probe at
+  (1.61 m, y_s), window one cell, estimate "mean"): the mean pressure of the
   particles in the last cell column (x > 1.61 m - h) within |y - y_s| <= h/2 (the window
   clipped at the floor; 0 when it holds no particle). The measured series (20 kHz) is
   averaged over 1 ms, the simulation's step, before the peak is taken. **Peak**: the
@@ -25,8 +27,6 @@ import math
 
 import numpy as np
 
-from ..cells import bin_particles
-from ..diagnostics import volume_fraction_field
 from ..reference import load
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 
@@ -34,10 +34,16 @@ H = 0.3  # m, column height
 G = 9.81
 LEVELS = "validation/lobovsky_2014_H300mm_water_levels_fig16.csv"
 PRESSURE = "validation/lobovsky_2014_H300mm_wall_pressure_fig18_event5.csv"
+# the example's [[probes]]: name -> x (m) and data columns; name -> y (m) and data column
 GAUGES = {"H1": (0.300, [1]), "H2": (0.865, [2, 3]), "H3": (1.114, [4, 5]),
-          "H4": (1.3625, [6, 7])}  # x (m), data columns
+          "H4": (1.3625, [6, 7])}
 SENSORS = {"sensor 1": (0.003, 1), "sensor 2": (0.015, 2), "sensor 3": (0.030, 4),
-           "sensor 4": (0.080, 5)}  # y (m), data column
+           "sensor 4": (0.080, 5)}
+
+
+def probe_name(label):
+    """The probe of examples/lobovsky.toml behind a gauge's or sensor's label."""
+    return label.replace(" ", "_")
 IMPACT = (2.0, 3.5)  # window of the first impact peak, in t sqrt(g/H)
 SPACING, SPACING_QUICK = 0.01, 0.01
 END, END_QUICK = 1.25, 0.75  # s
@@ -54,31 +60,13 @@ WHY_PEAK = ("impact peaks scatter by about a factor of two between Lobovsky's 10
             "and this series is one of them (peak event 5)")
 
 
-def gauge_level(sim, xg):
-    """Water level (m) at x = xg: where the interpolated f profile first drops below 1/2
-    going up from the floor (the top of the water layer on the floor; 0 when dry)."""
-    g = sim.grid
-    f = volume_fraction_field(g, bin_particles(g, sim.particles).theta)
-    s = xg / g.spacing - 0.5
-    i0 = int(np.clip(np.floor(s), 0, g.cells[0] - 2))
-    w = float(np.clip(s - i0, 0.0, 1.0))
-    col = (1 - w) * f[i0] + w * f[i0 + 1]
-    yc = g.cell_centres(1)
-    below = np.flatnonzero(col < 0.5)
-    if below.size == 0:
-        return float(g.size[1])
-    k = below[0]
-    if k == 0:
-        return 0.0
-    return float(yc[k - 1] + (yc[k] - yc[k - 1]) * (col[k - 1] - 0.5) / (col[k - 1] - col[k]))
-
-
-def wall_pressure(sim, ys):
-    """Mean particle pressure (Pa) in the last cell column within |y - ys| <= h/2."""
-    P, h = sim.particles, sim.grid.spacing
-    lx = sim.grid.size[0]
-    sel = (P.x[:, 0] > lx - h) & (np.abs(P.x[:, 1] - ys) <= 0.5 * h)
-    return float(P.pressure[sel].mean()) if np.any(sel) else 0.0
+def assert_probe(sim, label, quantity, position):
+    """The example's probe is where this module's table says (they are kept in step)."""
+    probe = next(p for p in sim.case.probes if p.name == probe_name(label))
+    if probe.quantity != quantity or not np.allclose(probe.position, position):
+        raise RuntimeError(f"examples/lobovsky.toml: probe {probe.name} is a {probe.quantity} "
+                           f"probe at {probe.position} m; the validation expects a {quantity} "
+                           f"probe at {position} m")
 
 
 def _running_mean(y, n):
@@ -100,19 +88,15 @@ def run(out, quick=False, context=None):
     h = SPACING_QUICK if quick else SPACING
     end = END_QUICK if quick else END
     res = CaseResult("lobovsky", "Lobovsky et al. (2014), H = 0.3 m")
-    rec = {"t": [], **{k: [] for k in GAUGES}, **{k: [] for k in SENSORS}}
-
-    def sample(sim):
-        rec["t"].append(sim.time)
-        for k, (xg, _) in GAUGES.items():
-            rec[k].append(gauge_level(sim, xg))
-        for k, (ys, _) in SENSORS.items():
-            rec[k].append(wall_pressure(sim, ys))
-
     dt = 1e-3
     sim = run_example("lobovsky.toml", [f"grid.spacing={h}", f"time.dt={dt}",
-                                        f"time.end={end}", f"output.interval={dt}"],
-                      on_output=sample)
+                                        f"time.end={end}", f"output.interval={dt}"])
+    rec = {"t": sim.series("time"),
+           **{k: sim.probe_series(probe_name(k)) for k in [*GAUGES, *SENSORS]}}
+    for k, (x, _) in GAUGES.items():
+        assert_probe(sim, k, "level", [x, 0.0])
+    for k, (y, _) in SENSORS.items():
+        assert_probe(sim, k, "pressure", [sim.case.domain.size[0], y])
     rho = sim.case.material.density
     scale = math.sqrt(G / H)
     ts = np.array(rec["t"]) * scale
