@@ -21,7 +21,7 @@ Particles that end a step inside a solid are moved out along grad phi
 (``kernels.cutcells.push_out``).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -45,6 +45,11 @@ class Tables:
     node: np.ndarray  # (m,) obstacle nodes
     normal: np.ndarray  # (m, D) their unit normals, into the solid
     no_slip: np.ndarray  # (m,) whether the node's obstacle is no-slip
+    solids: list = field(default_factory=list)  # the shapes (``shapes.Shape``)
+
+    def distance(self, points):
+        """The signed distance (m) of points to the nearest obstacle, negative inside."""
+        return np.min([s.signed_distance(points) for s in self.solids], axis=0)
 
     @property
     def present(self):
@@ -172,4 +177,6 @@ def of_case(case, grid):
     walls = [case.domain.walls if getattr(o, "walls", "domain") == "domain" else o.walls
              for o in specs]
     no_slip = np.array([w == "no_slip" for w in walls], dtype=bool)
-    return build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
+    tables = build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
+    tables.solids = solids
+    return tables

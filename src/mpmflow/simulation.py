@@ -354,7 +354,10 @@ class Simulation:
         if self._outputs.timeseries is not None:
             self._outputs.timeseries.append(row)
         if self._probes is not None:
-            values = probes.measure(self.case, self.grid, self.particles, bins, self.time)
+            solids = getattr(self.scheme, "solids", None)
+            values = probes.measure(self.case, self.grid, self.particles, bins, self.time,
+                                    solids.distance if solids is not None and solids.solids
+                                    else None)
             self._probes.append(values)
             if self._outputs.probes is not None:
                 self._outputs.probes.append(values)
