@@ -667,7 +667,7 @@ class Case(_Section):
                     f"vector; give {name} {D} entries, or domain.size {len(value)}")
         if D == 3:
             for k, body in enumerate(self.bodies):
-                if body.surface_amplitude:
+                if getattr(body, "surface_amplitude", 0.0):
                     raise ValueError(
                         f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
                         "cosine top surface is defined for 2D cases only so far; use a flat "
