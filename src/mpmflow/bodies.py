@@ -3,10 +3,15 @@ and whether the material would fill the whole grid.
 
 Each body is filled with particles on the global lattice (k + 1/2) * s, s = grid.spacing /
 particles_per_cell (``particles.lattice_in_box``): a particle stands for the square of side
-s around it. Bodies must not overlap (they may touch): overlapping boxes would place their
-particles on top of each other and create mass. The counts here are exact and cost one
-pass over the lattice columns of a body, not over its particles, so that a case can be
-sized (``mpmflow.memory``) in microseconds whatever its size.
+s around it. A box keeps the lattice points in [min, max) along each axis; any other shape
+the points of its bounding box that it ``contains`` (``mpmflow.shapes``); either way the
+points inside an obstacle are left out (``seeded``). Bodies must not overlap (they may
+touch): overlapping bodies would place their particles on top of each other and create
+mass. The counts here are exact. For a box clear of obstacles they cost one pass over the
+lattice columns of a body, not over its particles, so that a case can be sized
+(``mpmflow.memory``) in microseconds whatever its size; for other shapes, and for a box
+near an obstacle, one containment pass over the lattice points of the bounding box (of
+the box's part near the obstacles).
 """
 
 import itertools
@@ -33,13 +38,139 @@ def cosine_top(body, x):
                                                          / width)
 
 
-def particle_count(body, grid_spacing):
+# a containment pass over more lattice points than this is not made to count a body: such a
+# body is far beyond any machine's memory, and its count is estimated from its volume
+MAX_PASS = 2 * 10**8
+CHUNK = 2**20  # lattice points per chunk of a containment pass
+
+
+def is_box(body):
+    return getattr(body, "type", "box") == "box"
+
+
+def seed_region(body, shape, spacing):
+    """(lo, hi): the part of the lattice of ``spacing`` that holds the body's particles,
+    for ``particles.lattice_in_box`` (half open, [lo, hi)): a box's [min, max) (up to the
+    crest of a cosine top); for other shapes the bounding box, widened a little so that
+    lattice points on its upper faces are kept where the shape contains them."""
+    if is_box(body):
+        hi = list(body.max)
+        hi[1] += abs(body.surface_amplitude)
+        return np.asarray(body.min, dtype=float), np.asarray(hi, dtype=float)
+    lo, hi = shape.bounds()
+    return lo, hi + 2e-9 * spacing
+
+
+def lattice_count(lo, hi, spacing):
+    """Number of lattice points in [lo, hi) (exact integer)."""
+    n = 1
+    for a, b in zip(lo, hi):
+        k0, k1 = lattice_indices(a, b, spacing)
+        n *= max(0, k1 - k0 + 1)
+    return n
+
+
+def lattice_chunks(lo, hi, spacing, chunk=CHUNK):
+    """The lattice points in [lo, hi) as (n, D) arrays of about ``chunk`` points, slabs along
+    the last axis (so that a pass over many points holds few at once)."""
+    axes = []
+    for a, b in zip(lo, hi):
+        k0, k1 = lattice_indices(a, b, spacing)
+        axes.append((np.arange(k0, k1 + 1) + 0.5) * spacing)
+    if any(len(a) == 0 for a in axes):
+        return
+    per_slab = math.prod(len(a) for a in axes[:-1])
+    step = max(1, chunk // per_slab)
+    for j in range(0, len(axes[-1]), step):
+        mesh = np.meshgrid(*axes[:-1], axes[-1][j:j + step], indexing="ij")
+        yield np.stack([m.ravel(order="F") for m in mesh], axis=1)
+
+
+def in_body(body, shape, points, spacing):
+    """Which of the points the body keeps (before obstacles): a box's half-open [min, max)
+    on its own lattice (``lattice_indices``: max - 1e-9 spacing excluded) and below a
+    cosine top; any other shape, ``shape.contains``."""
+    if not is_box(body):
+        return shape.contains(points)
+    lo = np.asarray(body.min) - 1e-9 * spacing
+    hi = np.asarray(body.max) - 1e-9 * spacing
+    if body.surface_amplitude:
+        hi[1] += abs(body.surface_amplitude)
+    keep = np.all((points >= lo) & (points <= hi), axis=1)
+    if body.surface_amplitude:
+        keep &= points[:, 1] < cosine_top(body, points[:, 0])
+    return keep
+
+
+def in_obstacles(obstacles, points):
+    """Which of the points lie inside (or on) any of the obstacle shapes."""
+    inside = np.zeros(len(points), dtype=bool)
+    for shape in obstacles:
+        lo, hi = shape.bounds()
+        near = np.flatnonzero(np.all((points >= lo - 1e-12) & (points <= hi + 1e-12), axis=1))
+        if len(near):
+            inside[near[shape.contains(points[near])]] = True
+    return inside
+
+
+def seeded(body, shape, points, spacing, obstacles=()):
+    """The body's particles among these lattice points: kept by the body, outside every
+    obstacle (the material cannot start inside a structure)."""
+    keep = in_body(body, shape, points, spacing)
+    if obstacles and keep.any():
+        keep[keep] = ~in_obstacles(obstacles, points[keep])
+    return keep
+
+
+def _clip(lo, hi, shapes):
+    """The part of [lo, hi) inside the union of the shapes' bounding boxes, as one box
+    (their hull), or None when none reaches it."""
+    parts = []
+    for shape in shapes:
+        a, b = shape.bounds()
+        a, b = np.maximum(lo, a - 1e-9), np.minimum(hi, b + 1e-9)
+        if np.all(b >= a):
+            parts.append((a, b))
+    if not parts:
+        return None
+    return np.min([p[0] for p in parts], axis=0), np.max([p[1] for p in parts], axis=0)
+
+
+def particle_count(body, grid_spacing, shape=None, obstacles=()):
     """The number of particles the body is seeded with (exact; ``setup_case`` seeds them);
-    inf when the count overflows a float."""
+    inf when the count overflows a float. ``shape``: the body's ``mpmflow.shapes`` shape
+    (needed unless the body is a box); ``obstacles``: the obstacles' shapes, whose points
+    are left out."""
     try:
-        return _count(body, grid_spacing)
+        s = grid_spacing / body.particles_per_cell
+        if is_box(body):
+            n = _count(body, grid_spacing)
+            lo, hi = seed_region(body, shape, s)
+            near = _clip(lo, hi, obstacles) if obstacles else None
+            if near is None or not n:
+                return n
+            return n - _pass(body, shape, near, s, obstacles, carved=True)
+        lo, hi = seed_region(body, shape, s)
+        return _pass(body, shape, (lo, hi), s, obstacles)
     except OverflowError:
         return math.inf
+
+
+def _pass(body, shape, region, s, obstacles, carved=False):
+    """Lattice points in region the body keeps (carved: that the obstacles remove)."""
+    lo, hi = region
+    total = lattice_count(lo, hi, s)
+    if total > MAX_PASS:  # beyond any machine: the volume's worth of lattice points
+        volume = shape.volume() if shape is not None else float(np.prod(np.subtract(hi, lo)))
+        return 0 if carved else int(round(volume / s ** len(lo)))
+    n = 0
+    for points in lattice_chunks(lo, hi, s):
+        keep = in_body(body, shape, points, s)
+        if carved:
+            n += int(np.count_nonzero(in_obstacles(obstacles, points[keep])))
+        else:
+            n += int(np.count_nonzero(seeded(body, shape, points, s, obstacles)))
+    return n
 
 
 def _count(body, grid_spacing):
@@ -131,6 +262,8 @@ def overlap_message(bodies, spacing):
     for i in range(len(bodies)):
         for j in range(i + 1, len(bodies)):
             a, b = bodies[i], bodies[j]
+            if not is_box(a) or not is_box(b):
+                continue  # shapes: mpmflow.placement.body_overlap
             box = overlap(a, b, tol)
             if box is None:
                 continue
@@ -158,8 +291,9 @@ def overlap_message(bodies, spacing):
 
 def fills_grid(bodies, spacing, grid_size):
     """True when the particles of the bodies (each the square of its lattice cell) cover the
-    whole grid, leaving no empty space (flat boxes; a cosine top always leaves some)."""
-    if any(b.surface_amplitude for b in bodies):
+    whole grid, leaving no empty space (flat boxes; a cosine top always leaves some, other
+    shapes are taken to: the start's free-surface check catches what remains)."""
+    if any(not is_box(b) or b.surface_amplitude for b in bodies):
         return False
     rects = []
     for body in bodies:

@@ -6,14 +6,16 @@ is what the documentation and the error messages show.
 
 import difflib
 import sys
+import typing
 from pathlib import Path
-from typing import Literal, Optional, Union
+from typing import Annotated, ClassVar, Literal, Optional, Union
 
 import numpy as np
-from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
-                      ValidationInfo, model_validator)
+from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag,
+                      ValidationError, ValidationInfo, model_validator)
 
 from . import bodies as geometry
+from . import placement, shapes
 from .errors import CaseError
 from .grid import Grid
 from .stability import case_stable_time_step, initial_speed, sound_speed, time_step
@@ -61,26 +63,162 @@ class GridSettings(_Section):
         "(reported at start and in summary.json).", gt=0, examples=[0.004])
 
 
-class Box(_Section):
-    type: Literal["box"] = Field("box", description="Shape of the body: an axis-aligned box.")
-    min: list[float] = Field(description="Lower corner of the box (m).", examples=[[0.0, 0.0]],
+# --------------------------------------------------------------------------- shapes
+# The shape of a body or an obstacle: one class per shape type, holding only the shape's
+# fields; bodies and obstacles add their own fields to the same shape classes
+# (mpmflow.shapes builds the geometry from them).
+
+SHAPE_TYPES = ("box", "cylinder", "sphere", "disc", "polygon", "mesh")
+_TYPE_DOC = (
+    "Shape: \"box\" (the default; min, max), \"disc\" (2D; centre, radius), \"polygon\" "
+    "(2D; vertices), \"sphere\" (3D; centre, radius), \"cylinder\" (3D; centre, axis, "
+    "radius, length) or \"mesh\" (3D; a closed triangle surface from an STL or OBJ file: "
+    "path, scale, translate). Each type takes only its own shape keys.")
+
+
+def _type_field(kind):
+    return Field(kind, description=_TYPE_DOC)
+
+
+def _centre():
+    return Field(description="Centre (m) of a disc or sphere; of a cylinder, the centre of "
+                 "its base, where its axis starts.", min_length=2, max_length=3,
+                 examples=[[0.2, 0.1]])
+
+
+def _radius():
+    return Field(description="Radius (m) of a disc, sphere or cylinder.", gt=0,
+                 examples=[0.05])
+
+
+class _BoxShape(_Section):
+    VECTORS: ClassVar = ("min", "max")
+    type: Literal["box"] = _type_field("box")
+    min: list[float] = Field(description="Lower corner of a box (m).", examples=[[0.0, 0.0]],
                              min_length=2, max_length=3)
-    max: list[float] = Field(description="Upper corner of the box (m).",
+    max: list[float] = Field(description="Upper corner of a box (m).",
                              examples=[[0.114, 0.228]], min_length=2, max_length=3)
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if any(b <= a for a, b in zip(self.min, self.max)):
+            raise ValueError("each entry of max must be larger than the entry of min")
+        return self
+
+
+class _CylinderShape(_Section):
+    VECTORS: ClassVar = ("centre", "axis")
+    type: Literal["cylinder"] = _type_field("cylinder")
+    centre: list[float] = _centre()
+    axis: list[float] = Field(
+        description="Direction of a cylinder's axis from the centre of its base (any length; "
+        "[0, 0, 1] stands it upright).", min_length=3, max_length=3, examples=[[0, 0, 1]])
+    radius: float = _radius()
+    length: float = Field(description="Length (m) of a cylinder along its axis.", gt=0,
+                          examples=[0.2])
+
+    @model_validator(mode="after")
+    def _axis(self):
+        if not any(self.axis):
+            raise ValueError("the cylinder's axis must not be [0, 0, 0]; give its direction, "
+                             "e.g. axis = [0, 0, 1]")
+        return self
+
+
+class _SphereShape(_Section):
+    VECTORS: ClassVar = ("centre",)
+    type: Literal["sphere"] = _type_field("sphere")
+    centre: list[float] = _centre()
+    radius: float = _radius()
+
+
+class _DiscShape(_Section):
+    VECTORS: ClassVar = ("centre",)
+    type: Literal["disc"] = _type_field("disc")
+    centre: list[float] = _centre()
+    radius: float = _radius()
+
+
+class _PolygonShape(_Section):
+    VECTORS: ClassVar = ()
+    type: Literal["polygon"] = _type_field("polygon")
+    vertices: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
+        description="Corners of a polygon (2D) in order, [[x, y], ...] (m); the last joins the "
+        "first. Any simple polygon (convex or not; its edges must not cross).", min_length=3,
+        examples=[[[0.2, 0.0], [0.3, 0.0], [0.25, 0.05]]])
+
+    @model_validator(mode="after")
+    def _simple(self):
+        message = polygon_problem(self.vertices)
+        if message:
+            raise ValueError(message)
+        return self
+
+
+class _MeshShape(_Section):
+    VECTORS: ClassVar = ("translate",)
+    type: Literal["mesh"] = _type_field("mesh")
+    path: str = Field(
+        description="A mesh's file (STL or OBJ, read with trimesh): the closed surface of a "
+        "solid, relative to the case file's folder. Its coordinates are taken in metres "
+        "(times scale).", min_length=1, examples=["geometry/pier.stl"])
+    scale: float = Field(1.0, gt=0, description="Factor from a mesh file's units to metres "
+                         "(1: the file is in metres; 0.001: in millimetres).")
+    translate: list[float] = Field([0.0, 0.0, 0.0], description="Shift (m) applied to a mesh "
+                                   "after scaling.", min_length=3, max_length=3)
+
+
+def polygon_problem(vertices):
+    """Why these polygon corners are not a simple polygon (no area, crossing edges), or
+    None."""
+    v = np.asarray(vertices, dtype=float)
+    n = len(v)
+    area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+    if not abs(area) > 0:
+        return ("vertices: the polygon's corners enclose no area; give its corners in order "
+                "around its boundary")
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    for i in range(n):
+        a, b = v[i], v[(i + 1) % n]
+        for j in range(i + 1, n):
+            if j == i or (j + 1) % n == i or j == (i + 1) % n:
+                continue  # neighbouring edges share a corner
+            c, d = v[j], v[(j + 1) % n]
+            d1, d2 = cross(c, d, a), cross(c, d, b)
+            d3, d4 = cross(a, b, c), cross(a, b, d)
+            if (d1 * d2 <= 0 and d3 * d4 <= 0
+                    and max(min(a[0], b[0]), min(c[0], d[0])) <= min(max(a[0], b[0]), max(c[0], d[0]))
+                    and max(min(a[1], b[1]), min(c[1], d[1])) <= min(max(a[1], b[1]), max(c[1], d[1]))):
+                return (f"vertices: the polygon's edges {i} (vertices {i} to {(i + 1) % n}) and {j} "
+                        f"(vertices {j} to {(j + 1) % n}) cross or touch, so it is not a "
+                        "simple polygon; list its corners in order around the boundary")
+    return None
+
+
+class _BodyFields(_Section):
     particles_per_cell: int = Field(
         2, ge=1, le=16, description="Material points per cell along each axis (4 gives 16 per "
-        "cell in 2D, 64 in 3D). Points sit on a lattice aligned with the grid.")
+        "cell in 2D, 64 in 3D). Points sit on a lattice aligned with the grid; a body of any "
+        "shape keeps the lattice points inside it (and outside every obstacle).")
     velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s); "
                                   "at rest by default, in 2D and 3D.",
                                   min_length=2, max_length=3)
     initial_pressure: Literal["zero", "hydrostatic"] = Field(
         "zero", description="Initial particle pressure: \"zero\", or \"hydrostatic\" = "
-        "density * |g| * depth below the box's top (its highest corner against gravity). The "
+        "density * |g| * depth below the body's highest point against gravity (for a box its "
+        "highest corner). The "
         "explicit scheme starts from the matching compression (volume (1 - p/K) m/density), "
         "which spares it the acoustic transient of a column released without pressure; the "
         "projection scheme computes the pressure anew in its first step.")
+
+
+class Box(_BodyFields, _BoxShape):
     surface_amplitude: float = Field(
-        0.0, description="Amplitude A (m) of a cosine top surface, for standing-wave "
+        0.0, description="Amplitude A (m) of a cosine top surface (type = \"box\" only), for "
+        "standing-wave "
         "sloshing: particles are kept where y < max[1] + A cos(pi (x - min[0]) / (max[0] - "
         "min[0])), half a wavelength across the box (the first sloshing mode of a tank as "
         "wide as the box); the box is seeded up to max[1] + |A|. 0 = flat top. |A| must be "
@@ -88,14 +226,81 @@ class Box(_Section):
         "measured from this surface.", examples=[0.01])
 
     @model_validator(mode="after")
-    def _ordered(self):
-        if any(b <= a for a, b in zip(self.min, self.max)):
-            raise ValueError("each entry of max must be larger than the entry of min")
+    def _amplitude(self):
         if abs(self.surface_amplitude) >= self.max[1] - self.min[1]:
             raise ValueError(
                 f"|surface_amplitude| = {abs(self.surface_amplitude):g} m must be smaller than "
                 f"the box's height max[1] - min[1] = {self.max[1] - self.min[1]:g} m")
         return self
+
+
+class CylinderBody(_BodyFields, _CylinderShape):
+    pass
+
+
+class SphereBody(_BodyFields, _SphereShape):
+    pass
+
+
+class DiscBody(_BodyFields, _DiscShape):
+    pass
+
+
+class PolygonBody(_BodyFields, _PolygonShape):
+    pass
+
+
+class MeshBody(_BodyFields, _MeshShape):
+    pass
+
+
+class _ObstacleFields(_Section):
+    name: Optional[str] = Field(
+        None, description="Name of the obstacle, for messages and outputs (letters, digits, "
+        "_ . + -); optional.", pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["pier"])
+    walls: Literal["slip", "no_slip", "domain"] = Field(
+        "domain", description="Wall condition on the obstacle's surface: \"slip\", "
+        "\"no_slip\", or \"domain\" = the same as domain.walls.")
+
+
+class BoxObstacle(_ObstacleFields, _BoxShape):
+    pass
+
+
+class CylinderObstacle(_ObstacleFields, _CylinderShape):
+    pass
+
+
+class SphereObstacle(_ObstacleFields, _SphereShape):
+    pass
+
+
+class DiscObstacle(_ObstacleFields, _DiscShape):
+    pass
+
+
+class PolygonObstacle(_ObstacleFields, _PolygonShape):
+    pass
+
+
+class MeshObstacle(_ObstacleFields, _MeshShape):
+    pass
+
+
+def _shape_tag(value):
+    """The ``type`` of a body or obstacle table ("box" when not given)."""
+    kind = value.get("type", "box") if isinstance(value, dict) else getattr(value, "type", "box")
+    return kind if isinstance(kind, str) else repr(kind)
+
+
+def _shape_union(*models):
+    return Annotated[Union[tuple(Annotated[m, Tag(t)] for m, t in zip(models, SHAPE_TYPES))],
+                     Discriminator(_shape_tag)]
+
+
+Body = _shape_union(Box, CylinderBody, SphereBody, DiscBody, PolygonBody, MeshBody)
+Obstacle = _shape_union(BoxObstacle, CylinderObstacle, SphereObstacle, DiscObstacle,
+                        PolygonObstacle, MeshObstacle)
 
 
 class Material(_Section):
@@ -406,8 +611,14 @@ class Case(_Section):
     title: str = Field("", description="Free text shown in outputs.")
     domain: Domain
     grid: GridSettings
-    bodies: list[Box] = Field(description="Bodies of material ([[bodies]] tables).",
-                              min_length=1)
+    bodies: list[Body] = Field(
+        description="Bodies of material ([[bodies]] tables), each of a shape (bodies.N.type).",
+        min_length=1)
+    obstacles: list[Obstacle] = Field(
+        [], description="Fixed rigid obstacles ([[obstacles]] tables): structures the "
+        "material flows round, of the same shapes and shape keys as bodies (obstacles.N.type; "
+        "at least two grid cells thick). Bodies may surround them: the lattice points inside "
+        "an obstacle are not seeded.")
     material: Material = Material()
     physics: Physics = Physics()
     time: Time
@@ -420,6 +631,43 @@ class Case(_Section):
         "probes.N.name; time in s).")
     execution: Execution = Execution()
 
+    _base_dir: Optional[Path] = PrivateAttr(None)  # the case file's folder
+    _shapes: dict = PrivateAttr(default_factory=dict)  # built shapes, by their tables
+    _counts: dict = PrivateAttr(default_factory=dict)  # particle counts, by the geometry
+
+    @property
+    def base_dir(self):
+        """The folder relative paths of the case (mesh files) start from: the case file's,
+        or the current folder for a case not read from a file."""
+        return self._base_dir if self._base_dir is not None else Path.cwd()
+
+    def _shape(self, kind, k):
+        spec = getattr(self, kind)[k]
+        key = (kind, k, spec.model_dump_json(), str(self.base_dir))
+        if key not in self._shapes:
+            self._shapes[key] = shapes.from_spec(spec, len(self.domain.size), self.base_dir,
+                                                 key=f"{kind}.{k}")
+        return self._shapes[key]
+
+    def body_shape(self, k):
+        """The ``mpmflow.shapes`` shape of bodies.k."""
+        return self._shape("bodies", k)
+
+    def obstacle_shape(self, k):
+        """The ``mpmflow.shapes`` shape of obstacles.k."""
+        return self._shape("obstacles", k)
+
+    def particle_counts(self):
+        """The exact number of particles each body is seeded with (obstacles left out)."""
+        key = (self.model_dump_json(include={"bodies", "obstacles", "grid", "domain"}),
+               str(self.base_dir))
+        if key not in self._counts:
+            obstacles = [self.obstacle_shape(j) for j in range(len(self.obstacles))]
+            self._counts[key] = [
+                geometry.particle_count(b, self.grid.spacing, self.body_shape(k), obstacles)
+                for k, b in enumerate(self.bodies)]
+        return self._counts[key]
+
     def _same_dimension(self):
         """Every vector has one entry per axis of domain.size; the defaults (gravity down
         the last axis, bodies at rest) follow the dimension."""
@@ -430,9 +678,19 @@ class Case(_Section):
             if "velocity" not in body.model_fields_set and len(body.velocity) != D:
                 object.__setattr__(body, "velocity", [0.0] * D)
         vectors = [("physics.gravity", self.physics.gravity)]
+        for kind, specs in (("bodies", self.bodies), ("obstacles", self.obstacles)):
+            for k, spec in enumerate(specs):
+                if D not in shapes.DIM_OF[spec.type]:
+                    other = [t for t, d in shapes.DIM_OF.items() if D in d]
+                    raise ValueError(
+                        f"{kind}.{k}.type = {spec.type!r} is a shape of "
+                        f"{shapes.DIM_OF[spec.type][0]}D cases, but domain.size = "
+                        f"{self.domain.size} makes this case {D}D; give {kind}.{k} one of the "
+                        f"{D}D shapes ({', '.join(repr(t) for t in other)})")
+                vectors += [(f"{kind}.{k}.{name}", getattr(spec, name)) for name in spec.VECTORS
+                            if name != "translate" and name != "axis"]
         for k, body in enumerate(self.bodies):
-            vectors += [(f"bodies.{k}.min", body.min), (f"bodies.{k}.max", body.max),
-                        (f"bodies.{k}.velocity", body.velocity)]
+            vectors.append((f"bodies.{k}.velocity", body.velocity))
         vectors += [(f"probes.{k}.position", p.position) for k, p in enumerate(self.probes)]
         for name, value in vectors:
             if len(value) != D:
@@ -442,7 +700,7 @@ class Case(_Section):
                     f"vector; give {name} {D} entries, or domain.size {len(value)}")
         if D == 3:
             for k, body in enumerate(self.bodies):
-                if body.surface_amplitude:
+                if getattr(body, "surface_amplitude", 0.0):
                     raise ValueError(
                         f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
                         "cosine top surface is defined for 2D cases only so far; use a flat "
@@ -454,8 +712,15 @@ class Case(_Section):
 
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo):
+        if info.context and info.context.get("base_dir") is not None:
+            self._base_dir = Path(info.context["base_dir"])
         size = self.domain.size
         self._same_dimension()
+        if self.obstacles and self.solver.scheme != "projection":
+            raise ValueError(
+                f"solver.scheme = {self.solver.scheme!r} does not take obstacles so far; run "
+                "cases with [[obstacles]] with solver.scheme = \"projection\", or remove the "
+                "obstacles")
         folder = (info.context or {}).get("folder") if info is not None else None
         for k, probe in enumerate(self.probes):
             if probe.data is not None:
@@ -465,6 +730,8 @@ class Case(_Section):
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
                 f"({size} m); the grid needs at least two cells per side")
         for k, body in enumerate(self.bodies):
+            if not geometry.is_box(body):
+                continue  # placement.check
             crest = body.max[1] + abs(body.surface_amplitude)
             if body.surface_amplitude and crest > size[1] * (1 + 1e-12):
                 raise ValueError(
@@ -480,6 +747,16 @@ class Case(_Section):
         overlap = geometry.overlap_message(self.bodies, self.grid.spacing)
         if overlap:
             raise ValueError(overlap)
+        body_shapes = [self.body_shape(k) for k in range(len(self.bodies))]
+        obstacle_shapes = [self.obstacle_shape(k) for k in range(len(self.obstacles))]
+        placement.check(self, body_shapes, obstacle_shapes)
+        if obstacle_shapes:
+            for k, count in enumerate(self.particle_counts()):
+                message = (placement.empty_body_message(self, k, body_shapes[k],
+                                                        obstacle_shapes)
+                           if count == 0 else None)
+                if message:
+                    raise ValueError(message)
         if self.solver.scheme == "projection":
             grid = Grid.covering(size, self.grid.spacing)
             if geometry.fills_grid(self.bodies, self.grid.spacing, grid.size):
@@ -596,19 +873,42 @@ def _model_for(section):
     return section if isinstance(section, type) and issubclass(section, BaseModel) else None
 
 
+def _models_of(annotation):
+    """The pydantic models a field's annotation (or a list's item) may hold: one, the
+    members of a union (the shapes of bodies and obstacles), or none."""
+    origin = typing.get_origin(annotation)
+    if origin is Annotated:
+        return _models_of(typing.get_args(annotation)[0])
+    if origin is Union:
+        return [m for a in typing.get_args(annotation) for m in _models_of(a)]
+    model = _model_for(annotation)
+    return [model] if model is not None else []
+
+
+def _item(annotation):
+    """(is a list, the annotation of an item or the annotation itself)."""
+    if typing.get_origin(annotation) is list:
+        return True, typing.get_args(annotation)[0]
+    return False, annotation
+
+
 def key_reference():
     """Every case key with its default, whether it is required, and its description."""
     rows = []
 
+    seen = set()
+
     def walk(model, prefix):
         for name, field in model.model_fields.items():
-            ann = field.annotation
-            is_list = getattr(ann, "__origin__", None) is list
-            inner = getattr(ann, "__args__", (None,))[0] if is_list else ann
-            sub = _model_for(inner)
-            if sub is not None:
-                walk(sub, f"{prefix}{name}.N." if is_list else f"{prefix}{name}.")
+            is_list, inner = _item(field.annotation)
+            subs = _models_of(inner)
+            if subs:
+                for sub in subs:  # the shapes of a body: their keys, each once
+                    walk(sub, f"{prefix}{name}.N." if is_list else f"{prefix}{name}.")
                 continue
+            if f"{prefix}{name}" in seen:
+                continue
+            seen.add(f"{prefix}{name}")
             required = field.is_required()
             default = None if required else field.get_default()
             if model is Solver and name in FORMULATIONS["mpmflow"]:
@@ -625,7 +925,7 @@ _REFERENCE = {row["key"]: row for row in key_reference()}
 KNOWN_KEYS = list(_REFERENCE)
 # lists of tables an override may replace whole, e.g. {"probes": [{"name": ..., ...}]} or
 # --set 'probes=[{name = "p1", quantity = "pressure", position = [0.42, 0.01]}]'
-LIST_KEYS = ("bodies", "probes")
+LIST_KEYS = ("bodies", "obstacles", "probes")
 
 
 def _generic(dotted):
@@ -685,11 +985,42 @@ def apply_overrides(data, overrides):
         node[parts[-1]] = _parse_value(value.strip()) if parse else value
 
 
+def _shape_loc(parts):
+    """(loc without the shape tags pydantic puts after a body's or obstacle's index, the
+    shape type of that table or None): ("bodies", 0, "disc", "radius") -> bodies.0.radius."""
+    out, kind = [], None
+    for p in parts:
+        if isinstance(p, str) and p in SHAPE_TYPES and out and isinstance(out[-1], int):
+            kind = p
+            continue
+        out.append(p)
+    return ".".join(str(p) for p in out), kind
+
+
+def _shape_keys(kind, table):
+    models = {"bodies": Body, "obstacles": Obstacle}[table]
+    model = _models_of(models)[SHAPE_TYPES.index(kind)]
+    return ", ".join(model.model_fields)
+
+
 def _format_error(err, source):
     lines = []
     for e in err.errors():
-        loc = ".".join(str(p) for p in e["loc"])
+        loc, kind = _shape_loc(e["loc"])
+        if e["type"] == "union_tag_invalid":
+            given = e.get("input", {}).get("type") if isinstance(e.get("input"), dict) else None
+            lines.append(f"`{loc}.type` = {given!r} is not a shape: give {loc}.type one of "
+                         + ", ".join(f'"{t}"' for t in SHAPE_TYPES) + " (\"box\" when left "
+                         "out); `mpmflow keys` lists each shape's keys.")
+            continue
         if e["type"] == "extra_forbidden":
+            table = loc.split(".")[0]
+            if kind is not None and table in ("bodies", "obstacles") \
+                    and _generic(loc) in KNOWN_KEYS:
+                lines.append(f"`{loc}` is not a key of a \"{kind}\" ({table} of type "
+                             f"\"{kind}\" take {_shape_keys(kind, table)}): remove it, or "
+                             "set the type of shape it belongs to.")
+                continue
             lines.append(f"unknown key `{loc}`.{_suggest(loc)}")
             continue
         if e["type"] == "missing":
@@ -723,12 +1054,10 @@ def _is_section(loc):
         field = model.model_fields.get(part)
         if field is None:
             return False
-        ann = field.annotation
-        inner = getattr(ann, "__args__", (None,))[0] if getattr(ann, "__origin__", None) \
-            is list else ann
-        model = _model_for(inner)
-        if model is None:
+        models = _models_of(_item(field.annotation)[1])
+        if not models:
             return False
+        model = models[0]
     return True
 
 
@@ -775,14 +1104,23 @@ def _check_probe_data(k, probe, folder):
     object.__setattr__(data, "path", str(path))
 
 
-def validate(data, source=""):
-    folder = None
-    if source and not source.startswith("("):
-        folder = str(Path(source).resolve().parent)
+def validate(data, source="", base_dir=None):
+    """A Case from the case's dict; ``base_dir``: the folder relative paths (mesh files,
+    probes' data) start from, the case file's (None: the folder of ``source`` when it names
+    a file, else the current folder)."""
+    if base_dir is None and source and not source.startswith("("):
+        base_dir = str(Path(source).resolve().parent)
     try:
-        return Case.model_validate(data, context={"folder": folder})
+        return Case.model_validate(data, context={"base_dir": base_dir, "folder": base_dir})
     except ValidationError as err:
         raise _format_error(err, source) from None
+
+
+def _folder_of(path):
+    """The folder of a case file, where its relative paths start; the current folder for a
+    case that is not a regular file (a pipe such as <(sed ... case.toml))."""
+    path = Path(path)
+    return path.resolve().parent if path.is_file() else Path.cwd()
 
 
 def load_case(path, overrides=()):
@@ -793,7 +1131,7 @@ def load_case(path, overrides=()):
     "bodies.0.max": [0.1, 0.2]}. Either way the values pass the same checks as the file's."""
     data = _read_toml(path)
     apply_overrides(data, overrides)
-    return validate(data, source=str(path))
+    return validate(data, source=str(path), base_dir=_folder_of(path))
 
 
 def validate_case(data):
@@ -813,7 +1151,8 @@ def revalidate(case):
     if not isinstance(case, Case):
         raise CaseError(f"expected a case (mpmflow.load_case(...)), got {type(case).__name__}; "
                         "load one with mpmflow.load_case(path, overrides).")
-    return validate(case.model_dump(), source="(changed after loading)")
+    return validate(case.model_dump(), source="(changed after loading)",
+                    base_dir=case._base_dir)
 
 
 def resolved(case):
@@ -848,7 +1187,8 @@ def reference_page():
         "do not edit -->\n\n"
         "A case is a TOML file; all quantities are SI (m, s, kg, Pa). The domain is "
         "[0, size] and its boundaries are walls. `bodies` is a list of `[[bodies]]` tables "
-        "(`bodies.N.` below is the N-th, from 0). Any key can be overridden on the command "
+        "(`bodies.N.` below is the N-th, from 0), `obstacles` and `probes` likewise; a body "
+        "or obstacle takes the keys of its shape (`type`) besides its own. Any key can be overridden on the command "
         "line with `--set dotted.key=value`; `mpmflow keys` prints this list. Unknown keys "
         "are errors (with a suggestion), and a bad value stops with a message naming the "
         "key, the value, the allowed range and the fix (exit code 2).\n\n"

@@ -116,15 +116,14 @@ def estimate(case):
     """The Estimate of a validated case (no allocation: counts from the geometry)."""
     grid = Grid.covering(case.domain.size, case.grid.spacing)
     h = case.grid.spacing
-    count = sum(geometry.particle_count(b, h) for b in case.bodies)  # exact, or inf
+    count = sum(case.particle_counts())  # exact (obstacles left out), or inf
     particles = _as_float(count)  # a count of 1e400 (grid.spacing = 1e-300) is inf here
     nodes = math.prod(float(n) for n in grid.nodes)
     # pressure unknowns: the nodes of the cells the material covers, with room to spread
     unknowns = 0.0
-    for body in case.bodies:
-        hi = list(body.max)
-        hi[1] += abs(body.surface_amplitude)  # a cosine top (2D) reaches above max[1]
-        unknowns += math.prod((b - a) / h + 1 for a, b in zip(body.min, hi))
+    for k, body in enumerate(case.bodies):
+        lo, hi = geometry.seed_region(body, case.body_shape(k), h)  # a cosine top included
+        unknowns += math.prod((b - a) / h + 1 for a, b in zip(lo, hi))
     unknowns = min(nodes, SPREAD * unknowns)
     rows = case.time.end / case.output.interval + 2
     values = len(case.probes) + 1 + 14  # probes.csv and timeseries.csv

@@ -167,9 +167,7 @@ def of_case(case, grid):
     specs = getattr(case, "obstacles", None) or []
     if not specs:
         return build(grid)
-    from . import shapes
-    dim = grid.dim
-    solids = [shapes.from_spec(o, dim, getattr(case, "base_dir", None)) for o in specs]
+    solids = [case.obstacle_shape(k) for k in range(len(specs))]
     x = grid.node_coordinates()
     dist = np.array([s.signed_distance(x) for s in solids])  # (nobstacles, nnodes)
     phi = dist.min(axis=0)

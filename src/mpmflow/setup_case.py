@@ -5,7 +5,8 @@ import numpy as np
 from .cells import bin_particles
 from .errors import CaseError
 from .grid import Grid
-from .particles import Particles, seed_box, subset
+from .bodies import is_box, seed_region, seeded
+from .particles import Particles, lattice_in_box, seed_box, subset
 
 
 def build_grid(case):
@@ -16,13 +17,25 @@ def build_particles(case, grid):
     parts = []
     rho = case.material.density
     down = np.asarray(case.physics.gravity, dtype=float)
-    for body in case.bodies:
+    obstacles = [case.obstacle_shape(k) for k in range(len(case.obstacles))]
+    for k, body in enumerate(case.bodies):
         spacing = grid.spacing / body.particles_per_cell
+        if not is_box(body):
+            part = seed_shape(body, case.body_shape(k), spacing, rho, obstacles)
+            if body.initial_pressure == "hydrostatic":
+                g = np.linalg.norm(down)
+                up = -down / g if g > 0 else np.zeros_like(down)
+                top = case.body_shape(k).support(up)
+                part.pressure[:] = rho * g * (top - part.x @ up)
+            parts.append(part)
+            continue
         amplitude = body.surface_amplitude
         if amplitude == 0.0:
             part = seed_box(body.min, body.max, spacing, rho, body.velocity)
         else:
             part = seed_cosine_box(body.min, body.max, amplitude, spacing, rho, body.velocity)
+        if obstacles:
+            part = subset(part, seeded(body, None, part.x, spacing, obstacles))
         if body.initial_pressure == "hydrostatic":
             if amplitude == 0.0:
                 corners = np.array(np.meshgrid(*zip(body.min, body.max))).reshape(len(down), -1).T
@@ -35,6 +48,19 @@ def build_particles(case, grid):
     particles = Particles.concatenate(parts)
     check_packing(case, grid, particles, [p.count for p in parts])
     return particles
+
+
+def seed_shape(body, shape, spacing, density, obstacles=()):
+    """Particles filling a body of any shape: the lattice points of its bounding box that
+    it contains and no obstacle does (``bodies.seeded``), each with the volume
+    spacing**dim (m^3, m^2 in 2D) and mass density * volume (kg)."""
+    lo, hi = seed_region(body, shape, spacing)
+    x = lattice_in_box(lo, hi, spacing)
+    x = x[seeded(body, shape, x, spacing, obstacles)]
+    n, dim = x.shape
+    vol = np.full(n, spacing ** dim)
+    return Particles(x=x, v=np.tile(np.asarray(body.velocity, dtype=float), (n, 1)),
+                     pressure=np.zeros(n), mass=vol * density, volume=vol)
 
 
 def check_packing(case, grid, particles, counts):

@@ -1,0 +1,436 @@
+"""Solid shapes in 2D and 3D for bodies and obstacles: containment, signed distance, bounds.
+
+Every shape answers, for points given as an (n, D) array in metres:
+
+* ``contains(points)``: (n,) bool, inside or on the boundary (within ``ON_SURFACE`` m);
+* ``signed_distance(points)``: (n,) float (m), negative inside, positive outside: the exact
+  Euclidean distance to the surface for the primitives; for a mesh the unsigned distance to
+  the nearest triangle with the sign of the containment test;
+* ``bounds()``: the corners (lo, hi) of its axis-aligned bounding box (m);
+* ``volume()``: m^3 in 3D, the area (m^2) in 2D;
+* ``support(direction)``: the largest x . direction over the shape (m for a unit direction),
+  e.g. the height of its highest point against gravity.
+
+Shapes: ``Box`` (2D, 3D), ``Disc`` and ``Polygon`` (2D), ``Sphere``, ``Cylinder`` and
+``Mesh`` (3D). ``from_spec`` builds one from a case's ``[[bodies]]`` or ``[[obstacles]]``
+table. Everything is vectorised NumPy except the mesh's sums over triangles, which are
+compiled (``kernels.triangles``).
+"""
+
+import functools
+import math
+from pathlib import Path
+
+import numpy as np
+
+ON_SURFACE = 1e-12  # m: a point this close to the surface counts as inside
+
+DIM_OF = {"box": (2, 3), "disc": (2,), "polygon": (2,), "sphere": (3,), "cylinder": (3,),
+          "mesh": (3,)}
+
+
+def _points(points, dim):
+    x = np.asarray(points, dtype=float)
+    if x.ndim == 1 and x.shape[0] == dim:
+        x = x[None, :]
+    if x.ndim != 2 or x.shape[1] != dim:
+        raise ValueError(f"points must be an (n, {dim}) array of coordinates (m), got shape "
+                         f"{x.shape}")
+    return x
+
+
+class Shape:
+    """A closed solid region; subclasses define ``dim`` and the methods below."""
+
+    dim: int
+
+    def contains(self, points):
+        """(n,) bool: inside or on the boundary within ON_SURFACE (m)."""
+        return self.signed_distance(points) <= ON_SURFACE
+
+    def signed_distance(self, points):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def bounds(self):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def volume(self):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def support(self, direction):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class Box(Shape):
+    """Axis-aligned box [lo, hi] (m), 2D or 3D."""
+
+    def __init__(self, lo, hi):
+        self.lo = np.asarray(lo, dtype=float)
+        self.hi = np.asarray(hi, dtype=float)
+        self.dim = len(self.lo)
+
+    def contains(self, points):
+        x = _points(points, self.dim)
+        return np.all((x >= self.lo - ON_SURFACE) & (x <= self.hi + ON_SURFACE), axis=1)
+
+    def signed_distance(self, points):
+        x = _points(points, self.dim)
+        q = np.abs(x - 0.5 * (self.lo + self.hi)) - 0.5 * (self.hi - self.lo)
+        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+        return outside + np.minimum(q.max(axis=1), 0.0)
+
+    def bounds(self):
+        return self.lo.copy(), self.hi.copy()
+
+    def volume(self):
+        return float(np.prod(self.hi - self.lo))
+
+    def support(self, direction):
+        d = np.asarray(direction, dtype=float)
+        return float(np.sum(np.where(d > 0, self.hi, self.lo) * d))
+
+
+class Ball(Shape):
+    """Points within ``radius`` (m) of ``centre``: a disc in 2D, a sphere in 3D."""
+
+    def __init__(self, centre, radius):
+        self.centre = np.asarray(centre, dtype=float)
+        self.radius = float(radius)
+        self.dim = len(self.centre)
+
+    def signed_distance(self, points):
+        x = _points(points, self.dim)
+        return np.linalg.norm(x - self.centre, axis=1) - self.radius
+
+    def bounds(self):
+        return self.centre - self.radius, self.centre + self.radius
+
+    def volume(self):
+        r = self.radius
+        return math.pi * r * r if self.dim == 2 else 4.0 / 3.0 * math.pi * r ** 3
+
+    def support(self, direction):
+        d = np.asarray(direction, dtype=float)
+        return float(self.centre @ d + self.radius * np.linalg.norm(d))
+
+
+Disc = Sphere = Ball
+
+
+class Cylinder(Shape):
+    """A solid circular cylinder (3D) with flat ends: the base's centre ``base`` (m), the
+    ``axis`` direction (any length), ``radius`` and ``length`` (m) along the axis."""
+
+    dim = 3
+
+    def __init__(self, base, axis, radius, length):
+        self.base = np.asarray(base, dtype=float)
+        axis = np.asarray(axis, dtype=float)
+        norm = np.linalg.norm(axis)
+        if not norm > 0:
+            raise ValueError("the cylinder's axis must not be the zero vector")
+        self.axis = axis / norm
+        self.radius = float(radius)
+        self.length = float(length)
+
+    def signed_distance(self, points):
+        x = _points(points, 3) - self.base
+        t = x @ self.axis
+        rho = np.linalg.norm(x - t[:, None] * self.axis, axis=1)
+        dr = rho - self.radius
+        da = np.abs(t - 0.5 * self.length) - 0.5 * self.length
+        return (np.minimum(np.maximum(dr, da), 0.0)
+                + np.hypot(np.maximum(dr, 0.0), np.maximum(da, 0.0)))
+
+    def bounds(self):
+        top = self.base + self.length * self.axis
+        reach = self.radius * np.sqrt(np.clip(1.0 - self.axis ** 2, 0.0, 1.0))
+        return np.minimum(self.base, top) - reach, np.maximum(self.base, top) + reach
+
+    def volume(self):
+        return math.pi * self.radius ** 2 * self.length
+
+    def support(self, direction):
+        d = np.asarray(direction, dtype=float)
+        along = self.axis @ d
+        across = math.sqrt(max(float(d @ d) - along * along, 0.0))
+        return float(self.base @ d + max(0.0, self.length * along) + self.radius * across)
+
+
+class Polygon(Shape):
+    """A simple polygon (2D, convex or not) through ``vertices`` (m), closed implicitly."""
+
+    dim = 2
+
+    def __init__(self, vertices):
+        v = np.asarray(vertices, dtype=float)
+        self.vertices = v
+        self.a = v
+        self.b = np.roll(v, -1, axis=0)
+
+    def _edge_distance(self, x):
+        best = np.full(len(x), np.inf)
+        for a, b in zip(self.a, self.b):
+            e = b - a
+            t = np.clip(((x - a) @ e) / (e @ e), 0.0, 1.0)
+            best = np.minimum(best, np.linalg.norm(x - a - t[:, None] * e, axis=1))
+        return best
+
+    def _crossings(self, x):
+        """Inside by the crossing number: a ray to +x crosses an odd number of edges (the
+        half-open rule counts a vertex on the ray once)."""
+        inside = np.zeros(len(x), dtype=bool)
+        px, py = x[:, 0], x[:, 1]
+        for (ax, ay), (bx, by) in zip(self.a, self.b):
+            if ay == by:
+                continue  # a horizontal edge never crosses the ray by the half-open rule
+            straddles = (ay > py) != (by > py)
+            cross_x = ax + (py - ay) * (bx - ax) / (by - ay)
+            inside ^= straddles & (px < cross_x)
+        return inside
+
+    def contains(self, points):
+        x = _points(points, 2)
+        return self._crossings(x) | (self._edge_distance(x) <= ON_SURFACE)
+
+    def signed_distance(self, points):
+        x = _points(points, 2)
+        d = self._edge_distance(x)
+        return np.where(self._crossings(x) | (d == 0.0), -d, d)
+
+    def bounds(self):
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+    def volume(self):
+        return float(0.5 * abs(np.sum(self.a[:, 0] * self.b[:, 1] - self.b[:, 0] * self.a[:, 1])))
+
+    def support(self, direction):
+        return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
+
+
+class Mesh(Shape):
+    """A closed triangle mesh (3D): ``vertices`` (m), ``faces`` (triangles of vertex indices,
+    counter-clockwise seen from outside).
+
+    Inside where the generalised winding number exceeds 1/2 (the sum of the triangles'
+    signed solid angles over 4 pi, Van Oosterom & Strackee), which tolerates small defects:
+    a missing or doubled triangle only changes the classification near itself. The sum is
+    the fast winding number (``kernels.triangles.winding_numbers``: exact over nearby
+    triangles, far field of distant groups), compiled and parallel, for the points inside
+    the bounding box only. Measured on the shared 2-core development machine (one thread,
+    beside other work): 1e6 points uniform in the bounding box of a 1280-triangle icosphere
+    in 6.3 s (the exact sum over all triangles: 47 s), the winding number within 0.03 of the
+    exact sum and not one point classified differently. The distance is brute force over
+    the triangles with bounding-sphere pruning (1e5 points: 0.8 s).
+    """
+
+    dim = 3
+
+    LEAF = 4  # triangles per leaf of the far-field tree
+    FAR = 2.0  # a tree node farther than FAR times its radius adds its far field only
+
+    def __init__(self, vertices, faces):
+        v = np.ascontiguousarray(vertices, dtype=float)
+        f = np.asarray(faces, dtype=np.int64)
+        if len(f):
+            f = f[_morton_order(v[f].mean(axis=1))]  # neighbours in space next in the list
+        self.vertices, self.faces = v, f
+        self.v0 = np.ascontiguousarray(v[f[:, 0]])
+        self.v1 = np.ascontiguousarray(v[f[:, 1]])
+        self.v2 = np.ascontiguousarray(v[f[:, 2]])
+        n = np.cross(self.v1 - self.v0, self.v2 - self.v0)
+        length = np.linalg.norm(n, axis=1)
+        self.normals = np.ascontiguousarray(n / np.where(length > 0, length, 1.0)[:, None])
+        self.centres = np.ascontiguousarray((self.v0 + self.v1 + self.v2) / 3.0)
+        self.radii = np.sqrt(np.max([np.sum((w - self.centres) ** 2, axis=1)
+                                     for w in (self.v0, self.v1, self.v2)], axis=0))
+        self._lo, self._hi = v.min(axis=0), v.max(axis=0)
+        self._tree()
+
+    def _tree(self):
+        """The far-field tree over the (spatially sorted) triangles: node k covers triangles
+        tree[k, 0] to tree[k, 1] - 1 with children tree[k, 2], tree[k, 3] (-1 at a leaf),
+        a bounding sphere about the area-weighted centroid and the area-weighted normal
+        sum (the dipole)."""
+        area_normal = 0.5 * np.cross(self.v1 - self.v0, self.v2 - self.v0)
+        area = np.linalg.norm(area_normal, axis=1)
+        cum_n = np.concatenate([np.zeros((1, 3)), np.cumsum(area_normal, axis=0)])
+        cum_a = np.concatenate([[0.0], np.cumsum(area)])
+        cum_c = np.concatenate([np.zeros((1, 3)), np.cumsum(area[:, None] * self.centres,
+                                                             axis=0)])
+        tree, centre, radius, dipole = [], [], [], []
+
+        def build(s, e):
+            k = len(tree)
+            tree.append([s, e, -1, -1])
+            a = cum_a[e] - cum_a[s]
+            c = (cum_c[e] - cum_c[s]) / a if a > 0 else self.centres[s:e].mean(axis=0)
+            centre.append(c)
+            dipole.append(cum_n[e] - cum_n[s])
+            radius.append(0.0)
+            if e - s <= self.LEAF:
+                corners = np.concatenate([self.v0[s:e], self.v1[s:e], self.v2[s:e]])
+                radius[k] = float(np.sqrt(np.max(np.sum((corners - c) ** 2, axis=1))))
+            else:
+                mid = (s + e) // 2
+                left, right = build(s, mid), build(mid, e)
+                tree[k][2:] = [left, right]
+                radius[k] = max(float(np.linalg.norm(centre[q] - c)) + radius[q]
+                                for q in (left, right))
+            return k
+
+        if len(self.faces):
+            build(0, len(self.faces))
+        self.tree = np.array(tree, dtype=np.int64).reshape(-1, 4)
+        self.node_centre = np.array(centre, dtype=float).reshape(-1, 3)
+        self.node_radius = np.array(radius, dtype=float)
+        self.dipole = np.array(dipole, dtype=float).reshape(-1, 3)
+
+    def winding_number(self, points):
+        """(n,) generalised winding number at the points, and (n,) bool: on the surface."""
+        from .kernels.triangles import winding_numbers
+
+        x = np.ascontiguousarray(_points(points, 3))
+        w = np.zeros(len(x))
+        on = np.zeros(len(x), dtype=bool)
+        if len(x) and len(self.faces):
+            winding_numbers(x, self.v0, self.v1, self.v2, self.normals, ON_SURFACE,
+                            self.tree, self.node_centre, self.node_radius, self.dipole,
+                            self.FAR, w, on)
+        return w, on
+
+    def _near_box(self, x):
+        return np.all((x >= self._lo - ON_SURFACE) & (x <= self._hi + ON_SURFACE), axis=1)
+
+    def contains(self, points):
+        x = _points(points, 3)
+        out = np.zeros(len(x), dtype=bool)
+        near = np.flatnonzero(self._near_box(x))
+        w, on = self.winding_number(x[near])
+        out[near] = (w > 0.5) | on
+        return out
+
+    def unsigned_distance(self, points):
+        """(n,) distance (m) to the nearest triangle."""
+        from .kernels.triangles import nearest_distances
+
+        x = np.ascontiguousarray(_points(points, 3))
+        d = np.zeros(len(x))
+        if len(x):
+            nearest_distances(x, self.v0, self.v1, self.v2, self.centres, self.radii, d)
+        return d
+
+    def signed_distance(self, points):
+        x = _points(points, 3)
+        d = self.unsigned_distance(x)
+        return np.where(self.contains(x) & (d > 0), -d, d)
+
+    def bounds(self):
+        return self._lo.copy(), self._hi.copy()
+
+    def volume(self):
+        """Enclosed volume (m^3) by the divergence theorem over the triangles."""
+        return float(abs(np.einsum("ij,ij->i", self.v0, np.cross(self.v1, self.v2)).sum()) / 6.0)
+
+    def support(self, direction):
+        return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
+
+
+def _morton_order(x):
+    """The order of points along a Z-order (Morton) curve through their bounding box."""
+    lo, hi = x.min(axis=0), x.max(axis=0)
+    q = ((x - lo) / np.where(hi > lo, hi - lo, 1.0) * 1023).astype(np.int64)
+    code = np.zeros(len(x), dtype=np.int64)
+    for bit in range(10):
+        for axis in range(x.shape[1]):
+            code |= ((q[:, axis] >> bit) & 1) << (bit * x.shape[1] + axis)
+    return np.argsort(code, kind="stable")
+
+
+# --------------------------------------------------------------------------- mesh files
+
+def _refuse(key, text):
+    raise ValueError(f"{key}.path = {text}")
+
+
+@functools.lru_cache(maxsize=16)
+def _read_mesh(path, stamp):
+    """(vertices, faces, boundary edge count) of a mesh file; ``stamp`` (size, mtime)
+    invalidates the cache when the file changes."""
+    import trimesh
+
+    mesh = trimesh.load(path, force="mesh")
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    if len(faces) == 0:
+        return vertices, faces, 0, 0
+    boundary = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+    oriented = boundary == 0 and mesh.is_winding_consistent
+    if oriented and mesh.volume < 0:
+        faces = faces[:, ::-1]  # inside out: turn the triangles to face outwards
+    unmatched = 0 if oriented or boundary else 1
+    return vertices, faces, boundary, unmatched
+
+
+def load_mesh(path, scale=1.0, translate=(0.0, 0.0, 0.0), key="mesh", shown=None):
+    """A closed Mesh from an STL or OBJ file (read by trimesh): file units times ``scale``
+    are metres, then moved by ``translate`` (m). ValueError, naming ``key``, for a file that
+    is missing, unreadable, empty or not a closed surface. ``shown``: the path as the
+    user wrote it, for messages."""
+    path = Path(path)
+    shown = repr(str(shown if shown is not None else path))
+    if not path.is_file():
+        _refuse(key, f"{shown} does not exist (relative paths are taken from the case file's "
+                "folder); give the path of an STL or OBJ file.")
+    if path.suffix.lower() not in (".stl", ".obj"):
+        _refuse(key, f"{shown} is not an STL or OBJ file (its name ends in "
+                f"{path.suffix or 'nothing'!r}); export the surface as .stl or .obj.")
+    stat = path.stat()
+    try:
+        vertices, faces, boundary, unmatched = _read_mesh(str(path.resolve()),
+                                                          (stat.st_size, stat.st_mtime_ns))
+    except Exception as err:  # trimesh raises many kinds on a bad file
+        _refuse(key, f"{shown} cannot be read as a triangle mesh ({type(err).__name__}: "
+                f"{err}); export it again from your CAD tool as STL or OBJ.")
+    if len(faces) == 0:
+        _refuse(key, f"{shown} holds no triangles (an empty or non-triangle file); export "
+                "the closed surface of the solid as STL or OBJ.")
+    if boundary:
+        _refuse(key, f"{shown} is not a closed surface: {boundary} boundary edges (edges of "
+                "only one triangle), so its inside is not defined; close the mesh in your "
+                "CAD tool or with trimesh.repair.fill_holes, and check it with "
+                "trimesh.load(path).is_watertight.")
+    if unmatched:
+        _refuse(key, f"{shown} is closed but its triangles are not consistently oriented "
+                "(neighbours list their shared edge in the same direction); fix the normals "
+                "in your CAD tool or with trimesh.repair.fix_normals.")
+    v = vertices * float(scale) + np.asarray(translate, dtype=float)
+    return Mesh(v, faces)
+
+
+# --------------------------------------------------------------------------- case tables
+
+def from_spec(spec, dim, base_dir, key=None):
+    """The Shape of a case's ``[[bodies]]`` or ``[[obstacles]]`` table ``spec`` (its ``type``
+    and shape fields) in a ``dim``-dimensional case. ``base_dir``: the folder relative mesh
+    paths start from (the case file's). ``key``: the table's name for messages, e.g.
+    "obstacles.1". ValueError for a shape the dimension does not offer or a bad mesh."""
+    kind = getattr(spec, "type", "box")
+    key = key or kind
+    if dim not in DIM_OF[kind]:
+        others = ", ".join(k for k, d in DIM_OF.items() if dim in d)
+        raise ValueError(f"{key}.type = {kind!r} is a {DIM_OF[kind][0]}D shape but the case "
+                         f"is {dim}D; use one of {others} (or give domain.size "
+                         f"{DIM_OF[kind][0]} entries)")
+    if kind == "box":
+        return Box(spec.min, spec.max)
+    if kind in ("disc", "sphere"):
+        return Ball(spec.centre, spec.radius)
+    if kind == "cylinder":
+        return Cylinder(spec.centre, spec.axis, spec.radius, spec.length)
+    if kind == "polygon":
+        return Polygon(spec.vertices)
+    path = Path(spec.path).expanduser()
+    if not path.is_absolute():
+        path = Path(base_dir) / path
+    return load_mesh(path, spec.scale, spec.translate, key=key, shown=spec.path)

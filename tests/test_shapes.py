@@ -1,0 +1,290 @@
+"""Shapes of bodies and obstacles: containment and signed distance against analytic values,
+closed meshes read from files (and refused when open, empty or missing), seeded counts equal
+to the sizing counts, and each bad geometry refused with its key and fix (exit code 2)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from mpmflow import shapes
+from mpmflow.case import validate
+from mpmflow.errors import CaseError
+from mpmflow.grid import Grid
+from mpmflow.setup_case import build_particles
+
+RNG = np.random.default_rng(15)
+
+
+# --------------------------------------------------------------------------- primitives
+
+def test_box_in_2d_and_3d():
+    box = shapes.Box([0.0, 0.0, 0.0], [1.0, 2.0, 3.0])
+    x = np.array([[0.5, 1.0, 1.5], [0.0, 1.0, 1.5], [1.0, 2.0, 3.0], [1.0 + 1e-13, 1, 1],
+                  [1.1, 1.0, 1.5], [2.0, 3.0, 3.0], [0.1, 1.0, 1.5]])
+    assert box.contains(x).tolist() == [True, True, True, True, False, False, True]
+    np.testing.assert_allclose(box.signed_distance(x),
+                               [-0.5, 0.0, 0.0, 1e-13, 0.1, np.sqrt(2.0), -0.1], atol=1e-15)
+    assert box.volume() == 6.0
+    square = shapes.Box([0, 0], [1, 1])
+    np.testing.assert_allclose(square.signed_distance([[2.0, 2.0], [0.5, 0.25]]),
+                               [np.sqrt(2.0), -0.25])
+    lo, hi = square.bounds()
+    assert lo.tolist() == [0, 0] and hi.tolist() == [1, 1]
+
+
+def test_disc_and_sphere():
+    disc = shapes.Ball([1.0, 1.0], 0.5)
+    x = np.array([[1.0, 1.0], [1.5, 1.0], [2.0, 1.0], [1.0, 1.2]])
+    np.testing.assert_allclose(disc.signed_distance(x), [-0.5, 0.0, 0.5, -0.3])
+    assert disc.contains(x).tolist() == [True, True, False, True]
+    assert disc.volume() == pytest.approx(np.pi * 0.25)
+    sphere = shapes.Ball([0.0, 0.0, 1.0], 2.0)
+    np.testing.assert_allclose(sphere.signed_distance([[0, 0, 4.0], [0, 0, 0]]), [1.0, -1.0])
+    assert sphere.volume() == pytest.approx(4 / 3 * np.pi * 8)
+    assert sphere.support([0, 0, 1]) == 3.0
+
+
+def test_cylinder_any_axis_exact_distance():
+    axis = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    cyl = shapes.Cylinder([0.0, 0.0, 0.0], [2.0, 2.0, 0.0], 0.5, 2.0)
+    side = np.cross(axis, [0, 0, 1])
+    x = np.array([axis * 1.0,                       # on the axis, halfway: 0.5 to the side
+                  axis * 1.0 + side * 0.8,          # 0.3 outside the side
+                  -axis * 0.25,                     # 0.25 below the base
+                  axis * 2.25 + side * 0.9,         # beyond the top rim: corner distance
+                  axis * 1.9,                       # 0.1 below the top face
+                  side * 0.5])                      # on the base's rim
+    expected = [-0.5, 0.3, 0.25, np.hypot(0.25, 0.4), -0.1, 0.0]
+    np.testing.assert_allclose(cyl.signed_distance(x), expected, atol=1e-14)
+    assert cyl.contains(x).tolist() == [True, False, False, False, True, True]
+    assert cyl.volume() == pytest.approx(np.pi * 0.25 * 2.0)
+    lo, hi = cyl.bounds()
+    reach = 0.5 * np.sqrt(1 - axis**2)
+    np.testing.assert_allclose(lo, [0, 0, 0] - reach)
+    np.testing.assert_allclose(hi, axis * 2 + reach)
+    upright = shapes.Cylinder([0, 0, 0], [0, 0, 3], 1.0, 2.0)
+    assert upright.support([0, 0, 1]) == 2.0 and upright.support([1, 0, 0]) == 1.0
+
+
+def test_non_convex_polygon():
+    # an L: the notch [1, 2] x [1, 2] is outside
+    ell = shapes.Polygon([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]])
+    x = np.array([[0.5, 0.5], [1.5, 1.5], [1.5, 0.5], [0.5, 1.5], [1.0, 1.5], [2.0, 0.0],
+                  [3.0, 0.5], [1.2, 1.1], [0.5, 0.0]])
+    assert ell.contains(x).tolist() == [True, False, True, True, True, True, False, False,
+                                        True]
+    np.testing.assert_allclose(ell.signed_distance(x),
+                               [-0.5, 0.5, -0.5, -0.5, 0.0, 0.0, 1.0, 0.1, 0.0],
+                               atol=1e-15)
+    assert ell.volume() == 3.0
+    # a ray through vertices (y = 1 passes the corners (2, 1) and (1, 1)) counts right
+    assert ell.contains([[0.5, 1.0], [-1.0, 1.0], [1.5, 1.0]]).tolist() == [True, False, True]
+    # the same polygon clockwise
+    assert ell.contains(x).tolist() == shapes.Polygon(ell.vertices[::-1]).contains(x).tolist()
+
+
+def test_polygon_against_a_box_on_random_points():
+    box = shapes.Box([0.2, 0.1], [0.7, 0.4])
+    poly = shapes.Polygon([[0.2, 0.1], [0.7, 0.1], [0.7, 0.4], [0.2, 0.4]])
+    x = RNG.uniform(0, 1, (5000, 2))
+    assert (poly.contains(x) == box.contains(x)).all()
+    np.testing.assert_allclose(poly.signed_distance(x), box.signed_distance(x), atol=1e-14)
+
+
+# --------------------------------------------------------------------------- meshes
+
+def _write(mesh, path):
+    mesh.export(path)
+    return path
+
+
+def test_mesh_box_and_sphere_match_the_analytic_shapes(tmp_path):
+    path = _write(trimesh.creation.box(extents=[0.2, 0.1, 0.3]), tmp_path / "box.stl")
+    mesh = shapes.load_mesh(path, translate=[0.5, 0.5, 0.5])
+    box = shapes.Box([0.4, 0.45, 0.35], [0.6, 0.55, 0.65])
+    x = RNG.uniform(0.3, 0.7, (20000, 3))
+    assert (mesh.contains(x) == box.contains(x)).all()
+    # STL stores float32 coordinates: exact to their rounding
+    np.testing.assert_allclose(mesh.signed_distance(x), box.signed_distance(x), atol=1e-7)
+    assert mesh.volume() == pytest.approx(0.006)
+    np.testing.assert_allclose(mesh.bounds()[0], box.lo)
+
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    path = _write(ico, tmp_path / "ball.obj")
+    mesh = shapes.load_mesh(path, scale=0.1)  # file in decimetres
+    x = RNG.uniform(-0.12, 0.12, (20000, 3))
+    r = np.linalg.norm(x, axis=1)
+    facet = 0.1 * (1 - np.min(np.linalg.norm(ico.triangles_center, axis=1)))  # facet error
+    sure = np.abs(r - 0.1) > facet
+    assert (mesh.contains(x)[sure] == (r < 0.1)[sure]).all()
+    np.testing.assert_allclose(mesh.signed_distance(x), r - 0.1, atol=facet)
+
+
+def test_mesh_points_on_the_surface_count_as_inside(tmp_path):
+    mesh = shapes.load_mesh(_write(trimesh.creation.box(extents=[1, 1, 1]), tmp_path / "b.stl"))
+    faces = np.array([[0.5, 0.1, -0.2], [0.5, 0.5, 0.5], [0.0, 0.0, -0.5], [0.5 + 1e-9, 0, 0]])
+    assert mesh.contains(faces).tolist() == [True, True, True, False]
+
+
+def test_winding_number_tolerates_a_missing_triangle():
+    ico = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+    holed = shapes.Mesh(ico.vertices, ico.faces[1:])
+    hole = ico.triangles_center[0]
+    x = RNG.uniform(-1.2, 1.2, (20000, 3))
+    r = np.linalg.norm(x, axis=1)
+    far = (np.linalg.norm(x - hole, axis=1) > 0.5) & (np.abs(r - 1) > 0.05)
+    assert (holed.contains(x)[far] == (r < 1)[far]).all()
+
+
+def test_meshes_that_are_open_empty_missing_or_unreadable_are_refused(tmp_path):
+    ico = trimesh.creation.icosphere(subdivisions=1)
+    open_mesh = trimesh.Trimesh(ico.vertices, ico.faces[1:])
+    _write(open_mesh, tmp_path / "open.stl")
+    with pytest.raises(ValueError, match=r"bodies.1.path = 'open.stl' is not a closed surface: "
+                                         r"3 boundary edges.*trimesh.repair.fill_holes"):
+        shapes.load_mesh(tmp_path / "open.stl", key="bodies.1", shown="open.stl")
+    (tmp_path / "empty.stl").write_bytes(b"")
+    with pytest.raises(ValueError, match="empty.stl.*(holds no triangles|cannot be read)"):
+        shapes.load_mesh(tmp_path / "empty.stl", key="obstacles.0")
+    with pytest.raises(ValueError, match="obstacles.0.path = .*none.stl.* does not exist"):
+        shapes.load_mesh(tmp_path / "none.stl", key="obstacles.0")
+    (tmp_path / "junk.obj").write_text("this is not an obj file\n")
+    with pytest.raises(ValueError, match="junk.obj"):
+        shapes.load_mesh(tmp_path / "junk.obj", key="obstacles.0")
+
+
+def test_an_inside_out_mesh_is_turned_outwards(tmp_path):
+    ico = trimesh.creation.icosphere(subdivisions=1)
+    inverted = trimesh.Trimesh(ico.vertices, ico.faces[:, ::-1], process=False)
+    mesh = shapes.load_mesh(_write(inverted, tmp_path / "inv.stl"))
+    assert mesh.contains([[0, 0, 0], [2, 0, 0]]).tolist() == [True, False]
+
+
+# --------------------------------------------------------------------------- cases
+
+BASE2 = {"domain": {"size": [0.42, 0.44]}, "grid": {"spacing": 0.01},
+         "time": {"dt": 1e-3, "end": 0.01}, "output": {"snapshots": False}}
+BASE3 = {"domain": {"size": [0.2, 0.2, 0.3]}, "grid": {"spacing": 0.02},
+         "time": {"dt": 1e-3, "end": 0.01}, "output": {"snapshots": False}}
+
+
+def _case(base, bodies, obstacles=(), probes=(), base_dir=None):
+    data = {**base, "bodies": list(bodies), "obstacles": list(obstacles), "probes": list(probes)}
+    return validate(data, base_dir=base_dir)
+
+
+def _seeded(case):
+    grid = Grid.covering(case.domain.size, case.grid.spacing)
+    return build_particles(case, grid)
+
+
+def test_every_shape_seeds_the_count_it_was_sized_with(tmp_path):
+    _write(trimesh.creation.icosphere(subdivisions=2, radius=0.05), tmp_path / "ball.stl")
+    cases = [
+        _case(BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1,
+                       "particles_per_cell": 3}]),
+        _case(BASE2, [{"type": "polygon", "vertices": [[0, 0], [0.3, 0], [0.3, 0.1], [0.1, 0.1],
+                                                       [0.1, 0.3], [0, 0.3]]}]),
+        _case(BASE2, [{"min": [0, 0], "max": [0.42, 0.2], "particles_per_cell": 4}],
+              [{"type": "disc", "centre": [0.21, 0.1], "radius": 0.05}]),
+        _case(BASE3, [{"type": "sphere", "centre": [0.1, 0.1, 0.1], "radius": 0.07}]),
+        _case(BASE3, [{"type": "cylinder", "centre": [0.1, 0.1, 0.0], "axis": [0, 0, 1],
+                       "radius": 0.06, "length": 0.1}]),
+        _case(BASE3, [{"type": "mesh", "path": "ball.stl", "translate": [0.1, 0.1, 0.1]}],
+              base_dir=tmp_path),
+        _case(BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.15]}],
+              [{"type": "mesh", "path": "ball.stl", "translate": [0.1, 0.1, 0.08]}],
+              base_dir=tmp_path),
+    ]
+    for case in cases:
+        particles = _seeded(case)
+        assert particles.count == sum(case.particle_counts()) > 0
+        vol = particles.volume.sum()
+        expected = sum(case.body_shape(k).volume() for k in range(len(case.bodies))) - sum(
+            case.obstacle_shape(k).volume() for k in range(len(case.obstacles)))
+        assert vol == pytest.approx(expected, rel=0.1)
+        for k in range(len(case.obstacles)):  # nothing starts inside an obstacle
+            assert not case.obstacle_shape(k).contains(particles.x).any()
+
+
+def test_hydrostatic_pressure_below_the_highest_point():
+    case = _case(BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1,
+                          "initial_pressure": "hydrostatic"}])
+    p = _seeded(case)
+    np.testing.assert_allclose(p.pressure, 1000 * 9.81 * (0.3 - p.x[:, 1]))
+
+
+def test_relative_mesh_paths_start_at_the_case_file(tmp_path, monkeypatch):
+    from mpmflow.case import load_case, revalidate
+
+    (tmp_path / "geo").mkdir()
+    _write(trimesh.creation.box(extents=[0.06, 0.06, 0.06]), tmp_path / "geo" / "block.stl")
+    (tmp_path / "case.toml").write_text(
+        '[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n'
+        'end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n'
+        '[[obstacles]]\ntype = "mesh"\npath = "geo/block.stl"\ntranslate = [0.1, 0.1, 0.2]\n')
+    monkeypatch.chdir("/")
+    case = load_case(tmp_path / "case.toml", ["obstacles.0.translate=[0.1, 0.1, 0.15]"])
+    assert case.obstacle_shape(0).bounds()[0][2] == pytest.approx(0.12)
+    assert revalidate(case).obstacle_shape(0).volume() == pytest.approx(0.06**3)
+
+
+BAD = [
+    (BASE2, [{"type": "sphere", "centre": [0.1, 0.1, 0.1], "radius": 0.05}], [], [],
+     "bodies.0.type = 'sphere' is a shape of 3D cases"),
+    (BASE3, [{"type": "disc", "centre": [0.1, 0.1], "radius": 0.05}], [], [],
+     "bodies.0.type = 'disc' is a shape of 2D cases"),
+    (BASE2, [{"type": "disc", "centre": [0.4, 0.2], "radius": 0.05}], [], [],
+     "bodies.0 \\(a disc\\) spans .* outside the domain .* move it inside \\(bodies.0.centre\\)"),
+    (BASE2, [{"max": [0.1, 0.1], "min": [0, 0]}],
+     [{"type": "disc", "centre": [0.6, 0.2], "radius": 0.05}], [],
+     "obstacles.0 \\(a disc\\) spans .* beyond the domain"),
+    (BASE2, [{"max": [0.1, 0.1], "min": [0, 0]}],
+     [{"type": "disc", "centre": [0.3, 0.2], "radius": 0.008}], [],
+     "obstacles.0 \\(a disc\\) is 0.016 m thin .* refine grid.spacing"),
+    (BASE2, [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05},
+             {"min": [0, 0], "max": [0.42, 0.08]}], [], [],
+     "bodies.0 \\(a disc\\) and bodies.1 \\(a box\\) overlap: \\d+ lattice points"),
+    (BASE2, [{"min": [0.15, 0.05], "max": [0.25, 0.15]}],
+     [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.1}], [],
+     "bodies.0 \\(a box\\) lies wholly inside obstacles: all 400 of its lattice points"),
+    (BASE2, [{"min": [0, 0], "max": [0.42, 0.2]}],
+     [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05}],
+     [{"name": "p", "quantity": "pressure", "position": [0.2, 0.12]}],
+     "probes.0.position = .* lies 0.03 m inside obstacles.0"),
+    (BASE2, [{"type": "polygon", "vertices": [[0, 0], [0.2, 0], [0, 0.2], [0.2, 0.2]]}], [], [],
+     "vertices: the polygon's"),
+    (BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
+     [{"type": "mesh", "path": "missing.stl"}], [],
+     "obstacles.0.path = 'missing.stl' does not exist .*case file's folder"),
+    (BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1, "min": [0, 0]}], [], [],
+     "`bodies.0.min` is not a key of a \"disc\""),
+]
+
+
+@pytest.mark.parametrize("base, bodies, obstacles, probes, words", BAD)
+def test_bad_geometry_is_refused_with_the_key_and_the_fix(base, bodies, obstacles, probes,
+                                                          words):
+    with pytest.raises(CaseError, match=words):
+        _case(base, bodies, obstacles, probes)
+
+
+def test_the_cli_refuses_an_open_mesh_in_one_paragraph(tmp_path):
+    ico = trimesh.creation.icosphere(subdivisions=1, radius=0.03)
+    _write(trimesh.Trimesh(ico.vertices, ico.faces[2:]), tmp_path / "open.stl")
+    (tmp_path / "case.toml").write_text(
+        '[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n'
+        'end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n'
+        '[[obstacles]]\ntype = "mesh"\npath = "open.stl"\ntranslate = [0.1, 0.1, 0.2]\n')
+    env = {**os.environ, "PYTHONPATH": str(Path(shapes.__file__).parents[1])}
+    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run", "case.toml", "--out",
+                          "o"], capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                         env=env)
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "obstacles.0.path = 'open.stl' is not a closed surface" in res.stderr
+    assert "fill_holes" in res.stderr and res.stderr.count("\n") == 1
