@@ -44,6 +44,8 @@ def timed_advance(totals):
             p2g(P.x, P.v, P.mass, P.volume, W.order, W.start, G.h, G.cells, O.gravity, O.dt,
                 W.node_mass, W.node_mom, W.node_vol, W.v_old, W.v_star,
                 W.cell_vol if correct else W.cell_vol[:0])
+            if G.phi.shape[0] > 0:
+                cutcells.extend_velocity(G.onode, G.cells, W.node_mass, W.v_old, W.v_star)
             t2 = clock()
             step.node_fractions(G, O, W)
             t3 = clock()

@@ -4,7 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels import binning
+from .kernels import binning, cutcells
 
 
 @dataclass
@@ -37,4 +37,6 @@ def bin_particles(grid, particles, bins=None, open_=None):
         open_ = np.ones(grid.ncells)
     binning.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
                                  open_, bins.theta)
+    if (open_ < 1.0).any():
+        cutcells.sliver_fractions(tuple(grid.cells), open_, bins.theta)
     return bins

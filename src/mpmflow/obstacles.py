@@ -12,6 +12,8 @@ not on grid lines (corners and edges are rounded within a cell). From phi:
   slot 0 being the whole cell;
 * ``open``: the fluid fraction of each cell, by which a cut cell's particle volume is
   divided to give its volume fraction theta (a cut cell full of water has theta = 1);
+* where an obstacle touches a domain wall, its distance at the wall's nodes is taken one cell
+  in (``node_distance``), so that it meets the wall without a gap;
 * the obstacle nodes: the nodes of cut cells, each with the unit normal int N_i n ds /
   |int N_i n ds| of the obstacle's face around it (pointing into the solid). They are
   contact conditions like the domain walls (``kernels.walls``): a node holds the material
@@ -169,7 +171,7 @@ def of_case(case, grid):
         return build(grid)
     solids = [case.obstacle_shape(k) for k in range(len(specs))]
     x = grid.node_coordinates()
-    dist = np.array([s.signed_distance(x) for s in solids])  # (nobstacles, nnodes)
+    dist = np.array([node_distance(grid, s, x) for s in solids])  # (nobstacles, nnodes)
     phi = dist.min(axis=0)
     nearest = dist.argmin(axis=0)
     walls = [case.domain.walls if getattr(o, "walls", "domain") == "domain" else o.walls
@@ -178,3 +180,22 @@ def of_case(case, grid):
     tables = build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
     tables.solids = solids
     return tables
+
+
+def node_distance(grid, shape, x):
+    """The shape's signed distance at the nodes ``x``, taken one cell in from a domain wall
+    the shape touches or crosses: there the shape's own face on the wall would put phi = 0
+    at every wall node under it, and the interpolated surface would open a wedge of fluid
+    under the obstacle's edge. One cell in, a face meeting the wall is taken as
+    perpendicular to it within the first cell (exact for boxes and upright cylinders)."""
+    h = grid.spacing
+    lo, hi = shape.bounds()
+    size = grid.size
+    tol = 1e-9 * h
+    moved = x.copy()
+    for k in range(grid.dim):
+        if lo[k] <= tol:
+            moved[x[:, k] <= tol, k] += h
+        if hi[k] >= size[k] - tol:
+            moved[x[:, k] >= size[k] - tol, k] -= h
+    return shape.signed_distance(moved)

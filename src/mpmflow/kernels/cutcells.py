@@ -257,3 +257,88 @@ def push_out(x, v, phi_node, h, cells, margin):
             for k in range(D):
                 v[p, k] -= vn * grad[k] / g2
     return moved
+
+
+SLIVER = 0.5  # a cut cell with less fluid than this takes its volume fraction from beside
+
+
+@njit(cache=True, parallel=True)
+def sliver_fractions(cells, open_, theta):
+    """The volume fraction of a cut cell whose fluid part is a sliver (open < SLIVER): the
+    largest of its face neighbours' with open >= SLIVER (in place; unchanged without one).
+    A sliver thinner than the particle spacing holds no particle centre even in still water,
+    and read as empty it would put a free surface against the obstacle."""
+    D = len(cells)
+    cs = np.empty(D, dtype=np.int64)
+    n = 1
+    for k in range(D):
+        cs[k] = n
+        n *= cells[k]
+    for c in prange(n):
+        if not 0.0 < open_[c] < SLIVER:
+            continue
+        best = -1.0
+        r = c
+        for k in range(D):
+            i = r % cells[k]
+            r //= cells[k]
+            for step in (-1, 1):
+                j = i + step
+                if j < 0 or j >= cells[k]:
+                    continue
+                nb = c + step * cs[k]
+                if open_[nb] >= SLIVER and theta[nb] > best:
+                    best = theta[nb]
+        if best >= 0.0:
+            theta[c] = best
+
+
+@njit(cache=True)
+def extend_velocity(onode, cells, node_mass, v_old, v_star):
+    """The velocities of obstacle nodes no particle reaches (zero mass): the mass-weighted
+    mean of their neighbours' that carry mass (in place). Such a node sits inside the solid
+    at a corner of a cut cell, whose integrals still read its velocity."""
+    D = len(cells)
+    ns = np.empty(D, dtype=np.int64)
+    n = 1
+    for k in range(D):
+        ns[k] = n
+        n *= cells[k] + 1
+    NS = 1
+    for k in range(D):
+        NS *= 3
+    ix = np.empty(D, dtype=np.int64)
+    for e in range(onode.shape[0]):
+        i = onode[e]
+        if node_mass[i] > 0.0:
+            continue
+        r = i
+        for k in range(D):
+            ix[k] = r % (cells[k] + 1)
+            r //= cells[k] + 1
+        total = 0.0
+        for k in range(D):
+            v_old[i, k] = 0.0
+            v_star[i, k] = 0.0
+        for s in range(NS):
+            j = i
+            rs = s
+            inside = True
+            for k in range(D):
+                d = rs % 3 - 1
+                rs //= 3
+                if ix[k] + d < 0 or ix[k] + d > cells[k]:
+                    inside = False
+                    break
+                j += d * ns[k]
+            if not inside or node_mass[j] <= 0.0:
+                continue
+            m = node_mass[j]
+            total += m
+            for k in range(D):
+                v_old[i, k] += m * v_old[j, k]
+                v_star[i, k] += m * v_star[j, k]
+        if total > 0.0:
+            for k in range(D):
+                v_old[i, k] /= total
+                v_star[i, k] /= total

@@ -95,6 +95,8 @@ def bin_particles(P, G, W):
     binning.cell_index(P.x, G.h, G.cells, W.cell)
     binning.counting_sort(W.cell, W.theta.shape[0], W.start, W.order)
     binning.cell_volume_fraction(W.order, W.start, P.volume, G.cell_volume, G.open, W.theta)
+    if G.phi.shape[0] > 0:
+        cutcells.sliver_fractions(G.cells, G.open, W.theta)
 
 
 @njit(cache=True)
@@ -360,6 +362,8 @@ def predict(P, G, O, W, correct):
     transfer.particles_to_grid(P.x, P.v, P.mass, P.volume, W.order, W.start, G.h, G.cells,
                                O.gravity, O.dt, W.node_mass, W.node_mom, W.node_vol, W.v_old,
                                W.v_star, W.cell_vol if correct else W.cell_vol[:0])
+    if G.phi.shape[0] > 0:
+        cutcells.extend_velocity(G.onode, G.cells, W.node_mass, W.v_old, W.v_star)
     node_fractions(G, O, W)
     integrals = cell_integrals(P, G, O, W)
     rows = classify_nodes(G, O, W, integrals[0])
