@@ -602,6 +602,13 @@ class Case(_Section):
     _shapes: dict = PrivateAttr(default_factory=dict)  # built shapes, by their tables
     _counts: dict = PrivateAttr(default_factory=dict)  # particle counts, by the geometry
 
+    def __eq__(self, other):
+        """Equal cases: the same settings and folder (the caches of shapes and counts
+        aside)."""
+        if not isinstance(other, Case):
+            return NotImplemented
+        return self.__dict__ == other.__dict__ and self._base_dir == other._base_dir
+
     @property
     def base_dir(self):
         """The folder relative paths of the case (mesh files) start from: the case file's,
