@@ -348,6 +348,36 @@ def _morton_order(x):
     return np.argsort(code, kind="stable")
 
 
+def polygon_problem(vertices):
+    """Why these corners (m) are not a simple polygon (no area, edges that cross or touch),
+    or None. O(n^2) in the corners: a case's polygon has tens, not thousands."""
+    v = np.asarray(vertices, dtype=float)
+    n = len(v)
+    area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+    if not abs(area) > 0:
+        return ("vertices: the polygon's corners enclose no area; give its corners in order "
+                "around its boundary")
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    def spans_meet(a, b, c, d, k):
+        return max(min(a[k], b[k]), min(c[k], d[k])) <= min(max(a[k], b[k]), max(c[k], d[k]))
+
+    for i in range(n):
+        a, b = v[i], v[(i + 1) % n]
+        for j in range(i + 2, n):
+            if (j + 1) % n == i:
+                continue  # the last edge and the first share a corner
+            c, d = v[j], v[(j + 1) % n]
+            if (cross(c, d, a) * cross(c, d, b) <= 0 and cross(a, b, c) * cross(a, b, d) <= 0
+                    and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
+                return (f"vertices: the polygon's edges {i} (corners {i} to {(i + 1) % n}) and "
+                        f"{j} (corners {j} to {(j + 1) % n}) cross or touch, so it is not a "
+                        "simple polygon; list its corners in order around the boundary")
+    return None
+
+
 # --------------------------------------------------------------------------- mesh files
 
 def _refuse(key, text):
