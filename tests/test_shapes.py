@@ -88,6 +88,13 @@ def test_non_convex_polygon():
     assert ell.contains(x).tolist() == shapes.Polygon(ell.vertices[::-1]).contains(x).tolist()
 
 
+def test_only_simple_polygons_are_accepted():
+    assert shapes.polygon_problem([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]) is None
+    assert "no area" in shapes.polygon_problem([[0, 0], [1, 1], [2, 2]])
+    crossing = shapes.polygon_problem([[0, 0], [2, 0], [0, 1], [2, 2], [0, 2]])
+    assert "edges 1 (corners 1 to 2) and 4 (corners 4 to 0) cross or touch" in crossing
+
+
 def test_polygon_against_a_box_on_random_points():
     box = shapes.Box([0.2, 0.1], [0.7, 0.4])
     poly = shapes.Polygon([[0.2, 0.1], [0.7, 0.1], [0.7, 0.4], [0.2, 0.4]])

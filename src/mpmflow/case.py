@@ -149,7 +149,7 @@ class _PolygonShape(_Section):
 
     @model_validator(mode="after")
     def _simple(self):
-        message = polygon_problem(self.vertices)
+        message = shapes.polygon_problem(self.vertices)
         if message:
             raise ValueError(message)
         return self
@@ -166,36 +166,6 @@ class _MeshShape(_Section):
                          "(1: the file is in metres; 0.001: in millimetres).")
     translate: list[float] = Field([0.0, 0.0, 0.0], description="Shift (m) applied to a mesh "
                                    "after scaling.", min_length=3, max_length=3)
-
-
-def polygon_problem(vertices):
-    """Why these polygon corners are not a simple polygon (no area, crossing edges), or
-    None."""
-    v = np.asarray(vertices, dtype=float)
-    n = len(v)
-    area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
-    if not abs(area) > 0:
-        return ("vertices: the polygon's corners enclose no area; give its corners in order "
-                "around its boundary")
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    for i in range(n):
-        a, b = v[i], v[(i + 1) % n]
-        for j in range(i + 1, n):
-            if j == i or (j + 1) % n == i or j == (i + 1) % n:
-                continue  # neighbouring edges share a corner
-            c, d = v[j], v[(j + 1) % n]
-            d1, d2 = cross(c, d, a), cross(c, d, b)
-            d3, d4 = cross(a, b, c), cross(a, b, d)
-            if (d1 * d2 <= 0 and d3 * d4 <= 0
-                    and max(min(a[0], b[0]), min(c[0], d[0])) <= min(max(a[0], b[0]), max(c[0], d[0]))
-                    and max(min(a[1], b[1]), min(c[1], d[1])) <= min(max(a[1], b[1]), max(c[1], d[1]))):
-                return (f"vertices: the polygon's edges {i} (vertices {i} to {(i + 1) % n}) and {j} "
-                        f"(vertices {j} to {(j + 1) % n}) cross or touch, so it is not a "
-                        "simple polygon; list its corners in order around the boundary")
-    return None
 
 
 class _BodyFields(_Section):
@@ -634,6 +604,13 @@ class Case(_Section):
     _base_dir: Optional[Path] = PrivateAttr(None)  # the case file's folder
     _shapes: dict = PrivateAttr(default_factory=dict)  # built shapes, by their tables
     _counts: dict = PrivateAttr(default_factory=dict)  # particle counts, by the geometry
+
+    def __eq__(self, other):
+        """Equal cases: the same settings and folder (the caches of shapes and counts
+        aside)."""
+        if not isinstance(other, Case):
+            return NotImplemented
+        return self.__dict__ == other.__dict__ and self._base_dir == other._base_dir
 
     @property
     def base_dir(self):
@@ -1188,8 +1165,9 @@ def reference_page():
         "A case is a TOML file; all quantities are SI (m, s, kg, Pa). The domain is "
         "[0, size] and its boundaries are walls. `bodies` is a list of `[[bodies]]` tables "
         "(`bodies.N.` below is the N-th, from 0), `obstacles` and `probes` likewise; a body "
-        "or obstacle takes the keys of its shape (`type`) besides its own. Any key can be overridden on the command "
-        "line with `--set dotted.key=value`; `mpmflow keys` prints this list. Unknown keys "
+        "or obstacle takes the keys of its shape (`type`) besides its own. Any key can be "
+        "overridden on the command line with `--set dotted.key=value`; `mpmflow keys` prints "
+        "this list. Unknown keys "
         "are errors (with a suggestion), and a bad value stops with a message naming the "
         "key, the value, the allowed range and the fix (exit code 2).\n\n"
         + reference_markdown() + "\n")

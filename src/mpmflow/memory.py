@@ -123,7 +123,7 @@ def estimate(case):
     unknowns = 0.0
     for k, body in enumerate(case.bodies):
         lo, hi = geometry.seed_region(body, case.body_shape(k), h)  # a cosine top included
-        unknowns += math.prod((b - a) / h + 1 for a, b in zip(lo, hi))
+        unknowns += math.prod((float(b) - float(a)) / h + 1 for a, b in zip(lo, hi))
     unknowns = min(nodes, SPREAD * unknowns)
     rows = case.time.end / case.output.interval + 2
     values = len(case.probes) + 1 + 14  # probes.csv and timeseries.csv

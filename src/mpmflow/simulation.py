@@ -87,8 +87,8 @@ class Simulation:
         self.particles = build_particles(case, self.grid)
         if self.particles.count == 0:
             raise CaseError("The bodies hold no particles: every body is thinner than one "
-                            "particle spacing (grid.spacing / bodies.N.particles_per_cell). Enlarge the "
-                            "bodies or raise particles_per_cell.")
+                            "particle spacing (grid.spacing / bodies.N.particles_per_cell). "
+                            "Enlarge the bodies or raise particles_per_cell.")
         self.scheme = make_scheme(case, self.grid, self.particles)
         if hasattr(self.scheme, "check_free_surface"):
             try:
