@@ -108,3 +108,23 @@ def test_an_obstacle_with_no_slip_holds_the_water_on_its_face():
         assert held.size > 0
         speeds[walls] = np.abs(W.v_new[held]).max()
     assert speeds["no_slip"] == 0.0 and speeds["slip"] > 0.1
+
+
+@pytest.mark.parametrize("example", ["obstacle_2d.toml", "stl_drop_3d.toml",
+                                     "spheric_test2.toml"])
+def test_the_geometry_examples_load_and_start(example, tmp_path):
+    """The examples with obstacles, a polygon body, a body from the STL file shipped in
+    examples/geometry and SPHERIC Test 2 (coarsened) load and take their first steps, with
+    no particle inside an obstacle and the probes written."""
+    over = ["time.end=0.01", "output.interval=0.01", "output.snapshots=false"]
+    if example == "spheric_test2.toml":
+        over += ["grid.spacing=0.08", "domain.size=[3.44, 1.0, 1.04]",
+                 "obstacles=[{type='box', min=[0.6635, 0.2955, 0.0], "
+                 "max=[0.8245, 0.6985, 0.161]}, {type='box', min=[3.22, 0.0, 0.0], "
+                 "max=[3.44, 1.0, 1.04]}]", "time.dt=0.005", "output.interval=0.005"]
+    case = load_case(EXAMPLES / example, over)
+    sim = Simulation(case, tmp_path / "run")
+    sim.run()
+    assert np.all(sim.scheme.solids.distance(sim.particles.x) > -1e-9)
+    header = (tmp_path / "run" / "probes.csv").read_text().splitlines()[0]
+    assert header.startswith("time [s],") and len(header.split(",")) == len(case.probes) + 1

@@ -800,6 +800,13 @@ class Case(_Section):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "
                 f"{self.time.dt:g} s; make it at least one time step")
+        # once checked: mesh files by absolute path, so that the resolved case
+        # (summary.json) finds them from anywhere (as probes' data)
+        for spec in [*self.bodies, *self.obstacles]:
+            if spec.type == "mesh" and not Path(spec.path).expanduser().is_absolute():
+                path = (self.base_dir / Path(spec.path).expanduser()).resolve()
+                if path.is_file():
+                    object.__setattr__(spec, "path", str(path))
         return self
 
 

@@ -126,7 +126,38 @@ def side_view(x, p, size, spacing):
             f"slice y = {mid:.4g} m +- {0.5 * spacing:.3g} m")
 
 
-def _draw(ax, xy, p, t, size, vmax, plt):
+def obstacle_section(summary, plane, notes):
+    """The obstacles on the figures' plane (the x-y plane in 2D, the mid-width x-z slice in
+    3D) as (X, Y, signed distance) on a fine raster, or None without obstacles. Rebuilt from
+    the case in summary.json; an obstacle that cannot be rebuilt (a mesh file moved away) is
+    left out with a note."""
+    from .case import validate_case
+
+    spec = summary.get("case", {})
+    if not spec.get("obstacles"):
+        return None
+    try:
+        case = validate_case(spec)
+        solids = [case.obstacle_shape(k) for k in range(len(case.obstacles))]
+    except CaseError as err:
+        notes.append(f"the obstacles cannot be drawn: {err}")
+        return None
+    n = 400
+    X, Y = np.meshgrid(np.linspace(0, plane[0], n),
+                       np.linspace(0, plane[1], max(2, int(n * plane[1] / plane[0]))))
+    if len(case.domain.size) == 2:
+        pts = np.column_stack([X.ravel(), Y.ravel()])
+    else:
+        mid = 0.5 * summary.get("grid", {}).get("domain_used", case.domain.size)[1]
+        pts = np.column_stack([X.ravel(), np.full(X.size, mid), Y.ravel()])
+    phi = np.min([s.signed_distance(pts) for s in solids], axis=0).reshape(X.shape)
+    return X, Y, phi
+
+
+def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
+    if solid is not None and (solid[2] < 0).any():
+        ax.contourf(solid[0], solid[1], solid[2], levels=[solid[2].min() - 1.0, 0.0],
+                    colors=["0.55"])
     art = ax.scatter(xy[:, 0], xy[:, 1], c=p, s=1.0, marker="s", cmap="viridis", vmin=0.0,
                      vmax=vmax, linewidths=0, rasterized=True)
     ax.set_xlim(0, size[0])
@@ -164,6 +195,7 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         xy, pv, plane, names, caption = side_view(x, p, size, spacing)
         data[k] = (t, xy, pv)
     size = plane
+    solid = obstacle_section(summary, plane, notes)
     # the colour scale: the 99.5th percentile over all snapshots, so that a few impact peaks
     # do not leave the rest of the run dark
     vmax = float(np.percentile(np.concatenate([p for _, _, p in data]), 99.5)) or 1.0
@@ -171,7 +203,7 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
     written = []
     for (t, xy, p), (_, f) in zip(data, snaps):
         fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
-        art = _draw(ax, xy, p, t, size, vmax, plt)
+        art = _draw(ax, xy, p, t, size, vmax, plt, solid)
         fig.colorbar(art, ax=ax, label="pressure [Pa]")
         ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
         ax.set_ylabel(f"{names[1]} [m]")
@@ -182,12 +214,12 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
     fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
                              layout="constrained")
     for ax, k in zip(axes[0], pick):
-        art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt)
+        art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt, solid)
     fig.colorbar(art, ax=axes[0].tolist(), label="pressure [Pa]")
     save(fig, folder / "snapshots.png", DPI)
     written.append(folder / "snapshots.png")
     fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
-    art = _draw(ax, data[0][1], data[0][2], data[0][0], size, vmax, plt)
+    art = _draw(ax, data[0][1], data[0][2], data[0][0], size, vmax, plt, solid)
     fig.colorbar(art, ax=ax, label="pressure [Pa]")
     writer = PillowWriter(fps=4)
     tmp = folder / ".animation.partial.gif"  # Pillow picks the format from the suffix
