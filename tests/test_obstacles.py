@@ -35,7 +35,8 @@ def test_column_at_rest_around_an_obstacle_is_exact(name):
     example, obstacle = AT_REST[name]
     end = 0.3 if "3D" in name else 1.0
     case = load_case(EXAMPLES / example, [f"time.end={end}", "output.snapshots=false",
-                                          f"obstacles=[{obstacle}]"])
+                                          f"obstacles=[{obstacle}]",
+                                          "bodies.0.around_obstacles=true"])
     sim = Simulation(case)
     assert (sim.scheme.solids.static_slot > 0).sum() > 0  # cells are cut
     sim.run()

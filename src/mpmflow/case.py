@@ -176,6 +176,11 @@ class _BodyFields(_Section):
     velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s); "
                                   "at rest by default, in 2D and 3D.",
                                   min_length=2, max_length=3)
+    around_obstacles: bool = Field(
+        False, description="true = fill the body's shape except where obstacles are (water "
+        "in a tank round a pier: the lattice points inside obstacles are not seeded). false "
+        "(default) = a body that overlaps an obstacle is refused, as a likely mistake of "
+        "position.")
     initial_pressure: Literal["zero", "hydrostatic"] = Field(
         "zero", description="Initial particle pressure: \"zero\", or \"hydrostatic\" = "
         "density * |g| * depth below the body's highest point against gravity (for a box its "
@@ -734,6 +739,11 @@ class Case(_Section):
                            if count == 0 else None)
                 if message:
                     raise ValueError(message)
+                if not self.bodies[k].around_obstacles:
+                    message = placement.overlap_message(self, k, count, body_shapes[k],
+                                                        obstacle_shapes)
+                    if message:
+                        raise ValueError(message)
         if self.solver.scheme == "projection":
             grid = Grid.covering(size, self.grid.spacing)
             if geometry.fills_grid(self.bodies, self.grid.spacing, grid.size):

@@ -11,9 +11,9 @@ that involve the other shapes and the obstacles:
   (refused, not warned: a wall of less than two cells holds at most one row of grid nodes,
   and the water would leak through it or round it);
 * two bodies of which one is not a box that overlap: some lattice point seeded by both;
-* a body lying wholly inside obstacles (a body may surround or touch an obstacle: the
+* a body overlapping an obstacle, unless it says ``around_obstacles = true`` (then the
   lattice points inside obstacles are left out when seeding, so water can fill a tank
-  around a pier);
+  round a pier); a body lying wholly inside obstacles in any case;
 * a probe inside an obstacle (on its surface is fine: a sensor on a structure's face);
 * two obstacles with the same name.
 """
@@ -165,3 +165,24 @@ def empty_body_message(case, k, body_shape, obstacle_shapes):
             "lattice points are inside an obstacle, where the material cannot start, so it "
             f"would hold no particles; remove bodies.{k} or move it out of the obstacles "
             f"({_move_keys('bodies', k, body)})")
+
+
+def overlap_message(case, k, count, body_shape, obstacle_shapes):
+    """The message for bodies.k overlapping an obstacle (``count``: its particles with the
+    obstacles left out), or None when no obstacle takes any of its lattice points."""
+    body = case.bodies[k]
+    h = case.grid.spacing
+    alone = geometry.particle_count(body, h, body_shape)
+    if alone == count:
+        return None
+    for j, shape in enumerate(obstacle_shapes):
+        taken = alone - geometry.particle_count(body, h, body_shape, [shape])
+        if taken:
+            obstacle = case.obstacles[j]
+            return (f"{_what('bodies', k, body)} overlaps {_what('obstacles', j, obstacle)}: "
+                    f"{taken} of its {alone} lattice points lie inside the obstacle, where "
+                    "the material cannot start. Move them apart "
+                    f"({_move_keys('bodies', k, body)} or {_move_keys('obstacles', j, obstacle)})"
+                    f", or, to fill the body's shape round the obstacle (water in a tank round "
+                    f"a pier), set bodies.{k}.around_obstacles = true")
+    return None
