@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import ROOT, CaseResult, Row, fmt, markdown_table, run_example
+from .common import ROOT, CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 
 H0 = 0.55  # m
 LENGTH = 3.22  # m, the tank
@@ -108,10 +108,12 @@ def measures(sim, exp, end):
 def run(out, quick, context):
     exp = data()
     meshes = [(0.05, 0.75)] if quick else [(0.04, 6.0), (0.025, 6.0)]
-    rows, text = [], []
+    rows, text, runs = [], [], []
     for spacing, end in meshes:
         sim = run_example("spheric_test2.toml", overrides(spacing, end))
         m = measures(sim, exp, end)
+        runs.append((spacing, sim.series("time"),
+                     {n: sim.probe_series(n) for n in (*GAUGES, *IMPACT)}))
         tag = f"{spacing:g} m"
         if end >= 6.0:
             for gauge, value in m["levels"].items():
@@ -137,5 +139,38 @@ def run(out, quick, context):
             + markdown_table(["sensor", "computed", "measured"], table)
             + "\n\nFirst-impact times (s):\n\n"
             + markdown_table(["sensor", "computed", "measured"], timing))
-    return CaseResult("spheric", "SPHERIC Test 2: 3D dam break on a box", rows,
-                      text=__doc__.split("\n\n", 1)[1] + "\n\n" + "\n\n".join(text))
+    res = CaseResult("spheric", "SPHERIC Test 2: 3D dam break on a box", rows,
+                     text=__doc__.split("\n\n", 1)[1] + "\n\n" + "\n\n".join(text))
+    figure(out, exp, runs, res)
+    return res
+
+
+def figure(out, exp, runs, res):
+    """spheric.png: the levels H1-H4 (top) and the pressures P1, P3, P5, P7 (bottom) of each
+    mesh against the measured series (black)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(2, 4, figsize=(16, 6.5))
+    te = exp["time [s]"]
+    for k, (gauge, column) in enumerate(GAUGES.items()):
+        ax[0, k].plot(te, exp[column], "k-", lw=0.7, label="MARIN")
+        ax[0, k].set(title=f"{gauge} (data: {column.split(' ')[0]} as labelled)",
+                     xlabel="t [s]", ylabel="level [m]")
+    for k, name in enumerate(IMPACT):
+        ax[1, k].plot(te, exp[f"{name} [Pa]"], "k-", lw=0.5, label="MARIN")
+        ax[1, k].set(title=name, xlabel="t [s]", ylabel="pressure [Pa]")
+    for j, (spacing, t, series) in enumerate(runs):
+        for k, gauge in enumerate(GAUGES):
+            ax[0, k].plot(t, series[gauge], f"C{j}-", lw=0.9, label=f"MPM {spacing:g} m")
+        for k, name in enumerate(IMPACT):
+            ax[1, k].plot(t, series[name], f"C{j}-", lw=0.7, label=f"MPM {spacing:g} m")
+    end = max(t[-1] for _, t, _ in runs)
+    for a in ax.ravel():
+        a.set_xlim(0, end)
+        a.legend(fontsize=7)
+    for a in ax[1]:
+        a.set_xlim(0, min(end, 2.0))
+    fig.tight_layout()
+    save(fig, out / "spheric.png")
+    res.figures.append(("spheric.png", "Water levels H1-H4 (top) and pressures on the box's "
+                        "front (P1, P3) and top (P5, P7) face (bottom, first 2 s) against "
+                        "MARIN's measurements (black)."))
