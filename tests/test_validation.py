@@ -37,7 +37,7 @@ def test_report_has_the_summary_table_first_and_a_csv_row_per_row(quick):
     assert text.index("## Summary") < text.index("## Hydrostatic column")
     assert "| case | quantity | error measure | value | tolerance | result |" in text
     for png in ("hydrostatic.png", "sloshing.png", "dam_break_ar2.png", "dam_break_ar1.png",
-                "lobovsky.png", "volume.png", "long_run.png"):
+                "lobovsky.png", "volume.png", "long_run.png", "spheric.png"):
         assert (out / png).stat().st_size > 1000
         assert f"]({png})" in text
     with open(out / "summary.csv") as f:
@@ -220,3 +220,12 @@ def test_validate_checks_matplotlib_and_the_examples_before_running(tmp_path, ca
     assert "runs the case files in the examples/ folder of a source checkout" in err
     assert "sloshing.toml, " in err and "dam_break.toml are missing" in err  # volume's needs
     assert "Traceback" not in err and not (tmp_path / "b").exists()
+
+
+def test_spheric_test2_first_impact_on_the_box_at_the_coarse_mesh(quick):
+    """SPHERIC Test 2 at 0.05 m (quick): the wave reaches the box's front face (P1) within
+    the tolerance of the measured 0.393 s, and the impulse of that impact is within 30%
+    (measured: 0.017 s and 0.28)."""
+    _, rows, _ = quick
+    assert row(rows, "SPHERIC 2", "0.05 m: first impact at P1").passed
+    assert row(rows, "SPHERIC 2", "0.05 m: impulse of the first impact at P1").passed

@@ -41,6 +41,22 @@ WHY_LEVEL = ("0.1 H0 = 5.5 cm RMS: 1.4 cells of the 0.04 m mesh, 2.2 of the 0.02
              "level that follows the measured wave's arrival, height and return")
 TOL_TIME = 0.04
 WHY_TIME = ("10% of the 0.39 s the front takes to reach the box; 8 outputs of 5 ms")
+# why rows miss, written after the runs (the tolerances above were fixed before)
+MISS_TOP = ("the first water on the top face comes from the jet that climbs the front face at "
+            "the first impact: it lands on the top at 0.49 s at 0.025 m and 0.98 s at "
+            "0.04 m, and first presses above 500 Pa at 1.33 s at 0.02 m "
+            "(benchmarks/spheric.py), against 1.07-1.10 s measured: where and when the jet "
+            "lands is not converged at these meshes (8 cells across the box's height at "
+            "0.02 m)")
+MISS_FRONT = ("after the impact peak the simulated face pressure averages 30-55% below the "
+              "measured one at every mesh (0.45-0.7 s, 0.02 m: P1 3.6 against 5.5 kPa, P3 "
+              "2.1 against 4.6 kPa), with swings of 2-3.5 kPa between 5 ms outputs that the "
+              "window's mean and its plane fit read alike (so they are the particles' own); "
+              "why the face reads low after the impact is not established")
+_RETURN = ("the RMS comes from 1-3 s, the bore that reflects from the wall behind the box "
+           "(x = 0) and runs back: at 0.02 m H1 averages 0.14 m over 1-2 s against the "
+           "measured 0.29 m; after 3 s every gauge is within 0.05 H0 RMS")
+MISS_LEVEL = {"H1": _RETURN, "H2": _RETURN, "H3": _RETURN, "H4": _RETURN}
 TOL_IMPULSE = 0.3
 WHY_IMPULSE = ("the impulse converges where the peak does not; 30% with the 0.16 m box "
                "resolved by 4 to 6 cells")
@@ -119,17 +135,18 @@ def run(out, quick, context):
             for gauge, value in m["levels"].items():
                 rows.append(Row("SPHERIC 2", f"{tag}: water level {gauge}",
                                 "RMS of (h - h_exp) / H0 over 0-6 s", value, TOL_LEVEL,
-                                WHY_LEVEL))
+                                WHY_LEVEL, miss=MISS_LEVEL.get(gauge, "")))
         for name, (ts, te_) in m["times"].items():
             if end < te_ + WINDOW[1]:
                 continue
             rows.append(Row("SPHERIC 2", f"{tag}: first impact at {name}",
                             f"|t - t_exp|, first p > {THRESHOLD:g} Pa", abs(ts - te_),
-                            TOL_TIME, WHY_TIME, unit="s"))
+                            TOL_TIME, WHY_TIME, unit="s", miss=MISS_TOP))
         for name, (js, je) in m["impulses"].items():
             rows.append(Row("SPHERIC 2", f"{tag}: impulse of the first impact at {name}",
                             "|J - J_exp| / J_exp, J = int p dt over [t_exp - 0.05, t_exp + 0.3] s",
-                            abs(js - je) / je, TOL_IMPULSE, WHY_IMPULSE))
+                            abs(js - je) / je, TOL_IMPULSE, WHY_IMPULSE,
+                            miss=MISS_TOP if name in ("P5", "P7") else MISS_FRONT))
         table = [[n, fmt(ps), fmt(pe)] for n, (ps, pe) in m["peaks"].items()]
         timing = [[n, fmt(ts), fmt(te_)] for n, (ts, te_) in m["times"].items()]
         text.append(
