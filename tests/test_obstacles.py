@@ -129,3 +129,17 @@ def test_the_geometry_examples_load_and_start(example, tmp_path):
     assert np.all(sim.scheme.solids.distance(sim.particles.x) > -1e-9)
     header = (tmp_path / "run" / "probes.csv").read_text().splitlines()[0]
     assert header.startswith("time [s],") and len(header.split(",")) == len(case.probes) + 1
+
+
+def test_the_paper_formulation_runs_with_obstacles():
+    """With the paper's node free surface, a node whose cells all lie inside a solid is no
+    pressure unknown (it was, with an empty row: the multigrid divided by zero)."""
+    example, obstacle = AT_REST["disc (2D)"]
+    case = load_case(EXAMPLES / example, ["time.end=0.05", "output.snapshots=false",
+                                          f"obstacles=[{obstacle}]",
+                                          "bodies.0.around_obstacles=true",
+                                          "solver.formulation='paper'"])
+    sim = Simulation(case)
+    sim.run()
+    assert sim.time == pytest.approx(0.05)
+    assert np.all(sim.scheme.solids.distance(sim.particles.x) > -1e-3)

@@ -96,7 +96,11 @@ def build(grid, phi=None, no_slip_of=None):
     parts = np.zeros(m, dtype=np.int64)
     cutcells.cut_cell_tensors(phi, float(grid.spacing), cells, candidates, SUBCELLS, K, C, V,
                               F, Wf, parts)
-    cut = parts > 0
+    # a candidate without a fluid sub-cell is solid on the staircase (a sliver of positive
+    # phi at a corner, narrower than a sub-cell): left out like the cells inside
+    empty = V.sum(axis=1) <= 0.0
+    solid[candidates[empty]] = True
+    cut = (parts > 0) & ~empty
     cut_cells = candidates[cut]
     static_slot[solid] = -1
     static_slot[cut_cells] = 1 + np.arange(cut_cells.size)

@@ -135,8 +135,9 @@ def enclosed_cells(cells, node_f, enclosed):
 def classify_nodes(cells, cell_slot, static_slot, node_f, subcell, node_row):
     """Number the pressure unknowns; returns their count. A node is an unknown when all its
     in-domain cells outside solids (``static_slot`` >= 0) take part in the system
-    (``cell_slot`` >= 0) and, with ``subcell``, its volume fraction exceeds 1/2. Unknowns
-    are numbered in node order."""
+    (``cell_slot`` >= 0), there is at least one such cell (a node inside a solid is none)
+    and, with ``subcell``, its volume fraction exceeds 1/2. Unknowns are numbered in node
+    order."""
     D = len(cells)
     cs, per, nslabs = _layout(cells)
     for t in prange(CHUNKS):
@@ -145,11 +146,14 @@ def classify_nodes(cells, cell_slot, static_slot, node_f, subcell, node_row):
             _first_of_slab(slab, cells, ix)
             for i in range(slab * per, (slab + 1) * per):
                 unknown = not (subcell and node_f[i] <= 0.5)
+                fluid = False  # some cell of the node lies outside every solid
                 for b in range(1 << D):
                     c = cell_of_node(ix, b, cells, cs)
-                    if c >= 0 and cell_slot[c] < 0 and static_slot[c] >= 0:
-                        unknown = False
-                node_row[i] = 0 if unknown else -1
+                    if c >= 0 and static_slot[c] >= 0:
+                        fluid = True
+                        if cell_slot[c] < 0:
+                            unknown = False
+                node_row[i] = 0 if unknown and fluid else -1
                 _next(ix, cells, 1)
     return number(node_row)
 
