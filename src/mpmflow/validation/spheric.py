@@ -43,16 +43,16 @@ TOL_TIME = 0.04
 WHY_TIME = ("10% of the 0.39 s the front takes to reach the box; 8 outputs of 5 ms")
 # why rows miss, written after the runs (the tolerances above were fixed before)
 MISS_TOP = ("the first water on the top face comes from the jet that climbs the front face at "
-            "the first impact: it lands on the top at 0.49 s at 0.025 m and 0.98 s at "
-            "0.04 m, and first presses above 500 Pa at 1.33 s at 0.02 m "
-            "(benchmarks/spheric.py), against 1.07-1.10 s measured: where and when the jet "
-            "lands is not converged at these meshes (8 cells across the box's height at "
-            "0.02 m)")
-MISS_FRONT = ("after the impact peak the simulated face pressure averages 30-55% below the "
-              "measured one at every mesh (0.45-0.7 s, 0.02 m: P1 3.6 against 5.5 kPa, P3 "
-              "2.1 against 4.6 kPa), with swings of 2-3.5 kPa between 5 ms outputs that the "
-              "window's mean and its plane fit read alike (so they are the particles' own); "
-              "why the face reads low after the impact is not established")
+            "the first impact: the top-face pressure first passes 500 Pa at 0.98 s at "
+            "0.04 m, 1.34 s at 0.025 m and 1.33 s at 0.02 m (benchmarks/spheric.py), "
+            "against 1.07-1.10 s measured: where and when the jet lands is not converged "
+            "at these meshes (8 cells across the box's height at 0.02 m)")
+MISS_FRONT = ("after the impact peak the simulated face pressure averages below the measured "
+              "one (0.45-0.7 s, P3: 2.8 against 4.6 kPa at 0.05 m, 2.1 against 4.6 kPa at "
+              "0.02 m; P1 at 0.02 m: 3.6 against 5.5 kPa), with swings of 2-3.5 kPa between "
+              "5 ms outputs that the window's mean and its plane fit read alike (so they are "
+              "the particles' own); why the face reads low after the impact is not "
+              "established")
 _RETURN = ("the RMS comes from 1-3 s, the bore that reflects from the wall behind the box "
            "(x = 0) and runs back: at 0.02 m H1 averages 0.14 m over 1-2 s against the "
            "measured 0.29 m; after 3 s every gauge is within 0.05 H0 RMS")
