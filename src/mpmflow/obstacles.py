@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kernels import cutcells, quadrature
+from .kernels import cutcells, geometry, quadrature
 
 SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
 
@@ -107,13 +107,12 @@ def build(grid, phi=None, no_slip_of=None):
     open_[solid] = 0.0
     open_[cut_cells] = V[cut].sum(axis=1) / grid.cell_volume
     # obstacle nodes and their normals: int N_b n ds summed over the cut cells
-    ns = np.cumprod([1] + [c + 1 for c in cells[:-1]])
+    ns, _ = geometry.strides(cells)
     nvec = np.zeros((grid.nnodes, D))
     Fn = F[cut].sum(axis=1)  # (ncut, 2^D, D): int N_b n ds in each cut cell
     first = _first_nodes(cut_cells, cells, ns)
     for a in range(NC):
-        off = sum(ns[k] for k in range(D) if (a >> k) & 1)
-        np.add.at(nvec, first + off, Fn[:, a])
+        np.add.at(nvec, first + geometry.corner_offset(a, ns), Fn[:, a])
     size = np.linalg.norm(nvec, axis=1)
     node = np.flatnonzero(size > 1e-9 * grid.spacing ** (D - 1))
     normal = nvec[node] / size[node, None]
@@ -139,13 +138,11 @@ def _first_nodes(cells_flat, cells, ns):
 def _cell_corner_phi(grid, phi):
     """phi at the 2^D corners of every cell, (ncells, 2^D)."""
     cells = tuple(int(c) for c in grid.cells)
-    D = len(cells)
-    ns = np.cumprod([1] + [c + 1 for c in cells[:-1]])
+    ns, _ = geometry.strides(cells)
     first = _first_nodes(np.arange(grid.ncells), cells, ns)
-    out = np.empty((grid.ncells, 2**D))
-    for a in range(2**D):
-        off = sum(ns[k] for k in range(D) if (a >> k) & 1)
-        out[:, a] = phi[first + off]
+    out = np.empty((grid.ncells, 2 ** len(cells)))
+    for a in range(out.shape[1]):
+        out[:, a] = phi[first + geometry.corner_offset(a, ns)]
     return out
 
 

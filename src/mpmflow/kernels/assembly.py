@@ -13,9 +13,11 @@ positive definite. Without ``subcell`` nodes outside the unknowns have p = 0.
 import numpy as np
 from numba import njit, prange
 
+from .geometry import corner_offset
 from .ghost import ghost_factor
 from .parallel import CHUNKS
-from .stencil import coords, first_of_slab, next_in_slab, node_cells, node_stencil, tables
+from .stencil import (coords, first_of_slab, next_in_slab, node_cell, node_cells, node_stencil,
+                      tables)
 
 
 @njit(cache=True, parallel=True)
@@ -94,30 +96,14 @@ def wall_integral(ix, i, cells, ns, cs, h, cell_slot, static_slot, Wf, vstar, co
             for b in range(1 << D):
                 if ((b >> k) & 1) == on:
                     continue  # not a cell on this wall
-                c = 0
-                first = 0
-                a = 0
-                inside = True
-                for m in range(D):
-                    bit = (b >> m) & 1
-                    j = ix[m] - 1 + bit
-                    if j < 0 or j >= cells[m]:
-                        inside = False
-                        break
-                    c += j * cs[m]
-                    first += j * ns[m]
-                    if bit == 0:
-                        a += 1 << m
-                if not inside or cell_slot[c] < 0:
+                c, first, a = node_cell(ix, b, cells, ns, cs)
+                if c < 0 or cell_slot[c] < 0:
                     continue
                 ss = static_slot[c]
                 if ss >= 1:
                     face = 0.0
                     for corner in range(1 << D):
-                        jn = first
-                        for m in range(D):
-                            if (corner >> m) & 1:
-                                jn += ns[m]
+                        jn = first + corner_offset(corner, ns)
                         if contact[jn, k]:
                             face += Wf[ss, 2 * k + side, a, corner] * sign * vstar[jn, k]
                     total += face
@@ -146,28 +132,12 @@ def obstacle_integral(ix, cells, ns, cs, cell_slot, static_slot, F, vstar, ocont
     D = len(cells)
     total = 0.0
     for b in range(1 << D):
-        c = 0
-        first = 0
-        a = 0
-        inside = True
-        for m in range(D):
-            bit = (b >> m) & 1
-            j = ix[m] - 1 + bit
-            if j < 0 or j >= cells[m]:
-                inside = False
-                break
-            c += j * cs[m]
-            first += j * ns[m]
-            if bit == 0:
-                a += 1 << m
-        if not inside or cell_slot[c] < 0 or static_slot[c] < 1:
+        c, first, a = node_cell(ix, b, cells, ns, cs)
+        if c < 0 or cell_slot[c] < 0 or static_slot[c] < 1:
             continue
         s = static_slot[c]
         for corner in range(1 << D):
-            jn = first
-            for m in range(D):
-                if (corner >> m) & 1:
-                    jn += ns[m]
+            jn = first + corner_offset(corner, ns)
             if ocontact[jn]:
                 for k in range(D):
                     total += F[s, a, corner, k] * vstar[jn, k]

@@ -28,6 +28,8 @@ staircase (docs/method.md, "Obstacles"). The surface is placed to within h / n.
 import numpy as np
 from numba import njit, prange
 
+from .geometry import (cell_coords, cell_strides, corner_gradient, corner_offset,
+                       corner_weight, locate, node_coords, node_strides)
 from .quadrature import accumulate_point
 
 
@@ -35,31 +37,18 @@ from .quadrature import accumulate_point
 def phi_at(phi_node, local, first, ns):
     """phi interpolated multilinearly at local coordinates ``local`` of the cell whose first
     node is ``first``."""
-    D = local.shape[0]
     val = 0.0
-    for a in range(1 << D):
-        w = 1.0
-        i = first
-        for k in range(D):
-            if (a >> k) & 1:
-                w *= local[k]
-                i += ns[k]
-            else:
-                w *= 1.0 - local[k]
-        val += w * phi_node[i]
+    for a in range(1 << local.shape[0]):
+        val += corner_weight(a, local) * phi_node[first + corner_offset(a, ns)]
     return val
 
 
 @njit(cache=True)
 def _face_point(local, w, M, N):
     """Add a face quadrature point: M[a, b] += w N_a N_b."""
-    D = local.shape[0]
-    NC = 1 << D
+    NC = 1 << local.shape[0]
     for a in range(NC):
-        n = 1.0
-        for k in range(D):
-            n *= local[k] if (a >> k) & 1 else 1.0 - local[k]
-        N[a] = n
+        N[a] = corner_weight(a, local)
     for a in range(NC):
         for b in range(NC):
             M[a, b] += w * N[a] * N[b]
@@ -73,20 +62,14 @@ def cut_cell_tensors(phi_node, h, cells, candidates, nsub, K, C, V, F, Wf, solid
     D = len(cells)
     NC = 1 << D
     ns = np.empty(D, dtype=np.int64)
-    n = 1
-    for k in range(D):
-        ns[k] = n
-        n *= cells[k] + 1
+    node_strides(cells, ns)
     g = 0.5 / np.sqrt(3.0)
     sub = h / nsub
     for m in prange(candidates.shape[0]):
-        c = candidates[m]
         cx = np.empty(D, dtype=np.int64)
-        r = c
+        cell_coords(candidates[m], cells, cx)
         first = 0
         for k in range(D):
-            cx[k] = r % cells[k]
-            r //= cells[k]
             first += cx[k] * ns[k]
         local = np.empty(D)
         centre = np.empty(D)
@@ -188,32 +171,16 @@ def face_mass(h, D, Wf):
 def interpolate_phi(phi_node, x, p, inv_h, cells, ns, grad):
     """phi and its gradient (into ``grad``) at particle p, multilinear in its cell."""
     D = len(cells)
-    first = 0
     local = np.empty(D)
-    for k in range(D):
-        s = x[p, k] * inv_h
-        j = min(max(int(np.floor(s)), 0), cells[k] - 1)
-        local[k] = s - j
-        first += j * ns[k]
+    first = locate(x, p, inv_h, cells, ns, local)
     val = 0.0
     for k in range(D):
         grad[k] = 0.0
     for a in range(1 << D):
-        i = first
-        w = 1.0
+        phi = phi_node[first + corner_offset(a, ns)]
+        val += corner_weight(a, local) * phi
         for k in range(D):
-            if (a >> k) & 1:
-                w *= local[k]
-                i += ns[k]
-            else:
-                w *= 1.0 - local[k]
-        val += w * phi_node[i]
-        for k in range(D):
-            dw = inv_h if (a >> k) & 1 else -inv_h
-            for kk in range(D):
-                if kk != k:
-                    dw *= local[kk] if (a >> kk) & 1 else 1.0 - local[kk]
-            grad[k] += dw * phi_node[i]
+            grad[k] += corner_gradient(a, k, local, inv_h) * phi
     return val
 
 
@@ -224,10 +191,7 @@ def push_out(x, v, phi_node, h, cells, margin):
     Returns how many were moved."""
     D = len(cells)
     ns = np.empty(D, dtype=np.int64)
-    n = 1
-    for k in range(D):
-        ns[k] = n
-        n *= cells[k] + 1
+    node_strides(cells, ns)
     inv_h = 1.0 / h
     moved = 0
     for p in prange(x.shape[0]):
@@ -270,20 +234,16 @@ def sliver_fractions(cells, open_, theta):
     and read as empty it would put a free surface against the obstacle."""
     D = len(cells)
     cs = np.empty(D, dtype=np.int64)
-    n = 1
-    for k in range(D):
-        cs[k] = n
-        n *= cells[k]
+    n = cell_strides(cells, cs)
     for c in prange(n):
         if not 0.0 < open_[c] < SLIVER:
             continue
         best = -1.0
-        r = c
+        cx = np.empty(D, dtype=np.int64)
+        cell_coords(c, cells, cx)
         for k in range(D):
-            i = r % cells[k]
-            r //= cells[k]
             for step in (-1, 1):
-                j = i + step
+                j = cx[k] + step
                 if j < 0 or j >= cells[k]:
                     continue
                 nb = c + step * cs[k]
@@ -300,10 +260,7 @@ def extend_velocity(onode, cells, node_mass, v_old, v_star):
     at a corner of a cut cell, whose integrals still read its velocity."""
     D = len(cells)
     ns = np.empty(D, dtype=np.int64)
-    n = 1
-    for k in range(D):
-        ns[k] = n
-        n *= cells[k] + 1
+    node_strides(cells, ns)
     NS = 1
     for k in range(D):
         NS *= 3
@@ -312,10 +269,7 @@ def extend_velocity(onode, cells, node_mass, v_old, v_star):
         i = onode[e]
         if node_mass[i] > 0.0:
             continue
-        r = i
-        for k in range(D):
-            ix[k] = r % (cells[k] + 1)
-            r //= cells[k] + 1
+        node_coords(i, cells, ix)
         total = 0.0
         for k in range(D):
             v_old[i, k] = 0.0

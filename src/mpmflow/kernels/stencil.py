@@ -50,29 +50,34 @@ def tables(cells):
     return ns, cs, slot, offset
 
 
+@njit(cache=True, inline="always")
+def node_cell(ix, b, cells, ns, cs):
+    """Cell b (0 <= b < 2^D) of the node with coordinates ``ix``: (its flat index, -1 when
+    outside the grid; its first node; the node's corner in it)."""
+    c = 0
+    first = 0
+    a = 0
+    for k in range(len(cells)):
+        bit = (b >> k) & 1
+        j = ix[k] - 1 + bit
+        if j < 0 or j >= cells[k]:
+            return -1, 0, 0
+        c += j * cs[k]
+        first += j * ns[k]
+        if bit == 0:
+            a += 1 << k
+    return c, first, a
+
+
 @njit(cache=True)
 def node_cells(ix, cells, ns, cs, cell_slot, slots, local, base):
     """The cells around the node with coordinates ``ix`` that take part in the system: their
     slot in the element integrals, the node's corner in each, and each cell's first node.
     Returns how many (at most 2^D)."""
-    D = len(cells)
     n = 0
-    for b in range(1 << D):
-        c = 0
-        first = 0
-        a = 0
-        inside = True
-        for k in range(D):
-            bit = (b >> k) & 1
-            j = ix[k] - 1 + bit
-            if j < 0 or j >= cells[k]:
-                inside = False
-                break
-            c += j * cs[k]
-            first += j * ns[k]
-            if bit == 0:
-                a += 1 << k
-        if not inside:
+    for b in range(1 << len(cells)):
+        c, first, a = node_cell(ix, b, cells, ns, cs)
+        if c < 0:
             continue
         s = cell_slot[c]
         if s < 0:
