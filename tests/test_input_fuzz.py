@@ -17,6 +17,7 @@ import tempfile
 from pathlib import Path
 
 import hypothesis.strategies as st
+import pytest
 from hypothesis import HealthCheck, given, settings
 
 from mpmflow import case as case_module
@@ -247,3 +248,23 @@ def _run_case(text):
         assert any(cause in err for cause in ("The run blew up", "did not converge",
                                               "became unstable", "is singular")), err
     return code, err
+
+
+@pytest.mark.parametrize("key, value, words", [
+    ("grid.spacing", 5e-324, "cells along a side of the domain"),
+    ("material.density", 5e-324, "too small for a floating-point number"),
+    ("checkpoint.interval", 5e-324, None),  # every output: runs
+    ("output.snapshot_interval", 5e-324, None),
+])
+def test_subnormal_settings_are_refused_or_run(key, value, words):
+    """The three subnormal values the fuzzing above found on a clean clone (a traceback each:
+    an infinite cell count, particles of zero mass, an infinite checkpoint index), and the
+    snapshot interval that shares the last's arithmetic."""
+    data = copy.deepcopy(BASE)
+    section, name = key.split(".")
+    data[section][name] = value
+    code, err = _run_case(to_toml(data))
+    if words is None:
+        assert code in ("ran", 0), err
+    else:
+        assert code == 2 and words in err, err

@@ -322,7 +322,7 @@ class Output(_Section):
     snapshot_interval: Optional[float] = Field(
         None, gt=0, description="Simulated time between particle snapshots (s); defaults to "
         "output.interval. Snapshots are written at the first output time at or after each "
-        "multiple.")
+        "multiple (so an interval shorter than output.interval means every output).")
     snapshots: bool = Field(True, description="Write particle snapshots (VTU files and a "
                             "particles.pvd time series for ParaView).")
 
@@ -330,8 +330,9 @@ class Output(_Section):
 class Checkpoint(_Section):
     interval: float = Field(
         0.1, gt=0, description="Simulated time between checkpoints (s), written at the first "
-        "output time at or after each multiple, at the end of the run and when it is "
-        "interrupted (Ctrl-C, SIGTERM). A checkpoint (checkpoint_NNNNNNNNN.npz in the output "
+        "output time at or after each multiple (every output for an interval shorter than "
+        "output.interval), at the end of the run and when it is interrupted (Ctrl-C, "
+        "SIGTERM). A checkpoint (checkpoint_NNNNNNNNN.npz in the output "
         "folder, the latest two kept) holds everything needed to continue: `mpmflow run CASE "
         "--out DIR --restart` resumes from the latest and reproduces the uninterrupted run "
         "bit for bit.")
@@ -711,6 +712,23 @@ class Case(_Section):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
                 f"({size} m); the grid needs at least two cells per side")
+        most = max(s / self.grid.spacing for s in size)
+        if not np.isfinite(most):  # a huge finite count is the memory check's to refuse
+            raise ValueError(
+                f"grid.spacing = {self.grid.spacing:g} m makes {most:.3g} cells along a side "
+                f"of the domain ({size} m), beyond what any computer holds; give a larger "
+                "grid.spacing (the paper's dam break uses 0.004 m)")
+        D = len(size)
+        for k, body in enumerate(self.bodies):
+            volume = (self.grid.spacing / body.particles_per_cell) ** D
+            mass = self.material.density * volume
+            # (a particle volume that underflows is the spacing's: the memory check's)
+            if volume >= np.finfo(float).tiny and not mass >= np.finfo(float).tiny:
+                raise ValueError(
+                    f"material.density = {self.material.density:g} kg/m^3 gives the particles "
+                    f"of bodies.{k} a mass of {mass:g} kg, too small for a floating-point "
+                    "number to hold (masses and energies would be zero); give the density "
+                    "in kg/m^3 (water: 1000)")
         for k, body in enumerate(self.bodies):
             if not geometry.is_box(body):
                 continue  # placement.check

@@ -469,7 +469,9 @@ class Simulation:
         a sliver of dt (the pressure scales with 1/dt)."""
         case, dt = self.case, self.dt
         end, interval = case.time.end, case.output.interval
-        snap_interval = case.output.snapshot_interval or interval
+        # an interval shorter than the output interval means every output; taken as the
+        # output interval, so that time / interval stays finite (a 5e-324 s interval)
+        snap_interval = max(case.output.snapshot_interval or interval, interval)
         t_next = min(self.k_out * interval, end)
         n = max(1, int(np.ceil((t_next - self.time) / dt - 1e-6)))
         self._advance((t_next - self.time) / n, n)
@@ -485,7 +487,7 @@ class Simulation:
         self._output(snapshot=snap)
         if self.threads is not None:
             self.threads.update(self.time)
-        every = case.checkpoint.interval
+        every = max(case.checkpoint.interval, interval)
         if self.time >= self.k_checkpoint * every - 1e-9 * dt:
             self.k_checkpoint = int(np.floor(self.time / every + 1e-9)) + 1
             if self.out_dir is not None and self.time < end:  # the end has its own
