@@ -15,7 +15,7 @@ from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, 
                       ValidationError, ValidationInfo, model_validator)
 
 from . import bodies as geometry
-from . import placement, shapes
+from . import materials, placement, shapes
 from .errors import CaseError
 from .grid import Grid
 from .stability import case_stable_time_step, initial_speed, sound_speed, time_step
@@ -279,14 +279,52 @@ Obstacle = _shape_union(BoxObstacle, CylinderObstacle, SphereObstacle, DiscObsta
 
 
 class Material(_Section):
-    density: float = Field(1000.0, gt=0, description="Density (kg/m^3).")
-    viscosity: float = Field(0.0, ge=0, le=0, description="Dynamic viscosity (Pa s). Only "
-                             "inviscid material (0) is implemented so far.")
+    model: Literal[tuple(materials.MATERIALS)] = Field(
+        "water", description="Constitutive model: \"water\" (inviscid, the default), "
+        "\"newtonian\" (viscosity), \"herschel_bulkley\" (yield-stress material; Bingham "
+        "with flow_index = 1: consistency, yield_stress, flow_index, max_viscosity) or "
+        "\"mu_i\" (dense granular flow: friction_static, friction_limit, "
+        "inertial_number_ref, grain_diameter, grain_density, max_viscosity). Each takes only "
+        "its own parameters; the viscous stress is solved implicitly (docs/method.md, "
+        "\"Viscous materials\").")
+    density: float = Field(1000.0, gt=0, description="Density (kg/m^3); with model = "
+                           "\"mu_i\" the bulk density, solid fraction x grain_density.")
+    viscosity: float = Field(0.0, ge=0, description="Dynamic viscosity (Pa s) of model = "
+                             "\"newtonian\" (water at 20 C: 1.0e-3); 0 for \"water\".")
+    consistency: float = Field(1.0, description="Consistency K (Pa s^n) of model = "
+                               "\"herschel_bulkley\": |tau| = yield_stress + K rate^n "
+                               "where the material flows (the plastic viscosity when n = 1).")
+    yield_stress: float = Field(0.0, description="Yield stress (Pa) of model = "
+                                "\"herschel_bulkley\".")
+    flow_index: float = Field(1.0, description="Flow index n of model = \"herschel_bulkley\" "
+                              "(1: Bingham; < 1 shear-thinning).")
+    max_viscosity: float = Field(
+        1e5, description="Cap of the effective viscosity (Pa s) of models "
+        "\"herschel_bulkley\" and \"mu_i\" (bi-viscous regularisation): below the yield "
+        "the material creeps at rate |tau| / max_viscosity instead of standing still. Larger "
+        "is stiffer and costs more iterations of the viscous solve.")
+    friction_static: float = Field(0.38, description="mu_s of model = \"mu_i\": the "
+                                   "friction coefficient at rest (tan of the angle below which "
+                                   "a layer stops; glass beads: 0.38).")
+    friction_limit: float = Field(0.64, description="mu_2 of model = \"mu_i\": the friction "
+                                  "coefficient at large inertial number (glass beads: 0.64).")
+    inertial_number_ref: float = Field(0.279, description="I0 of model = \"mu_i\" (glass "
+                                       "beads: 0.279).")
+    grain_diameter: float = Field(0.53e-3, description="Grain diameter d (m) of model = "
+                                  "\"mu_i\" (glass beads: 0.53e-3).")
+    grain_density: float = Field(2450.0, description="Density of the grains (kg/m^3) of "
+                                 "model = \"mu_i\"; the solid fraction is density / "
+                                 "grain_density (glass beads: 2450).")
     bulk_modulus: float = Field(
         2.2e9, gt=0, description="Bulk modulus K (Pa) of the weakly compressible material of "
         "the explicit scheme, p = -K * volumetric strain (water: 2.2e9). It sets the sound "
         "speed sqrt(K / density) and with it the stable time step. Not used by the projection "
         "scheme, whose material is incompressible.")
+
+    @model_validator(mode="after")
+    def _model_parameters(self):
+        materials.check(self)
+        return self
 
 
 class Physics(_Section):
@@ -704,6 +742,12 @@ class Case(_Section):
                 f"solver.scheme = {self.solver.scheme!r} does not take obstacles so far; run "
                 "cases with [[obstacles]] with solver.scheme = \"projection\", or remove the "
                 "obstacles")
+        if self.material.model != "water" and self.solver.scheme != "projection":
+            raise ValueError(
+                f"solver.scheme = {self.solver.scheme!r} takes inviscid water only; run "
+                f"material.model = {self.material.model!r} with solver.scheme = "
+                "\"projection\" (which solves the viscous stress implicitly), or set "
+                "material.model = \"water\"")
         folder = (info.context or {}).get("folder") if info is not None else None
         for k, probe in enumerate(self.probes):
             if probe.data is not None:

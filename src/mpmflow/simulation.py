@@ -55,6 +55,7 @@ class Counters:
     max_unknowns: int = 0
     released: int = 0
     worst_residual: float = 0.0
+    viscous_iterations: int = 0
 
 
 @dataclass
@@ -514,6 +515,7 @@ class Simulation:
         c.max_unknowns = max(c.max_unknowns, report.unknowns)
         c.released += report.released
         c.worst_residual = max(c.worst_residual, report.residual)
+        c.viscous_iterations += getattr(report, "viscous_iterations", 0)
         P = self.particles
         if not (np.isfinite(P.v).all() and np.isfinite(P.x).all()):
             bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
@@ -571,6 +573,9 @@ class Simulation:
                                 "max_unknowns": c.max_unknowns,
                                 "worst_relative_residual": c.worst_residual,
                                 "wall_nodes_released": c.released},
+            "viscous_solver": ({"iterations": c.viscous_iterations,
+                                "model": self.case.material.model}
+                               if self.case.material.model != "water" else None),
             "notices": self.notices,
             "threads": self.threads.record() if self.threads is not None else None,
             "memory_estimate_bytes": self.memory.as_dict(),

@@ -4,6 +4,7 @@
 one named function below, so the step reads like the algorithm:
 
     bin_particles -> particles_to_grid -> cell_integrals -> classify_nodes
+      -> viscous_predictor (viscous materials only)
       -> pressure_multigrid (contact walls, assembly, solve, release, ghost values)
       -> correct_velocity and apply_walls -> volume_correction (every few steps)
       -> grid_to_particles
@@ -25,14 +26,16 @@ import numpy as np
 from numba import njit
 
 from . import (assembly, binning, corrector, cutcells, ghost, multigrid, quadrature, surface,
-               transfer, volume, walls)
+               transfer, viscous, volume, walls)
 
 # the obstacles' tables (``mpmflow.obstacles``): phi at the nodes (empty: none), the cells'
 # fluid fraction and static slot, the static element integrals by slot (0: a whole cell),
-# the obstacle nodes with their normals and no-slip flags
+# the obstacle nodes with their normals and no-slip flags; viscous_T: the full cell's
+# gradient products (``viscous.gauss_gradients``; empty for inviscid material)
 Grid = namedtuple(
     "Grid", "h cells cell_volume upper margin wall_node wall_axis wall_sign phi open "
-    "static_slot K_static C_static V_static F_static Wf_static onode onormal ono_slip")
+    "static_slot K_static C_static V_static F_static Wf_static onode onormal ono_slip "
+    "viscous_T")
 Particles = namedtuple("Particles", "x v mass volume pressure")
 # flip: the FLIP fraction of one step; volume_every: the volume correction runs on the steps
 # whose number (counted from the start of the run) is a multiple of it, 0 = never
@@ -40,12 +43,13 @@ Options = namedtuple(
     "Options",
     "dt gravity rho flip full sparse partial_particles surface subcell wall_flux no_slip "
     "theta_min expansion tol max_iterations sweeps volume_rate volume_every volume_tol "
-    "volume_max_iterations volume_dmax")
+    "volume_max_iterations volume_dmax viscous model model_params")
 Work = namedtuple(
     "Work",
     "cell start order theta node_mass node_mom node_vol v_old v_star v_c v_new node_f "
     "enclosed slot surface_slot node_row contact ocontact p_node cell_vol density "
-    "cell_row vol_cols vol_vals vol_rhs vol_rows q faces no_faces")
+    "cell_row vol_cols vol_vals vol_rhs vol_rows q faces no_faces eta eta_weight vrow vu "
+    "voff")
 
 # surface quadrature (solver.surface_quadrature)
 GAUSS, DIVERGENCE, CONSISTENT = 0, 1, 2
@@ -66,9 +70,10 @@ R_FAIL_NODE = 11  # node (pressure) or cell (volume correction) of the largest r
 R_FAIL_SIZE = 12  # unknowns of the failed system
 R_VOLUME_ITERATIONS = 13
 R_LAST_UNKNOWNS = 14  # the unknowns of the last step
-REPORT_SIZE = 15
+R_VISCOUS_ITERATIONS = 15
+REPORT_SIZE = 16
 
-OK, SINGULAR, PRESSURE_NOT_CONVERGED, VOLUME_NOT_CONVERGED = 0, 1, 2, 3
+OK, SINGULAR, PRESSURE_NOT_CONVERGED, VOLUME_NOT_CONVERGED, VISCOUS_NOT_CONVERGED = 0, 1, 2, 3, 4
 WET = 0.5  # volume correction: a cell less than half full is surface (as front, height)
 
 
@@ -301,6 +306,57 @@ def pressure_multigrid(G, O, W, integrals, rows, report):
 
 
 @njit(cache=True)
+def viscous_predictor(G, O, W, integrals, report):
+    """Step 2a, viscous materials only: the implicit viscous step (``viscous``) with each
+    cell's viscosity at the step's start, in incremental form: it acts on v* less the last
+    step's pressure gradient, dt/rho (G p)/V, which is added back after, so material held
+    by its pressure (a column at rest) meets no-slip walls without a spurious shear layer.
+    Returns a status code."""
+    if not O.viscous:
+        return OK
+    viscous.cell_viscosity(G.cells, G.h, W.theta, G.open, W.enclosed, O.full, W.v_old,
+                           W.p_node, O.model, O.model_params, W.eta, W.eta_weight)
+    base = W.v_c
+    corrector.correct_velocity(G.cells, integrals[5], integrals[6], integrals[7], W.p_node,
+                               W.v_star, O.dt / O.rho, base)
+    n = viscous.number_unknowns(W.node_mass, G.wall_node, G.wall_axis, G.wall_sign,
+                                O.no_slip, G.onode, G.onormal, G.ono_slip, base, W.vu,
+                                W.vrow, W.voff)
+    if n == 0:
+        return OK
+    D = len(G.cells)
+    NS = 1
+    for k in range(D):
+        NS *= 3
+    cols = np.empty((D, n, NS), dtype=np.int64)
+    vals = np.empty((D, n, NS))
+    rhs = np.empty(n)
+    node = np.empty(n, dtype=np.int64)
+    viscous.assemble(G.cells, G.viscous_T, W.eta_weight, W.node_mass, O.dt, W.vu, W.vrow,
+                     W.voff, cols, vals, rhs, node)
+    x = np.empty(n)
+    nn = W.vrow.shape[0]
+    for i in range(nn):
+        for k in range(D):
+            if W.vrow[i, k] >= 0:
+                x[W.vrow[i, k]] = W.vu[i, k]
+    it, res = viscous.solve(cols, vals, node, W.voff, G.cells, rhs, x, O.tol,
+                            O.max_iterations, O.sweeps)
+    report[R_VISCOUS_ITERATIONS] += it
+    if not res <= O.tol:
+        report[R_FAIL_ITERATIONS] = it
+        report[R_FAIL_RESIDUAL] = res
+        report[R_FAIL_NODE] = node[0]
+        report[R_FAIL_SIZE] = n
+        return VISCOUS_NOT_CONVERGED
+    for i in range(nn):
+        for k in range(D):
+            r = W.vrow[i, k]
+            W.v_star[i, k] += (x[r] if r >= 0 else W.vu[i, k]) - base[i, k]
+    return OK
+
+
+@njit(cache=True)
 def volume_correction(G, O, W, report):
     """Step 7 (every ``volume_every`` steps): the displacement that moves the particles back
     to the material's volume (``mpmflow.volume_correction``), into ``W.faces``. Returns a
@@ -403,7 +459,9 @@ def advance(P, G, O, W, first, nsteps, report):
         integrals, rows = predict(P, G, O, W, correct)
         report[R_UNKNOWNS] = max(report[R_UNKNOWNS], rows.shape[0])
         report[R_LAST_UNKNOWNS] = rows.shape[0]
-        status = pressure_multigrid(G, O, W, integrals, rows, report)
+        status = viscous_predictor(G, O, W, integrals, report)
+        if status == OK:
+            status = pressure_multigrid(G, O, W, integrals, rows, report)
         if status == OK:
             status = finish(P, G, O, W, integrals, correct, report)
         if status != OK:

@@ -8,9 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import obstacles, pressure, volume_correction
+from .. import materials, obstacles, pressure, volume_correction
 from ..errors import SolverError
-from ..kernels import step, walls
+from ..kernels import step, viscous, walls
 from ..linsolve import SMOOTHING_SWEEPS
 from ..transfers import flip_per_step
 from . import register
@@ -30,13 +30,15 @@ class StepReport:
     residual: float = 0.0  # the worst relative residual
     released: int = 0
     moved_inside: int = 0
+    viscous_iterations: int = 0  # of the viscous solves (viscous materials)
 
     def merge(self, other):
         return StepReport(max(self.unknowns, other.unknowns), self.solves + other.solves,
                           self.iterations + other.iterations,
                           max(self.max_iterations, other.max_iterations),
                           max(self.residual, other.residual), self.released + other.released,
-                          self.moved_inside + other.moved_inside)
+                          self.moved_inside + other.moved_inside,
+                          self.viscous_iterations + other.viscous_iterations)
 
     @classmethod
     def of(cls, report):
@@ -44,12 +46,13 @@ class StepReport:
         return cls(int(report[step.R_UNKNOWNS]), int(report[step.R_SOLVES]),
                    int(report[step.R_ITERATIONS]), int(report[step.R_MAX_ITERATIONS]),
                    float(report[step.R_RESIDUAL]), int(report[step.R_RELEASED]),
-                   int(report[step.R_MOVED]))
+                   int(report[step.R_MOVED]), int(report[step.R_VISCOUS_ITERATIONS]))
 
 
-def work_arrays(grid, count, volume_correction_on):
+def work_arrays(grid, count, volume_correction_on, viscous_on):
     """The step's arrays (``kernels.step.Work``), allocated once."""
     D, nn, nc = grid.dim, grid.nnodes, grid.ncells
+    nvc, nvn = (nc, nn) if viscous_on else (0, 0)  # the viscous predictor's, when it runs
     NS = 3**D
     nv = nc if volume_correction_on else 0  # the correction's arrays, when it runs
     faces = []
@@ -69,7 +72,9 @@ def work_arrays(grid, count, volume_correction_on):
         cell_vol=np.zeros(nv), density=np.zeros(nv), cell_row=np.empty(nv, dtype=np.int64),
         vol_cols=np.empty((nv, NS), dtype=np.int64), vol_vals=np.empty((nv, NS)),
         vol_rhs=np.empty(nv), vol_rows=np.empty(nv, dtype=np.int64), q=np.zeros(nv),
-        faces=tuple(faces), no_faces=tuple(np.zeros(0) for _ in range(D)))
+        faces=tuple(faces), no_faces=tuple(np.zeros(0) for _ in range(D)),
+        eta=np.zeros(nvc), eta_weight=np.zeros(nvc), vrow=np.empty((nvn, D), dtype=np.int64),
+        vu=np.zeros((nvn, D)), voff=np.zeros(D + 1, dtype=np.int64))
 
 
 @register("projection")
@@ -82,12 +87,16 @@ class ProjectionScheme:
         node, axis, sign = walls.wall_pairs(tuple(grid.cells))
         self.solids = obstacles.of_case(case, grid)
         o = self.solids
-        self.G = step.Grid(float(grid.spacing), tuple(int(c) for c in grid.cells),
+        self.viscous = materials.is_viscous(case.material)
+        cells = tuple(int(c) for c in grid.cells)
+        T = (viscous.gauss_gradients(cells, float(grid.spacing)) if self.viscous
+             else np.zeros((0, 0, 0, 0)))
+        self.G = step.Grid(float(grid.spacing), cells,
                            float(grid.cell_volume), np.asarray(grid.size, dtype=float),
                            MARGIN * grid.spacing, node, axis, sign, o.phi, o.open,
                            o.static_slot, o.K, o.C, o.V, o.F, o.Wf, o.node, o.normal,
-                           o.no_slip)
-        self.W = work_arrays(grid, particles.count, s.volume_correction > 0)
+                           o.no_slip, T)
+        self.W = work_arrays(grid, particles.count, s.volume_correction > 0, self.viscous)
         step.launch_threads()
         self.compiled_advance = step.advance
         self.python_pressure = (None if s.linear_solver == "multigrid"
@@ -106,6 +115,7 @@ class ProjectionScheme:
         every = (max(1, round(s.volume_correction_interval / dt))
                  if s.volume_correction > 0 else 0)
         particles = s.partial_cell_quadrature == "particles"
+        model, params = materials.parameters(m)
         return step.Options(
             dt=float(dt), gravity=np.asarray(self.case.physics.gravity, dtype=float),
             rho=float(m.density), flip=float(flip_per_step(s.flip, dt)),
@@ -119,7 +129,8 @@ class ProjectionScheme:
             volume_rate=float(s.volume_correction), volume_every=int(every),
             volume_tol=volume_correction.TOLERANCE,
             volume_max_iterations=volume_correction.MAX_ITERATIONS,
-            volume_dmax=volume_correction.MAX_DISPLACEMENT)
+            volume_dmax=volume_correction.MAX_DISPLACEMENT, viscous=self.viscous,
+            model=int(model), model_params=params)
 
     def state(self):
         """What the scheme carries from one step to the next beyond the particles: the nodal
@@ -185,6 +196,10 @@ class ProjectionScheme:
             integrals, rows = step.predict(Pt, self.G, O, self.W, correct)
             report[step.R_UNKNOWNS] = max(report[step.R_UNKNOWNS], rows.size)
             report[step.R_LAST_UNKNOWNS] = rows.size
+            status = step.viscous_predictor(self.G, O, self.W, integrals, report)
+            if status != step.OK:
+                report[step.R_STATUS] = status
+                return k
             self.python_pressure.solve(self.G, O, self.W, integrals, rows, report, where(k))
             status = step.finish(Pt, self.G, O, self.W, integrals, correct, report)
             if status != step.OK:
@@ -205,4 +220,14 @@ class ProjectionScheme:
                                          self.grid.node_coordinates()[worst])
         if status == step.VOLUME_NOT_CONVERGED:
             raise volume_correction.not_converged(where, residual, iterations, n)
+        if status == step.VISCOUS_NOT_CONVERGED:
+            m = self.case.material
+            raise SolverError(
+                f"The viscous solve did not converge{where}: relative residual "
+                f"{residual:.3e} after {iterations} iterations (solver.tolerance = "
+                f"{self.case.solver.tolerance:g}, solver.max_iterations = "
+                f"{self.case.solver.max_iterations}); {n} unknowns (velocity components). "
+                f"Try a smaller time.dt, a larger solver.max_iterations"
+                + (", or a smaller material.max_viscosity" if m.model in
+                   ("herschel_bulkley", "mu_i") else "") + ".")
         raise SolverError(f"The step failed{where} with status {status}.")

@@ -1,0 +1,51 @@
+"""Materials by name (``material.model``), one module each, as the schemes are.
+
+A material module gives:
+
+* ``NAME``: its name, the value of ``material.model``;
+* ``KEYS``: the ``[material]`` keys that are its parameters (besides ``density`` and
+  ``bulk_modulus``, which every material has); the schema (``mpmflow.case.Material``)
+  holds their descriptions and units;
+* ``MODEL``: its code in the compiled rheology (``kernels.rheology``);
+* ``check(m)``: the checks of its parameters, raising ValueError with a message that names
+  the key and the fix;
+* ``parameters(m)``: its parameters as the float array the compiled rheology reads.
+
+A material is one per case for now; the compiled step takes (model, parameters) so that a
+table of materials indexed per particle can follow without changing the kernels' formulas.
+"""
+
+import numpy as np
+
+from . import herschel_bulkley, mu_i, newtonian, water
+
+MATERIALS = {m.NAME: m for m in (water, newtonian, herschel_bulkley, mu_i)}
+COMMON = ("model", "density", "bulk_modulus")
+
+
+def check(m):
+    """Refuse parameters of another model (set to other than their defaults), then run the
+    model's own checks."""
+    module = MATERIALS[m.model]
+    for key in sorted(m.model_fields_set):
+        # a key at its default is not in the way (a resolved case lists every key)
+        if key in COMMON or key in module.KEYS or getattr(m, key) == type(m).model_fields[key].default:
+            continue
+        owners = [n for n, mod in MATERIALS.items() if key in mod.KEYS]
+        takes = ", ".join(module.KEYS) if module.KEYS else "no parameters besides density"
+        raise ValueError(
+            f"material.{key} is a parameter of material.model = "
+            f"{' or '.join(repr(o) for o in owners)}, not of {m.model!r} (which takes "
+            f"{takes}): remove it, or set material.model to the model it belongs to")
+    module.check(m)
+
+
+def parameters(m):
+    """(model code, parameters) for the compiled step."""
+    module = MATERIALS[m.model]
+    return module.MODEL, np.asarray(module.parameters(m), dtype=float)
+
+
+def is_viscous(m):
+    return MATERIALS[m.model].MODEL != 0
+
