@@ -66,7 +66,8 @@ without one), 141 the output pipe was closed (mpmflow keys | head)."""
 # mpmflow.validation.CASES, named here so that --help does not import the suite (a test
 # checks that the two agree)
 VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
-                    "volume", "long_run", "three_d", "spheric")
+                    "volume", "long_run", "three_d", "spheric", "viscous_wave",
+                    "granular_collapse", "bingham_slump")
 
 
 def _parser():

@@ -16,7 +16,8 @@ import time as _time
 from pathlib import Path
 
 from ..errors import CaseError, SimulationError
-from . import dam_break, hydrostatic, lobovsky, long_run, sloshing, spheric, three_d, volume
+from . import (dam_break, hydrostatic, lobovsky, long_run, materials, sloshing, spheric, three_d,
+               volume)
 from .common import EXAMPLES, CaseResult, Row
 
 CASES = {
@@ -29,6 +30,9 @@ CASES = {
     "long_run": long_run.run,
     "three_d": three_d.run,
     "spheric": spheric.run,
+    "viscous_wave": materials.run_wave,
+    "granular_collapse": materials.run_collapse,
+    "bingham_slump": materials.run_slump,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {"hydrostatic": ("hydrostatic.toml",), "sloshing": ("sloshing.toml",),
@@ -36,7 +40,9 @@ EXAMPLE_FILES = {"hydrostatic": ("hydrostatic.toml",), "sloshing": ("sloshing.to
                  "lobovsky": ("lobovsky.toml",),
                  "long_run": ("sloshing.toml", "dam_break.toml"),
                  "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml"),
-                 "spheric": ("spheric_test2.toml",)}  # the examples/ files each runs
+                 "spheric": ("spheric_test2.toml",), "viscous_wave": ("sloshing.toml",),
+                 "granular_collapse": ("granular_collapse.toml",),
+                 "bingham_slump": ("bingham_slump.toml",)}  # the examples/ files each runs
 
 
 def case_names(cases=None):

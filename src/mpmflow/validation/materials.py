@@ -1,0 +1,184 @@
+"""Viscous, viscoplastic and granular materials (``material.model``) against theory and
+experiment.
+
+``viscous_wave``: the first sloshing mode of examples/sloshing.toml (L = 0.4 m, depth
+0.2 m, slip walls) in a Newtonian liquid of kinematic viscosity nu = 1e-3 m^2/s. Linear
+theory (Lamb, section 348): the amplitude decays as exp(-2 nu k^2 t), k = pi / L, at any
+depth over a slip bed. The rate is fitted as in the sloshing case (a line through the log of
+the centre of mass's extrema); the inviscid scheme's own rate at the same mesh is reported
+beside it.
+
+``granular_collapse``: examples/granular_collapse.toml (glass beads, mu(I) with the
+parameters of Jop et al. 2006; solid fraction 0.6, bulk density 1470 kg/m^3) at aspect
+ratios a = H0 / L0 from 0.5 to 10, L0 = 0.05 m the half-width (the column spreads both
+ways), 12.5 cells across L0, rough (no-slip) floor, PIC transfer. Run-out: the furthest
+particle on each side at the end, mean of both, (L_inf - L0) / L0, against Lube et al.
+(2005): 1.2 a for a < 2.3, 1.9 a^(2/3) above. Final height H_inf / H0 (Lube: 1 for
+a < 1.15) is reported.
+
+``bingham_slump``: examples/bingham_slump.toml (yield stress 50 Pa, plastic viscosity
+1 Pa s). At rest the shallow deposit satisfies h |dh/dx| = tau_y / (rho g): the surface
+slope times the depth, measured on the particles' top surface over the middle 60% of each
+half of the deposit, against it; and the largest particle speed at the end (the deposit
+has stopped when it is a creep, below 1 mm/s).
+"""
+
+import math
+
+import numpy as np
+
+from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+from .sloshing import period_and_decay
+
+G = 9.81
+
+# tolerances, fixed before the results were looked at (those of the issue)
+TOL_WAVE = 0.05
+WHY_WAVE = "the issue's criterion for the decay rate of a standing wave"
+WAVE_SPACINGS, WAVE_SPACINGS_QUICK = (0.01, 0.005), (0.02,)
+NU = 1e-3  # m^2/s
+
+TOL_RUNOUT = 0.15
+WHY_RUNOUT = ("the issue's criterion; Lube et al.'s data scatter about their laws by about "
+              "10%")
+ASPECTS, ASPECTS_QUICK = (0.5, 1.0, 2.0, 4.0, 7.0, 10.0), (0.5, 2.0)
+L0 = 0.05  # m, half-width of the column
+SPLIT = 2.3  # aspect ratio between Lube's two laws
+
+TOL_ARREST = 0.2
+WHY_ARREST = ("the arrest condition is the shallow-layer limit; the deposit is 0.05 m deep "
+              "over 0.3 m (aspect 1/6), whose corrections are of that order")
+TOL_STOPPED = 1e-3
+WHY_STOPPED = "a creep of the capped viscosity is far below 1 mm/s (|tau| / cap ~ 5e-4 1/s)"
+
+
+def lube(a):
+    return 1.2 * a if a < SPLIT else 1.9 * a ** (2 / 3)
+
+
+def run_wave(out, quick=False, context=None):
+    res = CaseResult("viscous_wave", "Viscous standing wave: decay against linear theory")
+    k = math.pi / 0.4
+    theory = 2 * NU * k * k
+    runs = []
+    for h in WAVE_SPACINGS_QUICK if quick else WAVE_SPACINGS:
+        rates = []
+        for nu in (NU, 0.0):
+            xc = []
+
+            def centre(sim, xc=xc):
+                xc.append((sim.time, float(sim.particles.x[:, 0].mean()) - 0.2))
+
+            model = ([f"material.model='newtonian'", f"material.viscosity={nu * 1000.0}"]
+                     if nu > 0 else [])
+            sim = run_example("sloshing.toml", [f"grid.spacing={h}",
+                                                f"time.end={2.0 if quick else 5.0}", *model],
+                              on_output=centre)
+            a = np.array(xc)
+            period, decay = period_and_decay(a[:, 0], a[:, 1])[:2]
+            rates.append(-math.log(1 - decay) / period)
+            if nu > 0:
+                wall = sim.summary["wall_seconds"]
+                iters = sim.counters.viscous_iterations / max(sim.steps, 1)
+        runs.append({"h": h, "rate": rates[0], "inviscid": rates[1], "wall": wall,
+                     "iters": iters})
+    r = runs[-1]
+    res.rows.append(Row("viscous_wave", f"decay rate, h = {r['h']} m",
+                        "|rate - 2 nu k^2| / (2 nu k^2), nu = 1e-3 m^2/s",
+                        abs(r["rate"] - theory) / theory, TOL_WAVE, WHY_WAVE,
+                        miss="too few cells across the wave: the decay converges from above "
+                        "(see the table)"))
+    table = markdown_table(
+        ["h (m)", "decay rate (1/s)", "2 nu k^2 (1/s)", "error", "inviscid rate, same mesh",
+         "viscous iterations per step", "wall (s)"],
+        [[x["h"], fmt(x["rate"], 4), fmt(theory, 4), fmt((x["rate"] - theory) / theory),
+          fmt(x["inviscid"], 3), fmt(x["iters"]), fmt(x["wall"])] for x in runs])
+    res.text = __doc__.split("\n\n")[1] + "\n\n" + table
+    return res
+
+
+def _collapse(a, quick):
+    H0 = a * L0
+    run = lube(a) * L0
+    half = L0 + 1.6 * run + 0.02
+    h = L0 / (6.25 if quick else 12.5)
+    dt = min(5e-4, 0.35 * h / math.sqrt(2 * G * H0))
+    end = 0.6 + 6 * math.sqrt(H0 / G)
+    sim = run_example("granular_collapse.toml", [
+        f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]", f"grid.spacing={h}",
+        f"bodies.0.min=[{half - L0:.4f}, 0.0]", f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
+        f"time.dt={dt:.4g}", f"time.end={end:.3f}", "output.interval=0.05"])
+    x = sim.particles.x
+    reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))
+    return {"a": a, "runout": (reach - L0) / L0, "law": lube(a), "height": x[:, 1].max() / H0,
+            "speed": float(np.abs(sim.particles.v).max()), "wall": sim.summary["wall_seconds"],
+            "h": h, "particles": sim.particles.count}
+
+
+def run_collapse(out, quick=False, context=None):
+    res = CaseResult("granular_collapse", "Granular column collapse against Lube et al. (2005)")
+    runs = [_collapse(a, quick) for a in (ASPECTS_QUICK if quick else ASPECTS)]
+    for r in runs:
+        res.rows.append(Row("granular_collapse", f"run-out, a = {r['a']:g}",
+                            "|run-out - law| / law, (L_inf - L0) / L0", abs(r["runout"] - r["law"])
+                            / r["law"], TOL_RUNOUT, WHY_RUNOUT,
+                            miss="the deposit spreads short of the law with PIC transfer (and "
+                            "past it with FLIP); see the text"))
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    aa = np.linspace(0.4, 11, 200)
+    ax.plot(aa[aa < SPLIT], 1.2 * aa[aa < SPLIT], "k-", label="Lube et al. 2005: 1.2 a")
+    ax.plot(aa[aa >= SPLIT], 1.9 * aa[aa >= SPLIT] ** (2 / 3), "k--",
+            label="Lube et al. 2005: 1.9 a^(2/3)")
+    ax.fill_between(aa, [lube(v) * (1 - TOL_RUNOUT) for v in aa],
+                    [lube(v) * (1 + TOL_RUNOUT) for v in aa], color="0.9", label="+-15%")
+    ax.plot([r["a"] for r in runs], [r["runout"] for r in runs], "o", label="mpmflow (2D, mu(I))")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("aspect ratio a = H0 / L0")
+    ax.set_ylabel("run-out (L_inf - L0) / L0")
+    ax.legend()
+    fig.tight_layout()
+    save(fig, out / "granular_collapse.png")
+    res.figures.append(("granular_collapse.png", "Run-out of the granular columns against "
+                        "Lube et al. (2005)'s laws (the grey band: the tolerance)."))
+    table = markdown_table(
+        ["a", "h (m)", "particles", "run-out (L_inf - L0)/L0", "Lube's law", "H_inf / H0",
+         "largest speed at the end (m/s)", "wall (s)"],
+        [[r["a"], r["h"], r["particles"], fmt(r["runout"]), fmt(r["law"]), fmt(r["height"]),
+          fmt(r["speed"]), fmt(r["wall"])] for r in runs])
+    res.text = __doc__.split("\n\n")[2] + "\n\n" + table
+    return res
+
+
+def run_slump(out, quick=False, context=None):
+    res = CaseResult("bingham_slump", "Bingham slump: arrest condition")
+    sim = run_example("bingham_slump.toml", ["time.end=0.6"] if quick else [])
+    m = sim.case.material
+    scale = m.yield_stress / (m.density * G)
+    x = sim.particles.x
+    h = sim.case.grid.spacing
+    centre = 0.5 * sum(sim.case.domain.size[:1])
+    values = []
+    for side in (1, -1):
+        d = side * (x[:, 0] - centre)
+        front = d.max()
+        edges = np.arange(0.0, front + h, h)
+        top = np.array([x[(d >= lo) & (d < lo + h), 1].max() if ((d >= lo) & (d < lo + h)).any()
+                        else np.nan for lo in edges])
+        mid = edges + 0.5 * h
+        keep = (mid > 0.2 * front) & (mid < 0.8 * front) & np.isfinite(top)
+        slope = np.gradient(top[keep], mid[keep])
+        values.append(np.mean(top[keep] * np.abs(slope)) / scale)
+    ratio = float(np.mean(values))
+    speed = float(np.abs(sim.particles.v).max())
+    res.rows.append(Row("bingham_slump", "arrest: h |dh/dx| rho g / tau_y",
+                        "|mean over the deposit's middle - 1|", abs(ratio - 1), TOL_ARREST,
+                        WHY_ARREST, miss="the deposit has not stopped, or is not shallow"))
+    res.rows.append(Row("bingham_slump", "stopped", "largest particle speed at the end",
+                        speed, TOL_STOPPED, WHY_STOPPED, unit="m/s",
+                        miss="still spreading at the end of the run"))
+    res.text = (__doc__.split("\n\n")[3] + f"\n\nMeasured: h |dh/dx| rho g / tau_y = "
+                f"{fmt(ratio)} (left, right: {fmt(values[1])}, {fmt(values[0])}); largest speed "
+                f"at t = {sim.time:g} s: {speed:.3g} m/s; wall {fmt(sim.summary['wall_seconds'])} s.")
+    return res

@@ -1,0 +1,184 @@
+"""Materials (``material.model``) and the implicit viscous predictor (``kernels.viscous``).
+
+Physics: a column at rest stays at rest whatever the model; the viscous operator is that of
+the full stress 2 eta D (zero for a rigid rotation, symmetric positive definite); the
+solve is implicit (stable far beyond the explicit viscous limit); a granular layer stands
+below its angle of repose and flows above it. Input: bad parameters are refused with a
+message naming the key.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from mpmflow import Simulation, load_case
+from mpmflow.errors import CaseError
+from mpmflow.kernels import viscous
+
+HYDRO = "examples/hydrostatic.toml"
+NEWTONIAN = ["material.model='newtonian'", "material.viscosity=1.0"]
+BINGHAM = ["material.model='herschel_bulkley'", "material.consistency=1.0",
+           "material.yield_stress=10.0"]
+GRANULAR = ["material.model='mu_i'", "material.density=1470"]
+
+
+def _column(extra, walls="slip", end=0.2):
+    case = load_case(ROOT / HYDRO, [f"time.end={end}", "output.snapshots=false",
+                                    f"domain.walls='{walls}'", *extra])
+    sim = Simulation(case)
+    sim.run()
+    P = sim.particles
+    exact = case.material.density * 9.81 * (0.195 - P.x[:, 1])
+    return sim, np.abs(P.v).max(), np.abs(P.pressure - exact).max() / exact.max()
+
+
+@pytest.mark.parametrize("extra", [NEWTONIAN, BINGHAM, GRANULAR],
+                         ids=["newtonian", "bingham", "mu_i"])
+def test_a_column_at_rest_stays_at_rest(extra):
+    sim, speed, perr = _column(extra)
+    assert sim.counters.viscous_iterations > 0  # the viscous solve ran
+    assert speed < 1e-9 and perr < 1e-9, (speed, perr)
+
+
+def test_a_column_at_rest_next_to_no_slip_walls():
+    # the viscous step is incremental (it acts on v* less the last pressure gradient), so
+    # the no-slip side walls do not shear the column; only the first step, which has no
+    # pressure yet, leaves a trace: 1e-4 m/s is 1% of one step's gravity increment g dt
+    _, speed, perr = _column(NEWTONIAN, walls="no_slip")
+    assert speed < 1e-4 and perr < 1e-4, (speed, perr)
+
+
+def _system(cells, h, weight, mass, dt, u):
+    """The viscous system of every node unknown (no walls) for the nodal velocity u."""
+    nn, D = u.shape
+    row = np.empty((nn, D), dtype=np.int64)
+    uu = np.empty_like(u)
+    off = np.zeros(D + 1, dtype=np.int64)
+    empty_i, empty_f = np.zeros(0, dtype=np.int64), np.zeros(0)
+    n = viscous.number_unknowns(mass, empty_i, empty_i, empty_f, False, empty_i,
+                                np.zeros((0, D)), np.zeros(0, dtype=np.bool_), u, uu, row, off)
+    NS = 3**D
+    cols = np.empty((D, n, NS), dtype=np.int64)
+    vals = np.empty((D, n, NS))
+    rhs = np.empty(n)
+    node = np.empty(n, dtype=np.int64)
+    T = viscous.gauss_gradients(cells, h)
+    viscous.assemble(cells, T, weight, mass, dt, uu, row, off, cols, vals, rhs, node)
+    x = np.empty(n)
+    for k in range(D):
+        x[off[k]:off[k + 1]] = u[:, k]
+    return cols, vals, off, rhs, x
+
+
+def _dense(cols, vals, off):
+    D, n, NS = cols.shape
+    A = np.zeros((n, n))
+    for k in range(D):
+        for m in range(D):
+            for r in range(off[k], off[k + 1]):
+                for s in range(NS):
+                    if cols[m, r, s] >= 0:
+                        A[r, off[m] + cols[m, r, s]] += vals[m, r, s]
+    return A
+
+
+@pytest.mark.parametrize("cells", [(5, 4), (3, 4, 3)], ids=["2D", "3D"])
+def test_the_viscous_operator_is_the_full_stress(cells):
+    h, dt = 0.1, 0.01
+    rng = np.random.default_rng(1)
+    D = len(cells)
+    nodes = np.stack(np.meshgrid(*[np.arange(c + 1) * h for c in cells], indexing="ij"),
+                     axis=-1).reshape(-1, D, order="F")
+    weight = rng.uniform(0.5, 2.0, int(np.prod(cells)))  # cell viscosities, varying
+    mass = rng.uniform(1.0, 2.0, nodes.shape[0])
+    # a rigid rotation (about the last axis) has no strain rate: K u = 0 at every node, the
+    # surface ones included (the Laplacian form eta lap u would not vanish there)
+    u = np.zeros_like(nodes)
+    u[:, 0], u[:, 1] = -nodes[:, 1], nodes[:, 0]
+    cols, vals, off, rhs, x = _system(cells, h, weight, mass, dt, u)
+    A = _dense(cols, vals, off)
+    M = np.concatenate([mass / dt] * D)
+    K = A - np.diag(M)  # the viscous part
+    scale = np.abs(K).max() * np.abs(x).max()
+    assert np.abs(K @ x).max() < 1e-12 * scale
+    # a shear u_0 = x_1 does strain: the operator is not blind to it (its traction acts on
+    # the boundary nodes)
+    u = np.zeros_like(nodes)
+    u[:, 0] = nodes[:, 1]
+    x = _system(cells, h, weight, mass, dt, u)[4]
+    assert np.abs(K @ x).max() > 0.01 * np.abs(K).max() * np.abs(x).max()
+    # symmetric positive definite
+    assert np.abs(A - A.T).max() < 1e-12 * np.abs(A).max()
+    assert np.linalg.eigvalsh(A).min() > 0.99 * M.min()
+
+
+def test_the_viscous_step_is_implicit():
+    # honey-like: viscosity 1000 Pa s at h = 0.01 m, dt = 1e-3 s is 100 times the explicit
+    # limit rho h^2 / (2 D eta); the column (0.1 m wide, 0.195 m high) sags slowly instead
+    # of blowing up. Stokes scale of its speed: rho g H^2 / eta = 0.37 m/s; a water column
+    # reaches sqrt(g H) = 1.4 m/s in 0.2 s.
+    case = load_case(ROOT / "examples/dam_break.toml",
+                     ["time.end=0.2", "output.snapshots=false", "material.model='newtonian'",
+                      "material.viscosity=1000.0"])
+    sim = Simulation(case)
+    sim.run()
+    speed = np.abs(sim.particles.v).max()
+    assert np.isfinite(speed) and speed < 0.37, speed
+
+
+def _layer_slope(model, degrees, end):
+    theta = math.radians(degrees)
+    g = [9.81 * math.sin(theta), -9.81 * math.cos(theta)]
+    case = load_case(ROOT / HYDRO, [
+        f"time.end={end}", "output.snapshots=false", "domain.walls='no_slip'",
+        "domain.size=[0.2, 0.15]", "grid.spacing=0.005", f"physics.gravity={g}",
+        "bodies=[{type='box', min=[0,0], max=[0.2,0.05], particles_per_cell=2}]",
+        "time.dt=5e-4", "output.interval=0.05", *model])
+    sim = Simulation(case)
+    sim.run()
+    x = sim.particles.x
+
+    def top(x0):
+        return x[np.abs(x[:, 0] - x0) < 0.005, 1].max()
+
+    return math.degrees(math.atan((top(0.18) - top(0.02)) / 0.16))
+
+
+def test_a_granular_layer_stands_below_its_angle_of_repose():
+    # gravity tilted by 15 degrees (tan 15 = 0.27 < mu_s = 0.38): the layer's surface,
+    # inclined by 15 degrees to the level, stays; water levels (its surface turns by the
+    # tilt, 15 degrees, and beyond while it sloshes)
+    assert abs(_layer_slope(GRANULAR, 15, 0.5)) < 0.5
+    assert _layer_slope([], 15, 0.5) > 10
+    # tilted by 35 degrees (tan 35 = 0.70 > mu_2 = 0.64) the granular layer flows, and
+    # stops less steep than mu_s allows (21 degrees)
+    turned = _layer_slope(GRANULAR, 35, 1.0)
+    assert 35 - turned < math.degrees(math.atan(0.38)), turned
+
+
+@pytest.mark.parametrize("overrides, words", [
+    (["material.model='honey'"], ["material.model", "newtonian"]),
+    (["material.model='newtonian'", "material.viscosity=-1.0"], ["material.viscosity"]),
+    (["material.model='newtonian'"], ["material.viscosity > 0"]),
+    (["material.viscosity=1e-3"], ["newtonian"]),
+    (["material.model='mu_i'", "material.density=1470", "material.friction_limit=0.3"],
+     ["friction_static", "friction_limit", "mu_s < mu_2"]),
+    (["material.model='mu_i'", "material.density=1470", "material.grain_density=1000"],
+     ["grain_density", "solid fraction"]),
+    (["material.model='herschel_bulkley'", "material.yield_stress=-5.0"],
+     ["material.yield_stress"]),
+    (["material.model='herschel_bulkley'", "material.max_viscosity=0.5"],
+     ["material.max_viscosity"]),
+    (["material.model='newtonian'", "material.viscosity=1.0", "material.yield_stress=3.0"],
+     ["material.yield_stress", "herschel_bulkley"]),
+    (["material.model='newtonian'", "material.viscosity=1.0", "solver.scheme='explicit'",
+      "time.dt='auto'"], ["solver.scheme", "material.model"]),
+])
+def test_bad_material_parameters_are_refused(overrides, words):
+    with pytest.raises(CaseError) as err:
+        load_case(ROOT / HYDRO, overrides)
+    text = str(err.value)
+    for word in words:
+        assert word in text, text
