@@ -14,7 +14,7 @@ import pytest
 
 from conftest import ROOT
 from mpmflow import Simulation, load_case
-from mpmflow.errors import CaseError
+from mpmflow.errors import CaseError, SolverError
 from mpmflow.kernels import viscous
 
 HYDRO = "examples/hydrostatic.toml"
@@ -182,3 +182,18 @@ def test_bad_material_parameters_are_refused(overrides, words):
     text = str(err.value)
     for word in words:
         assert word in text, text
+
+
+def test_a_viscous_solve_that_does_not_converge_is_reported_with_its_worst_node():
+    # a moving column against no-slip walls: the first viscous solve needs iterations, and
+    # it runs before the pressure solve
+    case = load_case(ROOT / "examples/dam_break.toml",
+                     ["time.end=0.01", "output.snapshots=false", "material.model='newtonian'",
+                      "material.viscosity=1000.0", "solver.max_iterations=1",
+                      "solver.tolerance=1e-14", "domain.walls='no_slip'",
+                      "bodies.0.velocity=[0.5, 0.0]"])
+    with pytest.raises(SolverError) as err:
+        Simulation(case).run()
+    text = str(err.value)
+    assert "viscous solve did not converge" in text and "largest residual at node (" in text
+    assert "solver.max_iterations" in text

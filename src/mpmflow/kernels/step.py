@@ -66,7 +66,7 @@ R_STATUS = 7  # OK or the failure below
 R_STEP = 8  # the step (0-based, within the chunk) that failed or is running
 R_FAIL_ITERATIONS = 9
 R_FAIL_RESIDUAL = 10
-R_FAIL_NODE = 11  # node (pressure) or cell (volume correction) of the largest residual
+R_FAIL_NODE = 11  # node (pressure, viscous) or cell (volume correction) of the largest residual
 R_FAIL_SIZE = 12  # unknowns of the failed system
 R_VOLUME_ITERATIONS = 13
 R_LAST_UNKNOWNS = 14  # the unknowns of the last step
@@ -346,7 +346,7 @@ def viscous_predictor(G, O, W, integrals, report):
     if not res <= O.tol:
         report[R_FAIL_ITERATIONS] = it
         report[R_FAIL_RESIDUAL] = res
-        report[R_FAIL_NODE] = node[0]
+        report[R_FAIL_NODE] = node[viscous.worst_row(cols, vals, W.voff, x, rhs)]
         report[R_FAIL_SIZE] = n
         return VISCOUS_NOT_CONVERGED
     for i in range(nn):

@@ -235,6 +235,24 @@ def _apply(cols, vals, off, x, y, tmp):
 
 
 @njit(cache=True)
+def worst_row(cols, vals, off, x, rhs):
+    """The row of the largest |rhs - A x| (NaN counts as largest)."""
+    n = rhs.shape[0]
+    r = np.empty(n)
+    _apply(cols, vals, off, x, r, np.empty(n))
+    worst = 0
+    big = -1.0
+    for i in range(n):
+        a = abs(rhs[i] - r[i])
+        if not a <= big:
+            big = a
+            worst = i
+            if a != a:
+                break
+    return worst
+
+
+@njit(cache=True)
 def solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
     """Block-preconditioned CG from the initial guess in x (updated in place); stops when
     ||rhs - A x|| <= tol ||rhs||. Returns (iterations, relative residual)."""

@@ -17,6 +17,7 @@ table of materials indexed per particle can follow without changing the kernels'
 
 import numpy as np
 
+from ..kernels import rheology
 from . import herschel_bulkley, mu_i, newtonian, water
 
 MATERIALS = {m.NAME: m for m in (water, newtonian, herschel_bulkley, mu_i)}
@@ -47,5 +48,5 @@ def parameters(m):
 
 
 def is_viscous(m):
-    return MATERIALS[m.model].MODEL != 0
+    return MATERIALS[m.model].MODEL != rheology.WATER
 

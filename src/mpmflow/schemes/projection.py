@@ -226,7 +226,10 @@ class ProjectionScheme:
                 f"The viscous solve did not converge{where}: relative residual "
                 f"{residual:.3e} after {iterations} iterations (solver.tolerance = "
                 f"{self.case.solver.tolerance:g}, solver.max_iterations = "
-                f"{self.case.solver.max_iterations}); {n} unknowns (velocity components). "
+                f"{self.case.solver.max_iterations}); {n} unknowns (velocity components), "
+                "largest residual at node ("
+                + ", ".join(f"{c:.4g}" for c in self.grid.node_coordinates()[worst])
+                + ") m. "
                 f"Try a smaller time.dt, a larger solver.max_iterations"
                 + (", or a smaller material.max_viscosity" if m.model in
                    ("herschel_bulkley", "mu_i") else "") + ".")

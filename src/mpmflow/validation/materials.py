@@ -69,7 +69,7 @@ def run_wave(out, quick=False, context=None):
             def centre(sim, xc=xc):
                 xc.append((sim.time, float(sim.particles.x[:, 0].mean()) - 0.2))
 
-            model = ([f"material.model='newtonian'", f"material.viscosity={nu * 1000.0}"]
+            model = (["material.model='newtonian'", f"material.viscosity={nu * 1000.0}"]
                      if nu > 0 else [])
             sim = run_example("sloshing.toml", [f"grid.spacing={h}",
                                                 f"time.end={2.0 if quick else 5.0}", *model],
@@ -158,7 +158,7 @@ def run_slump(out, quick=False, context=None):
     scale = m.yield_stress / (m.density * G)
     x = sim.particles.x
     h = sim.case.grid.spacing
-    centre = 0.5 * sum(sim.case.domain.size[:1])
+    centre = 0.5 * sim.case.domain.size[0]
     values = []
     for side in (1, -1):
         d = side * (x[:, 0] - centre)
