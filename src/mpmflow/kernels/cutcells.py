@@ -44,6 +44,20 @@ def phi_at(phi_node, local, first, ns):
 
 
 @njit(cache=True)
+def _face_gauss_point(gp, k, side, centre, g, local):
+    """Gauss point gp (of 2^(D-1)) of the face normal to axis k on ``side`` (0, 1) of the
+    (sub-)cell with local centre ``centre`` (its offsets +-g already scaled), into
+    ``local``."""
+    bit = 0
+    for kk in range(local.shape[0]):
+        if kk == k:
+            local[kk] = float(side)
+        else:
+            local[kk] = centre[kk] + (g if (gp >> bit) & 1 else -g)
+            bit += 1
+
+
+@njit(cache=True)
 def _face_point(local, w, M, N):
     """Add a face quadrature point: M[a, b] += w N_a N_b."""
     NC = 1 << local.shape[0]
@@ -126,13 +140,7 @@ def cut_cell_tensors(phi_node, h, cells, candidates, nsub, K, C, V, F, Wf, solid
                             continue  # fluid here, solid there: a piece of obstacle face
                     M[:] = 0.0
                     for gp in range(1 << (D - 1)):
-                        bit = 0
-                        for kk in range(D):
-                            if kk == k:
-                                local[kk] = float(side)
-                            else:
-                                local[kk] = centre[kk] + (g if (gp >> bit) & 1 else -g) / nsub
-                                bit += 1
+                        _face_gauss_point(gp, k, side, centre, g / nsub, local)
                         _face_point(local, sub ** (D - 1) / (1 << (D - 1)), M, N)
                     for a in range(NC):
                         for b in range(NC):
@@ -153,17 +161,12 @@ def face_mass(h, D, Wf):
     Wf[:] = 0.0
     g = 0.5 / np.sqrt(3.0)
     local = np.empty(D)
+    centre = np.full(D, 0.5)
     N = np.empty(NC)
     for k in range(D):
         for side in range(2):
             for gp in range(1 << (D - 1)):
-                bit = 0
-                for kk in range(D):
-                    if kk == k:
-                        local[kk] = float(side)
-                    else:
-                        local[kk] = 0.5 + (g if (gp >> bit) & 1 else -g)
-                        bit += 1
+                _face_gauss_point(gp, k, side, centre, g, local)
                 _face_point(local, h ** (D - 1) / (1 << (D - 1)), Wf[2 * k + side], N)
 
 

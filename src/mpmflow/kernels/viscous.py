@@ -29,6 +29,7 @@ from . import multigrid, rheology
 from .geometry import corner_gradient, corner_offsets, node_strides
 from .parallel import CHUNKS
 from .stencil import first_of_slab, next_in_slab, node_cell, tables
+from .walls import normal_velocity
 
 # the rows of the system: row[i, k] >= 0 numbers the unknown component k of node i
 FREE, HELD = 0, -1  # before numbering: an unknown; a component kept at its value in u
@@ -130,10 +131,7 @@ def number_unknowns(node_mass, wall_node, wall_axis, wall_sign, no_slip, onode, 
         i = onode[e]
         if not ono_slip[e] or node_mass[i] <= 0.0:
             continue
-        vn = 0.0
-        for k in range(D):
-            vn += vstar[i, k] * onormal[e, k]
-        if vn >= 0.0:
+        if normal_velocity(vstar, i, onormal, e) >= 0.0:
             for k in range(D):
                 row[i, k] = HELD
                 u[i, k] = 0.0

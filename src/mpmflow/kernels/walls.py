@@ -85,6 +85,15 @@ def release_contact(node, axis, sign, vstar, node_row, p_node, contact):
 # with its unit normal into the solid; ``ocontact`` is per node.
 
 
+@njit(cache=True, inline="always")
+def normal_velocity(v, i, onormal, e):
+    """v_i . n_e: the velocity of node i into the solid along obstacle entry e's normal."""
+    vn = 0.0
+    for k in range(v.shape[1]):
+        vn += v[i, k] * onormal[e, k]
+    return vn
+
+
 @njit(cache=True)
 def apply_obstacles(onode, onormal, no_slip, v, ocontact):
     """Velocity conditions at the obstacle nodes (in place), as ``apply_walls``: the normal
@@ -93,9 +102,7 @@ def apply_obstacles(onode, onormal, no_slip, v, ocontact):
     D = v.shape[1]
     for e in range(onode.shape[0]):
         i = onode[e]
-        vn = 0.0
-        for k in range(D):
-            vn += v[i, k] * onormal[e, k]
+        vn = normal_velocity(v, i, onormal, e)
         if ocontact[i] and no_slip[e]:
             for k in range(D):
                 v[i, k] = 0.0
@@ -108,12 +115,9 @@ def apply_obstacles(onode, onormal, no_slip, v, ocontact):
 def start_obstacles(onode, onormal, vstar, node_row, ocontact):
     """The obstacle nodes that hold the material as the pressure step starts (in place): a
     pressure unknown, or v* pressing into the solid."""
-    D = vstar.shape[1]
     for e in range(onode.shape[0]):
         i = onode[e]
-        vn = 0.0
-        for k in range(D):
-            vn += vstar[i, k] * onormal[e, k]
+        vn = normal_velocity(vstar, i, onormal, e)
         ocontact[i] = node_row[i] >= 0 or vn > 0.0
 
 
@@ -121,13 +125,10 @@ def start_obstacles(onode, onormal, vstar, node_row, ocontact):
 def release_obstacles(onode, onormal, vstar, node_row, p_node, ocontact):
     """Release the obstacle nodes in contact whose pressure came out negative while v* leaves
     the solid (in place); returns how many."""
-    D = vstar.shape[1]
     released = 0
     for e in range(onode.shape[0]):
         i = onode[e]
-        vn = 0.0
-        for k in range(D):
-            vn += vstar[i, k] * onormal[e, k]
+        vn = normal_velocity(vstar, i, onormal, e)
         if node_row[i] >= 0 and p_node[i] < 0.0 and ocontact[i] and vn < 0.0:
             ocontact[i] = False
             released += 1
