@@ -1,0 +1,21 @@
+// mpmflow._core: the compiled core. Python reaches it only through mpmflow.state.
+#include <nanobind/nanobind.h>
+
+#include "../parallel.hpp"
+#include "modules.hpp"
+
+namespace nb = nanobind;
+
+NB_MODULE(_core, m) {
+  m.doc() = "mpmflow's compiled core (C++17, OpenMP): kernels of the projection scheme.";
+  m.def("max_threads", &mpmflow::max_threads, "OpenMP threads a parallel loop uses.");
+  m.def("set_threads", &mpmflow::set_threads, nb::arg("n"),
+        "Set the OpenMP threads of the following parallel loops.");
+  m.attr("CHUNKS") = mpmflow::CHUNKS;
+#ifdef NDEBUG
+  m.attr("DEBUG") = false;
+#else
+  m.attr("DEBUG") = true;
+#endif
+  mpmflow::bind::bind_binning(m);
+}

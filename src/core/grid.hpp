@@ -1,0 +1,134 @@
+// Index arithmetic of the uniform grid, written once for 2D and 3D (D is a template
+// parameter, so loops over axes and corners have constant bounds).
+//
+// Square (cubic) cells of side h cover [0, cells[k] h] along each axis k. Flat indices run
+// along axis 0 fastest: node (i_0, ..., i_{D-1}) is sum_k i_k ns_k with ns_0 = 1,
+// ns_k = ns_{k-1} (cells[k-1] + 1); cells likewise with cs_k. Corner a of a cell
+// (0 <= a < 2^D) is offset (a >> k) & 1 along axis k. A neighbour at offset (d_0, ...) in
+// {-1, 0, 1}^D of a node is stencil slot sum_k (d_k + 1) 3^k (9 slots in 2D, 27 in 3D).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "view.hpp"
+
+namespace mpmflow {
+
+constexpr int corners(int D) { return 1 << D; }
+constexpr int stencil_size(int D) { return D == 2 ? 9 : 27; }
+
+template <int D>
+struct Grid {
+  static constexpr int NC = 1 << D;              // corners of a cell
+  static constexpr int NS = stencil_size(D);     // nodes of a node's stencil
+  double h = 1.0;
+  double inv_h = 1.0;
+  std::array<index_t, D> cells{};
+  std::array<index_t, D> ns{};  // node strides
+  std::array<index_t, D> cs{};  // cell strides
+  std::array<index_t, NC> corner{};  // flat offset of each corner from a cell's first node
+  index_t nnodes = 0;
+  index_t ncells = 0;
+
+  Grid() = default;
+  Grid(double spacing, const std::array<index_t, D>& c) : h(spacing), inv_h(1.0 / spacing), cells(c) {
+    index_t n = 1, m = 1;
+    for (int k = 0; k < D; ++k) {
+      ns[k] = n;
+      cs[k] = m;
+      n *= cells[k] + 1;
+      m *= cells[k];
+    }
+    nnodes = n;
+    ncells = m;
+    corner[0] = 0;
+    for (int k = 0; k < D; ++k)
+      for (int a = 0; a < (1 << k); ++a) corner[a + (1 << k)] = corner[a] + ns[k];
+  }
+
+  // The cell (0 to n - 1) holding grid coordinate s = x / h; points beyond the grid go to
+  // the nearest cell, NaN to cell 0.
+  static index_t cell_of(double s, index_t n) {
+    if (!(s > 0.0)) return 0;
+    if (s >= n - 1.0) return n - 1;
+    return static_cast<index_t>(s);
+  }
+
+  // The first node of the cell holding point x (D coordinates) and the multilinear weights
+  // of its 2^D corners into w (built axis by axis, in the order of the Numba kernels).
+  index_t weights_at(const double* x, double* w) const {
+    index_t base = 0;
+    w[0] = 1.0;
+    for (int k = 0; k < D; ++k) {
+      const double s = x[k] * inv_h;
+      const index_t c = cell_of(s, cells[k]);
+      const double f = s - c;
+      base += c * ns[k];
+      for (int a = 0; a < (1 << k); ++a) {
+        w[a + (1 << k)] = w[a] * f;
+        w[a] *= 1.0 - f;
+      }
+    }
+    return base;
+  }
+
+  // The first node of the cell holding x and the local coordinates in it (each in [0, 1]).
+  index_t locate(const double* x, double* frac) const {
+    index_t base = 0;
+    for (int k = 0; k < D; ++k) {
+      const double s = x[k] * inv_h;
+      const index_t c = cell_of(s, cells[k]);
+      frac[k] = s - c;
+      base += c * ns[k];
+    }
+    return base;
+  }
+
+  // The flat cell holding x.
+  index_t cell_at(const double* x) const {
+    index_t c = 0;
+    for (int k = 0; k < D; ++k) c += cell_of(x[k] * inv_h, cells[k]) * cs[k];
+    return c;
+  }
+
+  void node_coords(index_t i, index_t* out) const {
+    for (int k = 0; k < D; ++k) {
+      const index_t n = cells[k] + 1;
+      out[k] = i % n;
+      i /= n;
+    }
+  }
+  void cell_coords(index_t c, index_t* out) const {
+    for (int k = 0; k < D; ++k) {
+      out[k] = c % cells[k];
+      c /= cells[k];
+    }
+  }
+  // The first node of cell c.
+  index_t cell_first_node(index_t c) const {
+    index_t i = 0;
+    for (int k = 0; k < D; ++k) {
+      i += (c % cells[k]) * ns[k];
+      c /= cells[k];
+    }
+    return i;
+  }
+
+  // Multilinear shape function of corner a at local coordinates frac.
+  static double corner_weight(int a, const double* frac) {
+    double w = 1.0;
+    for (int k = 0; k < D; ++k) w *= ((a >> k) & 1) ? frac[k] : 1.0 - frac[k];
+    return w;
+  }
+  // d N_a / d x_k at local coordinates frac (1/m).
+  double corner_gradient(int a, int k, const double* frac) const {
+    double g = ((a >> k) & 1) ? inv_h : -inv_h;
+    for (int j = 0; j < D; ++j)
+      if (j != k) g *= ((a >> j) & 1) ? frac[j] : 1.0 - frac[j];
+    return g;
+  }
+};
+
+}  // namespace mpmflow

@@ -1,0 +1,124 @@
+// Views of arrays owned elsewhere (NumPy, a Buffer, later device memory): a pointer and a
+// shape, row-major, no ownership. Indices are bounds-checked in debug builds (NDEBUG unset).
+#pragma once
+
+#include <array>
+#include <cassert>
+#include <cstdint>
+#include <vector>
+
+namespace mpmflow {
+
+using index_t = std::int64_t;
+
+#ifndef NDEBUG
+#define MPMFLOW_BOUNDS(cond) assert(cond)
+#else
+#define MPMFLOW_BOUNDS(cond) ((void)0)
+#endif
+
+// A view of R dimensions over T (R = 1: a vector, R = 2: rows of equal length, ...).
+template <class T, int R = 1>
+class View {
+ public:
+  View() { shape_.fill(0); }
+  View(T* data, std::array<index_t, R> shape) : data_(data), shape_(shape) {}
+
+  index_t size() const {
+    index_t n = 1;
+    for (int k = 0; k < R; ++k) n *= shape_[k];
+    return n;
+  }
+  index_t extent(int k) const { return shape_[k]; }
+  bool empty() const { return size() == 0; }
+  T* data() const { return data_; }
+
+  T& operator[](index_t i) const {  // flat index
+    MPMFLOW_BOUNDS(i >= 0 && i < size());
+    return data_[i];
+  }
+  T& operator()(index_t i) const {
+    static_assert(R == 1, "one index for a view of one dimension");
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0]);
+    return data_[i];
+  }
+  T& operator()(index_t i, index_t j) const {
+    static_assert(R == 2, "two indices for a view of two dimensions");
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1]);
+    return data_[i * shape_[1] + j];
+  }
+  T& operator()(index_t i, index_t j, index_t k) const {
+    static_assert(R == 3, "three indices for a view of three dimensions");
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 &&
+                   k < shape_[2]);
+    return data_[(i * shape_[1] + j) * shape_[2] + k];
+  }
+  T& operator()(index_t i, index_t j, index_t k, index_t l) const {
+    static_assert(R == 4, "four indices for a view of four dimensions");
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 &&
+                   k < shape_[2] && l >= 0 && l < shape_[3]);
+    return data_[((i * shape_[1] + j) * shape_[2] + k) * shape_[3] + l];
+  }
+  // Row i of a view of two or more dimensions, as a view of one dimension fewer.
+  View<T, R - 1> row(index_t i) const {
+    static_assert(R >= 2, "a row of a view of two or more dimensions");
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0]);
+    std::array<index_t, R - 1> s{};
+    for (int k = 1; k < R; ++k) s[k - 1] = shape_[k];
+    return View<T, R - 1>(data_ + i * (size() / (shape_[0] ? shape_[0] : 1)), s);
+  }
+  // The first n rows (n <= extent(0)).
+  View head(index_t n) const {
+    MPMFLOW_BOUNDS(n >= 0 && n <= shape_[0]);
+    auto s = shape_;
+    s[0] = n;
+    return View(data_, s);
+  }
+  operator View<const T, R>() const { return View<const T, R>(data_, shape_); }
+
+ private:
+  T* data_ = nullptr;
+  std::array<index_t, R> shape_;
+};
+
+// Storage the core owns: sized to a capacity outside the step and grown (never shrunk)
+// when a run needs more; kernels see it only through views. A device backend replaces
+// the std::vector by device memory behind the same interface.
+template <class T>
+class Buffer {
+ public:
+  // Make room for n elements; returns true if the storage moved (views are then stale).
+  bool reserve(index_t n) {
+    if (n <= static_cast<index_t>(data_.size())) return false;
+    data_.resize(static_cast<std::size_t>(n));
+    return true;
+  }
+  index_t capacity() const { return static_cast<index_t>(data_.size()); }
+  View<T> view(index_t n) {
+    MPMFLOW_BOUNDS(n <= capacity());
+    return View<T>(data_.data(), {n});
+  }
+  template <int R>
+  View<T, R> view(std::array<index_t, R> shape) {
+    View<T, R> v(data_.data(), shape);
+    MPMFLOW_BOUNDS(v.size() <= capacity());
+    return v;
+  }
+  // Grow to the shape if needed, then view it.
+  template <int R>
+  View<T, R> sized(std::array<index_t, R> shape) {
+    index_t n = 1;
+    for (auto s : shape) n *= s;
+    reserve(n);
+    return view<R>(shape);
+  }
+  View<T> sized(index_t n) {
+    reserve(n);
+    return view(n);
+  }
+
+ private:
+  std::vector<T> data_;
+};
+
+}  // namespace mpmflow
