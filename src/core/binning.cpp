@@ -22,8 +22,8 @@ void counting_sort(View<const index_t> cell, index_t ncells, View<index_t> start
 }
 
 void cell_volume_fraction(View<const index_t> order, View<const index_t> start,
-                          View<const double> volume, double cell_volume,
-                          View<const double> open_, View<double> theta) {
+                          View<const double> volume, double cell_volume, View<const double> open_,
+                          View<double> theta) {
   const double inv = 1.0 / cell_volume;
   parallel_for(theta.size(), [&](index_t c) {
     double total = 0.0;

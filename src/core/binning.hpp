@@ -20,7 +20,7 @@ void counting_sort(View<const index_t> cell, index_t ncells, View<index_t> start
 // theta_e = sum of the particle volumes in cell e / cell volume, over the fluid part of a
 // cell an obstacle cuts (open_: the fluid fraction).
 void cell_volume_fraction(View<const index_t> order, View<const index_t> start,
-                          View<const double> volume, double cell_volume,
-                          View<const double> open_, View<double> theta);
+                          View<const double> volume, double cell_volume, View<const double> open_,
+                          View<double> theta);
 
 }  // namespace mpmflow

@@ -21,19 +21,20 @@ constexpr int stencil_size(int D) { return D == 2 ? 9 : 27; }
 
 template <int D>
 struct Grid {
-  static constexpr int NC = 1 << D;              // corners of a cell
-  static constexpr int NS = stencil_size(D);     // nodes of a node's stencil
+  static constexpr int NC = 1 << D;           // corners of a cell
+  static constexpr int NS = stencil_size(D);  // nodes of a node's stencil
   double h = 1.0;
   double inv_h = 1.0;
   std::array<index_t, D> cells{};
-  std::array<index_t, D> ns{};  // node strides
-  std::array<index_t, D> cs{};  // cell strides
+  std::array<index_t, D> ns{};       // node strides
+  std::array<index_t, D> cs{};       // cell strides
   std::array<index_t, NC> corner{};  // flat offset of each corner from a cell's first node
   index_t nnodes = 0;
   index_t ncells = 0;
 
   Grid() = default;
-  Grid(double spacing, const std::array<index_t, D>& c) : h(spacing), inv_h(1.0 / spacing), cells(c) {
+  Grid(double spacing, const std::array<index_t, D>& c)
+      : h(spacing), inv_h(1.0 / spacing), cells(c) {
     index_t n = 1, m = 1;
     for (int k = 0; k < D; ++k) {
       ns[k] = n;

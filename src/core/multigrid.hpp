@@ -34,8 +34,8 @@ void residual(View<const index_t, 2> cols, View<const double, 2> vals, View<cons
 // a . b summed chunk by chunk (CHUNKS) when long: the same bits on any thread count.
 double dot(View<const double> a, View<const double> b);
 // The row of the largest |b - A x| (NaN counts as largest); r: scratch of n values.
-index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals,
-                  View<const double> x, View<const double> b, View<double> r);
+index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+                  View<const double> b, View<double> r);
 
 template <int D>
 class Multigrid {
@@ -48,8 +48,7 @@ class Multigrid {
   // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each).
   void vcycle(View<const double> b, View<double> x, int sweeps);
   // Preconditioned CG from the initial guess in x; stops when ||rhs - A x|| <= tol ||rhs||.
-  SolveResult pcg(View<const double> rhs, View<double> x, double tol, index_t maxiter,
-                  int sweeps);
+  SolveResult pcg(View<const double> rhs, View<double> x, double tol, index_t maxiter, int sweeps);
   index_t levels() const;
   index_t rows() const;  // unknowns of the finest level
 

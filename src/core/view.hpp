@@ -49,14 +49,13 @@ class View {
   }
   T& operator()(index_t i, index_t j, index_t k) const {
     static_assert(R == 3, "three indices for a view of three dimensions");
-    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 &&
-                   k < shape_[2]);
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 && k < shape_[2]);
     return data_[(i * shape_[1] + j) * shape_[2] + k];
   }
   T& operator()(index_t i, index_t j, index_t k, index_t l) const {
     static_assert(R == 4, "four indices for a view of four dimensions");
-    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 &&
-                   k < shape_[2] && l >= 0 && l < shape_[3]);
+    MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 && k < shape_[2] &&
+                   l >= 0 && l < shape_[3]);
     return data_[((i * shape_[1] + j) * shape_[2] + k) * shape_[3] + l];
   }
   // Row i of a view of two or more dimensions, as a view of one dimension fewer.

@@ -24,8 +24,8 @@ void bind_binning(nb::module_& m) {
         [](Array<const index_t> order, Array<const index_t> start, Array<const double> volume,
            double cell_volume, Array<const double> open_, Array<double> theta) {
           cell_volume_fraction(view<const index_t>(order), view<const index_t>(start),
-                               view<const double>(volume), cell_volume,
-                               view<const double>(open_), view<double>(theta));
+                               view<const double>(volume), cell_volume, view<const double>(open_),
+                               view<double>(theta));
         });
 }
 
