@@ -18,4 +18,9 @@ NB_MODULE(_core, m) {
   m.attr("DEBUG") = true;
 #endif
   mpmflow::bind::bind_binning(m);
+  mpmflow::bind::bind_quadrature(m);
+  mpmflow::bind::bind_free_surface(m);
+  mpmflow::bind::bind_ghost_pressure(m);
+  mpmflow::bind::bind_pressure_system(m);
+  mpmflow::bind::bind_walls(m);
 }

@@ -8,5 +8,10 @@ namespace mpmflow::bind {
 namespace nb = nanobind;
 
 void bind_binning(nb::module_& m);
+void bind_quadrature(nb::module_& m);
+void bind_free_surface(nb::module_& m);
+void bind_ghost_pressure(nb::module_& m);
+void bind_pressure_system(nb::module_& m);
+void bind_walls(nb::module_& m);
 
 }  // namespace mpmflow::bind

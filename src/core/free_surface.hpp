@@ -1,0 +1,53 @@
+// Where the material is, by node: the nodal volume fraction, the cells enclosed by the
+// material, and the pressure unknowns (2D and 3D; kernels/surface.py describes the node and
+// sub-cell free-surface treatments).
+//
+// A node's cells are the 2^D cells it is a corner of: cell b (0 <= b < 2^D) has index
+// i_k - 1 + ((b >> k) & 1) along axis k. Loops over nodes deal slabs round the parallel
+// chunks (stencil.hpp's for_slabs); each result depends on neighbours only.
+#pragma once
+
+#include <array>
+
+#include "grid.hpp"
+#include "view.hpp"
+
+namespace mpmflow {
+
+// Flat index of cell b of the node with coordinates ix (-1 when outside the grid).
+template <int D>
+inline index_t cell_of_node(const Grid<D>& g, const std::array<index_t, D>& ix, int b) {
+  index_t c = 0;
+  for (int k = 0; k < D; ++k) {
+    const index_t j = ix[k] - 1 + ((b >> k) & 1);
+    if (j < 0 || j >= g.cells[k]) return -1;
+    c += j * g.cs[k];
+  }
+  return c;
+}
+
+// Nodal volume fraction node_f (nnodes, dimensionless): the mean of the node's in-domain
+// cells' theta, each clipped to 1, weighted by the cells' fluid fraction open_ (a cell
+// inside a solid does not count); 0 for a node with no such cell.
+template <int D>
+void nodal_fraction(const Grid<D>& g, View<const double> theta, View<const double> open_,
+                    View<double> node_f);
+
+// enclosed[c]: all 2^D nodes of cell c lie inside the material (node_f > 1/2).
+template <int D>
+void enclosed_cells(const Grid<D>& g, View<const double> node_f, View<bool> enclosed);
+
+// Number the pressure unknowns into node_row (row of each node, -1 = none); returns their
+// count. A node is an unknown when all its in-domain cells outside solids (static_slot >= 0)
+// take part in the system (cell_slot >= 0), there is at least one such cell and, with
+// subcell, node_f > 1/2. Unknowns are numbered in node order.
+template <int D>
+index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
+                       View<const index_t> static_slot, View<const double> node_f, bool subcell,
+                       View<index_t> node_row);
+
+// Number the entries >= 0 of row in order (0, 1, ...); returns how many. A chunked count and
+// scan, so it runs in parallel with the serial result.
+index_t number(View<index_t> row);
+
+}  // namespace mpmflow

@@ -1,0 +1,44 @@
+#include "ghost_pressure.hpp"
+
+#include "stencil.hpp"
+
+namespace mpmflow {
+
+template <int D>
+void ghost_values(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
+                  View<const index_t> node_row, View<const double> node_f, double theta_min,
+                  View<double> p_node) {
+  constexpr int NC = 1 << D;
+  constexpr int NS = stencil_size(D);
+  constexpr int centre = NS / 2;
+  const StencilTables<D> t = tables<D>(g);
+  for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
+    if (node_row(i) >= 0) return;
+    std::array<double, NS> S;
+    std::array<index_t, NC> slots, base;
+    std::array<int, NC> local;
+    // no material around the node: none of its cells is in the system (a cell in the
+    // system holds particles or is enclosed by f > 1/2 nodes)
+    if (node_f(i) == 0.0 || node_stencil<D>(g, ix, cell_slot, K, t, S, slots, local, base) == 0) {
+      p_node(i) = 0.0;
+      return;
+    }
+    double num = 0.0, den = 0.0;
+    for (int s = 0; s < NS; ++s) {
+      const double sv = S[s];
+      if (s == centre || sv >= 0.0) continue;
+      const index_t j = i + t.offset[s];
+      if (node_row(j) < 0) continue;
+      num -= sv * ghost_factor(node_f(j), node_f(i), theta_min) * p_node(j);
+      den -= sv;
+    }
+    p_node(i) = den > 0.0 ? num / den : 0.0;
+  });
+}
+
+template void ghost_values<2>(const Grid<2>&, View<const index_t>, View<const double, 3>,
+                              View<const index_t>, View<const double>, double, View<double>);
+template void ghost_values<3>(const Grid<3>&, View<const index_t>, View<const double, 3>,
+                              View<const index_t>, View<const double>, double, View<double>);
+
+}  // namespace mpmflow

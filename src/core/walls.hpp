@@ -1,0 +1,71 @@
+// Velocity conditions at the domain walls and at obstacles, 2D and 3D: one-sided contact, a
+// wall stops penetration only. The wall nodes come as (node, axis of the wall's normal,
+// outward sign) triples from wall_pairs: the walls normal to axis 0 first, then axis 1, ...;
+// along each, the nodes in node order with the lower wall before the upper; a node on an
+// edge or a corner appears once for each of its walls. Obstacle nodes come as (node, unit
+// normal into the solid, no-slip flag) entries (onode, onormal, no_slip), with one contact
+// flag per node (ocontact). Velocities in m/s; the loops are serial (wall nodes are few,
+// and a corner node appears under several walls).
+#pragma once
+
+#include "grid.hpp"
+#include "view.hpp"
+
+namespace mpmflow {
+
+// The number of (node, wall) pairs of grid g: 2 sum_k nnodes / (cells[k] + 1).
+template <int D>
+index_t wall_pair_count(const Grid<D>& g);
+
+// The (node, axis, sign) triples of every wall node and wall into node, axis, sign (each
+// sized to at least wall_pair_count(g)); returns how many.
+template <int D>
+index_t wall_pairs(const Grid<D>& g, View<index_t> node, View<index_t> axis, View<double> sign);
+
+// Velocity conditions at wall nodes (in place in v, nnodes x D). Where the wall holds the
+// material (contact[i, k]) the normal velocity is zero; elsewhere on the wall only a
+// velocity into the wall is removed. No-slip also zeroes the tangential velocity at nodes in
+// contact.
+void apply_walls(View<const index_t> node, View<const index_t> axis, View<const double> sign,
+                 View<double, 2> v, View<const bool, 2> contact, bool no_slip);
+
+// The wall nodes that hold the material as the pressure step starts (in place):
+// contact[i, k] is set where node i carries a pressure unknown (node_row >= 0) or v* presses
+// into its wall normal to k; every other entry is cleared.
+void start_contact(View<const index_t> node, View<const index_t> axis, View<const double> sign,
+                   View<const double, 2> vstar, View<const index_t> node_row,
+                   View<bool, 2> contact);
+
+// Release the wall nodes in contact whose pressure p_node (Pa) came out negative while v*
+// leaves the wall (in place); returns how many (node, wall) pairs were released.
+index_t release_contact(View<const index_t> node, View<const index_t> axis, View<const double> sign,
+                        View<const double, 2> vstar, View<const index_t> node_row,
+                        View<const double> p_node, View<bool, 2> contact);
+
+// v_i . n_e (m/s): the velocity of node i into the solid along obstacle entry e's normal.
+inline double normal_velocity(View<const double, 2> v, index_t i, View<const double, 2> onormal,
+                              index_t e) {
+  double vn = 0.0;
+  for (index_t k = 0; k < v.extent(1); ++k) vn += v(i, k) * onormal(e, k);
+  return vn;
+}
+
+// Velocity conditions at the obstacle nodes (in place), as apply_walls: the normal velocity
+// is removed where the obstacle holds the material, elsewhere only a velocity into the
+// solid; a no-slip obstacle zeroes the whole velocity where it holds.
+void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
+                     View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact);
+
+// The obstacle nodes that hold the material as the pressure step starts (in place): a
+// pressure unknown, or v* pressing into the solid.
+void start_obstacles(View<const index_t> onode, View<const double, 2> onormal,
+                     View<const double, 2> vstar, View<const index_t> node_row,
+                     View<bool> ocontact);
+
+// Release the obstacle nodes in contact whose pressure came out negative while v* leaves
+// the solid (in place); returns how many.
+index_t release_obstacles(View<const index_t> onode, View<const double, 2> onormal,
+                          View<const double, 2> vstar, View<const index_t> node_row,
+                          View<const double> p_node, View<bool> ocontact);
+
+}  // namespace mpmflow
