@@ -3,16 +3,17 @@
 import numpy as np
 import pytest
 
+from mpmflow import state
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.kernels import quadrature, transfer, volume, walls
+from mpmflow.kernels import transfer, volume
 from mpmflow.particles import Particles, lattice_in_box, seed_box
 
 
 def test_gauss_cell_integrals_are_the_bilinear_element_matrices():
     h = 0.3
     K, C, V = np.zeros((4, 4)), np.zeros((4, 4, 2)), np.zeros(4)
-    quadrature.gauss_cell_tensors(h, K, C, V)
+    state.gauss_cell_tensors(h, K, C, V)
     # Q1 stiffness on a square: 2/3 on the diagonal, -1/6 along edges, -1/3 across
     expected = np.array([[4, -1, -1, -2], [-1, 4, -2, -1], [-1, -2, 4, -1], [-2, -1, -1, 4]]) / 6
     np.testing.assert_allclose(K, expected, atol=1e-14)
@@ -25,7 +26,7 @@ def test_gauss_cell_integrals_are_the_bilinear_element_matrices():
 def test_gauss_cell_integrals_in_3d_are_those_of_the_trilinear_element():
     h = 0.2
     K, C, V = np.zeros((8, 8)), np.zeros((8, 8, 3)), np.zeros(8)
-    quadrature.gauss_cell_tensors(h, K, C, V)
+    state.gauss_cell_tensors(h, K, C, V)
     np.testing.assert_allclose(V, h**3 / 8)
     np.testing.assert_allclose(K.sum(axis=1), 0.0, atol=1e-15)  # constants have no gradient
     # Q1 stiffness of the cube: diagonal h/3, edge 0, face diagonal -h/12, body diagonal -h/12
@@ -48,8 +49,8 @@ def test_particle_quadrature_integrates_constants_exactly():
     K, C, V = np.zeros((1, 4, 4)), np.zeros((1, 4, 4, 2)), np.zeros((1, 4))
     order = np.arange(len(pts))
     start = np.array([0, len(pts)])
-    quadrature.particle_cell_tensors(pts, np.full(len(pts), (h / 4) ** 2), order, start,
-                                     np.array([0]), h, (1, 1), K, C, V)
+    state.particle_cell_tensors(pts, np.full(len(pts), (h / 4) ** 2), order, start,
+                                np.array([0]), h, (1, 1), K, C, V)
     assert V.sum() == pytest.approx(h * h)
     np.testing.assert_allclose(K[0].sum(axis=1), 0.0, atol=1e-12)
 
@@ -142,8 +143,8 @@ def test_walls_are_one_sided_unless_in_contact():
     n = (ncx + 1) * (ncy + 1)
     v = np.tile([[-1.0, 1.0]], (n, 1))  # moving into the left and top walls
     released = np.zeros((n, 2), dtype=np.bool_)
-    pairs = walls.wall_pairs((ncx, ncy))
-    walls.apply_walls(*pairs, v, released, False)
+    pairs = state.wall_pairs((ncx, ncy))
+    state.apply_walls(*pairs, v, released, False)
     left = [0, 3, 6]
     top = [6, 7, 8]
     assert np.all(v[left, 0] == 0.0) and np.all(v[top, 1] == 0.0)
@@ -151,12 +152,12 @@ def test_walls_are_one_sided_unless_in_contact():
     assert v[bottom_mid, 1] == 1.0
     # every node carries a pressure unknown: every wall node starts in contact
     contact = np.zeros((n, 2), dtype=np.bool_)
-    walls.start_contact(*pairs, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
+    state.start_contact(*pairs, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
     ix, iy = np.arange(n) % (ncx + 1), np.arange(n) // (ncx + 1)
     np.testing.assert_array_equal(contact, np.stack([(ix == 0) | (ix == ncx),
                                                      (iy == 0) | (iy == ncy)], axis=1))
     v = np.tile([[1.0, 1.0]], (n, 1))
-    walls.apply_walls(*pairs, v, contact, True)  # in contact, no-slip: all zero
+    state.apply_walls(*pairs, v, contact, True)  # in contact, no-slip: all zero
     assert np.all(v[bottom_mid] == 0.0)
     assert np.all(v[4] == 1.0)  # interior node untouched
 
@@ -171,14 +172,14 @@ def test_contact_starts_where_material_presses_and_releases_under_tension():
     vstar[5, 0] = -1.0  # right wall node without unknown leaving the wall
     vstar[1, 1] = 2.0  # bottom node with unknown leaving the floor
     contact = np.ones((n, 2), dtype=np.bool_)
-    pairs = walls.wall_pairs((ncx, ncy))
-    walls.start_contact(*pairs, vstar, row, contact)
+    pairs = state.wall_pairs((ncx, ncy))
+    state.start_contact(*pairs, vstar, row, contact)
     assert contact[0].tolist() == [True, True] and contact[1].tolist() == [False, True]
     assert contact[3, 0] and not contact[5, 0] and not contact[4].any()
     p_node = np.zeros(n)
     p_node[1] = -5.0  # tension at the node that leaves the floor: released
     p_node[0] = -5.0  # tension, but v* does not leave the walls: kept
-    assert walls.release_contact(*pairs, vstar, row, p_node, contact) == 1
+    assert state.release_contact(*pairs, vstar, row, p_node, contact) == 1
     assert not contact[1, 1] and contact[0].all()
 
 
@@ -213,10 +214,10 @@ def test_particle_divergence_tensors_match_the_full_particle_tensors():
     bins = bin_particles(grid, Particles(x, 0 * x, 0 * vol, vol, vol))
     cells = np.array([0, 5, 23, 99])
     K, C, V = np.zeros((4, 4, 4)), np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
-    quadrature.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10), K, C, V)
+    state.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10), K, C, V)
     C2, V2 = np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
-    quadrature.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10),
-                                     np.zeros((0, 4, 4)), C2, V2)
+    state.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10),
+                                np.zeros((0, 4, 4)), C2, V2)
     np.testing.assert_allclose(C2, C, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(V2, V, rtol=1e-13, atol=1e-15)
     assert V.sum() > 0

@@ -27,7 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kernels import cutcells, geometry, quadrature
+from . import state
+from .kernels import cutcells, geometry
 
 SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
 
@@ -65,7 +66,7 @@ def build(grid, phi=None, no_slip_of=None):
     NC = 2**D
     cells = tuple(int(c) for c in grid.cells)
     K0, C0, V0 = np.zeros((NC, NC)), np.zeros((NC, NC, D)), np.zeros(NC)
-    quadrature.gauss_cell_tensors(grid.spacing, K0, C0, V0)
+    state.gauss_cell_tensors(grid.spacing, K0, C0, V0)
     W0 = np.zeros((2 * D, NC, NC))
     cutcells.face_mass(grid.spacing, D, W0)
     open_ = np.ones(nc)

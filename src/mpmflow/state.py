@@ -21,3 +21,51 @@ def max_threads():
 def set_threads(n):
     """Run the core's parallel loops on n threads."""
     _core.set_threads(int(n))
+
+
+# --- pressure system: quadrature, walls (src/core/quadrature, walls) ---
+
+
+def gauss_cell_tensors(h, K, C, V):
+    """The element integrals K (2^D x 2^D), C (2^D x 2^D x D), V (2^D) of a full cell of side
+    h from its 2^D Gauss points, into the arrays (float64; D from C's last axis)."""
+    _core.gauss_cell_tensors(float(h), K, C, V)
+
+
+def particle_cell_tensors(x, volume, order, start, cells_list, h, cells, K, C, V):
+    """The element integrals of the cells ``cells_list`` with their material points as
+    quadrature points into K[m], C[m], V[m] (K may have no rows: then C and V only); the
+    particles of cell c are order[start[c]:start[c + 1]]."""
+    _core.particle_cell_tensors(x, volume, order, start, cells_list, float(h),
+                                [int(c) for c in cells], K, C, V)
+
+
+def wall_pairs(cells):
+    """(node, axis, sign) arrays of every wall node and wall of the grid ``cells``: the walls
+    normal to axis 0 first, then axis 1, ...; the lower wall (sign -1) before the upper."""
+    cells = [int(c) for c in cells]
+    n = _core.wall_pair_count(cells)
+    node = np.empty(n, dtype=np.int64)
+    axis = np.empty(n, dtype=np.int64)
+    sign = np.empty(n)
+    _core.wall_pairs(cells, node, axis, sign)
+    return node, axis, sign
+
+
+def apply_walls(node, axis, sign, v, contact, no_slip):
+    """Velocity conditions at the wall nodes, in place in v (nnodes x D): the normal velocity
+    zeroed where the wall holds the material (``contact[i, k]``), elsewhere only a velocity
+    into the wall; no-slip zeroes the tangential velocity at the nodes in contact too."""
+    _core.apply_walls(node, axis, sign, v, contact, bool(no_slip))
+
+
+def start_contact(node, axis, sign, vstar, node_row, contact):
+    """The wall contact as the pressure step starts, into ``contact`` (nnodes x D, bool): a
+    wall node holds where it carries an unknown or v* presses into the wall."""
+    _core.start_contact(node, axis, sign, vstar, node_row, contact)
+
+
+def release_contact(node, axis, sign, vstar, node_row, p_node, contact):
+    """Release the wall nodes in contact under tension that v* leaves (in place); returns
+    how many (node, wall) pairs were released."""
+    return _core.release_contact(node, axis, sign, vstar, node_row, p_node, contact)
