@@ -39,7 +39,8 @@ void matvec(View<const index_t, 2> cols, View<const double, 2> vals, View<const 
 void residual(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
               View<const double> b, View<double> r);
 // a . b summed chunk by chunk (CHUNKS) when long (>= PARALLEL_ROWS): the same bits on any
-// thread count; shorter vectors are summed in order (NumPy's np.dot there: BLAS order).
+// thread count; shorter vectors are summed in index order (the Numba kernel called np.dot
+// there, which sums in BLAS's order: the two differ by rounding, ~1e-16 relative).
 double dot(View<const double> a, View<const double> b);
 // The row of the largest |b - A x| (NaN counts as largest); r: scratch of n values.
 index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
@@ -50,10 +51,14 @@ class Multigrid {
  public:
   // Build the levels for the matrix (cols, vals: n x 3^D) whose row r sits on grid point
   // node(r) of a grid with dims points per axis. The views must stay valid until the
-  // next setup (the finest level is not copied).
+  // next setup (the finest level is not copied). The storage of earlier setups is reused
+  // (allocation only when the hierarchy outgrows it). Throws std::invalid_argument on
+  // shapes that do not match, std::runtime_error when the coarsest operator is not positive
+  // definite (its Cholesky factor fails, where np.linalg.cholesky raised LinAlgError).
   void setup(View<const index_t, 2> cols, View<const double, 2> vals, View<const index_t> node,
              const std::array<index_t, D>& dims, index_t coarsest = COARSEST);
-  // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each).
+  // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each):
+  // sweeps forward colour Gauss-Seidel sweeps down, the dense solve, sweeps backward up.
   void vcycle(View<const double> b, View<double> x, int sweeps);
   // Preconditioned CG from the initial guess in x; stops when ||rhs - A x|| <= tol ||rhs||.
   SolveResult pcg(View<const double> rhs, View<double> x, double tol, index_t maxiter, int sweeps);
