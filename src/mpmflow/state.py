@@ -69,3 +69,41 @@ def release_contact(node, axis, sign, vstar, node_row, p_node, contact):
     """Release the wall nodes in contact under tension that v* leaves (in place); returns
     how many (node, wall) pairs were released."""
     return _core.release_contact(node, axis, sign, vstar, node_row, p_node, contact)
+# --- multigrid ---
+COARSEST = _core.COARSEST  # unknowns at which the multigrid hierarchy stops (dense factor)
+PARALLEL_ROWS = _core.PARALLEL_ROWS  # multigrid levels this large run on all threads
+
+
+def multigrid(cols, vals, node, dims, coarsest=COARSEST, hierarchy=None):
+    """A multigrid hierarchy (``_core.Multigrid2``/``Multigrid3``) set up for the ELL matrix
+    (cols, vals: n x 3^D) whose row r is grid point node[r] of a grid of ``dims`` points per
+    axis: ``hierarchy`` (an earlier one, whose storage is reused) when given, else a new one.
+    It holds the arrays until its next setup; its ``pcg(rhs, x, tol, maxiter, sweeps)``
+    updates x in place and returns (iterations, true relative residual); ``vcycle(b, x,
+    sweeps)`` applies the preconditioner."""
+    dims = tuple(int(d) for d in dims)
+    kind = _core.Multigrid2 if len(dims) == 2 else _core.Multigrid3
+    mg = hierarchy if isinstance(hierarchy, kind) else kind()
+    mg.setup(np.ascontiguousarray(cols, dtype=np.int64), np.ascontiguousarray(vals, dtype=float),
+             np.ascontiguousarray(node, dtype=np.int64), dims, int(coarsest))
+    return mg
+
+
+def matvec(cols, vals, x, y):
+    """y = A x (A in ELL form); y: float64, written in place."""
+    _core.matvec(cols, vals, x, y)
+
+
+def residual(cols, vals, x, b, out):
+    """out = b - A x (A in ELL form); out: float64, written in place."""
+    _core.residual(cols, vals, x, b, out)
+
+
+def dot(a, b):
+    """a . b summed chunk by chunk when long: the same bits on any thread count."""
+    return _core.dot(a, b)
+
+
+def worst_row(cols, vals, x, b):
+    """The row of the largest |b - A x| (NaN counts as largest)."""
+    return _core.worst_row(cols, vals, x, b, np.empty(len(b)))

@@ -23,4 +23,5 @@ NB_MODULE(_core, m) {
   mpmflow::bind::bind_ghost_pressure(m);
   mpmflow::bind::bind_pressure_system(m);
   mpmflow::bind::bind_walls(m);
+  mpmflow::bind::bind_multigrid(m);
 }

@@ -13,5 +13,6 @@ void bind_free_surface(nb::module_& m);
 void bind_ghost_pressure(nb::module_& m);
 void bind_pressure_system(nb::module_& m);
 void bind_walls(nb::module_& m);
+void bind_multigrid(nb::module_& m);
 
 }  // namespace mpmflow::bind
