@@ -18,4 +18,7 @@ NB_MODULE(_core, m) {
   m.attr("DEBUG") = true;
 #endif
   mpmflow::bind::bind_binning(m);
+  mpmflow::bind::bind_transfer(m);
+  mpmflow::bind::bind_corrector(m);
+  mpmflow::bind::bind_volume_correction(m);
 }

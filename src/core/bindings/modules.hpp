@@ -8,5 +8,8 @@ namespace mpmflow::bind {
 namespace nb = nanobind;
 
 void bind_binning(nb::module_& m);
+void bind_transfer(nb::module_& m);
+void bind_corrector(nb::module_& m);
+void bind_volume_correction(nb::module_& m);
 
 }  // namespace mpmflow::bind
