@@ -20,6 +20,8 @@ void bind_corrector(nb::module_& m) {
                               view<double, 2>(v_new, "v_new"));
         });
       },
+      nb::arg("cells"), nb::arg("cell_slot"), nb::arg("C"), nb::arg("V"), nb::arg("p_node"),
+      nb::arg("vstar"), nb::arg("dt_over_rho"), nb::arg("v_new").noconvert(),
       "The corrector v_new = v* - dt/rho (G p) / V at every node.");
 }
 

@@ -28,6 +28,11 @@ void bind_transfer(nb::module_& m) {
               view<double>(cell_vol, "cell_vol"));
         });
       },
+      nb::arg("x"), nb::arg("v"), nb::arg("mass"), nb::arg("volume"), nb::arg("order"),
+      nb::arg("start"), nb::arg("h"), nb::arg("cells"), nb::arg("gravity"), nb::arg("dt"),
+      nb::arg("node_mass").noconvert(), nb::arg("node_mom").noconvert(),
+      nb::arg("node_vol").noconvert(), nb::arg("v_old").noconvert(), nb::arg("v_star").noconvert(),
+      nb::arg("cell_vol").noconvert(),
       "Particle-to-grid: nodal mass, momentum, volume, velocity and predictor (and the "
       "volume on the cell centres if cell_vol is not empty).");
   m.def(
@@ -55,6 +60,9 @@ void bind_transfer(nb::module_& m) {
               view<const double>(upper, "upper"), margin, f);
         });
       },
+      nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("pressure").noconvert(),
+      nb::arg("h"), nb::arg("cells"), nb::arg("v_old"), nb::arg("v_new"), nb::arg("p_node"),
+      nb::arg("dt"), nb::arg("flip"), nb::arg("upper"), nb::arg("margin"), nb::arg("faces"),
       "Grid-to-particle (FLIP/PIC, positions, pressure, wall put-back); returns how many "
       "particles were put back inside.");
   m.def(
@@ -69,6 +77,8 @@ void bind_transfer(nb::module_& m) {
               view<double>(work_m, "work_m"), view<double>(work_mp, "work_mp"));
         });
       },
+      nb::arg("x"), nb::arg("mass"), nb::arg("pressure"), nb::arg("h"), nb::arg("cells"),
+      nb::arg("work_m").noconvert(), nb::arg("work_mp").noconvert(),
       "RMS of the particle pressure less its grid-smoothed value (Pa).");
   m.def(
       "strips",
@@ -79,6 +89,7 @@ void bind_transfer(nb::module_& m) {
         return strips(view<const index_t>(row_cum, "row_cum"), nstrips, min_rows,
                       view<index_t>(bounds, "bounds"));
       },
+      nb::arg("row_cum"), nb::arg("nstrips"), nb::arg("min_rows"), nb::arg("bounds").noconvert(),
       "Cut rows into at most nstrips strips of at least min_rows rows of about equal work; "
       "returns their number.");
 }

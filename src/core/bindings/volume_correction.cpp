@@ -18,6 +18,7 @@ void bind_volume_correction(nb::module_& m) {
                          view<const double>(volume, "volume"), view<double>(out, "out"));
         });
       },
+      nb::arg("x"), nb::arg("volume"), nb::arg("h"), nb::arg("cells"), nb::arg("out").noconvert(),
       "The particles' volume on the cell centres (m^3).");
   m.def(
       "assemble_volume",
@@ -39,12 +40,15 @@ void bind_volume_correction(nb::module_& m) {
           return std::make_pair(s.n, s.anchored);
         });
       },
+      nb::arg("cells"), nb::arg("theta"), nb::arg("density"), nb::arg("wet"), nb::arg("contact"),
+      nb::arg("static_slot"), nb::arg("cell_row").noconvert(), nb::arg("cols").noconvert(),
+      nb::arg("vals").noconvert(), nb::arg("rhs").noconvert(), nb::arg("rows").noconvert(),
       "The volume correction's Poisson system; returns (rows, whether any row touches air).");
   m.def(
       "face_displacements",
       [](std::vector<index_t> cells, Array<const index_t> cell_row,
          Array<const index_t> static_slot, Array<const double> q, double scale, double dmax,
-         std::vector<Array<double>> faces) {
+         std::vector<nb::handle> faces) {
         with_dim(cells.size(), [&](auto d) {
           constexpr int D = decltype(d)::value;
           const Grid<D> g = make_grid<D>(1.0, cells);
@@ -54,15 +58,24 @@ void bind_volume_correction(nb::module_& m) {
           for (int k = 0; k < D; ++k) {
             index_t n = 1;
             for (int j = 0; j < D; ++j) n *= g.cells[j] + (j == k ? 1 : 0);
-            if (static_cast<index_t>(faces[k].size()) != n)
+            // written: no implicit conversion (a converted copy would take the writes)
+            Array<double> a;
+            try {
+              a = nb::cast<Array<double>>(faces[k], false);
+            } catch (const std::exception&) {
+              throw std::invalid_argument("faces: C-contiguous float64 arrays");
+            }
+            if (static_cast<index_t>(a.size()) != n)
               throw std::invalid_argument("faces: the faces normal to each axis");
-            f[k] = view<double>(faces[k], "faces");
+            f[k] = view<double>(a, "faces");
           }
           face_displacements<D>(g, view<const index_t>(cell_row, "cell_row"),
                                 view<const index_t>(static_slot, "static_slot"),
                                 view<const double>(q, "q"), scale, dmax, f);
         });
       },
+      nb::arg("cells"), nb::arg("cell_row"), nb::arg("static_slot"), nb::arg("q"), nb::arg("scale"),
+      nb::arg("dmax"), nb::arg("faces"),
       "The volume correction's displacement on the cell faces (m).");
 }
 
