@@ -6,7 +6,6 @@ import pytest
 from mpmflow import state
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.kernels import transfer, volume
 from mpmflow.particles import Particles, lattice_in_box, seed_box
 
 
@@ -68,13 +67,13 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, vol))
     g, dt = np.array([0.5, -9.81]), 0.01
     cvol = np.empty(grid.ncells)
-    transfer.particles_to_grid(x, v, m, vol, bins.order, bins.start, 0.1, (10, 10), g, dt, mass, mom,
-                      nvol, v_old, v_star, cvol)
+    state.particles_to_grid(grid, x, v, m, vol, bins.order, bins.start, g, dt, mass, mom, nvol,
+                            v_old, v_star, cvol)
     assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
     # the volume on the cell centres (walls mirror): all of it, as the serial kernel has it
     assert cvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
     serial = np.empty(grid.ncells)
-    volume.cell_volume(x, vol, 0.1, (10, 10), serial)
+    state.cell_volume(grid, x, vol, serial)
     np.testing.assert_allclose(cvol, serial, rtol=1e-12, atol=1e-18)
     np.testing.assert_allclose(mom.sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=1e-12)
     assert nvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
@@ -101,8 +100,8 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     p = np.zeros(200)
     dt = 0.01
     exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
-    moved = transfer.grid_to_particles(x, v, p, 0.1, (10, 10), v_old, v_new, p_node, dt, 1.0,
-                              np.array([1.0, 1.0]), 1e-9, NONE)
+    moved = state.grid_to_particles(grid, x, v, p, v_old, v_new, p_node, dt, 1.0,
+                                    np.array([1.0, 1.0]), 1e-9, NONE)
     assert moved == 0
     np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
     np.testing.assert_allclose(x, x0 + dt * exact, atol=1e-12)  # eq. 21 moves with v^{t+1}
@@ -113,8 +112,8 @@ def test_grid_to_particles_puts_particles_back_inside_and_counts_them():
     x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
     v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
     still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move
-    moved = transfer.grid_to_particles(x, v, np.zeros(4), 0.1, (10, 10), still, still, np.zeros(121),
-                              0.01, 1.0, np.array([1.0, 1.0]), 1e-9, NONE)
+    moved = state.grid_to_particles(Grid(0.1, (10, 10)), x, v, np.zeros(4), still, still,
+                                    np.zeros(121), 0.01, 1.0, np.array([1.0, 1.0]), 1e-9, NONE)
     assert moved == 3
     assert np.all((x >= 0) & (x <= 1))
     np.testing.assert_allclose(x[0], [0.01, 0.5])  # mirrored back across the wall
@@ -185,7 +184,7 @@ def test_contact_starts_where_material_presses_and_releases_under_tension():
 
 @pytest.mark.parametrize("min_rows", [1, 2])
 def test_strips_cover_the_rows_with_room_between_and_balance_the_work(min_rows):
-    from mpmflow.kernels.parallel import strips
+    strips = state.strips
 
     rng = np.random.default_rng(5)
     for nrows in (1, 2, 3, 7, 40, 111):

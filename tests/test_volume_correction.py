@@ -4,11 +4,10 @@ nothing else moved (velocities, walls, the column at rest)."""
 import numpy as np
 import pytest
 
-from mpmflow import Simulation, load_case
+from mpmflow import Simulation, load_case, state
 from mpmflow.case import validate
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.kernels import volume
 from mpmflow.particles import seed_box
 
 from conftest import EXAMPLES, make_case
@@ -24,7 +23,7 @@ def test_dual_density_reads_one_for_a_shifted_lattice(shift):
     P = seed_box((0.0, 0.0), (0.6, 0.5), dp, 1000.0, (0.0, 0.0))
     P.x[:] = np.mod(P.x + shift * dp, [0.6, 0.5])  # a lattice shifted, wrapped into the box
     rho = np.empty(grid.ncells)
-    volume.cell_volume(P.x, P.volume, 0.1, (6, 5), rho)
+    state.cell_volume(grid, P.x, P.volume, rho)
     rho /= grid.cell_volume
     inner = rho.reshape(5, 6)[1:-1, 1:-1]
     np.testing.assert_allclose(inner, 1.0, atol=1e-12)
@@ -43,7 +42,7 @@ def test_dual_density_sees_a_strained_lattice_as_its_volume_not_its_rows():
     inside = np.all((P.x > 0.2) & (P.x < 0.6), axis=1)
     bins = bin_particles(grid, P)
     rho = np.empty(grid.ncells)
-    volume.cell_volume(P.x, P.volume, 0.1, (8, 8), rho)
+    state.cell_volume(grid, P.x, P.volume, rho)
     rho /= grid.cell_volume
     core = np.zeros((8, 8), dtype=bool)
     core[3:5, 3:5] = True

@@ -10,7 +10,7 @@ the vertical is z, and both run over every row (column) of cells across the widt
 
 import numpy as np
 
-from .kernels import transfer
+from . import state
 
 
 def last_crossings(f, centres, wall):
@@ -80,7 +80,4 @@ def potential_energy(particles, gravity):
 
 def pressure_noise(grid, particles):
     """RMS difference between particle pressure and its grid-smoothed value (Pa)."""
-    m = np.empty(grid.nnodes)
-    mp = np.empty(grid.nnodes)
-    return float(transfer.pressure_noise(particles.x, particles.mass, particles.pressure,
-                                         grid.spacing, tuple(grid.cells), m, mp))
+    return state.pressure_noise(grid, particles.x, particles.mass, particles.pressure)

@@ -28,9 +28,9 @@ import math
 
 import numpy as np
 
+from .. import state
 from ..cells import bin_particles
 from ..diagnostics import last_crossings, volume_measures
-from ..kernels import volume
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .sloshing import period_and_decay, theory
 
@@ -77,7 +77,7 @@ class Record:
         bins = bin_particles(g, P)
         vm = volume_measures(bins.theta, g.cell_volume, sim.volume0)
         rho = np.empty(g.ncells)
-        volume.cell_volume(P.x, P.volume, g.spacing, tuple(g.cells), rho)
+        state.cell_volume(g, P.x, P.volume, rho)
         hat = (np.count_nonzero(rho > 1.2 * g.cell_volume)
                / max(np.count_nonzero(bins.theta > 0), 1))
         f = np.clip(bins.theta, 0, 1).reshape(g.cells[1], g.cells[0])  # [cy, cx]

@@ -1,0 +1,180 @@
+#include "transfer.hpp"
+
+#include <cmath>
+
+#include "parallel.hpp"
+#include "strips.hpp"
+
+namespace mpmflow {
+
+template <int D>
+double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                      View<const double> pressure, View<double> work_m, View<double> work_mp) {
+  constexpr int NC = Grid<D>::NC;
+  std::array<double, NC> w;
+  for (index_t i = 0; i < g.nnodes; ++i) {
+    work_m[i] = 0.0;
+    work_mp[i] = 0.0;
+  }
+  const index_t n = x.extent(0);
+  for (index_t p = 0; p < n; ++p) {
+    const index_t base = g.weights_at(&x(p, 0), w.data());
+    for (int a = 0; a < NC; ++a) {
+      work_m[base + g.corner[a]] += w[a] * mass(p);
+      work_mp[base + g.corner[a]] += w[a] * mass(p) * pressure(p);
+    }
+  }
+  double total = 0.0;
+  for (index_t p = 0; p < n; ++p) {
+    const index_t base = g.weights_at(&x(p, 0), w.data());
+    double smooth = 0.0;
+    for (int a = 0; a < NC; ++a)
+      if (w[a] > 0.0)  // then the node has mass from this particle at least
+        smooth += w[a] * work_mp[base + g.corner[a]] / work_m[base + g.corner[a]];
+    const double d = pressure(p) - smooth;
+    total += d * d;
+  }
+  return std::sqrt(total / static_cast<double>(n > 1 ? n : 1));
+}
+
+namespace {
+
+// Particle-to-grid of the particles of cell slabs r0 to r1 - 1, cell by cell.
+template <int D>
+void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 2> x,
+                   View<const double, 2> v, View<const double> mass, View<const double> volume,
+                   View<const index_t> order, View<const index_t> start, View<double> node_mass,
+                   View<double, 2> node_mom, View<double> node_vol, View<double> cell_vol) {
+  constexpr int NC = Grid<D>::NC;
+  std::array<double, NC> w;
+  const index_t slab = g.cs[D - 1];
+  const bool cells_too = cell_vol.size() > 0;
+  for (index_t s = start(r0 * slab); s < start(r1 * slab); ++s) {
+    const index_t p = order(s);
+    const index_t base = g.weights_at(&x(p, 0), w.data());
+    const double m = mass(p);
+    std::array<double, D> vp;
+    for (int k = 0; k < D; ++k) vp[k] = v(p, k);
+    for (int a = 0; a < NC; ++a) {
+      const index_t i = base + g.corner[a];
+      const double wm = w[a] * m;
+      node_mass[i] += wm;
+      node_vol[i] += w[a] * volume(p);
+      for (int k = 0; k < D; ++k) node_mom(i, k) += wm * vp[k];
+    }
+    if (cells_too) scatter_cell_volume<D>(g, x, p, volume(p), cell_vol);
+  }
+}
+
+}  // namespace
+
+template <int D>
+void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const double, 2> v,
+                       View<const double> mass, View<const double> volume,
+                       View<const index_t> order, View<const index_t> start,
+                       View<const double> gravity, double dt, View<double> node_mass,
+                       View<double, 2> node_mom, View<double> node_vol, View<double, 2> v_old,
+                       View<double, 2> v_star, View<double> cell_vol) {
+  const index_t nn = g.nnodes;
+  parallel_for(nn, [&](index_t i) {
+    node_mass[i] = 0.0;
+    node_vol[i] = 0.0;
+    for (int k = 0; k < D; ++k) node_mom(i, k) = 0.0;
+  });
+  parallel_for(cell_vol.size(), [&](index_t c) { cell_vol[c] = 0.0; });
+  std::array<index_t, 2 * STRIPS + 1> bounds;
+  const index_t slab = g.cs[D - 1];
+  const index_t nstrips = strips(
+      g.cells[D - 1], [&](index_t r) { return start(r * slab); }, 2 * STRIPS, 2, bounds.data());
+  for_strips(bounds.data(), nstrips, x.extent(0), [&](index_t r0, index_t r1) {
+    scatter_slabs(r0, r1, g, x, v, mass, volume, order, start, node_mass, node_mom, node_vol,
+                  cell_vol);
+  });
+  parallel_for(nn, [&](index_t i) {
+    const double m = node_mass[i];
+    for (int k = 0; k < D; ++k) {
+      if (m > 0.0) {
+        v_old(i, k) = node_mom(i, k) / m;
+        v_star(i, k) = v_old(i, k) + dt * gravity(k);
+      } else {
+        v_old(i, k) = 0.0;
+        v_star(i, k) = 0.0;
+      }
+    }
+  });
+}
+
+namespace {
+
+// Grid-to-particle of particles lo to hi - 1 (grid_to_particles); returns how many were put
+// back inside.
+template <int D>
+index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View<double, 2> v,
+               View<double> pressure, View<const double, 2> v_old, View<const double, 2> v_new,
+               View<const double> p_node, double dt, double flip, View<const double> upper,
+               double margin, const std::array<View<const double>, D>& faces) {
+  constexpr int NC = Grid<D>::NC;
+  std::array<double, NC> w;
+  std::array<double, D> normal, tangent;
+  std::array<index_t, D> nlo, tlo, thi;
+  const bool correct = faces[0].size() > 0;
+  index_t moved = 0;
+  for (index_t p = lo; p < hi; ++p) {
+    const index_t base = g.weights_at(&x(p, 0), w.data());
+    std::array<double, D> pic{}, dv{}, disp{};
+    double pp = 0.0;
+    for (int a = 0; a < NC; ++a) {
+      const index_t i = base + g.corner[a];
+      for (int k = 0; k < D; ++k) {
+        pic[k] = pic[k] + w[a] * v_new(i, k);
+        dv[k] = dv[k] + w[a] * (v_new(i, k) - v_old(i, k));
+      }
+      pp += w[a] * p_node(i);
+    }
+    if (correct) {
+      face_samples<D>(g, View<const double, 2>(x), p, normal, nlo, tangent, tlo, thi);
+      for (int k = 0; k < D; ++k)
+        disp[k] = face_displacement<D>(g, k, faces[k], normal, nlo, tangent, tlo, thi);
+    }
+    for (int k = 0; k < D; ++k) {
+      v(p, k) = flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
+      x(p, k) += dt * pic[k];
+      if (correct) x(p, k) += disp[k];
+    }
+    pressure(p) = pp;
+    if (put_inside<D>(x, v, p, upper, margin)) moved += 1;
+  }
+  return moved;
+}
+
+}  // namespace
+
+template <int D>
+index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
+                          View<double> pressure, View<const double, 2> v_old,
+                          View<const double, 2> v_new, View<const double> p_node, double dt,
+                          double flip, View<const double> upper, double margin,
+                          const std::array<View<const double>, D>& faces) {
+  return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
+    return gather<D>(lo, hi, g, x, v, pressure, v_old, v_new, p_node, dt, flip, upper, margin,
+                     faces);
+  });
+}
+
+#define MPMFLOW_TRANSFER(D)                                                                        \
+  template double pressure_noise<D>(const Grid<D>&, View<const double, 2>, View<const double>,     \
+                                    View<const double>, View<double>, View<double>);               \
+  template void particles_to_grid<D>(const Grid<D>&, View<const double, 2>, View<const double, 2>, \
+                                     View<const double>, View<const double>, View<const index_t>,  \
+                                     View<const index_t>, View<const double>, double,              \
+                                     View<double>, View<double, 2>, View<double>, View<double, 2>, \
+                                     View<double, 2>, View<double>);                               \
+  template index_t grid_to_particles<D>(                                                           \
+      const Grid<D>&, View<double, 2>, View<double, 2>, View<double>, View<const double, 2>,       \
+      View<const double, 2>, View<const double>, double, double, View<const double>, double,       \
+      const std::array<View<const double>, D>&);
+MPMFLOW_TRANSFER(2)
+MPMFLOW_TRANSFER(3)
+#undef MPMFLOW_TRANSFER
+
+}  // namespace mpmflow

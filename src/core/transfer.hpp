@@ -1,0 +1,184 @@
+// Particle-grid transfers with multilinear shape functions, for 2D and 3D
+// (kernels/transfer.py).
+//
+// Particle-to-grid: nodal mass, momentum and material volume, the velocity and the
+// predictor with gravity, and (for the volume correction) the particles' volume on the
+// cell centres; grid-to-particle: the FLIP/PIC velocity, the position moved with the new
+// grid velocity plus the volume correction's displacement, the pressure, and the wall
+// put-back. The element functions (scatter_cell_volume, face_samples, face_displacement,
+// put_inside) are inline here: other kernels call them per particle.
+#pragma once
+
+#include <array>
+
+#include "grid.hpp"
+#include "view.hpp"
+
+namespace mpmflow {
+
+// Particle-to-grid cuts the slabs of cells (one index along the last axis) into 2 STRIPS
+// strips.
+constexpr index_t STRIPS = 16;
+
+// Add ``volume`` (m^3) at particle p to the cell centres with the multilinear hat of the
+// cell-centred grid. A wall mirrors the particles next to it: a ghost cell's weight goes to
+// its mirror, the cell against the wall, so a uniform material reads full up to the walls.
+// Points beyond the grid (and NaN) count at its edge.
+template <int D>
+inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index_t p, double volume,
+                                View<double> cell_vol) {
+  std::array<double, D> frac;
+  std::array<index_t, D> first;
+  for (int k = 0; k < D; ++k) {
+    double s = x(p, k) * g.inv_h;
+    if (!(s >= 0.0))
+      s = 0.0;
+    else if (s > g.cells[k])
+      s = static_cast<double>(g.cells[k]);
+    s -= 0.5;
+    const index_t i0 = static_cast<index_t>(s + 1.0) - 1;  // floor: s >= -1/2
+    frac[k] = s - i0;
+    first[k] = i0;
+  }
+  for (int a = 0; a < (1 << D); ++a) {
+    index_t c = 0;
+    double w = volume;
+    for (int k = 0; k < D; ++k) {
+      const int up = (a >> k) & 1;
+      index_t i = first[k] + up;
+      w *= up ? frac[k] : 1.0 - frac[k];
+      if (i < 0)
+        i = 0;
+      else if (i > g.cells[k] - 1)
+        i = g.cells[k] - 1;
+      c += i * g.cs[k];
+    }
+    cell_vol[c] += w;
+  }
+}
+
+// Where particle p samples the face values of the volume correction: along an axis j whose
+// faces it interpolates across (normal to them), between faces nlo[j] and nlo[j] + 1 with
+// the weight normal[j] of the upper one; along an axis whose faces lie at cell centres,
+// between tlo[j] and thi[j] (clamped to the outermost) with weight tangent[j]. Points
+// beyond the grid count at its edge.
+template <int D>
+inline void face_samples(const Grid<D>& g, View<const double, 2> x, index_t p,
+                         std::array<double, D>& normal, std::array<index_t, D>& nlo,
+                         std::array<double, D>& tangent, std::array<index_t, D>& tlo,
+                         std::array<index_t, D>& thi) {
+  for (int j = 0; j < D; ++j) {
+    double s = x(p, j) * g.inv_h;
+    if (!(s >= 0.0))
+      s = 0.0;
+    else if (s > g.cells[j])
+      s = static_cast<double>(g.cells[j]);
+    index_t i0 = static_cast<index_t>(s);
+    if (i0 > g.cells[j] - 1) i0 = g.cells[j] - 1;
+    nlo[j] = i0;
+    normal[j] = s - i0;
+    s -= 0.5;
+    i0 = static_cast<index_t>(s + 1.0) - 1;  // floor: s >= -1/2
+    tangent[j] = s - i0;
+    tlo[j] = i0 > 0 ? i0 : 0;
+    thi[j] = i0 + 1 < g.cells[j] - 1 ? i0 + 1 : g.cells[j] - 1;
+  }
+}
+
+// Component k of the volume correction's displacement at a particle (m), interpolated
+// multilinearly from f, the values on the cell faces normal to axis k (face (i_0, ...) at
+// i_k h along axis k, i_k = 0 to cells[k], and at (i_j + 1/2) h along the others, flat
+// index with axis 0 fastest), at the samples face_samples found.
+template <int D>
+inline double face_displacement(const Grid<D>& g, int k, View<const double> f,
+                                const std::array<double, D>& normal,
+                                const std::array<index_t, D>& nlo,
+                                const std::array<double, D>& tangent,
+                                const std::array<index_t, D>& tlo,
+                                const std::array<index_t, D>& thi) {
+  double acc = 0.0;
+  for (int a = 0; a < (1 << D); ++a) {
+    double w = 1.0;
+    index_t idx = 0;
+    index_t stride = 1;
+    for (int j = 0; j < D; ++j) {
+      const int up = (a >> j) & 1;
+      if (j == k) {
+        w *= up ? normal[j] : 1.0 - normal[j];
+        idx += (nlo[j] + up) * stride;
+        stride *= g.cells[j] + 1;
+      } else {
+        w *= up ? tangent[j] : 1.0 - tangent[j];
+        idx += (up ? thi[j] : tlo[j]) * stride;
+        stride *= g.cells[j];
+      }
+    }
+    acc += w * f[idx];
+  }
+  return acc;
+}
+
+// Put particle p back inside the box [0, upper] (m) if it left it; true if it was moved.
+// A particle beyond a wall is mirrored back across it (so it keeps its distance from the
+// wall) and at least ``margin`` (m) inside; its velocity component into the wall is removed.
+template <int D>
+inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<const double> upper,
+                       double margin) {
+  bool out = false;
+  for (int k = 0; k < D; ++k) {
+    const double lo = margin;
+    const double hi = upper(k) - margin;
+    double& xk = x(p, k);
+    if (xk < 0.0) {
+      const double m = lo > -xk ? lo : -xk;  // min(max(-x, lo), hi) as Python takes them
+      xk = hi < m ? hi : m;
+      if (v(p, k) < 0.0) v(p, k) = 0.0;
+      out = true;
+    } else if (xk > upper(k)) {
+      const double mirror = 2.0 * upper(k) - xk;
+      const double m = hi < mirror ? hi : mirror;
+      xk = lo > m ? lo : m;
+      if (v(p, k) > 0.0) v(p, k) = 0.0;
+      out = true;
+    }
+  }
+  return out;
+}
+
+// RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa).
+// The smoothed field is the particle-to-grid sum of m_p p_p divided by the nodal mass,
+// interpolated back: a smooth pressure field is kept (up to interpolation), a checkerboard
+// is not. work_m, work_mp: scratch of one value per node.
+template <int D>
+double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                      View<const double> pressure, View<double> work_m, View<double> work_mp);
+
+// Lumped nodal mass M_i = sum_p N_i(x_p) m_p (kg), momentum sum_p N_i m_p v_p, material
+// volume sum_p N_i V_p (m^3), velocity v_old_i = momentum / M_i and the predictor without
+// pressure v_star_i = v_old_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere); with
+// cell_vol non-empty also the particles' volume on the cell centres (scatter_cell_volume).
+// The particles come binned by cell (order, start: see binning.hpp). The slabs of cells
+// along the last axis are cut into 2 STRIPS strips of at least 2 slabs holding equal
+// numbers of particles (strips.hpp); the even strips are scattered in parallel, then the
+// odd ones, so results do not depend on the thread count.
+template <int D>
+void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const double, 2> v,
+                       View<const double> mass, View<const double> volume,
+                       View<const index_t> order, View<const index_t> start,
+                       View<const double> gravity, double dt, View<double> node_mass,
+                       View<double, 2> node_mom, View<double> node_vol, View<double, 2> v_old,
+                       View<double, 2> v_star, View<double> cell_vol);
+
+// Eqs. (19)-(21): FLIP/PIC velocity update (flip: the FLIP fraction of this step), position
+// update with v^{t+1} evaluated at x_p^t plus the volume correction's displacement (faces:
+// one array per axis, see face_displacement; empty arrays: none), pressure; then particles
+// that left the box [0, upper] are put back inside (put_inside). Returns how many were put
+// back.
+template <int D>
+index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
+                          View<double> pressure, View<const double, 2> v_old,
+                          View<const double, 2> v_new, View<const double> p_node, double dt,
+                          double flip, View<const double> upper, double margin,
+                          const std::array<View<const double>, D>& faces);
+
+}  // namespace mpmflow
