@@ -132,25 +132,6 @@ def test_pressure_solve_failure_stops_the_run_and_says_where(tmp_path):
     assert (out / "timeseries.csv").read_text().startswith("time,front,height")
 
 
-def test_progress_bar_says_when_kernels_compile_and_leaves_it_out_of_the_estimate(capsys):
-    """A first run compiles for tens of seconds: the bar says so instead of a wrong ETA."""
-    import time
-
-    from numba import njit
-
-    from mpmflow.cli import _progress_bar
-
-    bar, update = _progress_bar(1.0, quiet=False)
-    t0 = time.time()
-    njit(lambda a: a + 1)(1)  # a compilation (nothing cached) while the bar runs
-    assert "compiling kernels (first run only)" in capsys.readouterr().err
-    assert bar.start_t >= t0  # the estimate restarts after the compilation
-    update(0.5, 10, 1.0)
-    assert not bar.desc  # back to the plain bar once steps run
-    bar.close()
-    bar.close()  # closing twice (tqdm closes again when collected) is harmless
-
-
 def test_keys_into_a_pipe_closed_early_exits_quietly():
     """`mpmflow keys | head -1` raised BrokenPipeError with a traceback: the reader going
     away now stops the command quietly with 141 (128 + SIGPIPE), as other tools do."""

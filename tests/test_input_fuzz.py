@@ -198,7 +198,7 @@ def test_any_case_file_runs_or_fails_cleanly(monkeypatch):
     # every accepted case stays small: the memory a run may use is the program's and 8 MB
     # more (about 30k particles or 50k nodes; the estimate refuses the rest as it refuses a
     # case larger than the machine), and it is stopped after STEPS steps
-    budget = memory.PROGRAM + memory.COMPILE + 8 * memory.MB
+    budget = memory.PROGRAM + 8 * memory.MB
     monkeypatch.setattr(memory, "available", lambda: (budget, "the test's budget"))
     monkeypatch.setattr(Simulation, "_advance", _capped)
     monkeypatch.setenv("MPMFLOW_THREADS", "1")  # no sampling of the machine's load

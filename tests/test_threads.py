@@ -6,12 +6,11 @@ import subprocess
 import sys
 import time
 
-import numba
 import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from mpmflow import Simulation, load_case
+from mpmflow import Simulation, load_case, state
 from mpmflow import threads as threads_module
 from mpmflow.errors import CaseError
 
@@ -32,30 +31,30 @@ def run(threads, settings):
     ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005"],
 ])
 def test_dam_break_is_bit_identical_on_one_and_two_threads(settings):
-    if numba.config.NUMBA_NUM_THREADS < 2:
+    if state.POOL < 2:
         pytest.skip("one thread only")
     one, two = run(1, settings), run(2, settings)
     for field in ("x", "v", "pressure"):
         assert np.array_equal(getattr(one, field), getattr(two, field)), field
 
 
-def test_numbas_threads_are_given_back_after_a_run():
-    before = numba.get_num_threads()
+def test_the_cores_threads_are_given_back_after_a_run():
+    before = state.max_threads()
     run(1, ["grid.spacing=0.02", "time.end=0.01"])
-    assert numba.get_num_threads() == before
+    assert state.max_threads() == before
 
 
 def test_the_setting_and_the_environment_variable(monkeypatch):
     monkeypatch.setenv(threads_module.ENV, "1")
     assert threads_module.setting_from("auto") == ("fixed", 1)
-    assert threads_module.setting_from(2 if numba.config.NUMBA_NUM_THREADS >= 2 else 1)[0] \
+    assert threads_module.setting_from(2 if state.POOL >= 2 else 1)[0] \
         == "fixed"  # a number in the case wins over the variable
     monkeypatch.setenv(threads_module.ENV, "many")
     with pytest.raises(CaseError, match="MPMFLOW_THREADS = 'many' is not a number"):
         threads_module.setting_from("auto")
     monkeypatch.delenv(threads_module.ENV)
     assert threads_module.setting_from("auto") == ("auto", None)
-    too_many = numba.config.NUMBA_NUM_THREADS + 1
+    too_many = state.POOL + 1
     with pytest.raises(CaseError, match=f"execution.threads = {too_many} is more threads"):
         threads_module.setting_from(too_many)
 
@@ -71,12 +70,12 @@ def test_auto_counts_the_cores_others_keep_busy(monkeypatch):
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/stat") or len(os.sched_getaffinity(0)) < 2
-                    or numba.config.NUMBA_NUM_THREADS < 2, reason="needs Linux and 2 cores")
+                    or state.POOL < 2, reason="needs Linux and 2 cores")
 def test_auto_runs_on_fewer_threads_beside_busy_programs():
     """With a busy process on every core but one, "auto" starts on one thread, whatever
     else the machine is doing (the other engineer's tests may add load: fewer free cores
     only lower the choice)."""
-    cores = min(len(os.sched_getaffinity(0)), numba.config.NUMBA_NUM_THREADS)
+    cores = min(len(os.sched_getaffinity(0)), state.POOL)
     busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
             for _ in range(cores - 1)]
     try:

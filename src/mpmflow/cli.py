@@ -139,50 +139,21 @@ def _parser():
 
 
 def _progress_bar(end, quiet, start=0.0):
-    """A tqdm bar over simulated time, and its update callback. While Numba compiles kernels
-    that are not in its cache yet (the first run after an install or upgrade) the bar says
-    so, and the time spent compiling is left out of the estimate of the time remaining."""
+    """A tqdm bar over simulated time, and its update callback."""
     if quiet:
         return None, None
-    from numba.core import event
     from tqdm import tqdm
 
     bar = tqdm(total=end, initial=start, unit="s", unit_scale=False, dynamic_ncols=True, file=sys.stderr,
                bar_format="{l_bar}{bar}| t = {n:.3f}/{total:.3f} s [{elapsed}<{remaining}]"
                           "{postfix}")
     last = [start]
-    compiling = [0]  # depth of nested compilations
-
-    class Compiling(event.Listener):
-        def on_start(self, ev):
-            if compiling[0] == 0:
-                bar.set_description_str("compiling kernels (first run only)")
-            compiling[0] += 1
-
-        def on_end(self, ev):
-            compiling[0] -= 1
-            if compiling[0] == 0:  # the estimate starts again from here
-                bar.start_t = bar.last_print_t = bar._time()
-                bar.initial = bar.last_print_n = bar.n
-
-    listener = Compiling()
-    event.register("numba:compile", listener)
 
     def update(t, step, end_):
-        if bar.desc:
-            bar.set_description_str("", refresh=False)
         bar.update(t - last[0])
         last[0] = t
         bar.set_postfix_str(f"step {step}", refresh=False)
 
-    close = bar.close
-
-    def close_bar():
-        if listener in event._registered.get("numba:compile", ()):
-            event.unregister("numba:compile", listener)
-        close()
-
-    bar.close = close_bar
     return bar, update
 
 

@@ -55,8 +55,8 @@ def stop_on_signals(sim):
              "time with a checkpoint (send it again to stop at once, without one).\n")
 
     def unraisable(info):
-        # a handler that runs inside a __del__ (Numba frees llvmlite objects while it loads
-        # the kernels) has its exception printed as "Exception ignored ... Traceback" and
+        # a handler that runs inside a __del__ (a library freeing objects while it loads)
+        # has its exception printed as "Exception ignored ... Traceback" and
         # dropped; StopNow is then raised by the run loop after the current chunk
         if not isinstance(info.exc_value, StopNow):
             previous_hook(info)
@@ -89,7 +89,7 @@ class EarlySignals:
     Without them SIGTERM during the first second of a command (imports, loading the case,
     placing the particles) killed it without a word. A signal then raises EarlyStop, which
     the command reports (exit 130 / 143). Should the exception be lost (raised inside a
-    __del__ while Numba loads its kernels), ``check()``, called between the phases of the
+    __del__ while a library frees objects), ``check()``, called between the phases of the
     command, raises it again."""
 
     def __init__(self):

@@ -2,7 +2,7 @@
 how much this machine can give it.
 
 The estimate is the peak resident memory of the run's process: the program (Python, NumPy,
-Numba and the compiled kernels), the particles, the grid's arrays, the pressure solver (its
+SciPy and the compiled core), the particles, the grid's arrays, the pressure solver (its
 matrix and multigrid hierarchy, by pressure unknowns), the time series kept in memory, and
 the largest passing need: writing a particle snapshot (meshio builds copies of the arrays),
 or measuring an output row (binning the particles again). The bytes per particle, node and
@@ -29,8 +29,7 @@ from .grid import Grid
 
 MB = 2**20
 # measured (benchmarks/memory.py): see the module docstring
-PROGRAM = 190 * MB  # Python, NumPy, SciPy, Numba and the loaded kernels of a run
-COMPILE = 270 * MB  # more on the first run, while Numba compiles the kernels into its cache
+PROGRAM = 190 * MB  # Python, NumPy, SciPy and the compiled core
 PER_PARTICLE = 72  # B: x, v (2 each), pressure, mass, volume, the cell index and order
 PER_NODE = 165  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
 PER_UNKNOWN = 500  # B: matrix (9 entries), multigrid levels, CG vectors
@@ -90,21 +89,6 @@ def size(nbytes):
     return f"{nbytes / 2**10:.0f} kB"
 
 
-def _kernels_cached():
-    """Whether Numba's cache holds the compiled step (else the first run compiles it and the
-    kernels it calls, the bulk of the compilation)."""
-    folder = os.environ.get("NUMBA_CACHE_DIR")
-    here = Path(__file__).parent / "kernels"
-    places = [Path(folder)] if folder else [here / "__pycache__"]
-    for place in places:
-        try:
-            if any(place.rglob("step.advance-*.nbi")):
-                return True
-        except OSError:
-            pass
-    return False
-
-
 def _as_float(n):
     try:
         return float(n)
@@ -131,7 +115,7 @@ def estimate(case):
         passing, what = SNAPSHOT * particles, "writing a snapshot"
     else:
         passing, what = MEASURE[0] * particles + MEASURE[1] * nodes, "measuring a row"
-    program = PROGRAM + (0 if _kernels_cached() else COMPILE)
+    program = PROGRAM
     snaps = (case.time.end / (case.output.snapshot_interval or case.output.interval) + 2
              if case.output.snapshots else 0)
     disk = (rows * (170 + 12 * len(case.probes)) + snaps * (120 * particles + 200)

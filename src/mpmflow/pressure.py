@@ -1,7 +1,7 @@
 """The pressure step (docs/method.md, step 5) with a solver from Python, and the messages of
 every pressure failure.
 
-The default solver (``multigrid``) runs inside the compiled step (``kernels.step``). The
+The default solver (``multigrid``) runs inside the compiled step (the core's State). The
 others (``amg``, ``direct``; for comparison and tests) run the same compiled phases one step
 at a time, with this loop around the solve: assemble eq. (13) with the walls as contact
 conditions, solve, release the wall nodes whose pressure comes out negative while v* leaves
@@ -12,7 +12,6 @@ pressure to the ghost nodes.
 import numpy as np
 
 from .errors import SolverError
-from .kernels import step
 from .linsolve import LinearSolver, PressureMatrix
 
 SETUP_ERRORS = (np.linalg.LinAlgError, RuntimeError, ValueError)
@@ -42,8 +41,8 @@ def not_converged(where, residual, iterations, settings, unknowns, xyz):
 
 
 class PythonPressure:
-    """Step 5 with ``linsolve.LinearSolver`` (amg or direct); fills the step's report as the
-    compiled ``kernels.step.pressure_multigrid`` does."""
+    """Step 5 with ``linsolve.LinearSolver`` (amg or direct) around the compiled phases of
+    the core's State; fills the step's report as the compiled multigrid step does."""
 
     def __init__(self, grid, settings):
         self.grid = grid
@@ -51,36 +50,39 @@ class PythonPressure:
         self.solver = LinearSolver(settings.linear_solver, settings.tolerance,
                                    settings.max_iterations)
 
-    def solve(self, G, O, W, integrals, rows, report, where):
-        x = step.warm_start(W, rows)
-        cols, vals, anchored = step.pressure_matrix(G, O, W, integrals, rows)
+    def solve(self, core, O, report, where):
+        core.warm_start()
+        x = core.x0.copy()
+        anchored = core.pressure_matrix(O)
+        rows = core.rows.copy()
         n = rows.size
         if n == 0:
             return
         if not anchored:
             raise singular(where)
         try:
-            self.solver.prepare(PressureMatrix(cols, vals, rows, self.grid.nodes))
+            self.solver.prepare(PressureMatrix(core.matrix_cols.copy(), core.matrix_vals.copy(),
+                                               rows, self.grid.nodes))
         except SETUP_ERRORS as err:
             raise setup_failed(where, err, n) from None
-        rhs = np.empty(n)
         iterations = 0
         while True:
-            step.pressure_rhs(G, O, W, integrals, rows, rhs)
+            core.pressure_rhs(O)
+            rhs = core.rhs.copy()
             result = self.solver.solve(rhs, x)
-            report[step.R_SOLVES] += 1
-            report[step.R_ITERATIONS] += result.iterations
+            report.solves += 1
+            report.iterations += result.iterations
             iterations += result.iterations
-            report[step.R_RESIDUAL] = max(report[step.R_RESIDUAL], result.residual)
+            report.residual = max(report.residual, result.residual)
             if not result.converged:
                 r = self.solver.residual_vector(rhs, result.x)
                 worst = rows[int(np.nanargmax(np.abs(r)))]
                 raise not_converged(where, result.residual, result.iterations, self.settings,
                                     n, self.grid.node_coordinates()[worst])
             x = result.x
-            released = step.release_walls(G, W, rows, x)
+            released = core.release_walls(np.ascontiguousarray(x))
             if not released:
                 break
-            report[step.R_RELEASED] += released
-        report[step.R_MAX_ITERATIONS] = max(report[step.R_MAX_ITERATIONS], iterations)
-        step.extend_pressure(G, O, W, integrals)
+            report.released += released
+        report.max_iterations = max(report.max_iterations, iterations)
+        core.extend_pressure(O)

@@ -393,7 +393,7 @@ class Simulation:
         next output time with a checkpoint and status "interrupted".
 
         BLAS (NumPy's OpenBLAS) is held to one thread while the run lasts: the compiled
-        kernels use the cores through Numba's threads, and BLAS threads spinning after a
+        core uses the cores through its OpenMP threads, and BLAS threads spinning after a
         NumPy call took them away (measured: 2 threads 4.4 times slower than 1 at 416k
         particles; with BLAS on one thread, 1.5 times faster)."""
         try:

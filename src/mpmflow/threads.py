@@ -7,7 +7,7 @@ threads as alone, while one thread would have lost nothing. So with ``execution.
 "auto"`` (the default) a run uses the cores that other programs leave idle:
 
 - at the start, the cores it may use (its CPU affinity and the cgroup's CPU quota, at most
-  Numba's thread pool, ``NUMBA_NUM_THREADS``) less the programs running at that moment
+  the core's thread pool, ``OMP_NUM_THREADS``) less the programs running at that moment
   (``procs_running`` of /proc/stat, the least of three looks 1 ms apart);
 - then at output times, at most once a second of wall time, the cores less the CPU time
   other programs used since the last look, in cores (/proc/stat's busy time on this run's
@@ -40,10 +40,11 @@ except (ValueError, OSError, AttributeError):  # pragma: no cover
 
 
 def pool_size():
-    """The threads Numba started (NUMBA_NUM_THREADS, default: the cores)."""
-    import numba
+    """The most threads the core's parallel loops may use (OMP_NUM_THREADS, default: the
+    cores), as it was when mpmflow was imported."""
+    from . import state
 
-    return int(numba.config.NUMBA_NUM_THREADS)
+    return state.POOL
 
 
 def usable_cpus():
@@ -67,7 +68,7 @@ def cpu_quota():
 
 def setting_from(value):
     """("auto", None) or ("fixed", n) for the case's execution.threads, with MPMFLOW_THREADS
-    taking the place of "auto"; CaseError for a bad value or more threads than Numba's
+    taking the place of "auto"; CaseError for a bad value or more threads than the core's
     pool."""
     source = "execution.threads"
     if value == "auto":
@@ -85,8 +86,8 @@ def setting_from(value):
         return "auto", None
     pool = pool_size()
     if value > pool:
-        raise CaseError(f"{source} = {value} is more threads than Numba runs here ({pool}: "
-                        "NUMBA_NUM_THREADS, or the number of cores); give at most "
+        raise CaseError(f"{source} = {value} is more threads than the core runs here ({pool}: "
+                        "OMP_NUM_THREADS, or the number of cores); give at most "
                         f"{pool}, or \"auto\".")
     return "fixed", int(value)
 
@@ -128,7 +129,7 @@ class CpuMeter:
 
 
 def _own_running():
-    """This process's threads that are running or runnable now (Numba's workers spin for a
+    """This process's threads that are running or runnable now (OpenMP's workers spin for a
     while after a parallel region)."""
     n = 0
     for task in Path("/proc/self/task").iterdir():
@@ -159,7 +160,7 @@ def running_now():
 
 
 class ThreadGovernor:
-    """Sets Numba's threads for a run: ``start()``, ``update(t)`` at output times, ``stop()``."""
+    """Sets the core's threads for a run: ``start()``, ``update(t)`` at output times, ``stop()``."""
 
     def __init__(self, setting):
         self.mode, self.fixed = setting_from(setting)
@@ -172,11 +173,11 @@ class ThreadGovernor:
         self._previous = None
 
     def _set(self, n, t, others):
-        import numba
+        from . import state
 
         n = max(1, min(int(n), self.limit if self.mode == "auto" else pool_size()))
         if n != self.threads:
-            numba.set_num_threads(n)
+            state.set_threads(n)
             self.threads = n
             self.changes.append((t, n, None if others is None else round(others, 2)))
 
@@ -184,9 +185,9 @@ class ThreadGovernor:
         return math.floor(self.cores - others + (1 - FREE))
 
     def start(self, t=0.0):
-        import numba
+        from . import state
 
-        self._previous = numba.get_num_threads()
+        self._previous = state.max_threads()
         if self.mode == "fixed":
             self._set(self.fixed, t, None)
             return
@@ -214,11 +215,11 @@ class ThreadGovernor:
             self._set(self._choose(others), t, others)
 
     def stop(self):
-        """Give Numba back the threads it had before the run."""
-        import numba
+        """Give the core back the threads it had before the run."""
+        from . import state
 
         if self._previous is not None:
-            numba.set_num_threads(self._previous)
+            state.set_threads(self._previous)
             self._previous = None
 
     def record(self):

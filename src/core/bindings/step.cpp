@@ -1,0 +1,199 @@
+// The projection scheme's State<D> as Python classes State2 and State3, with its Options
+// and Report. The State keeps the grid's tables as views: the bound object holds the NumPy
+// arrays alive for its life.
+#include "../step.hpp"
+
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/unique_ptr.h>
+
+#include <memory>
+#include <string>
+
+#include "arrays.hpp"
+#include "modules.hpp"
+
+namespace mpmflow::bind {
+
+namespace {
+
+template <int D>
+struct BoundState {
+  std::vector<nb::object> keep;  // the arrays the tables view
+  std::unique_ptr<State<D>> state;
+};
+
+template <class T, int R>
+View<const T, R> table(nb::object a, const char* name, std::vector<nb::object>& keep) {
+  keep.push_back(a);
+  return view<const T, R>(nb::cast<Array<const T>>(a), name);
+}
+
+template <class T, int R>
+nb::ndarray<nb::numpy, T> out(View<T, R> v, nb::handle owner) {
+  std::array<std::size_t, R> shape{};
+  for (int k = 0; k < R; ++k) shape[k] = static_cast<std::size_t>(v.extent(k));
+  return nb::ndarray<nb::numpy, T>(v.data(), R, shape.data(), owner);
+}
+
+template <int D>
+Particles<D> particles(Array<double> x, Array<double> v, Array<const double> mass,
+                       Array<const double> volume, Array<double> pressure) {
+  Particles<D> P{view<double, 2>(x, "x"), view<double, 2>(v, "v"), view<const double>(mass),
+                 view<const double>(volume), view<double>(pressure)};
+  const index_t n = P.x.extent(0);
+  if (P.x.extent(1) != D || P.v.extent(0) != n || P.v.extent(1) != D || P.mass.size() != n ||
+      P.volume.size() != n || P.pressure.size() != n)
+    throw std::invalid_argument("particle arrays of inconsistent shapes");
+  return P;
+}
+
+template <int D>
+void bind_dim(nb::module_& m) {
+  const std::string suffix = std::to_string(D);
+  using S = BoundState<D>;
+  using O = Options<D>;
+  nb::class_<O>(m, ("Options" + suffix).c_str())
+      .def(nb::init<>())
+      .def_rw("dt", &O::dt)
+      .def_rw("gravity", &O::gravity)
+      .def_rw("rho", &O::rho)
+      .def_rw("flip", &O::flip)
+      .def_rw("full", &O::full)
+      .def_rw("sparse", &O::sparse)
+      .def_rw("partial_particles", &O::partial_particles)
+      .def_rw("surface", &O::surface)
+      .def_rw("subcell", &O::subcell)
+      .def_rw("wall_flux", &O::wall_flux)
+      .def_rw("no_slip", &O::no_slip)
+      .def_rw("theta_min", &O::theta_min)
+      .def_rw("expansion", &O::expansion)
+      .def_rw("tol", &O::tol)
+      .def_rw("max_iterations", &O::max_iterations)
+      .def_rw("sweeps", &O::sweeps)
+      .def_rw("volume_rate", &O::volume_rate)
+      .def_rw("volume_every", &O::volume_every)
+      .def_rw("volume_tol", &O::volume_tol)
+      .def_rw("volume_max_iterations", &O::volume_max_iterations)
+      .def_rw("volume_dmax", &O::volume_dmax)
+      .def_rw("viscous", &O::viscous)
+      .def_rw("model", &O::model)
+      .def_rw("model_params", &O::model_params);
+
+  nb::class_<S>(m, ("State" + suffix).c_str())
+      .def(
+          "__init__",
+          [](S* self, double h, std::vector<index_t> cells, double cell_volume,
+             std::array<double, D> upper, double margin, nb::object wall_node,
+             nb::object wall_axis, nb::object wall_sign, nb::object phi, nb::object open,
+             nb::object static_slot, nb::object K, nb::object C, nb::object V, nb::object F,
+             nb::object Wf, nb::object onode, nb::object onormal, nb::object ono_slip,
+             nb::object viscous_T, bool volume_correction, bool viscous) {
+            new (self) S();
+            auto& keep = self->keep;
+            GridTables<D> T;
+            T.wall_node = table<index_t, 1>(wall_node, "wall_node", keep);
+            T.wall_axis = table<index_t, 1>(wall_axis, "wall_axis", keep);
+            T.wall_sign = table<double, 1>(wall_sign, "wall_sign", keep);
+            T.phi = table<double, 1>(phi, "phi", keep);
+            T.open = table<double, 1>(open, "open", keep);
+            T.static_slot = table<index_t, 1>(static_slot, "static_slot", keep);
+            T.K_static = table<double, 3>(K, "K", keep);
+            T.C_static = table<double, 4>(C, "C", keep);
+            T.V_static = table<double, 2>(V, "V", keep);
+            T.F_static = table<double, 4>(F, "F", keep);
+            T.Wf_static = table<double, 4>(Wf, "Wf", keep);
+            T.onode = table<index_t, 1>(onode, "onode", keep);
+            T.onormal = table<double, 2>(onormal, "onormal", keep);
+            T.ono_slip = table<bool, 1>(ono_slip, "ono_slip", keep);
+            T.viscous_T = table<double, 4>(viscous_T, "viscous_T", keep);
+            self->state = std::make_unique<State<D>>(make_grid<D>(h, cells), cell_volume, upper,
+                                                     margin, T, volume_correction, viscous);
+          },
+          "Build the step's state for a grid (spacing h, cell counts) and its tables.")
+      .def(
+          "advance",
+          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
+             Array<const double> volume, Array<double> pressure, const O& opt, index_t first,
+             index_t nsteps, Report& report) {
+            auto P = particles<D>(x, v, mass, volume, pressure);
+            nb::gil_scoped_release release;
+            return self.state->advance(P, opt, first, nsteps, report);
+          },
+          "nsteps steps; returns the steps done (fewer: report.status says why).")
+      .def("predict",
+           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
+              Array<const double> volume, Array<double> pressure, const O& opt, bool correct) {
+             auto P = particles<D>(x, v, mass, volume, pressure);
+             return self.state->predict(P, opt, correct);
+           })
+      .def("warm_start", [](S& self) { self.state->warm_start(); })
+      .def("pressure_matrix", [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
+      .def("pressure_rhs", [](S& self, const O& opt) { self.state->pressure_rhs(opt); })
+      .def("release_walls",
+           [](S& self, Array<const double> x) {
+             return self.state->release_walls(view<const double>(x, "x"));
+           })
+      .def("extend_pressure", [](S& self, const O& opt) { self.state->extend_pressure(opt); })
+      .def("viscous_predictor",
+           [](S& self, const O& opt, Report& report) {
+             return self.state->viscous_predictor(opt, report);
+           })
+      .def("finish",
+           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
+              Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
+              Report& report) {
+             auto P = particles<D>(x, v, mass, volume, pressure);
+             return self.state->finish(P, opt, correct, report);
+           })
+      .def_prop_ro("p_node",
+                   [](nb::handle h) {
+                     return out(nb::cast<S&>(h).state->p_node(), h);
+                   })
+      .def_prop_ro("v_new", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_new(), h); })
+      .def_prop_ro("ocontact",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->ocontact(), h); })
+      .def_prop_ro("volume_q",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_q(), h); })
+      .def_prop_ro("rows", [](nb::handle h) { return out(nb::cast<S&>(h).state->rows(), h); })
+      .def_prop_ro("matrix_cols",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_cols(), h); })
+      .def_prop_ro("matrix_vals",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_vals(), h); })
+      .def_prop_ro("rhs", [](nb::handle h) { return out(nb::cast<S&>(h).state->rhs(), h); })
+      .def_prop_ro("x0", [](nb::handle h) { return out(nb::cast<S&>(h).state->x0(), h); });
+}
+
+}  // namespace
+
+void bind_step(nb::module_& m) {
+  nb::class_<Report>(m, "Report")
+      .def(nb::init<>())
+      .def_rw("unknowns", &Report::unknowns)
+      .def_rw("solves", &Report::solves)
+      .def_rw("iterations", &Report::iterations)
+      .def_rw("max_iterations", &Report::max_iterations)
+      .def_rw("residual", &Report::residual)
+      .def_rw("released", &Report::released)
+      .def_rw("moved", &Report::moved)
+      .def_rw("status", &Report::status)
+      .def_rw("step", &Report::step)
+      .def_rw("fail_iterations", &Report::fail_iterations)
+      .def_rw("fail_residual", &Report::fail_residual)
+      .def_rw("fail_node", &Report::fail_node)
+      .def_rw("fail_size", &Report::fail_size)
+      .def_rw("volume_iterations", &Report::volume_iterations)
+      .def_rw("last_unknowns", &Report::last_unknowns)
+      .def_rw("viscous_iterations", &Report::viscous_iterations);
+  m.attr("OK") = static_cast<int>(OK);
+  m.attr("SINGULAR") = static_cast<int>(SINGULAR);
+  m.attr("PRESSURE_NOT_CONVERGED") = static_cast<int>(PRESSURE_NOT_CONVERGED);
+  m.attr("VOLUME_NOT_CONVERGED") = static_cast<int>(VOLUME_NOT_CONVERGED);
+  m.attr("VISCOUS_NOT_CONVERGED") = static_cast<int>(VISCOUS_NOT_CONVERGED);
+  m.attr("GAUSS") = static_cast<int>(GAUSS);
+  m.attr("DIVERGENCE") = static_cast<int>(DIVERGENCE);
+  m.attr("CONSISTENT") = static_cast<int>(CONSISTENT);
+  bind_dim<2>(m);
+  bind_dim<3>(m);
+}
+
+}  // namespace mpmflow::bind

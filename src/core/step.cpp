@@ -1,0 +1,492 @@
+#include "step.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "binning.hpp"
+#include "corrector.hpp"
+#include "cut_cells.hpp"
+#include "free_surface.hpp"
+#include "ghost_pressure.hpp"
+#include "parallel.hpp"
+#include "pressure_system.hpp"
+#include "quadrature.hpp"
+#include "transfer.hpp"
+#include "viscous.hpp"
+#include "volume_correction.hpp"
+#include "walls.hpp"
+
+namespace mpmflow {
+
+namespace {
+constexpr double WET = 0.5;  // volume correction: a cell less than half full is surface
+}
+
+template <int D>
+State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper,
+                double margin, const GridTables<D>& tables, bool volume_correction,
+                bool viscous)
+    : grid_(grid),
+      cell_volume_(cell_volume),
+      upper_(upper),
+      margin_(margin),
+      T_(tables),
+      volume_on_(volume_correction),
+      viscous_on_(viscous),
+      obstacles_(tables.phi.size() > 0),
+      nstatic_(tables.K_static.extent(0)) {
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  start_.reserve(nc + 1);
+  theta_.reserve(nc);
+  node_mass_.reserve(nn);
+  node_mom_.reserve(nn * D);
+  node_vol_.reserve(nn);
+  v_old_.reserve(nn * D);
+  v_star_.reserve(nn * D);
+  v_c_.reserve(nn * D);
+  v_new_.reserve(nn * D);
+  node_f_.reserve(nn);
+  enclosed_.reserve(nc);
+  slot_.reserve(nc);
+  surface_slot_.reserve(nc);
+  node_row_.reserve(nn);
+  node_row_.view(nn);
+  for (index_t i = 0; i < nn; ++i) node_row_.view(nn)(i) = -1;
+  rows_.reserve(nn);
+  contact_.reserve(nn * D);
+  ocontact_.reserve(nn);
+  anchored_.reserve(nn);
+  p_node_.reserve(nn);
+  for (index_t i = 0; i < nn; ++i) p_node_.view(nn)(i) = 0.0;
+  for (index_t i = 0; i < nn * D; ++i) v_new_.view(nn * D)(i) = 0.0;
+  for (index_t i = 0; i < nn; ++i) ocontact_.view(nn)(i) = false;
+  partial_.reserve(nc);
+  listed_.reserve(nc);
+  if (volume_on_) {
+    cell_vol_.reserve(nc);
+    density_.reserve(nc);
+    cell_row_.reserve(nc);
+    vol_cols_.reserve(nc * NS);
+    vol_vals_.reserve(nc * NS);
+    vol_rhs_.reserve(nc);
+    vol_rows_.reserve(nc);
+    q_.reserve(nc);
+    qx_.reserve(nc);
+    for (index_t c = 0; c < nc; ++c) q_.view(nc)(c) = 0.0;
+    for (int k = 0; k < D; ++k) {
+      index_t n = 1;
+      for (int j = 0; j < D; ++j) n *= grid_.cells[j] + (j == k ? 1 : 0);
+      faces_[k].reserve(n);
+      for (index_t i = 0; i < n; ++i) faces_[k].view(n)(i) = 0.0;
+    }
+  }
+  if (viscous_on_) {
+    eta_.reserve(nc);
+    eta_weight_.reserve(nc);
+    vu_.reserve(nn * D);
+    vrow_.reserve(nn * D);
+    voff_.reserve(D + 1);
+  }
+}
+
+template <int D>
+void State<D>::bin_particles(const Particles<D>& P) {
+  const index_t n = P.count();
+  const index_t nc = grid_.ncells;
+  auto cell = cell_.sized(n);
+  auto order = order_.sized(n);
+  auto start = start_.view(nc + 1);
+  auto theta = theta_.view(nc);
+  cell_index<D>(grid_, P.x, cell);
+  counting_sort(cell, nc, start, order);
+  cell_volume_fraction(order, start, P.volume, cell_volume_, T_.open, theta);
+  if (obstacles_) sliver_fractions<D>(grid_, T_.open, theta);
+}
+
+template <int D>
+void State<D>::node_fractions(const Options<D>& O) {
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
+  auto enclosed = enclosed_.view(nc);
+  if (O.subcell) {
+    enclosed_cells<D>(grid_, node_f_.view(nn), enclosed);
+  } else {
+    for (index_t c = 0; c < nc; ++c) enclosed(c) = false;
+  }
+}
+
+template <int D>
+void State<D>::cell_integrals(const Particles<D>& P, const Options<D>& O) {
+  // which cells take part in the pressure system and their element integrals (slot 0: the
+  // Gauss tensors, 1 to nstatic - 1: the cut cells, then the cells' own particle tensors)
+  const index_t nc = grid_.ncells;
+  auto theta = theta_.view(nc);
+  auto enclosed = enclosed_.view(nc);
+  auto slot = slot_.view(nc);
+  auto stat = T_.static_slot;
+  const index_t ns = nstatic_;
+  index_t npartial = 0, nsurface = 0;
+  for (index_t c = 0; c < nc; ++c) {
+    const bool counted = theta(c) >= O.sparse;
+    slot(c) = (counted || enclosed(c)) && stat(c) >= 0 ? stat(c) : -1;
+    if (counted && theta(c) < O.full && stat(c) >= 0) {
+      if (O.partial_particles)
+        npartial += 1;
+      else if (!enclosed(c))
+        nsurface += 1;
+    }
+  }
+  const index_t nk = npartial + ns;
+  auto K = K_.template sized<3>({nk, NC, NC});
+  auto C = C_.template sized<4>({nk, NC, NC, D});
+  auto V = V_.template sized<2>({nk, NC});
+  std::copy(T_.K_static.data(), T_.K_static.data() + T_.K_static.size(), K.data());
+  std::copy(T_.C_static.data(), T_.C_static.data() + T_.C_static.size(), C.data());
+  std::copy(T_.V_static.data(), T_.V_static.data() + T_.V_static.size(), V.data());
+  auto start = start_.view(nc + 1);
+  auto order = order_.view(P.count());
+  if (npartial) {
+    auto partial = partial_.view(npartial);
+    index_t m = 0;
+    for (index_t c = 0; c < nc; ++c) {
+      if (theta(c) >= O.sparse && theta(c) < O.full && stat(c) >= 0) {
+        slot(c) = ns + m;
+        partial(m) = c;
+        m += 1;
+      }
+    }
+    particle_cell_tensors<D>(grid_, P.x, P.volume, order, start, partial,
+                             View<double, 3>(K.data() + ns * NC * NC, {npartial, NC, NC}),
+                             View<double, 4>(C.data() + ns * NC * NC * D, {npartial, NC, NC, D}),
+                             View<double, 2>(V.data() + ns * NC, {npartial, NC}));
+  }
+  I_.slot = slot;
+  I_.K = K;
+  if (O.surface == GAUSS || O.partial_particles) {
+    I_.rhs_slot = I_.cor_slot = slot;
+    I_.rhs_C = I_.cor_C = C;
+    I_.rhs_V = I_.cor_V = V;
+    return;
+  }
+  auto surface_slot = surface_slot_.view(nc);
+  auto listed = listed_.view(nsurface);
+  index_t m = 0;
+  for (index_t c = 0; c < nc; ++c) {
+    surface_slot(c) = slot(c);
+    if (theta(c) >= O.sparse && theta(c) < O.full && !enclosed(c) && stat(c) >= 0) {
+      surface_slot(c) = ns + m;
+      listed(m) = c;
+      m += 1;
+    }
+  }
+  const index_t nsk = nsurface + ns;
+  auto Cs = Cs_.template sized<4>({nsk, NC, NC, D});
+  auto Vs = Vs_.template sized<2>({nsk, NC});
+  auto Vcells = Vcells_.template sized<2>({nsk, NC});
+  std::copy(T_.C_static.data(), T_.C_static.data() + T_.C_static.size(), Cs.data());
+  std::copy(T_.V_static.data(), T_.V_static.data() + T_.V_static.size(), Vs.data());
+  std::copy(T_.V_static.data(), T_.V_static.data() + T_.V_static.size(), Vcells.data());
+  for (index_t s = ns; s < nsk; ++s)
+    for (int a = 0; a < NC; ++a) Vcells(s, a) = T_.V_static(0, a);
+  if (nsurface) {
+    particle_cell_tensors<D>(grid_, P.x, P.volume, order, start, listed,
+                             View<double, 3>(nullptr, {0, NC, NC}),
+                             View<double, 4>(Cs.data() + ns * NC * NC * D, {nsurface, NC, NC, D}),
+                             View<double, 2>(Vs.data() + ns * NC, {nsurface, NC}));
+  }
+  I_.rhs_slot = surface_slot;
+  I_.rhs_C = Cs;
+  I_.rhs_V = Vcells;
+  if (O.surface == CONSISTENT) {
+    I_.cor_slot = surface_slot;
+    I_.cor_C = Cs;
+    I_.cor_V = Vs;
+  } else {
+    I_.cor_slot = slot;
+    I_.cor_C = C;
+    I_.cor_V = V;
+  }
+}
+
+template <int D>
+void State<D>::classify_nodes(const Options<D>& O) {
+  const index_t nn = grid_.nnodes;
+  auto node_row = node_row_.view(nn);
+  nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn),
+                                      O.subcell, node_row);
+  auto rows = rows_.view(nrows_);
+  for (index_t i = 0; i < nn; ++i) {
+    const index_t r = node_row(i);
+    if (r >= 0) rows(r) = i;
+  }
+}
+
+template <int D>
+index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool correct) {
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  bin_particles(P);
+  auto v_old = v_old_.template view<2>({nn, D});
+  auto v_star = v_star_.template view<2>({nn, D});
+  particles_to_grid<D>(grid_, P.x, P.v, P.mass, P.volume, order_.view(P.count()),
+                       start_.view(nc + 1), O.gravity, O.dt, node_mass_.view(nn),
+                       node_mom_.template view<2>({nn, D}), node_vol_.view(nn), v_old, v_star,
+                       correct ? cell_vol_.view(nc) : View<double>());
+  if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
+  node_fractions(O);
+  cell_integrals(P, O);
+  classify_nodes(O);
+  return nrows_;
+}
+
+template <int D>
+void State<D>::warm_start() {
+  const index_t nn = grid_.nnodes;
+  auto x = x_.sized(nrows_);
+  auto rows = rows_.view(nrows_);
+  auto p = p_node_.view(nn);
+  for (index_t r = 0; r < nrows_; ++r) x(r) = p(rows(r));
+  for (index_t i = 0; i < nn; ++i) p(i) = 0.0;
+}
+
+template <int D>
+bool State<D>::pressure_matrix(const Options<D>& O) {
+  const index_t nn = grid_.nnodes;
+  auto v_star = v_star_.template view<2>({nn, D});
+  auto node_row = node_row_.view(nn);
+  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row,
+                contact_.template view<2>({nn, D}));
+  start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact_.view(nn));
+  const index_t n = nrows_;
+  auto cols = cols_.template sized<2>({n, NS});
+  auto vals = vals_.template sized<2>({n, NS});
+  auto anchored = anchored_.sized(n);
+  rhs_.reserve(n);  // the right-hand side and the solver's scratch, grown here, not in a solve
+  scratch_.reserve(n);
+  if (n == 0) return false;
+  assemble_matrix<D>(grid_, I_.slot, I_.K, node_row, node_f_.view(nn), O.subcell, O.theta_min,
+                     cols, vals, anchored);
+  for (index_t r = 0; r < n; ++r)
+    if (anchored(r)) return true;
+  return false;
+}
+
+template <int D>
+void State<D>::pressure_rhs(const Options<D>& O) {
+  const index_t nn = grid_.nnodes;
+  auto v_c = v_star_.template view<2>({nn, D});
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  if (!O.wall_flux) {  // the paper: the divergence of the wall-constrained v*
+    v_c = v_c_.template view<2>({nn, D});
+    std::copy(v_star_.view(nn * D).data(), v_star_.view(nn * D).data() + nn * D, v_c.data());
+    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, v_c, contact, O.no_slip);
+    apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_c, ocontact);
+  }
+  assemble_rhs<D>(grid_, I_.rhs_slot, I_.rhs_C, I_.rhs_V, node_vol_.view(nn), rows_.view(nrows_),
+                  v_c, contact, O.wall_flux, O.expansion / O.dt, O.rho / O.dt, T_.static_slot,
+                  T_.F_static, T_.Wf_static, ocontact, rhs_.view(nrows_));
+}
+
+template <int D>
+index_t State<D>::release_walls(View<const double> x) {
+  const index_t nn = grid_.nnodes;
+  auto rows = rows_.view(nrows_);
+  auto p = p_node_.view(nn);
+  for (index_t r = 0; r < nrows_; ++r) p(rows(r)) = x(r);
+  auto v_star = v_star_.template view<2>({nn, D});
+  auto node_row = node_row_.view(nn);
+  return release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, p,
+                         contact_.template view<2>({nn, D})) +
+         release_obstacles(T_.onode, T_.onormal, v_star, node_row, p, ocontact_.view(nn));
+}
+
+template <int D>
+void State<D>::extend_pressure(const Options<D>& O) {
+  const index_t nn = grid_.nnodes;
+  if (O.subcell)
+    ghost_values<D>(grid_, I_.slot, I_.K, node_row_.view(nn), node_f_.view(nn), O.theta_min,
+                    p_node_.view(nn));
+}
+
+template <int D>
+int State<D>::pressure_multigrid(const Options<D>& O, Report& report) {
+  warm_start();
+  const bool anchored = pressure_matrix(O);
+  const index_t n = nrows_;
+  if (n == 0) return OK;
+  if (!anchored) return SINGULAR;
+  std::array<index_t, D> dims{};
+  for (int k = 0; k < D; ++k) dims[k] = grid_.cells[k] + 1;
+  auto cols = cols_.template view<2>({n, NS});
+  auto vals = vals_.template view<2>({n, NS});
+  auto rows = rows_.view(n);
+  pressure_mg_.setup(cols, vals, rows, dims, COARSEST);
+  auto x = x_.view(n);
+  auto rhs = rhs_.view(n);
+  index_t step_iterations = 0;
+  while (true) {
+    pressure_rhs(O);
+    const SolveResult res = pressure_mg_.pcg(rhs, x, O.tol, O.max_iterations, O.sweeps);
+    report.solves += 1;
+    report.iterations += res.iterations;
+    step_iterations += res.iterations;
+    report.residual = std::max(report.residual, res.residual);
+    if (!(res.residual <= O.tol)) {
+      report.fail_iterations = res.iterations;
+      report.fail_residual = res.residual;
+      report.fail_node = rows(worst_row(cols, vals, x, rhs, scratch_.view(n)));
+      report.fail_size = n;
+      return PRESSURE_NOT_CONVERGED;
+    }
+    const index_t released = release_walls(x);
+    if (released == 0) break;
+    report.released += released;
+  }
+  report.max_iterations = std::max(report.max_iterations, step_iterations);
+  extend_pressure(O);
+  return OK;
+}
+
+template <int D>
+int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
+  if (!O.viscous) return OK;
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  auto v_old = v_old_.template view<2>({nn, D});
+  auto v_star = v_star_.template view<2>({nn, D});
+  auto p = p_node_.view(nn);
+  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_old, p,
+                    O.model, O.model_params, eta_.view(nc), eta_weight_.view(nc));
+  auto base = v_c_.template view<2>({nn, D});
+  correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
+  auto vu = vu_.template view<2>({nn, D});
+  auto vrow = vrow_.template view<2>({nn, D});
+  auto voff = voff_.view(D + 1);
+  const index_t n =
+      number_unknowns(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_sign, O.no_slip,
+                      T_.onode, T_.onormal, T_.ono_slip, base, vu, vrow, voff);
+  if (n == 0) return OK;
+  auto cols = vcols_.template sized<3>({D, n, NS});
+  auto vals = vvals_.template sized<3>({D, n, NS});
+  auto rhs = vrhs_.sized(n);
+  auto node = vnode_.sized(n);
+  assemble_viscous<D>(grid_, T_.viscous_T, eta_weight_.view(nc), node_mass_.view(nn), O.dt, vu,
+                      vrow, voff, cols, vals, rhs, node);
+  auto x = vx_.sized(n);
+  for (index_t i = 0; i < nn; ++i)
+    for (int k = 0; k < D; ++k)
+      if (vrow(i, k) >= 0) x(vrow(i, k)) = vu(i, k);
+  const SolveResult res = solve_viscous<D>(grid_, cols, vals, node, voff, rhs, x, O.tol,
+                                           O.max_iterations, O.sweeps, viscous_mg_,
+                                           vwork_.sized(8 * n));
+  report.viscous_iterations += res.iterations;
+  if (!(res.residual <= O.tol)) {
+    report.fail_iterations = res.iterations;
+    report.fail_residual = res.residual;
+    report.fail_node = node(worst_viscous_row(cols, vals, voff, x, rhs, vwork_.sized(8 * n)));
+    report.fail_size = n;
+    return VISCOUS_NOT_CONVERGED;
+  }
+  for (index_t i = 0; i < nn; ++i)
+    for (int k = 0; k < D; ++k) {
+      const index_t r = vrow(i, k);
+      v_star(i, k) += (r >= 0 ? x(r) : vu(i, k)) - base(i, k);
+    }
+  return OK;
+}
+
+template <int D>
+int State<D>::volume_correction(const Options<D>& O, Report& report) {
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  const double inv = 1.0 / cell_volume_;
+  auto density = density_.view(nc);
+  auto cell_vol = cell_vol_.view(nc);
+  for (index_t c = 0; c < nc; ++c) density(c) = cell_vol(c) * inv;
+  auto cell_row = cell_row_.view(nc);
+  auto all_cols = vol_cols_.template view<2>({nc, NS});
+  auto all_vals = vol_vals_.template view<2>({nc, NS});
+  const auto assembled =
+      assemble_volume<D>(grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}),
+                         T_.static_slot, cell_row, all_cols, all_vals, vol_rhs_.view(nc),
+                         vol_rows_.view(nc));
+  const index_t n = assembled.n;
+  std::array<View<double>, D> faces;
+  for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
+  if (n == 0 || !assembled.anchored) {
+    // nothing, or material filling the whole domain: its volume cannot change
+    for (int k = 0; k < D; ++k)
+      for (index_t i = 0; i < faces[k].size(); ++i) faces[k](i) = 0.0;
+    return OK;
+  }
+  auto rows = vol_rows_.view(n);
+  auto cols = vol_cols_.template view<2>({n, NS});
+  auto vals = vol_vals_.template view<2>({n, NS});
+  auto rhs = vol_rhs_.view(n);
+  auto Q = q_.view(nc);
+  auto q = qx_.view(n);
+  for (index_t r = 0; r < n; ++r) q(r) = Q(rows(r));
+  std::array<index_t, D> dims{};
+  for (int k = 0; k < D; ++k) dims[k] = grid_.cells[k];
+  volume_mg_.setup(cols, vals, rows, dims, COARSEST);
+  const SolveResult res = volume_mg_.pcg(rhs, q, O.volume_tol, O.volume_max_iterations, 1);
+  report.volume_iterations += res.iterations;
+  if (!(res.residual <= O.volume_tol)) {
+    report.fail_iterations = res.iterations;
+    report.fail_residual = res.residual;
+    report.fail_node = rows(worst_row(cols, vals, q, rhs, scratch_.sized(n)));
+    report.fail_size = n;
+    return VOLUME_NOT_CONVERGED;
+  }
+  for (index_t c = 0; c < nc; ++c) Q(c) = 0.0;
+  for (index_t r = 0; r < n; ++r) Q(rows(r)) = q(r);
+  face_displacements<D>(grid_, cell_row, T_.static_slot, q, O.volume_rate * grid_.h,
+                        O.volume_dmax * grid_.h, faces);
+  return OK;
+}
+
+template <int D>
+int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
+  const index_t nn = grid_.nnodes;
+  auto v_new = v_new_.template view<2>({nn, D});
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p_node_.view(nn),
+                      v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
+  apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, v_new, contact, O.no_slip);
+  apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact);
+  std::array<View<const double>, D> faces{};  // empty: no displacement
+  if (correct) {
+    const int status = volume_correction(O, report);
+    if (status != OK) return status;
+    for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
+  }
+  report.moved += grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
+                                       v_new, p_node_.view(nn), O.dt, O.flip, upper_, margin_,
+                                       faces);
+  if (obstacles_) report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+  return OK;
+}
+
+template <int D>
+index_t State<D>::advance(const Particles<D>& P, const Options<D>& O, index_t first,
+                          index_t nsteps, Report& report) {
+  for (index_t k = 0; k < nsteps; ++k) {
+    report.step = k;
+    const bool correct = O.volume_every > 0 && (first + k) % O.volume_every == 0;
+    const index_t n = predict(P, O, correct);
+    report.unknowns = std::max(report.unknowns, n);
+    report.last_unknowns = n;
+    int status = viscous_predictor(O, report);
+    if (status == OK) status = pressure_multigrid(O, report);
+    if (status == OK) status = finish(P, O, correct, report);
+    if (status != OK) {
+      report.status = status;
+      return k;
+    }
+  }
+  return nsteps;
+}
+
+template class State<2>;
+template class State<3>;
+
+}  // namespace mpmflow

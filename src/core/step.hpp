@@ -1,0 +1,203 @@
+// One step of the projection scheme (Kularathna & Soga 2017; docs/method.md, steps 1-8),
+// 2D and 3D. The step is a sequence of named phases, each one or a few parallel loops:
+//
+//   bin_particles -> particles_to_grid -> node_fractions -> cell_integrals -> classify_nodes
+//     -> viscous_predictor (viscous materials only)
+//     -> pressure (contact walls, assembly, solve, release, ghost values)
+//     -> finish: correct_velocity and the walls -> volume_correction (every few steps)
+//        -> grid_to_particles -> push out of obstacles
+//
+// A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
+// (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
+// particle count or to a step's system when a run needs more; never allocated in a step
+// otherwise) and the multigrid hierarchies. Failures (a solve that does not converge, a
+// pressure system without a free surface) stop the chunk of steps with a status in the
+// Report; Python turns them into messages.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "grid.hpp"
+#include "multigrid.hpp"
+#include "view.hpp"
+
+namespace mpmflow {
+
+enum Status : int {
+  OK = 0,
+  SINGULAR = 1,
+  PRESSURE_NOT_CONVERGED = 2,
+  VOLUME_NOT_CONVERGED = 3,
+  VISCOUS_NOT_CONVERGED = 4
+};
+enum SurfaceQuadrature : int { GAUSS = 0, DIVERGENCE = 1, CONSISTENT = 2 };
+
+// What a chunk of steps did (sums over its steps unless said).
+struct Report {
+  index_t unknowns = 0;  // the largest number of pressure unknowns in a step
+  index_t solves = 0;
+  index_t iterations = 0;
+  index_t max_iterations = 0;  // the most iterations in one step
+  double residual = 0.0;       // the worst relative residual
+  index_t released = 0;
+  index_t moved = 0;
+  int status = OK;
+  index_t step = 0;  // the step (0-based, within the chunk) that failed or is running
+  index_t fail_iterations = 0;
+  double fail_residual = 0.0;
+  index_t fail_node = 0;  // node (pressure, viscous) or cell (volume correction)
+  index_t fail_size = 0;  // unknowns of the failed system
+  index_t volume_iterations = 0;
+  index_t last_unknowns = 0;  // the unknowns of the last step
+  index_t viscous_iterations = 0;
+};
+
+// The step's settings (constant over a chunk of steps).
+template <int D>
+struct Options {
+  double dt = 1e-3;
+  std::array<double, D> gravity{};
+  double rho = 1000.0;
+  double flip = 1.0;  // the FLIP fraction of one step
+  double full = 0.9;
+  double sparse = 0.0;
+  bool partial_particles = false;
+  int surface = GAUSS;
+  bool subcell = true;
+  bool wall_flux = true;
+  bool no_slip = false;
+  double theta_min = 0.0;
+  double expansion = 0.0;
+  double tol = 1e-8;
+  index_t max_iterations = 500;
+  int sweeps = 1;
+  double volume_rate = 0.0;
+  index_t volume_every = 0;  // the volume correction runs on steps numbered a multiple of it
+  double volume_tol = 1e-6;
+  index_t volume_max_iterations = 200;
+  double volume_dmax = 0.1;
+  bool viscous = false;
+  int model = 0;
+  std::array<double, 8> model_params{};
+};
+
+// The particles: views of the caller's arrays (n particles).
+template <int D>
+struct Particles {
+  View<double, 2> x;  // n x D (m)
+  View<double, 2> v;  // n x D (m/s)
+  View<const double> mass;
+  View<const double> volume;
+  View<double> pressure;
+  index_t count() const { return x.extent(0); }
+};
+
+// The grid's fixed tables (views of arrays the caller keeps alive for the State's life).
+// Walls: the wall nodes with the axis and side of their wall. Obstacles (empty phi: none):
+// phi at the nodes, each cell's fluid fraction and static slot (0: whole cell, s >= 1: a
+// cut cell's, -1: solid), the static element integrals by slot, the cut cells' face terms,
+// the obstacle nodes with their normals and no-slip flags. viscous_T: the full cell's
+// gradient products (viscous materials; empty otherwise).
+template <int D>
+struct GridTables {
+  View<const index_t> wall_node, wall_axis;
+  View<const double> wall_sign;
+  View<const double> phi, open;
+  View<const index_t> static_slot;
+  View<const double, 3> K_static;  // (nstatic, 2^D, 2^D)
+  View<const double, 4> C_static;  // (nstatic, 2^D, 2^D, D)
+  View<const double, 2> V_static;  // (nstatic, 2^D)
+  View<const double, 4> F_static;  // (nstatic, 2^D, 2^D, D)
+  View<const double, 4> Wf_static;  // (nstatic, 2 D, 2^D, 2^D)
+  View<const index_t> onode;
+  View<const double, 2> onormal;  // (m, D)
+  View<const bool> ono_slip;
+  View<const double, 4> viscous_T;
+};
+
+template <int D>
+class State {
+ public:
+  static constexpr int NC = 1 << D;
+  static constexpr int NS = stencil_size(D);
+
+  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper,
+        double margin, const GridTables<D>& tables, bool volume_correction, bool viscous);
+
+  // nsteps steps of options.dt; first: the number of the first step (1-based, from the start
+  // of the run). Stops at the first failure; returns the steps done.
+  index_t advance(const Particles<D>& P, const Options<D>& O, index_t first, index_t nsteps,
+                  Report& report);
+
+  // The phases, for the pressure solvers run from Python (amg, direct) and for checks.
+  index_t predict(const Particles<D>& P, const Options<D>& O, bool correct);  // -> unknowns
+  bool pressure_matrix(const Options<D>& O);  // assemble; false: singular (no free surface)
+  void pressure_rhs(const Options<D>& O);
+  index_t release_walls(View<const double> x);  // the solution in; returns nodes released
+  void extend_pressure(const Options<D>& O);
+  void warm_start();  // the last pressure at this step's unknowns into x0, p_node cleared
+  int viscous_predictor(const Options<D>& O, Report& report);
+  int finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
+
+  // the arrays Python reads (views of the state's own storage)
+  View<double> p_node() { return p_node_.view(grid_.nnodes); }
+  View<double, 2> v_new() { return v_new_.template view<2>({grid_.nnodes, D}); }
+  View<bool> ocontact() { return ocontact_.view(grid_.nnodes); }
+  View<double> volume_q() { return q_.view(volume_on_ ? grid_.ncells : 0); }
+  View<const index_t> rows() { return rows_.view(nrows_); }
+  View<const index_t, 2> matrix_cols() { return cols_.template view<2>({nrows_, NS}); }
+  View<const double, 2> matrix_vals() { return vals_.template view<2>({nrows_, NS}); }
+  View<double> rhs() { return rhs_.view(nrows_); }
+  View<double> x0() { return x_.view(nrows_); }
+  const Grid<D>& grid() const { return grid_; }
+
+ private:
+  int pressure_multigrid(const Options<D>& O, Report& report);
+  int volume_correction(const Options<D>& O, Report& report);
+  void bin_particles(const Particles<D>& P);
+  void node_fractions(const Options<D>& O);
+  void cell_integrals(const Particles<D>& P, const Options<D>& O);
+  void classify_nodes(const Options<D>& O);
+
+  Grid<D> grid_;
+  double cell_volume_;
+  std::array<double, D> upper_;
+  double margin_;
+  GridTables<D> T_;
+  bool volume_on_, viscous_on_;
+  bool obstacles_;
+  index_t nstatic_;
+  index_t nrows_ = 0;
+  index_t nsurface_ = 0, npartial_ = 0;
+
+  // work arrays (Buffers: grown, never shrunk)
+  Buffer<index_t> cell_, start_, order_;
+  Buffer<double> theta_, node_mass_, node_mom_, node_vol_, v_old_, v_star_, v_c_, v_new_,
+      node_f_;
+  Buffer<bool> enclosed_;
+  Buffer<index_t> slot_, surface_slot_, node_row_, rows_, partial_, listed_;
+  Buffer<bool> contact_, ocontact_, anchored_;
+  Buffer<double> p_node_;
+  Buffer<double> K_, C_, V_, Cs_, Vs_, Vcells_;  // the step's element integrals
+  Buffer<index_t> cols_;
+  Buffer<double> vals_, rhs_, x_, scratch_;
+  Multigrid<D> pressure_mg_;
+  // volume correction
+  Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];
+  Buffer<index_t> cell_row_, vol_cols_, vol_rows_;
+  Multigrid<D> volume_mg_;
+  // viscous predictor
+  Buffer<double> eta_, eta_weight_, vu_, vvals_, vrhs_, vx_, vwork_;
+  Buffer<index_t> vrow_, voff_, vcols_, vnode_;
+  std::array<Multigrid<D>, D> viscous_mg_;
+  // integrals of this step, as views into the buffers above
+  struct Integrals {
+    View<const index_t> slot, rhs_slot, cor_slot;
+    View<const double, 3> K;
+    View<const double, 4> rhs_C, cor_C;
+    View<const double, 2> rhs_V, cor_V;
+  } I_;
+};
+
+}  // namespace mpmflow
