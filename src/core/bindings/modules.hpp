@@ -8,5 +8,6 @@ namespace mpmflow::bind {
 namespace nb = nanobind;
 
 void bind_binning(nb::module_& m);
+void bind_cut_cells(nb::module_& m);
 
 }  // namespace mpmflow::bind
