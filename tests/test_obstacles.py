@@ -1,4 +1,4 @@
-"""Fixed obstacles (``mpmflow.obstacles``, ``kernels/cutcells``): faces off the grid lines,
+"""Fixed obstacles (``mpmflow.obstacles``, ``src/core/cut_cells``): faces off the grid lines,
 the column at rest around them, flow round them, and the face terms' geometry."""
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 
 from mpmflow import Simulation, load_case
 from mpmflow.grid import Grid
-from mpmflow.kernels import cutcells, quadrature
+from mpmflow.kernels import quadrature
 from mpmflow import obstacles
 
 from conftest import EXAMPLES

@@ -4,7 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels import binning, cutcells
+from . import state
 
 
 @dataclass
@@ -31,12 +31,12 @@ def bin_particles(grid, particles, bins=None, open_=None):
             order=np.empty(n, dtype=np.int64),
             theta=np.empty(grid.ncells),
         )
-    binning.cell_index(particles.x, grid.spacing, tuple(grid.cells), bins.cell)
-    binning.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
+    state.cell_index(particles.x, grid.spacing, grid.cells, bins.cell)
+    state.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
     if open_ is None:
         open_ = np.ones(grid.ncells)
-    binning.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
-                                 open_, bins.theta)
+    state.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
+                               open_, bins.theta)
     if (open_ < 1.0).any():
-        cutcells.sliver_fractions(tuple(grid.cells), open_, bins.theta)
+        state.sliver_fractions(grid.cells, open_, bins.theta)
     return bins

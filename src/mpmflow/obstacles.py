@@ -8,7 +8,7 @@ not on grid lines (corners and edges are rounded within a cell). From phi:
 * cells wholly inside a solid are left out of everything, like cells beyond the domain;
 * cells the surface cuts get their own element integrals over the fluid part, the obstacle's
   face term, and the fluid part of their faces on the domain's walls
-  (``kernels.cutcells``): the "static" slots 1, 2, ... of the step's element integrals,
+  (``state.cut_cell_tensors``, src/core/cut_cells.hpp): the "static" slots 1, 2, ... of the step's element integrals,
   slot 0 being the whole cell;
 * ``open``: the fluid fraction of each cell, by which a cut cell's particle volume is
   divided to give its volume fraction theta (a cut cell full of water has theta = 1);
@@ -20,7 +20,7 @@ not on grid lines (corners and edges are rounded within a cell). From phi:
   where it presses into the solid and lets go where holding it would need suction.
 
 Particles that end a step inside a solid are moved out along grad phi
-(``kernels.cutcells.push_out``).
+(``state.push_out``).
 """
 
 from dataclasses import dataclass, field
@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import state
-from .kernels import cutcells, geometry
 
 SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
 
@@ -68,7 +67,7 @@ def build(grid, phi=None, no_slip_of=None):
     K0, C0, V0 = np.zeros((NC, NC)), np.zeros((NC, NC, D)), np.zeros(NC)
     state.gauss_cell_tensors(grid.spacing, K0, C0, V0)
     W0 = np.zeros((2 * D, NC, NC))
-    cutcells.face_mass(grid.spacing, D, W0)
+    state.face_mass(grid.spacing, D, W0)
     open_ = np.ones(nc)
     static_slot = np.zeros(nc, dtype=np.int64)
     if phi is None:
@@ -95,8 +94,8 @@ def build(grid, phi=None, no_slip_of=None):
     F = np.zeros((m, NC, NC, D))
     Wf = np.zeros((m, 2 * D, NC, NC))
     parts = np.zeros(m, dtype=np.int64)
-    cutcells.cut_cell_tensors(phi, float(grid.spacing), cells, candidates, SUBCELLS, K, C, V,
-                              F, Wf, parts)
+    state.cut_cell_tensors(phi, float(grid.spacing), cells, candidates, SUBCELLS, K, C, V, F,
+                           Wf, parts)
     # a candidate without a fluid sub-cell is solid on the staircase (a sliver of positive
     # phi at a corner, narrower than a sub-cell): left out like the cells inside
     empty = V.sum(axis=1) <= 0.0
@@ -108,12 +107,12 @@ def build(grid, phi=None, no_slip_of=None):
     open_[solid] = 0.0
     open_[cut_cells] = V[cut].sum(axis=1) / grid.cell_volume
     # obstacle nodes and their normals: int N_b n ds summed over the cut cells
-    ns, _ = geometry.strides(cells)
+    ns = _node_strides(cells)
     nvec = np.zeros((grid.nnodes, D))
     Fn = F[cut].sum(axis=1)  # (ncut, 2^D, D): int N_b n ds in each cut cell
     first = _first_nodes(cut_cells, cells, ns)
-    for a in range(NC):
-        np.add.at(nvec, first + geometry.corner_offset(a, ns), Fn[:, a])
+    for a, offset in enumerate(_corner_offsets(ns)):
+        np.add.at(nvec, first + offset, Fn[:, a])
     size = np.linalg.norm(nvec, axis=1)
     node = np.flatnonzero(size > 1e-9 * grid.spacing ** (D - 1))
     normal = nvec[node] / size[node, None]
@@ -124,6 +123,18 @@ def build(grid, phi=None, no_slip_of=None):
                   np.concatenate([np.zeros((1, NC, NC, D)), F[cut]]),
                   np.concatenate([W0[None], Wf[cut]]), node.astype(np.int64), normal,
                   np.asarray(no_slip, dtype=np.bool_))
+
+
+def _node_strides(cells):
+    """Flat node strides ns_k (axis 0 fastest): 1, cells[0] + 1, (cells[0] + 1)(cells[1] + 1)."""
+    return np.cumprod([1] + [int(c) + 1 for c in cells[:-1]]).astype(np.int64)
+
+
+def _corner_offsets(ns):
+    """Flat offset of each of the 2^D corners of a cell from its first node (corner a is
+    offset (a >> k) & 1 along axis k)."""
+    return np.array([sum(int(s) for k, s in enumerate(ns) if (a >> k) & 1)
+                     for a in range(1 << len(ns))], dtype=np.int64)
 
 
 def _first_nodes(cells_flat, cells, ns):
@@ -139,11 +150,11 @@ def _first_nodes(cells_flat, cells, ns):
 def _cell_corner_phi(grid, phi):
     """phi at the 2^D corners of every cell, (ncells, 2^D)."""
     cells = tuple(int(c) for c in grid.cells)
-    ns, _ = geometry.strides(cells)
+    ns = _node_strides(cells)
     first = _first_nodes(np.arange(grid.ncells), cells, ns)
     out = np.empty((grid.ncells, 2 ** len(cells)))
-    for a in range(out.shape[1]):
-        out[:, a] = phi[first + geometry.corner_offset(a, ns)]
+    for a, offset in enumerate(_corner_offsets(ns)):
+        out[:, a] = phi[first + offset]
     return out
 
 

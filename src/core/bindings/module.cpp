@@ -27,4 +27,5 @@ NB_MODULE(_core, m) {
   mpmflow::bind::bind_transfer(m);
   mpmflow::bind::bind_corrector(m);
   mpmflow::bind::bind_volume_correction(m);
+  mpmflow::bind::bind_cut_cells(m);
 }

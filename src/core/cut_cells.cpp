@@ -1,0 +1,333 @@
+#include "cut_cells.hpp"
+
+#include <cmath>
+
+#include "parallel.hpp"
+
+namespace mpmflow {
+
+namespace {
+
+// One quadrature point at local coordinates `local` with weight w (m^D) added to a cell's
+// K (NC x NC), C (NC x NC x D) and V (NC): the arithmetic of quadrature.accumulate_point,
+// in its order (kept here until the quadrature port's own is merged).
+template <int D>
+void add_point(const std::array<double, D>& local, double w, double h, View<double, 2> K,
+               View<double, 3> C, View<double, 1> V) {
+  constexpr int NC = 1 << D;
+  const double inv_h = 1.0 / h;
+  std::array<double, NC> N;
+  std::array<std::array<double, D>, NC> dN;
+  for (int a = 0; a < NC; ++a) {
+    double n = 1.0;
+    for (int k = 0; k < D; ++k) n *= ((a >> k) & 1) ? local[k] : 1.0 - local[k];
+    N[a] = n;
+    for (int k = 0; k < D; ++k) {
+      double gk = ((a >> k) & 1) ? 1.0 : -1.0;
+      for (int j = 0; j < D; ++j)
+        if (j != k) gk *= ((a >> j) & 1) ? local[j] : 1.0 - local[j];
+      dN[a][k] = gk * inv_h;
+    }
+  }
+  for (int a = 0; a < NC; ++a) {
+    V(a) += w * N[a];
+    for (int b = 0; b < NC; ++b) {
+      double kk = 0.0;
+      for (int k = 0; k < D; ++k) kk += dN[a][k] * dN[b][k];
+      K(a, b) += w * kk;
+      for (int k = 0; k < D; ++k) C(a, b, k) += w * N[a] * dN[b][k];
+    }
+  }
+}
+
+// Gauss point gp (of 2^(D-1)) of the face normal to axis k on `side` (0, 1) of the
+// (sub-)cell with local centre `centre` (its offsets +-gs already scaled), into `local`.
+template <int D>
+void face_gauss_point(int gp, int k, int side, const std::array<double, D>& centre, double gs,
+                      std::array<double, D>& local) {
+  int bit = 0;
+  for (int kk = 0; kk < D; ++kk) {
+    if (kk == k) {
+      local[kk] = static_cast<double>(side);
+    } else {
+      local[kk] = centre[kk] + (((gp >> bit) & 1) ? gs : -gs);
+      ++bit;
+    }
+  }
+}
+
+// A face quadrature point: M[a, b] += w N_a N_b (M: NC x NC, flat).
+template <int D>
+void face_point(const std::array<double, D>& local, double w, double* M) {
+  constexpr int NC = 1 << D;
+  std::array<double, NC> N;
+  for (int a = 0; a < NC; ++a) N[a] = Grid<D>::corner_weight(a, local.data());
+  for (int a = 0; a < NC; ++a)
+    for (int b = 0; b < NC; ++b) M[a * NC + b] += w * N[a] * N[b];
+}
+
+template <int D>
+constexpr double power(double x) {  // x^D as Numba's x**D: x * x (* x)
+  double r = x;
+  for (int k = 1; k < D; ++k) r *= x;
+  return r;
+}
+
+}  // namespace
+
+template <int D>
+double phi_at(const Grid<D>& g, View<const double> phi_node, const std::array<double, D>& local,
+              index_t first) {
+  double val = 0.0;
+  for (int a = 0; a < Grid<D>::NC; ++a)
+    val += Grid<D>::corner_weight(a, local.data()) * phi_node[first + g.corner[a]];
+  return val;
+}
+
+template <int D>
+void cut_cell_tensors(const Grid<D>& g, View<const double> phi_node, View<const index_t> candidates,
+                      index_t nsub, View<double, 3> K, View<double, 4> C, View<double, 2> V,
+                      View<double, 4> F, View<double, 4> Wf, View<index_t> solid_parts) {
+  constexpr int NC = 1 << D;
+  const double h = g.h;
+  const double gauss = 0.5 / std::sqrt(3.0);
+  const double sub = h / static_cast<double>(nsub);
+  const double dsub = static_cast<double>(nsub);
+  index_t total = 1;
+  for (int k = 0; k < D; ++k) total *= nsub;
+  const index_t nface = total / nsub;
+  const index_t m_count = candidates.size();
+  for_each_chunk(
+      m_count,
+      [&](index_t, index_t lo, index_t hi) {
+        for (index_t m = lo; m < hi; ++m) {
+          std::array<index_t, D> cx;
+          g.cell_coords(candidates(m), cx.data());
+          index_t first = 0;
+          for (int k = 0; k < D; ++k) first += cx[k] * g.ns[k];
+          std::array<double, D> local, centre;
+          double M[NC * NC];
+          View<double, 2> Km = K.row(m);
+          View<double, 3> Cm = C.row(m);
+          View<double, 1> Vm = V.row(m);
+          View<double, 3> Fm = F.row(m);
+          View<double, 3> Wm = Wf.row(m);
+          for (index_t i = 0; i < Km.size(); ++i) Km[i] = 0.0;
+          for (index_t i = 0; i < Cm.size(); ++i) Cm[i] = 0.0;
+          for (index_t i = 0; i < Vm.size(); ++i) Vm[i] = 0.0;
+          for (index_t i = 0; i < Fm.size(); ++i) Fm[i] = 0.0;
+          for (index_t i = 0; i < Wm.size(); ++i) Wm[i] = 0.0;
+          index_t solid = 0;
+          // volume: 2^D Gauss points in each fluid sub-cell
+          const double wvol = power<D>(sub) / NC;
+          for (index_t q = 0; q < total; ++q) {
+            index_t rq = q;
+            for (int k = 0; k < D; ++k) {
+              const index_t si = rq % nsub;
+              rq /= nsub;
+              centre[k] = (static_cast<double>(si) + 0.5) / dsub;
+            }
+            if (!(phi_at<D>(g, phi_node, centre, first) > 0.0)) {
+              ++solid;
+              continue;
+            }
+            for (int gp = 0; gp < NC; ++gp) {
+              for (int k = 0; k < D; ++k)
+                local[k] = centre[k] + (((gp >> k) & 1) ? gauss : -gauss) / dsub;
+              add_point<D>(local, wvol, h, Km, Cm, Vm);
+            }
+          }
+          // faces: 2^(D-1) Gauss points on each sub-face
+          const double wface = power<D - 1>(sub) / (1 << (D - 1));
+          for (int k = 0; k < D; ++k) {
+            for (int side = 0; side < 2; ++side) {
+              const index_t j = cx[k] + (side == 1 ? 1 : -1);
+              const bool wall = j < 0 || j >= g.cells[k];
+              const index_t other_first = first + (side == 1 ? g.ns[k] : -g.ns[k]);
+              const double sign = side == 1 ? 1.0 : -1.0;
+              for (index_t q = 0; q < nface; ++q) {
+                index_t rq = q;
+                for (int kk = 0; kk < D; ++kk) {
+                  if (kk == k) {
+                    centre[kk] = side == 0 ? 0.5 / dsub : 1.0 - 0.5 / dsub;
+                  } else {
+                    centre[kk] = (static_cast<double>(rq % nsub) + 0.5) / dsub;
+                    rq /= nsub;
+                  }
+                }
+                if (!(phi_at<D>(g, phi_node, centre, first) > 0.0))
+                  continue;  // solid on this side: part of the obstacle's face, or no face
+                if (!wall) {
+                  centre[k] = 1.0 - centre[k];  // the mirrored sub-cell across the face
+                  const bool fluid_other = phi_at<D>(g, phi_node, centre, other_first) > 0.0;
+                  if (!fluid_other) {
+                    ++solid;
+                    continue;  // fluid here, solid there: a piece of obstacle face
+                  }
+                }
+                for (int i = 0; i < NC * NC; ++i) M[i] = 0.0;
+                for (int gp = 0; gp < (1 << (D - 1)); ++gp) {
+                  face_gauss_point<D>(gp, k, side, centre, gauss / dsub, local);
+                  face_point<D>(local, wface, M);
+                }
+                for (int a = 0; a < NC; ++a)
+                  for (int b = 0; b < NC; ++b) {
+                    Fm(a, b, k) -= sign * M[a * NC + b];
+                    if (wall) Wm(2 * k + side, a, b) += M[a * NC + b];
+                  }
+              }
+            }
+          }
+          for (int a = 0; a < NC; ++a)
+            for (int b = 0; b < NC; ++b)
+              for (int k = 0; k < D; ++k) Fm(a, b, k) += Cm(a, b, k) + Cm(b, a, k);
+          solid_parts(m) = solid;
+        }
+      },
+      m_count * total);
+}
+
+template <int D>
+void face_mass(const Grid<D>& g, View<double, 3> Wf) {
+  for (index_t i = 0; i < Wf.size(); ++i) Wf[i] = 0.0;
+  const double gauss = 0.5 / std::sqrt(3.0);
+  std::array<double, D> local, centre;
+  centre.fill(0.5);
+  const double w = power<D - 1>(g.h) / (1 << (D - 1));
+  for (int k = 0; k < D; ++k)
+    for (int side = 0; side < 2; ++side)
+      for (int gp = 0; gp < (1 << (D - 1)); ++gp) {
+        face_gauss_point<D>(gp, k, side, centre, gauss, local);
+        face_point<D>(local, w, &Wf(2 * k + side, 0, 0));
+      }
+}
+
+template <int D>
+double interpolate_phi(const Grid<D>& g, View<const double> phi_node, View<const double, 2> x,
+                       index_t p, double* grad) {
+  double local[D];
+  const index_t first = g.locate(&x(p, 0), local);
+  double val = 0.0;
+  for (int k = 0; k < D; ++k) grad[k] = 0.0;
+  for (int a = 0; a < Grid<D>::NC; ++a) {
+    const double phi = phi_node[first + g.corner[a]];
+    val += Grid<D>::corner_weight(a, local) * phi;
+    for (int k = 0; k < D; ++k) grad[k] += g.corner_gradient(a, k, local) * phi;
+  }
+  return val;
+}
+
+template <int D>
+index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
+                 View<const double> phi_node, double margin) {
+  View<const double, 2> xc = x;
+  return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
+    index_t moved = 0;
+    for (index_t p = lo; p < hi; ++p) {
+      double grad[D];
+      double phi = interpolate_phi<D>(g, phi_node, xc, p, grad);
+      if (phi >= margin) continue;
+      ++moved;
+      for (int it = 0; it < 4; ++it) {
+        double g2 = 0.0;
+        for (int k = 0; k < D; ++k) g2 += grad[k] * grad[k];
+        if (g2 == 0.0) break;
+        const double step = (margin - phi) / g2;
+        for (int k = 0; k < D; ++k) x(p, k) += step * grad[k];
+        phi = interpolate_phi<D>(g, phi_node, xc, p, grad);
+        if (phi >= margin) break;
+      }
+      double g2 = 0.0, vn = 0.0;
+      for (int k = 0; k < D; ++k) {
+        g2 += grad[k] * grad[k];
+        vn += v(p, k) * grad[k];
+      }
+      if (g2 > 0.0 && vn < 0.0)
+        for (int k = 0; k < D; ++k) v(p, k) -= vn * grad[k] / g2;
+    }
+    return moved;
+  });
+}
+
+template <int D>
+void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> theta) {
+  // only sliver cells are written, only cells with open >= SLIVER read: no race
+  parallel_for(g.ncells, [&](index_t c) {
+    if (!(0.0 < open_(c) && open_(c) < SLIVER)) return;
+    double best = -1.0;
+    index_t cx[D];
+    g.cell_coords(c, cx);
+    for (int k = 0; k < D; ++k)
+      for (int step = -1; step <= 1; step += 2) {
+        const index_t j = cx[k] + step;
+        if (j < 0 || j >= g.cells[k]) continue;
+        const index_t nb = c + step * g.cs[k];
+        if (open_(nb) >= SLIVER && theta(nb) > best) best = theta(nb);
+      }
+    if (best >= 0.0) theta(c) = best;
+  });
+}
+
+template <int D>
+void extend_velocity(const Grid<D>& g, View<const index_t> onode, View<const double> node_mass,
+                     View<double, 2> v_old, View<double, 2> v_star) {
+  // only massless nodes are written, only nodes with mass read: no race
+  parallel_for(onode.size(), [&](index_t e) {
+    const index_t i = onode(e);
+    if (node_mass(i) > 0.0) return;
+    index_t ix[D];
+    g.node_coords(i, ix);
+    double total = 0.0;
+    for (int k = 0; k < D; ++k) {
+      v_old(i, k) = 0.0;
+      v_star(i, k) = 0.0;
+    }
+    for (int s = 0; s < Grid<D>::NS; ++s) {
+      index_t j = i;
+      int rs = s;
+      bool inside = true;
+      for (int k = 0; k < D; ++k) {
+        const int d = rs % 3 - 1;
+        rs /= 3;
+        if (ix[k] + d < 0 || ix[k] + d > g.cells[k]) {
+          inside = false;
+          break;
+        }
+        j += d * g.ns[k];
+      }
+      if (!inside || node_mass(j) <= 0.0) continue;
+      const double m = node_mass(j);
+      total += m;
+      for (int k = 0; k < D; ++k) {
+        v_old(i, k) += m * v_old(j, k);
+        v_star(i, k) += m * v_star(j, k);
+      }
+    }
+    if (total > 0.0)
+      for (int k = 0; k < D; ++k) {
+        v_old(i, k) /= total;
+        v_star(i, k) /= total;
+      }
+  });
+}
+
+#define MPMFLOW_INSTANTIATE(D)                                                                  \
+  template double phi_at<D>(const Grid<D>&, View<const double>, const std::array<double, D>&,   \
+                            index_t);                                                           \
+  template void cut_cell_tensors<D>(const Grid<D>&, View<const double>, View<const index_t>,    \
+                                    index_t, View<double, 3>, View<double, 4>, View<double, 2>, \
+                                    View<double, 4>, View<double, 4>, View<index_t>);           \
+  template void face_mass<D>(const Grid<D>&, View<double, 3>);                                  \
+  template double interpolate_phi<D>(const Grid<D>&, View<const double>, View<const double, 2>, \
+                                     index_t, double*);                                         \
+  template index_t push_out<D>(const Grid<D>&, View<double, 2>, View<double, 2>,                \
+                               View<const double>, double);                                     \
+  template void sliver_fractions<D>(const Grid<D>&, View<const double>, View<double>);          \
+  template void extend_velocity<D>(const Grid<D>&, View<const index_t>, View<const double>,     \
+                                   View<double, 2>, View<double, 2>);
+
+MPMFLOW_INSTANTIATE(2)
+MPMFLOW_INSTANTIATE(3)
+#undef MPMFLOW_INSTANTIATE
+
+}  // namespace mpmflow
