@@ -13,9 +13,8 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from mpmflow import Simulation, load_case
+from mpmflow import Simulation, load_case, state
 from mpmflow.errors import CaseError, SolverError
-from mpmflow.kernels import viscous
 
 HYDRO = "examples/hydrostatic.toml"
 NEWTONIAN = ["material.model='newtonian'", "material.viscosity=1.0"]
@@ -57,15 +56,15 @@ def _system(cells, h, weight, mass, dt, u):
     uu = np.empty_like(u)
     off = np.zeros(D + 1, dtype=np.int64)
     empty_i, empty_f = np.zeros(0, dtype=np.int64), np.zeros(0)
-    n = viscous.number_unknowns(mass, empty_i, empty_i, empty_f, False, empty_i,
-                                np.zeros((0, D)), np.zeros(0, dtype=np.bool_), u, uu, row, off)
+    n = state.number_unknowns(mass, empty_i, empty_i, empty_f, False, empty_i,
+                              np.zeros((0, D)), np.zeros(0, dtype=np.bool_), u, uu, row, off)
     NS = 3**D
     cols = np.empty((D, n, NS), dtype=np.int64)
     vals = np.empty((D, n, NS))
     rhs = np.empty(n)
     node = np.empty(n, dtype=np.int64)
-    T = viscous.gauss_gradients(cells, h)
-    viscous.assemble(cells, T, weight, mass, dt, uu, row, off, cols, vals, rhs, node)
+    T = state.gauss_gradients(cells, h)
+    state.assemble(cells, T, weight, mass, dt, uu, row, off, cols, vals, rhs, node)
     x = np.empty(n)
     for k in range(D):
         x[off[k]:off[k + 1]] = u[:, k]

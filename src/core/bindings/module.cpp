@@ -28,4 +28,5 @@ NB_MODULE(_core, m) {
   mpmflow::bind::bind_corrector(m);
   mpmflow::bind::bind_volume_correction(m);
   mpmflow::bind::bind_cut_cells(m);
+  mpmflow::bind::bind_viscous(m);
 }

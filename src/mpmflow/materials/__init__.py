@@ -6,7 +6,7 @@ A material module gives:
 * ``KEYS``: the ``[material]`` keys that are its parameters (besides ``density`` and
   ``bulk_modulus``, which every material has); the schema (``mpmflow.case.Material``)
   holds their descriptions and units;
-* ``MODEL``: its code in the compiled rheology (``kernels.rheology``);
+* ``MODEL``: its code in the compiled rheology (``state``: src/core/rheology.hpp);
 * ``check(m)``: the checks of its parameters, raising ValueError with a message that names
   the key and the fix;
 * ``parameters(m)``: its parameters as the float array the compiled rheology reads.
@@ -17,7 +17,7 @@ table of materials indexed per particle can follow without changing the kernels'
 
 import numpy as np
 
-from ..kernels import rheology
+from .. import state
 from . import herschel_bulkley, mu_i, newtonian, water
 
 MATERIALS = {m.NAME: m for m in (water, newtonian, herschel_bulkley, mu_i)}
@@ -48,5 +48,5 @@ def parameters(m):
 
 
 def is_viscous(m):
-    return MATERIALS[m.model].MODEL != rheology.WATER
+    return MATERIALS[m.model].MODEL != state.WATER
 

@@ -4,11 +4,11 @@ rate^flow_index where it flows, rigid below the yield stress. Regularised as the
 model: eta = min(max_viscosity, consistency rate^(n - 1) + yield_stress / rate), so below
 the yield stress the material creeps at rate |tau| / max_viscosity."""
 
-from ..kernels import rheology
+from .. import state
 
 NAME = "herschel_bulkley"
 KEYS = ("consistency", "yield_stress", "flow_index", "max_viscosity")
-MODEL = rheology.HERSCHEL_BULKLEY
+MODEL = state.HERSCHEL_BULKLEY
 
 
 def check(m):

@@ -5,12 +5,12 @@ phi = material.density / material.grain_density. As a viscosity: eta = mu(I) p /
 capped at max_viscosity (at rest the material creeps at rate |tau| / max_viscosity); no
 strength without pressure (p <= 0: eta = 0)."""
 
-from ..kernels import rheology
+from .. import state
 
 NAME = "mu_i"
 KEYS = ("friction_static", "friction_limit", "inertial_number_ref", "grain_diameter",
         "grain_density", "max_viscosity")
-MODEL = rheology.MU_I
+MODEL = state.MU_I
 
 
 def check(m):

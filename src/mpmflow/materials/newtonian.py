@@ -1,11 +1,11 @@
 """A Newtonian liquid (``material.model = "newtonian"``): tau = 2 eta D with a constant
 dynamic viscosity eta = ``material.viscosity`` (Pa s)."""
 
-from ..kernels import rheology
+from .. import state
 
 NAME = "newtonian"
 KEYS = ("viscosity",)
-MODEL = rheology.NEWTONIAN
+MODEL = state.NEWTONIAN
 
 
 def check(m):

@@ -1,10 +1,10 @@
 """Inviscid water (``material.model = "water"``, the default): no deviatoric stress."""
 
-from ..kernels import rheology
+from .. import state
 
 NAME = "water"
 KEYS = ("viscosity",)
-MODEL = rheology.WATER
+MODEL = state.WATER
 
 
 def check(m):

@@ -1,0 +1,86 @@
+// The implicit viscous predictor (docs/method.md, "Viscous materials"), 2D and 3D.
+//
+// Before the pressure step, the predicted velocity v* becomes the solution u of
+//
+//     M/dt (u - v*) = -K_visc u,   (K_visc u)_(i,k) = sum_e c_e int dN_i/dx_m (du_k/dx_m +
+//     du_m/dx_k)
+//
+// the backward-Euler step of the full deviatoric stress tau = 2 eta D(u). M is the lumped
+// nodal mass (kg), c_e = eta_e w_e with eta_e the cell's viscosity (Pa s, rheology.hpp) and
+// w_e its fluid fraction; the element integrals are the full-cell Gauss tensors
+// T[a, b, m, k] = int dN_a/dx_m dN_b/dx_k. The free surface is traction-free. Walls: the normal
+// component of a wall node keeps v*; a no-slip wall or obstacle holds the tangential velocity
+// at 0 where the material presses on it or rests.
+//
+// The system is symmetric positive definite, stored as D x D blocks in ELL form (cols, vals:
+// D x n x 3^D; block (k, m) = rows of component k, columns of component m numbered within
+// component m), and solved by conjugate gradients preconditioned with one multigrid V-cycle
+// of each diagonal block. See src/mpmflow/kernels/viscous.py (the Numba original).
+#pragma once
+
+#include <array>
+
+#include "grid.hpp"
+#include "multigrid.hpp"
+#include "view.hpp"
+
+namespace mpmflow {
+
+// T[a, b, m, k] = int over a full cell of dN_a/dx_m dN_b/dx_k (m^(D-2)), by 2^D Gauss points
+// (exact for multilinear N). T: 2^D x 2^D x D x D.
+template <int D>
+void gauss_gradients(const Grid<D>& g, View<double, 4> T);
+
+// Each cell's viscosity eta (Pa s) at the strain rate of the nodal velocity v (nn x D, m/s)
+// at its centre and the mean of its corners' pressure p_node (Pa; negative counts as 0),
+// and weight = eta x its fluid fraction (1 where theta >= full or enclosed, else theta)
+// x open_ (the part an obstacle leaves open); both 0 in cells without material (theta <= 0
+// and not enclosed). model, par: the rheology's code and parameters (rheology.hpp).
+template <int D>
+void cell_viscosity(const Grid<D>& g, View<const double> theta, View<const double> open_,
+                    View<const bool> enclosed, double full, View<const double, 2> v,
+                    View<const double> p_node, int model, View<const double> par, View<double> eta,
+                    View<double> weight);
+
+// The unknowns and held values of the system: u (nn x D) = vstar with the held tangential
+// components of no-slip contacts set to 0; row(i, k) the unknown's number (component by
+// component, each in node order), -1 where held or massless; off (D + 1) the first row of
+// each component. Walls: entries (wall_node, wall_axis, wall_sign); obstacles: entries
+// (onode, onormal: its outward normal, ono_slip: no-slip). Returns the number of unknowns.
+template <int D>
+index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_node,
+                        View<const index_t> wall_axis, View<const double> wall_sign, bool no_slip,
+                        View<const index_t> onode, View<const double, 2> onormal,
+                        View<const bool> ono_slip, View<const double, 2> vstar, View<double, 2> u,
+                        View<index_t, 2> row, View<index_t> off);
+
+// The system for the unknowns of number_unknowns (n of them): cols(m, r, s), vals(m, r, s)
+// (D x n x 3^D, kg/s) the couplings of row r to component m (columns numbered within
+// component m, -1 empty), rhs (n, kg m/s^2) = M/dt u with the held values moved to it, and
+// node(r) the node of row r. T from gauss_gradients, weight from cell_viscosity (Pa s), dt (s).
+template <int D>
+void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weight,
+              View<const double> node_mass, double dt, View<const double, 2> u,
+              View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
+              View<double, 3> vals, View<double> rhs, View<index_t> node);
+
+// y = A x block by block (the Numba _apply); tmp: scratch of n values.
+void apply_blocks(View<const index_t, 3> cols, View<const double, 3> vals, View<const index_t> off,
+                  View<const double> x, View<double> y, View<double> tmp);
+
+// The row of the largest |rhs - A x| (NaN counts as largest); r, tmp: scratch of n values.
+index_t worst_row(View<const index_t, 3> cols, View<const double, 3> vals, View<const index_t> off,
+                  View<const double> x, View<const double> rhs, View<double> r, View<double> tmp);
+
+// Block-preconditioned CG from the initial guess in x (updated in place; m/s); stops when
+// ||rhs - A x|| <= tol ||rhs|| or after maxiter iterations. Preconditioner: one V-cycle
+// (sweeps Gauss-Seidel sweeps) of each component's diagonal block, whose hierarchy is set up
+// here in mg[k] (the caller owns the objects, reused between steps). work: scratch of
+// 5 x n values. Returns (iterations, true relative residual).
+template <int D>
+SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const double, 3> vals,
+                  View<const index_t> node, View<const index_t> off, View<const double> rhs,
+                  View<double> x, double tol, index_t maxiter, int sweeps,
+                  std::array<Multigrid<D>, D>& mg, View<double, 2> work);
+
+}  // namespace mpmflow
