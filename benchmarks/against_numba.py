@@ -4,7 +4,7 @@ of the paper's dam break (issue 23: agree to 1e-10 m over 20 steps).
 Runs each code in its own process on the same case and compares the particles:
 
     python benchmarks/against_numba.py --baseline /path/to/checkout-of-9b87813 \
-        [--python /path/to/python-with-numba] [--steps 20] [--set key=value ...]
+        [--python /path/to/python-with-numba] [--case CASE] [--steps 20] [--set key=value ...]
 
 The baseline is a checkout of the last Numba commit (`git worktree add /tmp/numba 9b87813`)
 run with an interpreter that has its dependencies (numba); this checkout runs with the
@@ -35,11 +35,11 @@ np.savez(sys.argv[2], x=P.x, v=P.v, pressure=P.pressure)
 """
 
 
-def run(python, src, out, overrides):
+def run(python, src, case, out, overrides):
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = str(src)
-    subprocess.run([python, "-c", RUN, str(CASE), str(out), *overrides], check=True, env=env,
+    subprocess.run([python, "-c", RUN, str(case), str(out), *overrides], check=True, env=env,
                    cwd=tempfile.gettempdir())
     return np.load(out)
 
@@ -48,6 +48,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--baseline", required=True, type=Path, help="checkout of the Numba commit")
     ap.add_argument("--python", default=sys.executable, help="interpreter for the baseline")
+    ap.add_argument("--case", type=Path, default=CASE, help="case file (default: the dam break)")
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--dt", type=float, default=1e-3)
     ap.add_argument("--tolerance", type=float, default=1e-10)
@@ -56,8 +57,9 @@ def main():
     overrides = [f"time.dt={a.dt}", f"time.end={a.steps * a.dt}", "output.snapshots=false",
                  *a.set]
     with tempfile.TemporaryDirectory() as tmp:
-        new = run(sys.executable, None, Path(tmp) / "core.npz", overrides)
-        old = run(a.python, a.baseline / "src", Path(tmp) / "numba.npz", overrides)
+        new = run(sys.executable, None, a.case.resolve(), Path(tmp) / "core.npz", overrides)
+        old = run(a.python, a.baseline / "src", a.case.resolve(), Path(tmp) / "numba.npz",
+                  overrides)
     dx = float(np.abs(new["x"] - old["x"]).max())
     dv = float(np.abs(new["v"] - old["v"]).max())
     dp = float(np.abs(new["pressure"] - old["pressure"]).max())

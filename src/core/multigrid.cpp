@@ -1,5 +1,7 @@
 #include "multigrid.hpp"
 
+#include "strips.hpp"
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -8,28 +10,6 @@
 namespace mpmflow {
 
 namespace {
-
-// A copy of kernels/parallel.py's strips (another helper writes src/core/strips.hpp; this
-// one goes when that header is merged). Cut rows 0 to n - 1 into at most nstrips strips of
-// at least min_rows rows each, holding about equal work: strip t is rows bounds[t] to
-// bounds[t + 1] - 1. row_cum[r]: the work in rows 0 to r - 1 (n + 1 entries,
-// non-decreasing); bounds: nstrips + 1 entries. Returns the number of strips (>= 1).
-index_t strips(View<const index_t> row_cum, index_t nstrips, index_t min_rows,
-               View<index_t> bounds) {
-  const index_t nrows = row_cum.size() - 1;
-  const index_t k = std::max<index_t>(1, std::min(nstrips, nrows / min_rows));
-  const index_t total = row_cum(nrows);
-  bounds(0) = 0;
-  for (index_t t = 1; t < k; ++t) {
-    const index_t target = total * t / k;
-    index_t row = bounds(t - 1) + min_rows;
-    const index_t last = nrows - min_rows * (k - t);  // leave room for the strips to come
-    while (row < last && row_cum(row) < target) ++row;
-    bounds(t) = row;
-  }
-  bounds(k) = nrows;
-  return k;
-}
 
 template <int D>
 void coords_of(index_t i, const std::array<index_t, D>& dims, std::array<index_t, D>& out) {

@@ -25,8 +25,6 @@ constexpr index_t COARSEST = 64;  // unknowns at which the hierarchy stops (dens
 // Levels of at least this many rows run their row loops and dot products on all threads
 // (the same bits on any thread count); smaller ones run on the calling thread.
 constexpr index_t PARALLEL_ROWS = 4096;
-// Galerkin products of large levels: at most this many strips of whole slabs of rows.
-constexpr index_t STRIPS = 16;
 
 struct SolveResult {
   index_t iterations = 0;

@@ -228,7 +228,7 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
   auto v_old = v_old_.template view<2>({nn, D});
   auto v_star = v_star_.template view<2>({nn, D});
   particles_to_grid<D>(grid_, P.x, P.v, P.mass, P.volume, order_.view(P.count()),
-                       start_.view(nc + 1), O.gravity, O.dt, node_mass_.view(nn),
+                       start_.view(nc + 1), View<const double>(O.gravity.data(), {D}), O.dt, node_mass_.view(nn),
                        node_mom_.template view<2>({nn, D}), node_vol_.view(nn), v_old, v_star,
                        correct ? cell_vol_.view(nc) : View<double>());
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
@@ -355,34 +355,35 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto v_star = v_star_.template view<2>({nn, D});
   auto p = p_node_.view(nn);
   cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_old, p,
-                    O.model, O.model_params, eta_.view(nc), eta_weight_.view(nc));
+                    O.model, View<const double>(O.model_params.data(), {8}), eta_.view(nc),
+                    eta_weight_.view(nc));
   auto base = v_c_.template view<2>({nn, D});
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
   const index_t n =
-      number_unknowns(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_sign, O.no_slip,
+      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_sign, O.no_slip,
                       T_.onode, T_.onormal, T_.ono_slip, base, vu, vrow, voff);
   if (n == 0) return OK;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});
   auto rhs = vrhs_.sized(n);
   auto node = vnode_.sized(n);
-  assemble_viscous<D>(grid_, T_.viscous_T, eta_weight_.view(nc), node_mass_.view(nn), O.dt, vu,
+  mpmflow::assemble<D>(grid_, T_.viscous_T, eta_weight_.view(nc), node_mass_.view(nn), O.dt, vu,
                       vrow, voff, cols, vals, rhs, node);
   auto x = vx_.sized(n);
   for (index_t i = 0; i < nn; ++i)
     for (int k = 0; k < D; ++k)
       if (vrow(i, k) >= 0) x(vrow(i, k)) = vu(i, k);
-  const SolveResult res = solve_viscous<D>(grid_, cols, vals, node, voff, rhs, x, O.tol,
-                                           O.max_iterations, O.sweeps, viscous_mg_,
-                                           vwork_.sized(8 * n));
+  auto work = vwork_.template sized<2>({5, n});
+  const SolveResult res = mpmflow::solve<D>(grid_, cols, vals, node, voff, rhs, x, O.tol,
+                                            O.max_iterations, O.sweeps, viscous_mg_, work);
   report.viscous_iterations += res.iterations;
   if (!(res.residual <= O.tol)) {
     report.fail_iterations = res.iterations;
     report.fail_residual = res.residual;
-    report.fail_node = node(worst_viscous_row(cols, vals, voff, x, rhs, vwork_.sized(8 * n)));
+    report.fail_node = node(mpmflow::worst_row(cols, vals, voff, x, rhs, work.row(0), work.row(1)));
     report.fail_size = n;
     return VISCOUS_NOT_CONVERGED;
   }
@@ -404,8 +405,8 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
   auto cell_row = cell_row_.view(nc);
   auto all_cols = vol_cols_.template view<2>({nc, NS});
   auto all_vals = vol_vals_.template view<2>({nc, NS});
-  const auto assembled =
-      assemble_volume<D>(grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}),
+  const VolumeSystem assembled =
+      mpmflow::assemble<D>(grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}),
                          T_.static_slot, cell_row, all_cols, all_vals, vol_rhs_.view(nc),
                          vol_rows_.view(nc));
   const index_t n = assembled.n;
@@ -460,8 +461,8 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
   }
   report.moved += grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
-                                       v_new, p_node_.view(nn), O.dt, O.flip, upper_, margin_,
-                                       faces);
+                                       v_new, p_node_.view(nn), O.dt, O.flip,
+                                       View<const double>(upper_.data(), {D}), margin_, faces);
   if (obstacles_) report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
   return OK;
 }

@@ -13,6 +13,10 @@
 
 namespace mpmflow {
 
+// Scatters cut their rows into at most this many strips (particle-to-grid: 2 STRIPS; the
+// multigrid's Galerkin products: STRIPS).
+constexpr index_t STRIPS = 16;
+
 // Cut rows 0 to nrows - 1 into at most nstrips strips of at least min_rows rows each,
 // holding about equal amounts of work: strip t is rows bounds[t] to bounds[t + 1] - 1.
 // row_cum(r) is the work in rows 0 to r - 1 (r = 0 to nrows, non-decreasing); bounds needs

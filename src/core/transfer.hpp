@@ -12,13 +12,11 @@
 #include <array>
 
 #include "grid.hpp"
+#include "strips.hpp"
 #include "view.hpp"
 
 namespace mpmflow {
 
-// Particle-to-grid cuts the slabs of cells (one index along the last axis) into 2 STRIPS
-// strips.
-constexpr index_t STRIPS = 16;
 
 // Add ``volume`` (m^3) at particle p to the cell centres with the multilinear hat of the
 // cell-centred grid. A wall mirrors the particles next to it: a ghost cell's weight goes to

@@ -4,8 +4,9 @@
 
 #include <array>
 #include <cassert>
+#include <algorithm>
 #include <cstdint>
-#include <vector>
+#include <memory>
 
 namespace mpmflow {
 
@@ -82,24 +83,28 @@ class View {
 
 // Storage the core owns: sized to a capacity outside the step and grown (never shrunk)
 // when a run needs more; kernels see it only through views. A device backend replaces
-// the std::vector by device memory behind the same interface.
+// the host array by device memory behind the same interface.
 template <class T>
 class Buffer {
  public:
-  // Make room for n elements; returns true if the storage moved (views are then stale).
+  // Make room for n elements, keeping the first capacity() ones; returns true if the
+  // storage moved (views taken before are then stale).
   bool reserve(index_t n) {
-    if (n <= static_cast<index_t>(data_.size())) return false;
-    data_.resize(static_cast<std::size_t>(n));
+    if (n <= capacity_) return false;
+    auto grown = std::make_unique<T[]>(static_cast<std::size_t>(n));
+    std::copy(data_.get(), data_.get() + capacity_, grown.get());
+    data_ = std::move(grown);
+    capacity_ = n;
     return true;
   }
-  index_t capacity() const { return static_cast<index_t>(data_.size()); }
+  index_t capacity() const { return capacity_; }
   View<T> view(index_t n) {
     MPMFLOW_BOUNDS(n <= capacity());
-    return View<T>(data_.data(), {n});
+    return View<T>(data_.get(), {n});
   }
   template <int R>
   View<T, R> view(std::array<index_t, R> shape) {
-    View<T, R> v(data_.data(), shape);
+    View<T, R> v(data_.get(), shape);
     MPMFLOW_BOUNDS(v.size() <= capacity());
     return v;
   }
@@ -117,7 +122,8 @@ class Buffer {
   }
 
  private:
-  std::vector<T> data_;
+  std::unique_ptr<T[]> data_;
+  index_t capacity_ = 0;
 };
 
 }  // namespace mpmflow

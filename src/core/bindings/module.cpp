@@ -24,6 +24,7 @@ NB_MODULE(_core, m) {
   mpmflow::bind::bind_pressure_system(m);
   mpmflow::bind::bind_walls(m);
   mpmflow::bind::bind_multigrid(m);
+  mpmflow::bind::bind_step(m);
   mpmflow::bind::bind_transfer(m);
   mpmflow::bind::bind_corrector(m);
   mpmflow::bind::bind_volume_correction(m);

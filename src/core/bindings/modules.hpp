@@ -14,6 +14,7 @@ void bind_ghost_pressure(nb::module_& m);
 void bind_pressure_system(nb::module_& m);
 void bind_walls(nb::module_& m);
 void bind_multigrid(nb::module_& m);
+void bind_step(nb::module_& m);
 void bind_transfer(nb::module_& m);
 void bind_corrector(nb::module_& m);
 void bind_volume_correction(nb::module_& m);
