@@ -81,33 +81,31 @@ def test_iteration_limit_is_reported_not_hidden(system):
 
 
 def test_large_multigrid_solve_is_right_and_independent_of_threads():
-    # above multigrid.PARALLEL_ROWS the row loops and dot products run on all threads:
+    # above state.PARALLEL_ROWS the row loops and dot products run on all threads:
     # the answer must match sparse LU and be bit-identical on 1 and 2 threads
-    import numba
-
-    from mpmflow.kernels import multigrid
+    from mpmflow import state
 
     nnx, nny = 121, 111
     yy, xx = np.mgrid[0:nny, 0:nnx]
     mask = (yy > 0) & (xx > 0) & (xx < nnx - 1) & (yy < 0.8 * nny + 5 * np.sin(xx / 7))
     m = poisson_ell(nnx, nny, mask)
-    assert m.nodes.size > multigrid.PARALLEL_ROWS
+    assert m.nodes.size > state.PARALLEL_ROWS
     b = np.random.default_rng(3).normal(size=m.nodes.size)
     exact = spla.spsolve(m.csr().tocsc(), b)
-    if numba.config.NUMBA_NUM_THREADS < 2:
+    if state.max_threads() < 2:
         pytest.skip("one thread only: nothing to compare")
     answers = []
-    before = numba.get_num_threads()
+    before = state.max_threads()
     try:
         for threads in (1, 2):
-            numba.set_num_threads(threads)
+            state.set_threads(threads)
             s = LinearSolver("multigrid", 1e-10, 200)
             s.prepare(m)
             res = s.solve(b)
             assert res.converged and res.iterations <= 20
             answers.append(res.x)
     finally:
-        numba.set_num_threads(before)
+        state.set_threads(before)
     np.testing.assert_allclose(answers[0], exact, rtol=0, atol=1e-8 * np.abs(exact).max())
     for x in answers[1:]:
         assert np.array_equal(x, answers[0])

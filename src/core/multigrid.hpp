@@ -13,13 +13,20 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
+#include "grid.hpp"
 #include "parallel.hpp"
 #include "view.hpp"
 
 namespace mpmflow {
 
 constexpr index_t COARSEST = 64;  // unknowns at which the hierarchy stops (dense factor)
+// Levels of at least this many rows run their row loops and dot products on all threads
+// (the same bits on any thread count); smaller ones run on the calling thread.
+constexpr index_t PARALLEL_ROWS = 4096;
+// Galerkin products of large levels: at most this many strips of whole slabs of rows.
+constexpr index_t STRIPS = 16;
 
 struct SolveResult {
   index_t iterations = 0;
@@ -31,7 +38,9 @@ void matvec(View<const index_t, 2> cols, View<const double, 2> vals, View<const 
             View<double> y);
 void residual(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
               View<const double> b, View<double> r);
-// a . b summed chunk by chunk (CHUNKS) when long: the same bits on any thread count.
+// a . b summed chunk by chunk (CHUNKS) when long (>= PARALLEL_ROWS): the same bits on any
+// thread count; shorter vectors are summed in index order (the Numba kernel called np.dot
+// there, which sums in BLAS's order: the two differ by rounding, ~1e-16 relative).
 double dot(View<const double> a, View<const double> b);
 // The row of the largest |b - A x| (NaN counts as largest); r: scratch of n values.
 index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
@@ -42,10 +51,14 @@ class Multigrid {
  public:
   // Build the levels for the matrix (cols, vals: n x 3^D) whose row r sits on grid point
   // node(r) of a grid with dims points per axis. The views must stay valid until the
-  // next setup (the finest level is not copied).
+  // next setup (the finest level is not copied). The storage of earlier setups is reused
+  // (allocation only when the hierarchy outgrows it). Throws std::invalid_argument on
+  // shapes that do not match, std::runtime_error when the coarsest operator is not positive
+  // definite (its Cholesky factor fails, where np.linalg.cholesky raised LinAlgError).
   void setup(View<const index_t, 2> cols, View<const double, 2> vals, View<const index_t> node,
              const std::array<index_t, D>& dims, index_t coarsest = COARSEST);
-  // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each).
+  // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each):
+  // sweeps forward colour Gauss-Seidel sweeps down, the dense solve, sweeps backward up.
   void vcycle(View<const double> b, View<double> x, int sweeps);
   // Preconditioned CG from the initial guess in x; stops when ||rhs - A x|| <= tol ||rhs||.
   SolveResult pcg(View<const double> rhs, View<double> x, double tol, index_t maxiter, int sweeps);
@@ -53,11 +66,36 @@ class Multigrid {
   index_t rows() const;  // unknowns of the finest level
 
  private:
-  struct Impl;
-  // storage of all levels (owned here, reused between setups); filled in by multigrid.cpp
-  Buffer<index_t> index_store_[8];
-  Buffer<double> value_store_[8];
-  std::array<index_t, 64> level_info_{};
+  static constexpr int NS = stencil_size(D);  // stencil slots of a row
+  static constexpr int NP = 1 << D;           // entries of a row of P (coarse parents)
+  // One level: its operator (level 0: the caller's views), its place on its grid, the rows
+  // by colour, P to the next coarser level, and its V-cycle vectors. The storage grows
+  // with the hierarchy and is reused by later setups.
+  struct Level {
+    index_t n = 0;
+    std::array<index_t, D> dims{};
+    std::array<index_t, NP + 1> cstart{};  // colour k: rows[cstart[k]:cstart[k + 1]]
+    View<const index_t, 2> cols;
+    View<const double, 2> vals;
+    View<const index_t> node;
+    View<index_t> rows;
+    View<index_t, 2> pcols;  // n x NP, columns on the next level (-1: none; entries first)
+    View<double, 2> pw;      // n x NP
+    View<double> b, x, r;    // right-hand side, solution, residual (level 0: b, x given)
+    Buffer<index_t> cols_store, node_store, rows_store, pcols_store;
+    Buffer<double> vals_store, pw_store, b_store, x_store, r_store;
+  };
+  void coarse_level(index_t l);  // level l + 1's unknowns and P of level l
+  void galerkin(index_t l);      // level l + 1's operator P^T A P
+  void colour_rows(Level& lv);
+  void factor();  // dense Cholesky factor of the coarsest level
+  void cholesky_solve(View<const double> b, View<double> x);
+
+  std::vector<Level> level_;  // grown, never shrunk; the first nlev_ are in use
+  index_t nlev_ = 0;
+  Buffer<index_t> crow_store_, ccoord_store_, row_cum_store_;  // setup scratch
+  Buffer<double> factor_store_;                                // coarsest: L, n x n
+  Buffer<double> r_store_, p_store_, q_store_, z_store_;       // CG vectors
 };
 
 }  // namespace mpmflow

@@ -1,7 +1,7 @@
 """Sparse symmetric positive definite solves for the pressure system.
 
 ``multigrid`` conjugate gradients preconditioned by a geometric multigrid V-cycle on the
-            node grid (compiled, ``kernels.multigrid``); warm-started.
+            node grid (compiled: the core's Multigrid, through ``state``); warm-started.
 ``amg``     conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid
             (pyamg); warm-started.
 ``direct``  sparse LU (SuperLU through SciPy).
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels import multigrid
+from . import state
 
 SMOOTHING_SWEEPS = 1  # Gauss-Seidel sweeps before and after each coarse correction
 
@@ -55,9 +55,9 @@ class LinearSolver:
     def prepare(self, matrix):
         self.matrix = matrix
         if self.method == "multigrid":
-            dims = np.asarray(matrix.grid_nodes, dtype=np.int64)
-            self._setup = multigrid.build_hierarchy(matrix.cols, matrix.vals, matrix.nodes,
-                                                    dims, multigrid.COARSEST)
+            # an earlier hierarchy's storage is reused
+            self._setup = state.multigrid(matrix.cols, matrix.vals, matrix.nodes,
+                                          matrix.grid_nodes, hierarchy=self._setup)
             return
         self._A = matrix.csr()
         if self.method == "direct":
@@ -78,8 +78,8 @@ class LinearSolver:
             return SolveResult(np.zeros_like(b), 0, 0.0, True)
         if self.method == "multigrid":
             x = np.zeros_like(b) if x0 is None else x0.copy()
-            iterations, residual = multigrid.pcg(*self._setup, b, x, tol, self.max_iterations,
-                                                 SMOOTHING_SWEEPS)
+            iterations, residual = self._setup.pcg(b, x, tol, self.max_iterations,
+                                                   SMOOTHING_SWEEPS)
         else:
             if self.method == "direct":
                 x = self._setup.solve(b)
@@ -96,5 +96,5 @@ class LinearSolver:
     def residual_vector(self, b, x):
         """b - A x for the prepared matrix."""
         out = np.empty_like(b)
-        multigrid.residual(self.matrix.cols, self.matrix.vals, x, b, out)
+        state.residual(self.matrix.cols, self.matrix.vals, x, b, out)
         return out

@@ -78,24 +78,65 @@ def number_unknowns(node_mass, wall_node, wall_axis, wall_sign, no_slip, onode, 
     return n
 
 
-def assemble(cells, T, weight, node_mass, dt, u, row, off, cols, vals, rhs, node):
+def viscous_assemble(cells, T, weight, node_mass, dt, u, row, off, cols, vals, rhs, node):
     """The viscous system's blocks, right-hand side and the node of each row (in place)."""
     out = [_viscous_out(a) for a in (cols, vals, rhs, node)]
-    _core.assemble([int(c) for c in cells], T, weight, node_mass, float(dt), u, row, off, *out)
+    _core.viscous_assemble([int(c) for c in cells], T, weight, node_mass, float(dt), u, row, off,
+                           *out)
     for a, c in zip((cols, vals, rhs, node), out):
         _viscous_back(a, c)
 
 
-def worst_row(cols, vals, off, x, rhs):
+def viscous_worst_row(cols, vals, off, x, rhs):
     """The row of the largest |rhs - A x| of the viscous system (NaN counts as largest)."""
-    return _core.worst_row(cols, vals, off, x, rhs)
+    return _core.viscous_worst_row(cols, vals, off, x, rhs)
 
 
-def solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
+def viscous_solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
     """Block-preconditioned CG of the viscous system from the guess in ``x`` (in place).
     Returns (iterations, relative residual)."""
     xc = _viscous_out(x)
-    result = _core.solve(cols, vals, node, off, [int(c) for c in cells], rhs, xc, float(tol),
-                         int(maxiter), int(sweeps))
+    result = _core.viscous_solve(cols, vals, node, off, [int(c) for c in cells], rhs, xc,
+                                 float(tol), int(maxiter), int(sweeps))
     _viscous_back(x, xc)
     return result
+
+
+# --- multigrid ---
+COARSEST = _core.COARSEST  # unknowns at which the multigrid hierarchy stops (dense factor)
+PARALLEL_ROWS = _core.PARALLEL_ROWS  # multigrid levels this large run on all threads
+
+
+def multigrid(cols, vals, node, dims, coarsest=COARSEST, hierarchy=None):
+    """A multigrid hierarchy (``_core.Multigrid2``/``Multigrid3``) set up for the ELL matrix
+    (cols, vals: n x 3^D) whose row r is grid point node[r] of a grid of ``dims`` points per
+    axis: ``hierarchy`` (an earlier one, whose storage is reused) when given, else a new one.
+    It holds the arrays until its next setup; its ``pcg(rhs, x, tol, maxiter, sweeps)``
+    updates x in place and returns (iterations, true relative residual); ``vcycle(b, x,
+    sweeps)`` applies the preconditioner."""
+    dims = tuple(int(d) for d in dims)
+    kind = _core.Multigrid2 if len(dims) == 2 else _core.Multigrid3
+    mg = hierarchy if isinstance(hierarchy, kind) else kind()
+    mg.setup(np.ascontiguousarray(cols, dtype=np.int64), np.ascontiguousarray(vals, dtype=float),
+             np.ascontiguousarray(node, dtype=np.int64), dims, int(coarsest))
+    return mg
+
+
+def matvec(cols, vals, x, y):
+    """y = A x (A in ELL form); y: float64, written in place."""
+    _core.matvec(cols, vals, x, y)
+
+
+def residual(cols, vals, x, b, out):
+    """out = b - A x (A in ELL form); out: float64, written in place."""
+    _core.residual(cols, vals, x, b, out)
+
+
+def dot(a, b):
+    """a . b summed chunk by chunk when long: the same bits on any thread count."""
+    return _core.dot(a, b)
+
+
+def worst_row(cols, vals, x, b):
+    """The row of the largest |b - A x| (NaN counts as largest)."""
+    return _core.worst_row(cols, vals, x, b, np.empty(len(b)))

@@ -19,4 +19,5 @@ NB_MODULE(_core, m) {
 #endif
   mpmflow::bind::bind_binning(m);
   mpmflow::bind::bind_viscous(m);
+  mpmflow::bind::bind_multigrid(m);
 }

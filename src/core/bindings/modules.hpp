@@ -9,5 +9,6 @@ namespace nb = nanobind;
 
 void bind_binning(nb::module_& m);
 void bind_viscous(nb::module_& m);
+void bind_multigrid(nb::module_& m);
 
 }  // namespace mpmflow::bind

@@ -1,0 +1,575 @@
+#include "multigrid.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <type_traits>
+
+namespace mpmflow {
+
+namespace {
+
+// A copy of kernels/parallel.py's strips (another helper writes src/core/strips.hpp; this
+// one goes when that header is merged). Cut rows 0 to n - 1 into at most nstrips strips of
+// at least min_rows rows each, holding about equal work: strip t is rows bounds[t] to
+// bounds[t + 1] - 1. row_cum[r]: the work in rows 0 to r - 1 (n + 1 entries,
+// non-decreasing); bounds: nstrips + 1 entries. Returns the number of strips (>= 1).
+index_t strips(View<const index_t> row_cum, index_t nstrips, index_t min_rows,
+               View<index_t> bounds) {
+  const index_t nrows = row_cum.size() - 1;
+  const index_t k = std::max<index_t>(1, std::min(nstrips, nrows / min_rows));
+  const index_t total = row_cum(nrows);
+  bounds(0) = 0;
+  for (index_t t = 1; t < k; ++t) {
+    const index_t target = total * t / k;
+    index_t row = bounds(t - 1) + min_rows;
+    const index_t last = nrows - min_rows * (k - t);  // leave room for the strips to come
+    while (row < last && row_cum(row) < target) ++row;
+    bounds(t) = row;
+  }
+  bounds(k) = nrows;
+  return k;
+}
+
+template <int D>
+void coords_of(index_t i, const std::array<index_t, D>& dims, std::array<index_t, D>& out) {
+  for (int k = 0; k < D; ++k) {
+    out[k] = i % dims[k];
+    i /= dims[k];
+  }
+}
+
+// The colour of node i: sum_k (i_k mod 2) 2^k.
+template <int D>
+int colour_of(index_t i, const std::array<index_t, D>& dims) {
+  int c = 0;
+  for (int k = 0; k < D; ++k) {
+    c += static_cast<int>((i % dims[k]) % 2) << k;
+    i /= dims[k];
+  }
+  return c;
+}
+
+// y = A x (subtract: y = b - A x) for rows lo to hi - 1; NS slots a row (0: cols' width).
+template <int NS>
+void matvec_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+                 const double* b, View<double> y, index_t lo, index_t hi, bool subtract) {
+  const index_t ns = NS > 0 ? NS : cols.extent(1);
+  for (index_t r = lo; r < hi; ++r) {
+    if (ns == 0) {
+      y(r) = subtract ? b[r] : 0.0;
+      continue;
+    }
+    const index_t* c = &cols(r, 0);
+    const double* v = &vals(r, 0);
+    double acc = 0.0;
+    for (index_t s = 0; s < ns; ++s)
+      if (c[s] >= 0) acc += v[s] * x(c[s]);
+    y(r) = subtract ? b[r] - acc : acc;
+  }
+}
+
+// y = A x or b - A x over all rows, by CHUNKS chunks on all threads when n >= PARALLEL_ROWS.
+void apply(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+           const double* b, View<double> y, bool subtract) {
+  static_assert(PARALLEL_ROWS == SERIAL_BELOW, "for_each_chunk's cut-off is the levels'");
+  const index_t n = cols.extent(0);
+  const index_t ns = cols.extent(1);
+  for_each_chunk(n, [&](index_t, index_t lo, index_t hi) {
+    if (ns == 9)
+      matvec_rows<9>(cols, vals, x, b, y, lo, hi, subtract);
+    else if (ns == 27)
+      matvec_rows<27>(cols, vals, x, b, y, lo, hi, subtract);
+    else
+      matvec_rows<0>(cols, vals, x, b, y, lo, hi, subtract);
+  });
+}
+
+// Gauss-Seidel update of rows[lo:hi] (one colour: the rows do not couple); the diagonal in
+// the middle slot.
+template <int NS>
+void gs_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
+             View<double> x, View<const index_t> rows, index_t lo, index_t hi) {
+  constexpr int centre = NS / 2;
+  for (index_t k = lo; k < hi; ++k) {
+    const index_t r = rows(k);
+    const index_t* c = &cols(r, 0);
+    const double* v = &vals(r, 0);
+    double acc = b(r);
+    for (int s = 0; s < NS; ++s)
+      if (c[s] >= 0 && s != centre) acc -= v[s] * x(c[s]);
+    x(r) = acc / v[centre];
+  }
+}
+
+// One 2^D-colour Gauss-Seidel sweep, colours in order (forward) or in reverse.
+template <int D>
+void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
+                  View<double> x, View<const index_t> rows,
+                  const std::array<index_t, (1 << D) + 1>& cstart, bool forward) {
+  constexpr int NCOL = 1 << D;
+  const index_t n = cols.extent(0);
+  for (int k = 0; k < NCOL; ++k) {
+    const int colour = forward ? k : NCOL - 1 - k;
+    const index_t lo = cstart[colour], hi = cstart[colour + 1];
+    for_each_chunk(
+        hi - lo,
+        [&](index_t, index_t a, index_t z) {
+          gs_rows<stencil_size(D)>(cols, vals, b, x, rows, lo + a, lo + z);
+        },
+        n);
+  }
+}
+
+// r_c = P^T r_f (serial: the sums in the order of the fine rows).
+template <int NP>
+void restrict_to(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> rf,
+                 View<double> rc) {
+  for (index_t i = 0; i < rc.size(); ++i) rc(i) = 0.0;
+  const index_t n = pcols.extent(0);
+  for (index_t r = 0; r < n; ++r)
+    for (int a = 0; a < NP; ++a) {
+      const index_t c = pcols(r, a);
+      if (c >= 0) rc(c) += pw(r, a) * rf(r);
+    }
+}
+
+// x_f += P e_c (rows independent: in parallel on large levels, the same bits).
+template <int NP>
+void prolong_add(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> ec,
+                 View<double> xf) {
+  for_each_chunk(pcols.extent(0), [&](index_t, index_t lo, index_t hi) {
+    for (index_t r = lo; r < hi; ++r) {
+      double acc = 0.0;
+      for (int a = 0; a < NP; ++a) {
+        const index_t c = pcols(r, a);
+        if (c >= 0) acc += pw(r, a) * ec(c);
+      }
+      xf(r) += acc;
+    }
+  });
+}
+
+// CG updates: x += alpha p, r -= alpha q (step), or p = z + beta p.
+void cg_update(View<double> x, View<double> r, View<double> p, View<const double> q,
+               View<const double> z, double alpha, double beta, bool step) {
+  for_each_chunk(r.size(), [&](index_t, index_t lo, index_t hi) {
+    if (step) {
+      for (index_t i = lo; i < hi; ++i) {
+        x(i) += alpha * p(i);
+        r(i) -= alpha * q(i);
+      }
+    } else {
+      for (index_t i = lo; i < hi; ++i) p(i) = z(i) + beta * p(i);
+    }
+  });
+}
+
+void fill(View<double> v, double value) {
+  for_each_chunk(v.size(), [&](index_t, index_t lo, index_t hi) {
+    for (index_t i = lo; i < hi; ++i) v(i) = value;
+  });
+}
+
+void copy(View<const double> from, View<double> to) {
+  for_each_chunk(to.size(), [&](index_t, index_t lo, index_t hi) {
+    for (index_t i = lo; i < hi; ++i) to(i) = from(i);
+  });
+}
+
+// The contributions of fine rows r0 to r1 - 1 to P^T A P; the slot of coarse column J in
+// coarse row I from their coarse coordinates (the Numba kernel's slot table gives the same
+// slots where it is used).
+template <int D>
+void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<const double, 2> vals,
+                   View<const index_t, 2> pcols, View<const double, 2> pw,
+                   View<const index_t, 2> ccoord, View<index_t, 2> ccols, View<double, 2> cvals) {
+  constexpr int NP = 1 << D;
+  constexpr int NS = stencil_size(D);
+  for (index_t r = r0; r < r1; ++r) {
+    for (int a = 0; a < NP; ++a) {
+      const index_t I = pcols(r, a);
+      if (I < 0) break;  // P's entries of a row come first, then -1
+      const double wa = pw(r, a);
+      for (int s = 0; s < NS; ++s) {
+        const index_t j = cols(r, s);
+        if (j < 0) continue;
+        const double v = wa * vals(r, s);
+        for (int b = 0; b < NP; ++b) {
+          const index_t J = pcols(j, b);
+          if (J < 0) break;
+          index_t slot = 0, p3 = 1;
+          for (int k = 0; k < D; ++k) {
+            slot += (ccoord(J, k) - ccoord(I, k) + 1) * p3;
+            p3 *= 3;
+          }
+          ccols(I, slot) = J;
+          cvals(I, slot) += v * pw(j, b);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void matvec(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+            View<double> y) {
+  apply(cols, vals, x, nullptr, y, false);
+}
+
+void residual(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+              View<const double> b, View<double> r) {
+  apply(cols, vals, x, b.data(), r, true);
+}
+
+double dot(View<const double> a, View<const double> b) {
+  const index_t n = a.size();
+  if (n < PARALLEL_ROWS) {
+    double acc = 0.0;
+    for (index_t i = 0; i < n; ++i) acc += a(i) * b(i);
+    return acc;
+  }
+  return reduce_chunks<double>(n, [&](index_t lo, index_t hi) {
+    double acc = 0.0;
+    for (index_t i = lo; i < hi; ++i) acc += a(i) * b(i);
+    return acc;
+  });
+}
+
+index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+                  View<const double> b, View<double> r) {
+  residual(cols, vals, x, b, r);
+  index_t worst = 0;
+  double big = -1.0;
+  for (index_t i = 0; i < r.size(); ++i) {
+    const double a = std::abs(r(i));
+    if (!(a <= big)) {
+      big = a;
+      worst = i;
+      if (a != a) break;
+    }
+  }
+  return worst;
+}
+
+template <int D>
+void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals,
+                         View<const index_t> node, const std::array<index_t, D>& dims,
+                         index_t coarsest) {
+  static_assert(std::is_nothrow_move_constructible_v<Level>,
+                "levels keep views of their own storage: moving must not copy it");
+  if (cols.extent(1) != NS || vals.extent(1) != NS || vals.extent(0) != cols.extent(0) ||
+      node.size() != cols.extent(0))
+    throw std::invalid_argument("multigrid: cols, vals must be n x 3^D and node n long");
+  if (level_.empty()) level_.emplace_back();
+  {
+    Level& f = level_[0];
+    f.n = cols.extent(0);
+    f.dims = dims;
+    f.cols = cols;
+    f.vals = vals;
+    f.node = node;
+  }
+  nlev_ = 1;
+  while (level_[nlev_ - 1].n > coarsest) {
+    coarse_level(nlev_ - 1);
+    if (level_[nlev_].n == 0) break;
+    galerkin(nlev_ - 1);
+    ++nlev_;
+  }
+  for (index_t l = 0; l < nlev_; ++l) {
+    Level& lv = level_[l];
+    colour_rows(lv);
+    lv.r = lv.r_store.sized(lv.n);
+    if (l > 0) {
+      lv.b = lv.b_store.sized(lv.n);
+      lv.x = lv.x_store.sized(lv.n);
+    }
+  }
+  factor();
+  const index_t n = level_[0].n;
+  r_store_.reserve(n);
+  p_store_.reserve(n);
+  q_store_.reserve(n);
+  z_store_.reserve(n);
+}
+
+template <int D>
+void Multigrid<D>::coarse_level(index_t l) {
+  if (static_cast<index_t>(level_.size()) < l + 2) level_.emplace_back();
+  Level& f = level_[l];
+  Level& c = level_[l + 1];
+  std::array<index_t, D> cdims{}, ix{};
+  index_t ncn = 1;
+  for (int k = 0; k < D; ++k) {
+    cdims[k] = f.dims[k] / 2 + 1;
+    ncn *= cdims[k];
+  }
+  View<index_t> crow = crow_store_.sized(ncn);
+  for (index_t i = 0; i < ncn; ++i) crow(i) = -1;
+  const index_t n = f.n;
+  for (index_t r = 0; r < n; ++r) {
+    coords_of<D>(f.node(r), f.dims, ix);
+    bool even = true;
+    index_t ci = 0, stride = 1;
+    for (int k = 0; k < D; ++k) {
+      if (ix[k] % 2 != 0) even = false;
+      ci += (ix[k] / 2) * stride;
+      stride *= cdims[k];
+    }
+    if (even) crow(ci) = 0;
+  }
+  index_t nc = 0;
+  for (index_t i = 0; i < ncn; ++i)
+    if (crow(i) == 0) ++nc;
+  View<index_t> cnode = c.node_store.sized(nc);
+  nc = 0;
+  for (index_t i = 0; i < ncn; ++i)
+    if (crow(i) == 0) {
+      crow(i) = nc;
+      cnode(nc) = i;
+      ++nc;
+    }
+  c.n = nc;
+  c.dims = cdims;
+  c.node = cnode;
+  f.pcols = f.pcols_store.template sized<2>({n, NP});
+  f.pw = f.pw_store.template sized<2>({n, NP});
+  for (index_t r = 0; r < n; ++r) {
+    coords_of<D>(f.node(r), f.dims, ix);
+    int m = 0;
+    for (int a = 0; a < NP; ++a) {
+      f.pcols(r, a) = -1;
+      f.pw(r, a) = 0.0;
+    }
+    for (int combo = 0; combo < NP; ++combo) {  // axis 0 fastest
+      index_t ci = 0, stride = 1;
+      double w = 1.0;
+      bool ok = true;
+      for (int k = 0; k < D; ++k) {
+        const int up = (combo >> k) & 1;
+        index_t ck;
+        if (ix[k] % 2 == 0) {
+          if (up) {
+            ok = false;
+            break;
+          }
+          ck = ix[k] / 2;
+        } else {
+          ck = ix[k] / 2 + up;
+          w *= 0.5;
+        }
+        if (ck >= cdims[k]) {
+          ok = false;
+          break;
+        }
+        ci += ck * stride;
+        stride *= cdims[k];
+      }
+      if (!ok) continue;
+      if (crow(ci) >= 0) {
+        f.pcols(r, m) = crow(ci);
+        f.pw(r, m) = w;
+        ++m;
+      }
+    }
+  }
+  View<index_t, 2> ccoord = ccoord_store_.template sized<2>({nc, D});
+  for (index_t I = 0; I < nc; ++I) {
+    coords_of<D>(cnode(I), cdims, ix);
+    for (int k = 0; k < D; ++k) ccoord(I, k) = ix[k];
+  }
+}
+
+template <int D>
+void Multigrid<D>::galerkin(index_t l) {
+  Level& f = level_[l];
+  Level& c = level_[l + 1];
+  const index_t nc = c.n, n = f.n;
+  View<index_t, 2> ccols = c.cols_store.template sized<2>({nc, NS});
+  View<double, 2> cvals = c.vals_store.template sized<2>({nc, NS});
+  for (index_t i = 0; i < nc * NS; ++i) {
+    ccols[i] = -1;
+    cvals[i] = 0.0;
+  }
+  c.cols = ccols;
+  c.vals = cvals;
+  View<const index_t, 2> ccoord = ccoord_store_.template view<2>({nc, D});
+  if (n < PARALLEL_ROWS) {
+    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, ccoord, ccols, cvals);
+    return;
+  }
+  // strips of whole slabs (nodes of equal last coordinate), at least 2 each: fine row r adds
+  // only to coarse rows within one slab of it, so strips two apart never meet
+  index_t per = 1;
+  for (int k = 0; k < D - 1; ++k) per *= f.dims[k];
+  const index_t y0 = f.node(0) / per;
+  const index_t y1 = f.node(n - 1) / per + 1;
+  View<index_t> row_cum = row_cum_store_.sized(y1 - y0 + 1);
+  index_t i = 0;
+  for (index_t s = 0; s <= y1 - y0; ++s) {  // np.searchsorted(node, (y0 + s) per)
+    const index_t target = (y0 + s) * per;
+    while (i < n && f.node(i) < target) ++i;
+    row_cum(s) = i;
+  }
+  std::array<index_t, STRIPS + 1> strip{}, bounds{};
+  const index_t k = strips(row_cum, STRIPS, 2, View<index_t>(strip.data(), {STRIPS + 1}));
+  for (index_t u = 0; u <= k; ++u) bounds[u] = row_cum(strip[u]);
+  for (index_t parity = 0; parity < 2; ++parity) {
+    for_each_chunk((k - parity + 1) / 2,
+                   [&](index_t, index_t lo, index_t hi) {
+                     for (index_t t = lo; t < hi; ++t) {
+                       const index_t u = 2 * t + parity;
+                       galerkin_rows<D>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols, f.pw,
+                                        ccoord, ccols, cvals);
+                     }
+                   },
+                   n);
+  }
+}
+
+template <int D>
+void Multigrid<D>::colour_rows(Level& lv) {
+  constexpr int NCOL = 1 << D;
+  lv.rows = lv.rows_store.sized(lv.n);
+  lv.cstart.fill(0);
+  for (index_t r = 0; r < lv.n; ++r) lv.cstart[colour_of<D>(lv.node(r), lv.dims) + 1] += 1;
+  for (int k = 0; k < NCOL; ++k) lv.cstart[k + 1] += lv.cstart[k];
+  std::array<index_t, NCOL> fill{};
+  for (int k = 0; k < NCOL; ++k) fill[k] = lv.cstart[k];
+  for (index_t r = 0; r < lv.n; ++r) lv.rows(fill[colour_of<D>(lv.node(r), lv.dims)]++) = r;
+}
+
+// The dense coarsest operator and its Cholesky factor L (A = L L^T, lower, row-major), by
+// the unblocked algorithm of LAPACK's potf2 (column j: the diagonal, then the column below
+// it scaled by 1 / L_jj); NumPy's LAPACK (np.linalg.cholesky in the Numba kernel) sums in
+// its own blocked order, so the factors agree to rounding.
+template <int D>
+void Multigrid<D>::factor() {
+  const Level& c = level_[nlev_ - 1];
+  const index_t n = c.n;
+  View<double, 2> L = factor_store_.template sized<2>({n, n});
+  for (index_t i = 0; i < n * n; ++i) L[i] = 0.0;
+  for (index_t r = 0; r < n; ++r)
+    for (int s = 0; s < NS; ++s)
+      if (c.cols(r, s) >= 0) L(r, c.cols(r, s)) += c.vals(r, s);
+  for (index_t j = 0; j < n; ++j) {
+    double ajj = L(j, j);
+    for (index_t k = 0; k < j; ++k) ajj -= L(j, k) * L(j, k);
+    if (!(ajj > 0.0))
+      throw std::runtime_error(
+          "multigrid: the coarsest operator is not positive definite (Cholesky failed)");
+    ajj = std::sqrt(ajj);
+    L(j, j) = ajj;
+    const double inv = 1.0 / ajj;
+    for (index_t i = j + 1; i < n; ++i) {
+      double acc = L(i, j);
+      for (index_t k = 0; k < j; ++k) acc -= L(i, k) * L(j, k);
+      L(i, j) = acc * inv;
+    }
+  }
+  for (index_t i = 0; i < n; ++i)  // the upper triangle held A: clear it, as NumPy's L
+    for (index_t j = i + 1; j < n; ++j) L(i, j) = 0.0;
+}
+
+template <int D>
+void Multigrid<D>::cholesky_solve(View<const double> b, View<double> x) {
+  const index_t n = level_[nlev_ - 1].n;
+  const double* L = factor_store_.template view<2>({n, n}).data();
+  for (index_t i = 0; i < n; ++i) {
+    double acc = b(i);
+    for (index_t k = 0; k < i; ++k) acc -= L[i * n + k] * x(k);
+    x(i) = acc / L[i * n + i];
+  }
+  for (index_t i = n - 1; i >= 0; --i) {
+    double acc = x(i);
+    for (index_t k = i + 1; k < n; ++k) acc -= L[k * n + i] * x(k);
+    x(i) = acc / L[i * n + i];
+  }
+}
+
+template <int D>
+void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
+  if (nlev_ == 0) throw std::logic_error("multigrid: vcycle before setup");
+  auto bl = [&](index_t l) -> View<const double> { return l == 0 ? b : level_[l].b; };
+  auto xl = [&](index_t l) -> View<double> { return l == 0 ? x : level_[l].x; };
+  for (index_t l = 0; l + 1 < nlev_; ++l) {
+    Level& lv = level_[l];
+    const View<double> xv = xl(l);
+    fill(xv, 0.0);
+    for (int s = 0; s < sweeps; ++s)
+      gauss_seidel<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart, true);
+    residual(lv.cols, lv.vals, xv, bl(l), lv.r);
+    restrict_to<NP>(lv.pcols, lv.pw, lv.r, level_[l + 1].b);
+  }
+  cholesky_solve(bl(nlev_ - 1), xl(nlev_ - 1));
+  for (index_t l = nlev_ - 2; l >= 0; --l) {
+    Level& lv = level_[l];
+    prolong_add<NP>(lv.pcols, lv.pw, level_[l + 1].x, xl(l));
+    for (int s = 0; s < sweeps; ++s)
+      gauss_seidel<D>(lv.cols, lv.vals, bl(l), xl(l), lv.rows, lv.cstart, false);
+  }
+}
+
+template <int D>
+SolveResult Multigrid<D>::pcg(View<const double> rhs, View<double> x, double tol, index_t maxiter,
+                              int sweeps) {
+  if (nlev_ == 0) throw std::logic_error("multigrid: pcg before setup");
+  const Level& f = level_[0];
+  const index_t n = f.n;
+  if (rhs.size() != n || x.size() != n)
+    throw std::invalid_argument("multigrid: rhs and x must have one value per row");
+  View<double> r = r_store_.sized(n), p = p_store_.sized(n), q = q_store_.sized(n),
+               z = z_store_.sized(n);
+  const double bnorm = std::sqrt(dot(rhs, rhs));
+  if (bnorm == 0.0) {
+    fill(x, 0.0);
+    return {0, 0.0};
+  }
+  residual(f.cols, f.vals, x, rhs, r);
+  double rnorm = std::sqrt(dot(r, r));
+  if (rnorm > bnorm) {
+    // a warm start worse than zero (the right-hand side changed a lot) would only cost
+    // accuracy: the residual would have to fall far below round-off of A x0
+    fill(x, 0.0);
+    copy(rhs, r);
+    rnorm = bnorm;
+  }
+  if (rnorm <= tol * bnorm) return {0, rnorm / bnorm};
+  vcycle(r, z, sweeps);
+  copy(z, p);
+  double rz = dot(r, z);
+  index_t it = 0;
+  while (it < maxiter) {
+    ++it;
+    matvec(f.cols, f.vals, p, q);
+    const double alpha = rz / dot(p, q);
+    cg_update(x, r, p, q, z, alpha, 0.0, true);
+    rnorm = std::sqrt(dot(r, r));
+    if (rnorm <= tol * bnorm) break;
+    vcycle(r, z, sweeps);
+    const double rz_new = dot(r, z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    cg_update(x, r, p, q, z, 0.0, beta, false);
+  }
+  // the recursive residual can drift from the true one: report the true residual
+  residual(f.cols, f.vals, x, rhs, q);
+  return {it, std::sqrt(dot(q, q)) / bnorm};
+}
+
+template <int D>
+index_t Multigrid<D>::levels() const {
+  return nlev_;
+}
+
+template <int D>
+index_t Multigrid<D>::rows() const {
+  return nlev_ > 0 ? level_[0].n : 0;
+}
+
+template class Multigrid<2>;
+template class Multigrid<3>;
+
+}  // namespace mpmflow
