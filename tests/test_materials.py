@@ -64,7 +64,7 @@ def _system(cells, h, weight, mass, dt, u):
     rhs = np.empty(n)
     node = np.empty(n, dtype=np.int64)
     T = state.gauss_gradients(cells, h)
-    state.assemble(cells, T, weight, mass, dt, uu, row, off, cols, vals, rhs, node)
+    state.viscous_assemble(cells, T, weight, mass, dt, uu, row, off, cols, vals, rhs, node)
     x = np.empty(n)
     for k in range(D):
         x[off[k]:off[k + 1]] = u[:, k]

@@ -340,24 +340,68 @@ def number_unknowns(node_mass, wall_node, wall_axis, wall_sign, no_slip, onode, 
     return n
 
 
-def assemble(cells, T, weight, node_mass, dt, u, row, off, cols, vals, rhs, node):
+def viscous_assemble(cells, T, weight, node_mass, dt, u, row, off, cols, vals, rhs, node):
     """The viscous system's blocks, right-hand side and the node of each row (in place)."""
     out = [_viscous_out(a) for a in (cols, vals, rhs, node)]
-    _core.assemble([int(c) for c in cells], T, weight, node_mass, float(dt), u, row, off, *out)
+    _core.viscous_assemble([int(c) for c in cells], T, weight, node_mass, float(dt), u, row, off,
+                           *out)
     for a, c in zip((cols, vals, rhs, node), out):
         _viscous_back(a, c)
 
 
-def worst_row(cols, vals, off, x, rhs):
+def viscous_worst_row(cols, vals, off, x, rhs):
     """The row of the largest |rhs - A x| of the viscous system (NaN counts as largest)."""
-    return _core.worst_row(cols, vals, off, x, rhs)
+    return _core.viscous_worst_row(cols, vals, off, x, rhs)
 
 
-def solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
+def viscous_solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
     """Block-preconditioned CG of the viscous system from the guess in ``x`` (in place).
     Returns (iterations, relative residual)."""
     xc = _viscous_out(x)
-    result = _core.solve(cols, vals, node, off, [int(c) for c in cells], rhs, xc, float(tol),
-                         int(maxiter), int(sweeps))
+    result = _core.viscous_solve(cols, vals, node, off, [int(c) for c in cells], rhs, xc,
+                                 float(tol), int(maxiter), int(sweeps))
     _viscous_back(x, xc)
     return result
+
+
+# --- explicit scheme ---
+# The weakly compressible explicit scheme (src/core/explicit_scheme.hpp), 2D and 3D. ``grid``
+# is a ``mpmflow.grid.Grid``; arrays are C-contiguous float64 (``contact``: bool), vectors
+# (count, dim); the cell and node work arrays are the scheme's (``schemes.explicit``).
+
+
+def explicit_cell_state(grid, x, mass, volume, density, bulk, tension, full, sparse, cell_j,
+                        cell_vol, cell_v0, cell_xi, cell_p):
+    """Volumetric strain J and pressure once per cell from the particles in it (in place)."""
+    _core.cell_state(x, mass, volume, density, bulk, tension, grid.spacing, list(grid.cells),
+                     full, sparse, cell_j, cell_vol, cell_v0, cell_xi, cell_p)
+
+
+def explicit_particle_state(grid, x, mass, volume, pressure, density, smoothing, cell_j,
+                            cell_vol, cell_p, node_w, node_p):
+    """Each particle's volume (its cell's J) and pressure (smoothed through the nodes or its
+    cell's), in place."""
+    _core.particle_state(x, mass, volume, pressure, density, grid.spacing, list(grid.cells),
+                         bool(smoothing), cell_j, cell_vol, cell_p, node_w, node_p)
+
+
+def explicit_max_speed(v):
+    """The largest particle speed (m/s); NaN if any speed is NaN."""
+    return _core.max_speed(v)
+
+
+def explicit_steps(grid, span, nsteps, safety, x, v, pressure, mass, volume, density, bulk,
+                   gravity, flip_ms, no_slip, smoothing, full, sparse, mass_cut, q_lin, q_quad,
+                   tension, max_speed, upper, margin, node_mass, node_mom, v_old, v_new,
+                   contact, cell_j, cell_vol, cell_v0, cell_xi, cell_p, cell_q, node_w, node_p,
+                   stats):
+    """Explicit steps over ``span`` seconds (in place); ``stats`` gets [steps taken, time
+    advanced (s), smallest step (s), particles put back inside, 1 if stopped on
+    ``max_speed`` else 0, largest particle speed (m/s) at the end]."""
+    _core.explicit_steps(
+        span, int(nsteps), safety, x, v, pressure, mass, volume, density, bulk,
+        np.ascontiguousarray(gravity, dtype=float), grid.spacing, list(grid.cells), flip_ms,
+        bool(no_slip), bool(smoothing), full, sparse, mass_cut, q_lin, q_quad, tension,
+        max_speed, np.ascontiguousarray(upper, dtype=float), margin, node_mass, node_mom,
+        v_old, v_new, contact, cell_j, cell_vol, cell_v0, cell_xi, cell_p, cell_q, node_w,
+        node_p, stats)

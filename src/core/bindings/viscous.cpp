@@ -64,7 +64,7 @@ void bind_viscous(nb::module_& m) {
       },
       "Number the viscous system's unknowns; returns their count.");
   m.def(
-      "assemble",
+      "viscous_assemble",
       [](std::vector<index_t> cells, Array<const double> T, Array<const double> weight,
          Array<const double> node_mass, double dt, Array<const double> u, Array<const index_t> row,
          Array<const index_t> off, Array<index_t> cols, Array<double> vals, Array<double> rhs,
@@ -81,7 +81,7 @@ void bind_viscous(nb::module_& m) {
       },
       "The viscous system's blocks, right-hand side and the node of each row.");
   m.def(
-      "worst_row",
+      "viscous_worst_row",
       [](Array<const index_t> cols, Array<const double> vals, Array<const index_t> off,
          Array<const double> x, Array<const double> rhs) {
         std::vector<double> r(rhs.size()), tmp(rhs.size());
@@ -93,7 +93,7 @@ void bind_viscous(nb::module_& m) {
       },
       "The row of the largest |rhs - A x| of the viscous system.");
   m.def(
-      "solve",
+      "viscous_solve",
       [](Array<const index_t> cols, Array<const double> vals, Array<const index_t> node,
          Array<const index_t> off, std::vector<index_t> cells, Array<const double> rhs,
          Array<double> x, double tol, index_t maxiter, int sweeps) {
