@@ -1,8 +1,7 @@
 """Whole-process wall time of `mpmflow run examples/dam_break.toml` (1.0 s of flow, 0.004 m,
 26k particles, 1000 steps, outputs at the example's intervals).
 
-One warm-up run first (it fills Numba's on-disk cache, as any first run does), then
---repeat timed runs; prints the median, min and max and the machine, and appends a JSON
+One warm-up run first (it fills the page cache), then --repeat timed runs; prints the median, min and max and the machine, and appends a JSON
 record to benchmarks/results.jsonl.
 
     python benchmarks/dam_break.py [--repeat 5] [--set key=value ...]
@@ -31,12 +30,18 @@ def machine():
                 break
     except OSError:
         pass
-    import numba
+    import subprocess
+
     import numpy
 
+    try:
+        commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+                                capture_output=True, text=True).stdout.strip()
+    except OSError:
+        commit = "?"
     return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "numpy": numpy.__version__, "numba": numba.__version__,
-            "threads": os.environ.get("NUMBA_NUM_THREADS", "default")}
+            "numpy": numpy.__version__, "commit": commit,
+            "threads": os.environ.get("OMP_NUM_THREADS", "default")}
 
 
 def save(record):

@@ -26,7 +26,6 @@ TIMES = (0.1, 0.3, 0.5)
 
 def capture():
     from mpmflow import Simulation, load_case
-    from mpmflow.kernels import step
 
     case = load_case(ROOT / "examples" / "dam_break.toml", ["time.end=0.5",
                                                             "output.snapshots=false"])
@@ -36,13 +35,13 @@ def capture():
     def grab(s):
         if any(abs(s.time - t) < 1e-9 for t in TIMES):
             sc, P = s.scheme, s.particles
-            Pt = step.Particles(P.x.copy(), P.v.copy(), P.mass, P.volume, P.pressure.copy())
+            core = sc.core  # the next step recomputes everything these phases write
             O = sc.options(case.time.dt)
-            integrals, rows = step.predict(Pt, sc.G, O, sc.W, False)
-            cols, vals, _ = step.pressure_matrix(sc.G, O, sc.W, integrals, rows)
-            rhs = np.empty(rows.size)
-            step.pressure_rhs(sc.G, O, sc.W, integrals, rows, rhs)
-            systems.append((s.time, cols.copy(), vals.copy(), rows.copy(), rhs,
+            core.predict(P.x.copy(), P.v.copy(), P.mass, P.volume, P.pressure.copy(), O, False)
+            core.pressure_matrix(O)
+            core.pressure_rhs(O)
+            systems.append((s.time, core.matrix_cols.copy(), core.matrix_vals.copy(),
+                            core.rows.copy(), core.rhs.copy(),
                             tuple(c + 1 for c in s.grid.cells)))
 
     sim.on_output = grab

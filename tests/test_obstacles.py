@@ -6,8 +6,8 @@ import pytest
 
 from mpmflow import Simulation, load_case
 from mpmflow.grid import Grid
-from mpmflow.kernels import quadrature
-from mpmflow import obstacles
+
+from mpmflow import obstacles, state
 
 from conftest import EXAMPLES
 
@@ -66,7 +66,7 @@ def test_face_terms_of_a_plane_give_its_area_and_normal():
         assert fluid == pytest.approx(area * (4 * h - stair), rel=1e-12)
         # a whole fluid cell's integrals are the Gauss ones
         K, C, V = np.zeros((2**D, 2**D)), np.zeros((2**D, 2**D, D)), np.zeros(2**D)
-        quadrature.gauss_cell_tensors(h, K, C, V)
+        state.gauss_cell_tensors(h, K, C, V)
         assert np.allclose(t.K[0], K) and np.allclose(t.V[0], V)
         assert np.allclose(t.normal, [0.0] * (D - 1) + [-1.0])
 

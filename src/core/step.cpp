@@ -1,6 +1,7 @@
 #include "step.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "binning.hpp"
@@ -20,6 +21,25 @@ namespace mpmflow {
 
 namespace {
 constexpr double WET = 0.5;  // volume correction: a cell less than half full is surface
+
+// Adds the seconds from its construction to the next lap (or its end) to a phase's total.
+class PhaseClock {
+ public:
+  explicit PhaseClock(std::array<double, NPHASES>& totals) : totals_(totals), t_(now()) {}
+  void lap(int phase) {
+    const double t = now();
+    totals_[phase] += t - t_;
+    t_ = t;
+  }
+
+ private:
+  static double now() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+  std::array<double, NPHASES>& totals_;
+  double t_;
+};
 }
 
 template <int D>
@@ -224,7 +244,9 @@ void State<D>::classify_nodes(const Options<D>& O) {
 template <int D>
 index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool correct) {
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  PhaseClock clock(phase_seconds_);
   bin_particles(P);
+  clock.lap(PHASE_BINNING);
   auto v_old = v_old_.template view<2>({nn, D});
   auto v_star = v_star_.template view<2>({nn, D});
   particles_to_grid<D>(grid_, P.x, P.v, P.mass, P.volume, order_.view(P.count()),
@@ -232,9 +254,13 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
                        node_mom_.template view<2>({nn, D}), node_vol_.view(nn), v_old, v_star,
                        correct ? cell_vol_.view(nc) : View<double>());
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
+  clock.lap(PHASE_P2G);
   node_fractions(O);
+  clock.lap(PHASE_FREE_SURFACE);
   cell_integrals(P, O);
+  clock.lap(PHASE_INTEGRALS);
   classify_nodes(O);
+  clock.lap(PHASE_FREE_SURFACE);
   return nrows_;
 }
 
@@ -447,6 +473,7 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
 template <int D>
 int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
   const index_t nn = grid_.nnodes;
+  PhaseClock clock(phase_seconds_);
   auto v_new = v_new_.template view<2>({nn, D});
   auto contact = contact_.template view<2>({nn, D});
   auto ocontact = ocontact_.view(nn);
@@ -454,9 +481,11 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
                       v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
   apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, v_new, contact, O.no_slip);
   apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact);
+  clock.lap(PHASE_CORRECTOR);
   std::array<View<const double>, D> faces{};  // empty: no displacement
   if (correct) {
     const int status = volume_correction(O, report);
+    clock.lap(PHASE_VOLUME);
     if (status != OK) return status;
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
   }
@@ -464,6 +493,7 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
                                        v_new, p_node_.view(nn), O.dt, O.flip,
                                        View<const double>(upper_.data(), {D}), margin_, faces);
   if (obstacles_) report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+  clock.lap(PHASE_G2P);
   return OK;
 }
 
@@ -476,8 +506,11 @@ index_t State<D>::advance(const Particles<D>& P, const Options<D>& O, index_t fi
     const index_t n = predict(P, O, correct);
     report.unknowns = std::max(report.unknowns, n);
     report.last_unknowns = n;
+    PhaseClock clock(phase_seconds_);
     int status = viscous_predictor(O, report);
+    clock.lap(PHASE_VISCOUS);
     if (status == OK) status = pressure_multigrid(O, report);
+    clock.lap(PHASE_PRESSURE);
     if (status == OK) status = finish(P, O, correct, report);
     if (status != OK) {
       report.status = status;

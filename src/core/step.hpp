@@ -53,6 +53,20 @@ struct Report {
   index_t viscous_iterations = 0;
 };
 
+// The phases of a step, as timed by State (seconds summed over the steps of a run).
+enum Phase : int {
+  PHASE_BINNING = 0,
+  PHASE_P2G,
+  PHASE_FREE_SURFACE,
+  PHASE_INTEGRALS,
+  PHASE_VISCOUS,
+  PHASE_PRESSURE,
+  PHASE_CORRECTOR,
+  PHASE_VOLUME,
+  PHASE_G2P,
+  NPHASES
+};
+
 // The step's settings (constant over a chunk of steps).
 template <int D>
 struct Options {
@@ -151,6 +165,8 @@ class State {
   View<double> rhs() { return rhs_.view(nrows_); }
   View<double> x0() { return x_.view(nrows_); }
   const Grid<D>& grid() const { return grid_; }
+  // wall-clock seconds spent in each phase (Phase) since construction
+  const std::array<double, NPHASES>& phase_seconds() const { return phase_seconds_; }
 
  private:
   int pressure_multigrid(const Options<D>& O, Report& report);
@@ -160,6 +176,7 @@ class State {
   void cell_integrals(const Particles<D>& P, const Options<D>& O);
   void classify_nodes(const Options<D>& O);
 
+  std::array<double, NPHASES> phase_seconds_{};
   Grid<D> grid_;
   double cell_volume_;
   std::array<double, D> upper_;

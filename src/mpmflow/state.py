@@ -405,3 +405,6 @@ def explicit_steps(grid, span, nsteps, safety, x, v, pressure, mass, volume, den
         max_speed, np.ascontiguousarray(upper, dtype=float), margin, node_mass, node_mom,
         v_old, v_new, contact, cell_j, cell_vol, cell_v0, cell_xi, cell_p, cell_q, node_w,
         node_p, stats)
+
+
+PHASES = tuple(_core.PHASES)  # the phases a step's State times (``phase_seconds``)

@@ -4,10 +4,13 @@
 #include "../step.hpp"
 
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/string.h>
 #include <nanobind/stl/unique_ptr.h>
+#include <nanobind/stl/vector.h>
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "arrays.hpp"
 #include "modules.hpp"
@@ -145,6 +148,11 @@ void bind_dim(nb::module_& m) {
              auto P = particles<D>(x, v, mass, volume, pressure);
              return self.state->finish(P, opt, correct, report);
            })
+      .def_prop_ro("phase_seconds",
+                   [](S& self) {
+                     const auto& t = self.state->phase_seconds();
+                     return std::vector<double>(t.begin(), t.end());
+                   })
       .def_prop_ro("p_node",
                    [](nb::handle h) {
                      return out(nb::cast<S&>(h).state->p_node(), h);
@@ -192,6 +200,11 @@ void bind_step(nb::module_& m) {
   m.attr("GAUSS") = static_cast<int>(GAUSS);
   m.attr("DIVERGENCE") = static_cast<int>(DIVERGENCE);
   m.attr("CONSISTENT") = static_cast<int>(CONSISTENT);
+  m.attr("PHASES") = std::vector<std::string>{
+      "binning", "particle to grid", "free surface (node fractions, classify)",
+      "cell integrals (quadrature)", "viscous predictor",
+      "pressure (assembly, multigrid, PCG, walls)", "corrector and walls", "volume correction",
+      "grid to particle"};
   bind_dim<2>(m);
   bind_dim<3>(m);
 }
