@@ -18,4 +18,5 @@ NB_MODULE(_core, m) {
   m.attr("DEBUG") = true;
 #endif
   mpmflow::bind::bind_binning(m);
+  mpmflow::bind::bind_explicit_scheme(m);
 }

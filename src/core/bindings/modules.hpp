@@ -8,5 +8,6 @@ namespace mpmflow::bind {
 namespace nb = nanobind;
 
 void bind_binning(nb::module_& m);
+void bind_explicit_scheme(nb::module_& m);
 
 }  // namespace mpmflow::bind
