@@ -106,9 +106,11 @@ void for_each_wall(const Grid<D>& g, F&& f) {
 }
 
 // Wall nodes where the velocity points into the wall are in contact: normal velocity 0 (and
-// tangential too for no-slip); elsewhere the material leaves the wall freely.
+// tangential too for no-slip); elsewhere the material leaves the wall freely. (The rule of
+// kernels/walls.py, apply_walls, with the wall pairs enumerated in wall_pairs' order; the
+// core's walls can take its place when they land.)
 template <int D>
-void walls(const Grid<D>& g, View<double, 2> u, View<bool, 2> contact, bool no_slip) {
+void wall_contact(const Grid<D>& g, View<double, 2> u, View<bool, 2> contact, bool no_slip) {
   for (index_t e = 0; e < contact.size(); ++e) contact[e] = false;
   for_each_wall(g, [&](index_t i, int k, double sign) { contact(i, k) = sign * u(i, k) > 0.0; });
   for_each_wall(g, [&](index_t i, int k, double sign) {
@@ -122,10 +124,11 @@ void walls(const Grid<D>& g, View<double, 2> u, View<bool, 2> contact, bool no_s
 }
 
 // Put particle p back inside the box [0, upper] if it left it (mirrored across the wall, at
-// least margin inside, its velocity into the wall removed); true if it was moved.
+// least margin inside, its velocity into the wall removed); true if it was moved. (The rule
+// of kernels/transfer.py, put_inside.)
 template <int D>
-inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<const double> upper,
-                       double margin) {
+inline bool put_back_inside(View<double, 2> x, View<double, 2> v, index_t p,
+                            View<const double> upper, double margin) {
   bool out = false;
   for (int k = 0; k < D; ++k) {
     const double lo = margin;
@@ -349,7 +352,7 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
         }
       }
     });
-    walls(g, v_new, contact, no_slip);
+    wall_contact(g, v_new, contact, no_slip);
     // the new J of each cell from the strain rate of v_new (in cell_p until (4))
     parallel_for(ncell, [&](index_t cc) {
       if (cell_vol(cc) > 0.0) {
@@ -379,7 +382,7 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
           v(p, k) = flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
           x(p, k) += dt * pic[k];
         }
-        if (put_inside<D>(x, v, p, upper, margin)) ++out;
+        if (put_back_inside<D>(x, v, p, upper, margin)) ++out;
       }
       count[t] = out;
     });
