@@ -45,7 +45,6 @@ def test_every_vector_has_one_entry_per_axis():
 
 
 @pytest.mark.parametrize("override, words", [
-    (["solver.scheme=explicit", "time.dt=auto"], "runs in 2D only so far"),
     (["bodies.0.surface_amplitude=0.01"], "cosine top surface is defined for 2D cases only"),
 ])
 def test_what_is_2d_only_is_refused_in_3d_with_the_fix(override, words):

@@ -726,10 +726,6 @@ class Case(_Section):
                         f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
                         "cosine top surface is defined for 2D cases only so far; use a flat "
                         "box in 3D (surface_amplitude = 0)")
-            if self.solver.scheme != "projection":
-                raise ValueError(
-                    f"solver.scheme = {self.solver.scheme!r} runs in 2D only so far; 3D cases "
-                    "run with solver.scheme = \"projection\"")
 
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo):

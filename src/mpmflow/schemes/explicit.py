@@ -9,17 +9,18 @@ volumetric strain holds no pressure (``solver.explicit_cell_threshold``). The ce
 drives the motion at the cell centre (at the particles' centroid in partly filled cells),
 the transpose of the strain rate; the particles report it smoothed through the nodes
 (``solver.pressure_smoothing``, output only). With time.dt = "auto" the step is
-re-evaluated every step from the current speeds. The kernel is ``kernels.explicit2d``, with
-its own copies of the weights, FLIP/PIC update and wall conditions (the same rules as the
-projection scheme's). The choices, the cures and the variants tried and rejected:
-docs/method.md, "The explicit comparator"."""
+re-evaluated every step from the current speeds. The kernel is the core's explicit scheme
+(src/core/explicit_scheme.hpp, reached through ``mpmflow.state``), written once for 2D and
+3D, with the grid's weights and the projection scheme's wall and put-back rules. The
+choices, the cures and the variants tried and rejected: docs/method.md, "The explicit
+comparator"."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from .. import state
 from ..errors import SimulationError
-from ..kernels import explicit2d
 from ..stability import sound_speed, stable_time_step
 from . import register
 from .projection import StepReport
@@ -33,8 +34,6 @@ class ExplicitReport(StepReport):
 @register("explicit")
 class ExplicitScheme:
     def __init__(self, case, grid, particles):
-        if grid.dim != 2:
-            raise NotImplementedError("only 2D grids are implemented")
         self.grid = grid
         self.particles = particles
         m, sv = case.material, case.solver
@@ -78,13 +77,12 @@ class ExplicitScheme:
 
     def _pressure(self):
         g, P = self.grid, self.particles
-        nx, ny = g.cells
-        explicit2d.cell_state_2d(P.x, P.mass, P.volume, self.density, self.bulk, self.tension,
-                                 g.spacing, nx, ny, self.full, self.sparse, self.cell_j,
-                                 self.cell_vol, self.cell_v0, self.cell_xi, self.cell_p)
-        explicit2d.particle_state_2d(P.x, P.mass, P.volume, P.pressure, self.density,
-                                     g.spacing, nx, ny, self.smoothing, self.cell_j,
-                                     self.cell_vol, self.cell_p, self.node_w, self.node_p)
+        state.explicit_cell_state(g, P.x, P.mass, P.volume, self.density, self.bulk,
+                                  self.tension, self.full, self.sparse, self.cell_j,
+                                  self.cell_vol, self.cell_v0, self.cell_xi, self.cell_p)
+        state.explicit_particle_state(g, P.x, P.mass, P.volume, P.pressure, self.density,
+                                      self.smoothing, self.cell_j, self.cell_vol, self.cell_p,
+                                      self.node_w, self.node_p)
 
     _STATE = ("cell_j", "cell_vol", "cell_v0", "cell_xi", "cell_p", "clock", "smallest")
 
@@ -108,21 +106,20 @@ class ExplicitScheme:
 
     def stable_time_step(self):
         """h / (c + |v|max) at the current particle speeds (s)."""
-        speed = float(explicit2d.max_speed_2d(self.particles.v))
+        speed = float(state.explicit_max_speed(self.particles.v))
         return stable_time_step(self.grid.spacing, self.bulk, self.density, speed)
 
     def advance(self, dt, nsteps, where=lambda k: ""):
         """The span nsteps * dt in one compiled call; ``where(k)`` names step k in messages.
         With time.dt = "auto" the span is cut into steps re-evaluated every step from the
-        current speeds (``explicit2d.explicit_steps_2d``), as many as needed; else nsteps
+        current speeds (``state.explicit_steps``), as many as needed; else nsteps
         steps of dt, whose stability is checked once, after the last step."""
         g, P = self.grid, self.particles
-        nx, ny = g.cells
-        explicit2d.explicit_steps_2d(
-            nsteps * dt, nsteps, self.safety if self.auto else 0.0, P.x, P.v, P.pressure,
-            P.mass, P.volume, self.density, self.bulk, self.gravity[0], self.gravity[1],
-            g.spacing, nx, ny, self.flip, self.no_slip, self.smoothing, self.full, self.sparse,
-            self.mass_cut, self.q_lin, self.q_quad, self.tension, self.max_speed, self.upper,
+        state.explicit_steps(
+            g, nsteps * dt, nsteps, self.safety if self.auto else 0.0, P.x, P.v, P.pressure,
+            P.mass, P.volume, self.density, self.bulk, self.gravity, self.flip, self.no_slip,
+            self.smoothing, self.full, self.sparse, self.mass_cut, self.q_lin, self.q_quad,
+            self.tension, self.max_speed, self.upper,
             1e-6 * g.spacing, self.node_mass, self.node_mom, self.v_old, self.v_new,
             self.contact, self.cell_j, self.cell_vol, self.cell_v0, self.cell_xi, self.cell_p,
             self.cell_q, self.node_w, self.node_p, self.stats)
