@@ -168,8 +168,8 @@ def test_a_body_faster_than_the_bound_is_refused_before_the_run(tmp_path, capsys
 def test_a_second_sigterm_stops_at_once_with_143(tmp_path):
     """The first SIGTERM asks for a stop at the next output time; a second one, sent while
     the long chunk to that output time runs, stops without a checkpoint: exit 143 (not
-    130), reported as SIGTERM, no traceback (also when the signal lands in a __del__ while
-    Numba loads the kernels: the run loop then stops after the chunk)."""
+    130), reported as SIGTERM, no traceback (also when the signal lands in a __del__: the
+    run loop then stops after the chunk)."""
     out = tmp_path / "o"
     # one chunk to t = 1 s at 0.004 m: seconds of stepping, so the second signal lands in
     # it even on a fast machine (at 0.008 m to 0.5 s the chunk could end first)

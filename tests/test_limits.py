@@ -43,8 +43,7 @@ def test_a_case_too_large_for_the_machine_is_refused_at_once(tmp_path):
 
 def test_the_limit_comes_from_the_estimate_not_a_fixed_count(tmp_path):
     """1.7e6 particles passed the old fixed limits (5e7) whatever the memory; with 300 MB
-    to give, the estimate (about 800 MB: 801 MB measured by benchmarks/memory.py; 270 MB
-    more while Numba's cache is empty) refuses them, and 2 GB holds them."""
+    to give, the estimate (about 800 MB: 801 MB measured by benchmarks/memory.py) refuses them, and 2 GB holds them."""
     fine = ["--set", "grid.spacing=0.0005", "--set", "time.dt=1e-4"]
     res, wall = _cli("run", DAM, "--out", tmp_path / "o", *fine,
                      env={"MPMFLOW_MEMORY_LIMIT": "300M"})
@@ -81,8 +80,7 @@ def test_the_estimate_is_near_the_measured_peak(tmp_path):
     args = ["run", DAM, "--out", tmp_path / "o", "--set", "grid.spacing=0.001", "--set",
             "time.dt=2.5e-4", "--set", "time.end=7.5e-4", "--set", "output.interval=2.5e-4"]
     # the run is started by a small launcher process: a child forked from this test process
-    # would count this process's pages (Numba's compiled kernels, hundreds of MB once other
-    # tests ran here) in its own peak, ru_maxrss being taken from the fork on
+    # would count this process's pages (hundreds of MB once other tests ran here) in its own peak, ru_maxrss being taken from the fork on
     launcher = ("import os, subprocess, sys\n"
                 "p = subprocess.Popen([sys.executable, '-m', 'mpmflow.cli', *sys.argv[1:]], "
                 "stderr=subprocess.PIPE, text=True)\n"

@@ -1,4 +1,4 @@
-"""Materials (``material.model``) and the implicit viscous predictor (``kernels.viscous``).
+"""Materials (``material.model``) and the implicit viscous predictor (src/core/viscous).
 
 Physics: a column at rest stays at rest whatever the model; the viscous operator is that of
 the full stress 2 eta D (zero for a rigid rotation, symmetric positive definite); the

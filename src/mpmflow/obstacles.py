@@ -16,7 +16,7 @@ not on grid lines (corners and edges are rounded within a cell). From phi:
   in (``node_distance``), so that it meets the wall without a gap;
 * the obstacle nodes: the nodes of cut cells, each with the unit normal int N_i n ds /
   |int N_i n ds| of the obstacle's face around it (pointing into the solid). They are
-  contact conditions like the domain walls (``kernels.walls``): a node holds the material
+  contact conditions like the domain walls (src/core/walls): a node holds the material
   where it presses into the solid and lets go where holding it would need suction.
 
 Particles that end a step inside a solid are moved out along grad phi

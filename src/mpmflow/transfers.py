@@ -1,5 +1,5 @@
 """The FLIP fraction of a step (docs/method.md, step 7); the transfers themselves are the
-compiled ``kernels.transfer``."""
+core's src/core/transfer."""
 
 FLIP_TIME = 1e-3  # s: solver.flip is the FLIP fraction per this much simulated time
 

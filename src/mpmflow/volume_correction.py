@@ -8,7 +8,7 @@ that brings it back to 1 (after Kugelstadt et al. 2021, "Implicit density projec
 volume conserving liquids"):
 
 1. density: rho_c = sum_p N_c(x_p) V_p / h^d with the bilinear hat of the cell-centred grid,
-   particles mirrored at walls (``kernels.transfer.scatter_cell_volume``, summed by the
+   particles mirrored at walls (src/core/transfer.hpp's ``scatter_cell_volume``, summed by the
    particle-to-grid kernel in the same pass); smooth, and exact for
    a lattice of particles however it is shifted or strained (a per-cell count is not: a row of
    particles crossing a cell edge changes it by 1/4);
@@ -19,7 +19,7 @@ volume conserving liquids"):
    interior's gaps are closed by drawing the surface down;
 3. the displacement d = -beta h grad q on the cell faces (0 on walls, so nothing is pushed
    into a wall), interpolated to each particle from its own faces and added to the particle's
-   position in the grid-to-particle step (``kernels.transfer``).
+   position in the grid-to-particle step (src/core/transfer).
 
 It removes the fraction beta of the volume error each step, both ways: packed cells spread
 out and loosened regions close up. Velocities are untouched, so the correction puts no
@@ -27,8 +27,8 @@ kinetic energy into the flow (the density correction of the pressure equation, w
 div v = beta (vol/V - 1)/dt, does: under FLIP the velocity it adds is kept). Measured choices
 and the candidates that lost: docs/method.md.
 
-The compiled step runs it (``kernels.step.volume_correction``, on the kernels of
-``kernels.volume``); this module holds its constants and its failure message.
+The compiled step runs it (``State::volume_correction`` in src/core/step.cpp, on the
+kernels of src/core/volume_correction); this module holds its constants and its failure message.
 """
 
 from .errors import SolverError
