@@ -9,9 +9,8 @@ os.wait4, the same number /usr/bin/time -v reports as "Maximum resident set size
 
     python benchmarks/memory.py [--spacing 0.002 0.001 0.0005] [--steps 3]
 
-Run it with NUMBA_NUM_THREADS=1 on a shared machine (threads change the peak little).
-One warm-up run first fills Numba's on-disk cache, so the runs measured load compiled
-kernels, as a user's runs after the first do. Appends a JSON record to
+Run it with OMP_NUM_THREADS=1 on a shared machine (threads change the peak little).
+Appends a JSON record to
 benchmarks/results.jsonl (not tracked).
 """
 

@@ -7,6 +7,9 @@
 namespace nb = nanobind;
 
 NB_MODULE(_core, m) {
+  // Objects still referenced when the interpreter exits (a Simulation kept by a test or a
+  // user's session) are freed by the OS; nanobind's report of them at exit is noise.
+  nb::set_leak_warnings(false);
   m.doc() = "mpmflow's compiled core (C++17, OpenMP): kernels of the projection scheme.";
   m.def("max_threads", &mpmflow::max_threads, "OpenMP threads a parallel loop uses.");
   m.def("set_threads", &mpmflow::set_threads, nb::arg("n"),
