@@ -7,10 +7,16 @@ BIN := $(VENV)/bin
 
 .PHONY: setup test dam-break validate bench figures clean
 
-$(VENV)/.installed: pyproject.toml
-	$(PYTHON) -m venv $(VENV)
+CORE := CMakeLists.txt $(wildcard src/core/*.hpp src/core/*.cpp src/core/bindings/*)
+
+# the compiled core (src/core) is built by the install into build/<wheel tag>; a change to
+# a C++ file installs again, which rebuilds only what changed there
+$(VENV)/.installed: pyproject.toml $(CORE)
+	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,plot]"
+	$(BIN)/python -m pip install --quiet "scikit-build-core>=0.10" "nanobind>=2.4"
+	@echo "building the core (C++, about a minute on 2 cores the first time)"
+	$(BIN)/python -m pip install --quiet --no-build-isolation -e ".[test,plot]"
 	touch $@
 
 setup: $(VENV)/.installed

@@ -56,7 +56,7 @@ def main():
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        measure(0.02, 1, tmp)  # warm-up: Numba's cache
+        measure(0.02, 1, tmp)  # warm-up: the page cache
         for spacing in args.spacing:
             est, peak, wall = measure(spacing, args.steps, tmp)
             ratio = est["total"] / peak

@@ -104,7 +104,7 @@ def test_an_obstacle_with_no_slip_holds_the_water_on_its_face():
             f"walls='{walls}'}}]"])
         sim = Simulation(case)
         sim.run()
-        W, o = sim.scheme.W, sim.scheme.solids
+        W, o = sim.scheme.core, sim.scheme.solids
         held = o.node[W.ocontact[o.node]]
         assert held.size > 0
         speeds[walls] = np.abs(W.v_new[held]).max()
