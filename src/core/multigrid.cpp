@@ -1,11 +1,11 @@
 #include "multigrid.hpp"
 
-#include "strips.hpp"
-
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
+
+#include "strips.hpp"
 
 namespace mpmflow {
 

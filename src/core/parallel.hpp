@@ -71,6 +71,19 @@ T reduce_chunks(index_t n, F&& body) {
   return total;
 }
 
+// The same with another associative combination of the partials (e.g. the largest),
+// taken in chunk order.
+template <class T, class F, class C>
+T reduce_chunks(index_t n, F&& body, C&& combine) {
+  const index_t nchunks = std::min(CHUNKS, std::max<index_t>(n, 1));
+  T part[CHUNKS];
+#pragma omp parallel for schedule(static) if (n >= SERIAL_BELOW)
+  for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  T total = part[0];
+  for (index_t t = 1; t < nchunks; ++t) total = combine(total, part[t]);
+  return total;
+}
+
 // out[i] = sum of in[j] for j < i, for i in [0, n]; out has n + 1 entries (in and out
 // may be the same storage shifted by one: out[i + 1] += out[i]). Returns out[n].
 template <class T>

@@ -40,12 +40,11 @@ class PhaseClock {
   std::array<double, NPHASES>& totals_;
   double t_;
 };
-}
+}  // namespace
 
 template <int D>
 State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper,
-                double margin, const GridTables<D>& tables, bool volume_correction,
-                bool viscous)
+                double margin, const GridTables<D>& tables, bool volume_correction, bool viscous)
     : grid_(grid),
       cell_volume_(cell_volume),
       upper_(upper),
@@ -232,8 +231,8 @@ template <int D>
 void State<D>::classify_nodes(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
   auto node_row = node_row_.view(nn);
-  nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn),
-                                      O.subcell, node_row);
+  nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn), O.subcell,
+                                      node_row);
   auto rows = rows_.view(nrows_);
   for (index_t i = 0; i < nn; ++i) {
     const index_t r = node_row(i);
@@ -250,9 +249,9 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
   auto v_old = v_old_.template view<2>({nn, D});
   auto v_star = v_star_.template view<2>({nn, D});
   particles_to_grid<D>(grid_, P.x, P.v, P.mass, P.volume, order_.view(P.count()),
-                       start_.view(nc + 1), View<const double>(O.gravity.data(), {D}), O.dt, node_mass_.view(nn),
-                       node_mom_.template view<2>({nn, D}), node_vol_.view(nn), v_old, v_star,
-                       correct ? cell_vol_.view(nc) : View<double>());
+                       start_.view(nc + 1), View<const double>(O.gravity.data(), {D}), O.dt,
+                       node_mass_.view(nn), node_mom_.template view<2>({nn, D}), node_vol_.view(nn),
+                       v_old, v_star, correct ? cell_vol_.view(nc) : View<double>());
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
   node_fractions(O);
@@ -289,8 +288,8 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
   rhs_.reserve(n);  // the right-hand side and the solver's scratch, grown here, not in a solve
   scratch_.reserve(n);
   if (n == 0) return false;
-  assemble_matrix<D>(grid_, I_.slot, I_.K, node_row, node_f_.view(nn), O.subcell, O.theta_min,
-                     cols, vals, anchored);
+  assemble_matrix<D>(grid_, I_.slot, I_.K, node_row, node_f_.view(nn), O.subcell, O.theta_min, cols,
+                     vals, anchored);
   for (index_t r = 0; r < n; ++r)
     if (anchored(r)) return true;
   return false;
@@ -380,8 +379,8 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto v_old = v_old_.template view<2>({nn, D});
   auto v_star = v_star_.template view<2>({nn, D});
   auto p = p_node_.view(nn);
-  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_old, p,
-                    O.model, View<const double>(O.model_params.data(), {8}), eta_.view(nc),
+  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_old, p, O.model,
+                    View<const double>(O.model_params.data(), {8}), eta_.view(nc),
                     eta_weight_.view(nc));
   auto base = v_c_.template view<2>({nn, D});
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
@@ -390,14 +389,14 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto voff = voff_.view(D + 1);
   const index_t n =
       number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_sign, O.no_slip,
-                      T_.onode, T_.onormal, T_.ono_slip, base, vu, vrow, voff);
+                         T_.onode, T_.onormal, T_.ono_slip, base, vu, vrow, voff);
   if (n == 0) return OK;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});
   auto rhs = vrhs_.sized(n);
   auto node = vnode_.sized(n);
   mpmflow::assemble<D>(grid_, T_.viscous_T, eta_weight_.view(nc), node_mass_.view(nn), O.dt, vu,
-                      vrow, voff, cols, vals, rhs, node);
+                       vrow, voff, cols, vals, rhs, node);
   auto x = vx_.sized(n);
   for (index_t i = 0; i < nn; ++i)
     for (int k = 0; k < D; ++k)
@@ -431,10 +430,9 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
   auto cell_row = cell_row_.view(nc);
   auto all_cols = vol_cols_.template view<2>({nc, NS});
   auto all_vals = vol_vals_.template view<2>({nc, NS});
-  const VolumeSystem assembled =
-      mpmflow::assemble<D>(grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}),
-                         T_.static_slot, cell_row, all_cols, all_vals, vol_rhs_.view(nc),
-                         vol_rows_.view(nc));
+  const VolumeSystem assembled = mpmflow::assemble<D>(
+      grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}), T_.static_slot,
+      cell_row, all_cols, all_vals, vol_rhs_.view(nc), vol_rows_.view(nc));
   const index_t n = assembled.n;
   std::array<View<double>, D> faces;
   for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
@@ -489,35 +487,101 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
     if (status != OK) return status;
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
   }
-  report.moved += grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
-                                       v_new, p_node_.view(nn), O.dt, O.flip,
-                                       View<const double>(upper_.data(), {D}), margin_, faces);
+  report.moved += grid_to_particles<D>(
+      grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new, p_node_.view(nn), O.dt,
+      O.flip, View<const double>(upper_.data(), {D}), margin_, faces);
   if (obstacles_) report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
   clock.lap(PHASE_G2P);
   return OK;
 }
 
 template <int D>
-index_t State<D>::advance(const Particles<D>& P, const Options<D>& O, index_t first,
-                          index_t nsteps, Report& report) {
+int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
+  const index_t n = predict(P, O, correct);
+  report.unknowns = std::max(report.unknowns, n);
+  report.last_unknowns = n;
+  PhaseClock clock(phase_seconds_);
+  int status = viscous_predictor(O, report);
+  clock.lap(PHASE_VISCOUS);
+  if (status == OK) status = pressure_multigrid(O, report);
+  clock.lap(PHASE_PRESSURE);
+  if (status == OK) status = finish(P, O, correct, report);
+  if (status == OK) {
+    report.steps += 1;
+    report.dt_min = report.steps == 1 ? O.dt : std::min(report.dt_min, O.dt);
+    report.dt_max = std::max(report.dt_max, O.dt);
+  }
+  return status;
+}
+
+template <int D>
+index_t State<D>::advance(const Particles<D>& P, const Options<D>& O, index_t first, index_t nsteps,
+                          Report& report, const Between& between) {
   for (index_t k = 0; k < nsteps; ++k) {
     report.step = k;
     const bool correct = O.volume_every > 0 && (first + k) % O.volume_every == 0;
-    const index_t n = predict(P, O, correct);
-    report.unknowns = std::max(report.unknowns, n);
-    report.last_unknowns = n;
-    PhaseClock clock(phase_seconds_);
-    int status = viscous_predictor(O, report);
-    clock.lap(PHASE_VISCOUS);
-    if (status == OK) status = pressure_multigrid(O, report);
-    clock.lap(PHASE_PRESSURE);
-    if (status == OK) status = finish(P, O, correct, report);
+    const int status = step_once(P, O, correct, report);
     if (status != OK) {
       report.status = status;
       return k;
     }
+    if (between && k + 1 < nsteps && !between()) {
+      report.status = INTERRUPTED;
+      return k + 1;
+    }
   }
   return nsteps;
+}
+
+template <int D>
+double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double span,
+                              index_t max_steps, Report& report, const Between& between) {
+  double elapsed = 0.0;
+  Options<D> Ok = O;
+  for (index_t k = 0; k < max_steps && elapsed < span; ++k) {
+    report.step = k;
+    const index_t n = P.count();
+    const double vmax2 = reduce_chunks<double>(
+        n,
+        [&](index_t lo, index_t hi) {
+          double m = 0.0;
+          for (index_t p = lo; p < hi; ++p) {
+            double s = 0.0;
+            for (int d = 0; d < D; ++d) s += P.v(p, d) * P.v(p, d);
+            m = std::max(m, s);
+          }
+          return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    double dt = O.dt_max;
+    if (vmax2 > 0.0) dt = std::min(dt, O.courant * grid_.h / std::sqrt(vmax2));
+    const double rest = span - elapsed;
+    if (dt >= rest * (1.0 - 1e-9))
+      dt = rest;
+    else if (2.0 * dt > rest)
+      dt = 0.5 * rest;
+    Ok.dt = dt;
+    Ok.flip = std::pow(O.flip_rate, dt / FLIP_TIME);
+    bool correct = false;
+    if (O.volume_rate > 0.0) {
+      since_volume_ += dt;
+      if (since_volume_ >= O.volume_interval * (1.0 - 1e-9)) {
+        correct = true;
+        since_volume_ = 0.0;
+      }
+    }
+    const int status = step_once(P, Ok, correct, report);
+    if (status != OK) {
+      report.status = status;
+      return elapsed;
+    }
+    elapsed = dt >= rest ? span : elapsed + dt;
+    if (between && elapsed < span && !between()) {
+      report.status = INTERRUPTED;
+      return elapsed;
+    }
+  }
+  return elapsed;
 }
 
 template class State<2>;

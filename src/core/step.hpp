@@ -16,6 +16,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "grid.hpp"
@@ -29,7 +30,8 @@ enum Status : int {
   SINGULAR = 1,
   PRESSURE_NOT_CONVERGED = 2,
   VOLUME_NOT_CONVERGED = 3,
-  VISCOUS_NOT_CONVERGED = 4
+  VISCOUS_NOT_CONVERGED = 4,
+  INTERRUPTED = 5  // the caller's check between steps asked to stop (a signal)
 };
 enum SurfaceQuadrature : int { GAUSS = 0, DIVERGENCE = 1, CONSISTENT = 2 };
 
@@ -51,6 +53,9 @@ struct Report {
   index_t volume_iterations = 0;
   index_t last_unknowns = 0;  // the unknowns of the last step
   index_t viscous_iterations = 0;
+  index_t steps = 0;    // the steps taken
+  double dt_min = 0.0;  // the shortest and longest step taken (s)
+  double dt_max = 0.0;
 };
 
 // The phases of a step, as timed by State (seconds summed over the steps of a run).
@@ -94,7 +99,15 @@ struct Options {
   bool viscous = false;
   int model = 0;
   std::array<double, 8> model_params{};
+  // the adaptive step (advance_span): dt = min(dt_max, courant h / max |v_p|), the FLIP
+  // fraction per FLIP_TIME of flow, the volume correction every volume_interval of flow
+  double courant = 1.0;
+  double dt_max = 1e-2;
+  double flip_rate = 1.0;
+  double volume_interval = 2e-3;
 };
+
+constexpr double FLIP_TIME = 1e-3;  // s: solver.flip is the FLIP fraction per this much time
 
 // The particles: views of the caller's arrays (n particles).
 template <int D>
@@ -119,10 +132,10 @@ struct GridTables {
   View<const double> wall_sign;
   View<const double> phi, open;
   View<const index_t> static_slot;
-  View<const double, 3> K_static;  // (nstatic, 2^D, 2^D)
-  View<const double, 4> C_static;  // (nstatic, 2^D, 2^D, D)
-  View<const double, 2> V_static;  // (nstatic, 2^D)
-  View<const double, 4> F_static;  // (nstatic, 2^D, 2^D, D)
+  View<const double, 3> K_static;   // (nstatic, 2^D, 2^D)
+  View<const double, 4> C_static;   // (nstatic, 2^D, 2^D, D)
+  View<const double, 2> V_static;   // (nstatic, 2^D)
+  View<const double, 4> F_static;   // (nstatic, 2^D, 2^D, D)
   View<const double, 4> Wf_static;  // (nstatic, 2 D, 2^D, 2^D)
   View<const index_t> onode;
   View<const double, 2> onormal;  // (m, D)
@@ -136,13 +149,26 @@ class State {
   static constexpr int NC = 1 << D;
   static constexpr int NS = stencil_size(D);
 
-  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper,
-        double margin, const GridTables<D>& tables, bool volume_correction, bool viscous);
+  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper, double margin,
+        const GridTables<D>& tables, bool volume_correction, bool viscous);
 
   // nsteps steps of options.dt; first: the number of the first step (1-based, from the start
   // of the run). Stops at the first failure; returns the steps done.
+  // between(): called after every step, false stops the chunk (status INTERRUPTED).
+  using Between = std::function<bool()>;
   index_t advance(const Particles<D>& P, const Options<D>& O, index_t first, index_t nsteps,
-                  Report& report);
+                  Report& report, const Between& between = nullptr);
+
+  // Steps of adaptive size (time.dt = "auto") over the time span (s): each step's size
+  // from the Courant number on the particles' speeds at its start, within O.dt_max; the
+  // last two steps are shortened to land on the end of the span exactly (no sliver: when
+  // less than two steps remain, the rest is cut in two equal halves). Stops after
+  // max_steps or at the first failure; returns the time covered (report.steps: the steps).
+  double advance_span(const Particles<D>& P, const Options<D>& O, double span, index_t max_steps,
+                      Report& report, const Between& between = nullptr);
+  // the flow time since the last volume correction (adaptive steps; kept in checkpoints)
+  double since_volume() const { return since_volume_; }
+  void set_since_volume(double t) { since_volume_ = t; }
 
   // The phases, for the pressure solvers run from Python (amg, direct) and for checks.
   index_t predict(const Particles<D>& P, const Options<D>& O, bool correct);  // -> unknowns
@@ -176,7 +202,9 @@ class State {
   void cell_integrals(const Particles<D>& P, const Options<D>& O);
   void classify_nodes(const Options<D>& O);
 
+  int step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
   std::array<double, NPHASES> phase_seconds_{};
+  double since_volume_ = 0.0;
   Grid<D> grid_;
   double cell_volume_;
   std::array<double, D> upper_;
@@ -190,8 +218,7 @@ class State {
 
   // work arrays (Buffers: grown, never shrunk)
   Buffer<index_t> cell_, start_, order_;
-  Buffer<double> theta_, node_mass_, node_mom_, node_vol_, v_old_, v_star_, v_c_, v_new_,
-      node_f_;
+  Buffer<double> theta_, node_mass_, node_mom_, node_vol_, v_old_, v_star_, v_c_, v_new_, node_f_;
   Buffer<bool> enclosed_;
   Buffer<index_t> slot_, surface_slot_, node_row_, rows_, partial_, listed_;
   Buffer<bool> contact_, ocontact_, anchored_;

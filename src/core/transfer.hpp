@@ -17,7 +17,6 @@
 
 namespace mpmflow {
 
-
 // Add ``volume`` (m^3) at particle p to the cell centres with the multilinear hat of the
 // cell-centred grid. A wall mirrors the particles next to it: a ghost cell's weight goes to
 // its mirror, the cell against the wall, so a uniform material reads full up to the walls.

@@ -2,9 +2,9 @@
 // shape, row-major, no ownership. Indices are bounds-checked in debug builds (NDEBUG unset).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cassert>
-#include <algorithm>
 #include <cstdint>
 #include <memory>
 

@@ -28,6 +28,8 @@ else:  # pragma: no cover
 # checkpoint files are numbered by step with 9 digits (checkpoint_NNNNNNNNN.npz): the most
 # steps a run can take. (At 2 ms per step, the cost of a small case, that is 23 days.)
 MAX_STEPS = 999_999_999
+COURANT = 1.0  # time.courant's default (docs/method.md, "Adaptive steps")
+MAX_DT = 1e-2  # s: time.max_dt's default, the paper's step for its dam break
 MAX_CASE_BYTES = 16 * 2**20  # a case file is a page of TOML; anything larger is not one
 
 
@@ -335,20 +337,28 @@ class Physics(_Section):
 
 class Time(_Section):
     dt: Union[Literal["auto"], float] = Field(
-        description="Time step (s). The explicit scheme also takes \"auto\": its stable step "
-        "h / (c + |v|) (sound speed c = sqrt(K / density), largest initial speed |v|) times "
-        "time.safety_factor.", examples=[1e-3])
+        description="Time step (s), or \"auto\". With \"auto\" the projection scheme sets "
+        "every step from the particles' speeds: dt = time.courant grid.spacing / max |v_p|, "
+        "at most time.max_dt, the last steps before an output time shortened to land on it; "
+        "the explicit scheme takes its stable step h / (c + |v|) (sound speed "
+        "c = sqrt(K / density)) times time.safety_factor.", examples=[1e-3])
     safety_factor: float = Field(
         0.5, gt=0, le=1, description="Fraction of the stable explicit time step used by "
         "time.dt = \"auto\" (dimensionless).")
+    courant: float = Field(
+        COURANT, gt=0, le=10, description="Courant number of the projection scheme's steps "
+        "with time.dt = \"auto\": the fastest particle crosses this many cells per step "
+        "(dimensionless; measured against the dam break's validation rows, docs/method.md).")
+    max_dt: float = Field(
+        MAX_DT, gt=0, description="Longest step of the projection scheme with time.dt = "
+        "\"auto\" (s): the step of a flow at rest, and the cap when it moves slowly.")
     end: float = Field(description="Simulated time at which the run stops (s).", gt=0,
                        examples=[1.0])
 
     @model_validator(mode="after")
     def _positive(self):
         if self.dt != "auto" and self.dt <= 0:
-            raise ValueError("time.dt must be greater than 0 (seconds), or \"auto\" for the "
-                             "explicit scheme")
+            raise ValueError("time.dt must be greater than 0 (seconds), or \"auto\"")
         return self
 
 
@@ -830,10 +840,13 @@ class Case(_Section):
                     f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
                     f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
                     f"stop at once; give a slower velocity or raise solver.max_speed")
-        if self.time.dt == "auto" and self.solver.scheme != "explicit":
+        if (self.time.dt == "auto" and self.solver.scheme == "projection"
+                and self.solver.linear_solver != "multigrid"):
             raise ValueError(
-                "time.dt = \"auto\" is the stable step of the explicit scheme; the "
-                "projection scheme needs a number, e.g. time.dt = 1e-3 (s)")
+                "time.dt = \"auto\" runs the projection scheme's steps inside the compiled "
+                f"core, with the multigrid solver; solver.linear_solver = "
+                f"{self.solver.linear_solver!r} solves from Python one fixed step at a time: "
+                "set solver.linear_solver = \"multigrid\", or give time.dt a number")
         dt = time_step(self)
         if self.time.end < dt * (1 - 1e-9):
             raise ValueError(
@@ -847,13 +860,7 @@ class Case(_Section):
                 f"the {MAX_STEPS:,} a run can take (checkpoints are numbered by step with 9 "
                 "digits; at a few milliseconds per step that many steps take weeks): give a "
                 "shorter time.end, or a larger time.dt")
-        if self.time.dt == "auto":
-            if self.solver.scheme != "explicit":
-                raise ValueError(
-                    "time.dt = \"auto\" is the stable step of the explicit scheme; the "
-                    "projection scheme needs a number, e.g. time.dt = 1e-3 (s)")
-            return self
-        if self.solver.scheme == "explicit":
+        if self.time.dt != "auto" and self.solver.scheme == "explicit":
             limit = case_stable_time_step(self)
             if self.time.dt > limit:
                 c = sound_speed(self.material.bulk_modulus, self.material.density)
@@ -864,7 +871,7 @@ class Case(_Section):
                     f"time.dt to at most {limit:.4g} s, or time.dt = \"auto\" (which uses "
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
                     "material.bulk_modulus")
-        if self.output.interval < self.time.dt * (1 - 1e-9):
+        if self.time.dt != "auto" and self.output.interval < self.time.dt * (1 - 1e-9):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "
                 f"{self.time.dt:g} s; make it at least one time step")

@@ -542,6 +542,17 @@ class Simulation:
         return {"sound_speed": sound_speed(m.bulk_modulus, m.density),
                 "stable_time_step": case_stable_time_step(self.case)}
 
+    def _adaptive_summary(self):
+        """time.dt = "auto" with the projection scheme: the steps' range."""
+        scheme = self.scheme
+        if not getattr(scheme, "auto", False) or not hasattr(scheme, "dt_range"):
+            return {}
+        shortest, longest = scheme.dt_range
+        return {"adaptive_steps": {"courant": self.case.time.courant,
+                                   "max_dt": self.case.time.max_dt,
+                                   "shortest": shortest if np.isfinite(shortest) else None,
+                                   "longest": longest or None}}
+
     def _summary(self, status, message):
         P, c = self.particles, self.counters
         wall = self._wall_seconds()
@@ -566,6 +577,7 @@ class Simulation:
             "scheme": self.case.solver.scheme,
             "dt": self.dt,
             **self._explicit_summary(),
+            **self._adaptive_summary(),
             "grid": {"spacing": self.grid.spacing, "cells": list(self.grid.cells),
                      "domain_used": [float(s) for s in self.grid.size]},
             "pressure_solver": {"solves": c.solves, "iterations": c.iterations,

@@ -29,8 +29,11 @@ def case_stable_time_step(case):
 
 
 def time_step(case):
-    """The time step a run uses: time.dt, or for time.dt = "auto" the stable explicit step
-    times time.safety_factor (s)."""
+    """The time step a run uses (s): time.dt; for time.dt = "auto", the stable explicit step
+    times time.safety_factor (explicit scheme), or the longest step time.max_dt (projection
+    scheme, which then sets each step from the flow within it)."""
     if case.time.dt == "auto":
-        return case.time.safety_factor * case_stable_time_step(case)
+        if case.solver.scheme == "explicit":
+            return case.time.safety_factor * case_stable_time_step(case)
+        return case.time.max_dt
     return case.time.dt

@@ -25,6 +25,27 @@ struct BoundState {
   std::unique_ptr<State<D>> state;
 };
 
+// Between two steps of a chunk (run without the GIL): Python's signal handlers run, so
+// that a SIGINT or SIGTERM whose handler raises (the run's second signal: stop at once)
+// stops the chunk after the step in progress, and the exception reaches the caller.
+class SignalCheck {
+ public:
+  std::function<bool()> between() {
+    return [this] {
+      nb::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() == 0) return true;
+      error_ = std::make_unique<nb::python_error>();
+      return false;
+    };
+  }
+  void raise_if_any() {
+    if (error_) throw nb::python_error(*error_);
+  }
+
+ private:
+  std::unique_ptr<nb::python_error> error_;
+};
+
 template <class T, int R>
 View<const T, R> table(nb::object a, const char* name, std::vector<nb::object>& keep) {
   keep.push_back(a);
@@ -49,6 +70,11 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<const double> mas
     throw std::invalid_argument("particle arrays of inconsistent shapes");
   return P;
 }
+
+// the particle arguments: those a step writes must not be silently copied
+#define MPMFLOW_PARTICLE_ARGS                                                             \
+  nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("mass"), nb::arg("volume"), \
+      nb::arg("pressure").noconvert()
 
 template <int D>
 void bind_dim(nb::module_& m) {
@@ -80,17 +106,21 @@ void bind_dim(nb::module_& m) {
       .def_rw("volume_dmax", &O::volume_dmax)
       .def_rw("viscous", &O::viscous)
       .def_rw("model", &O::model)
-      .def_rw("model_params", &O::model_params);
+      .def_rw("model_params", &O::model_params)
+      .def_rw("courant", &O::courant)
+      .def_rw("dt_max", &O::dt_max)
+      .def_rw("flip_rate", &O::flip_rate)
+      .def_rw("volume_interval", &O::volume_interval);
 
   nb::class_<S>(m, ("State" + suffix).c_str())
       .def(
           "__init__",
           [](S* self, double h, std::vector<index_t> cells, double cell_volume,
-             std::array<double, D> upper, double margin, nb::object wall_node,
-             nb::object wall_axis, nb::object wall_sign, nb::object phi, nb::object open,
-             nb::object static_slot, nb::object K, nb::object C, nb::object V, nb::object F,
-             nb::object Wf, nb::object onode, nb::object onormal, nb::object ono_slip,
-             nb::object viscous_T, bool volume_correction, bool viscous) {
+             std::array<double, D> upper, double margin, nb::object wall_node, nb::object wall_axis,
+             nb::object wall_sign, nb::object phi, nb::object open, nb::object static_slot,
+             nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
+             nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
+             bool volume_correction, bool viscous) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -119,18 +149,49 @@ void bind_dim(nb::module_& m) {
              Array<const double> volume, Array<double> pressure, const O& opt, index_t first,
              index_t nsteps, Report& report) {
             auto P = particles<D>(x, v, mass, volume, pressure);
-            nb::gil_scoped_release release;
-            return self.state->advance(P, opt, first, nsteps, report);
+            SignalCheck check;
+            index_t done;
+            {
+              nb::gil_scoped_release release;
+              done = self.state->advance(P, opt, first, nsteps, report, check.between());
+            }
+            check.raise_if_any();
+            return done;
           },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("first"), nb::arg("nsteps"),
+          nb::arg("report"),
           "nsteps steps; returns the steps done (fewer: report.status says why).")
-      .def("predict",
-           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-              Array<const double> volume, Array<double> pressure, const O& opt, bool correct) {
-             auto P = particles<D>(x, v, mass, volume, pressure);
-             return self.state->predict(P, opt, correct);
-           })
+      .def(
+          "advance_span",
+          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
+             Array<const double> volume, Array<double> pressure, const O& opt, double span,
+             index_t max_steps, Report& report) {
+            auto P = particles<D>(x, v, mass, volume, pressure);
+            SignalCheck check;
+            double covered;
+            {
+              nb::gil_scoped_release release;
+              covered = self.state->advance_span(P, opt, span, max_steps, report, check.between());
+            }
+            check.raise_if_any();
+            return covered;
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("span"), nb::arg("max_steps"),
+          nb::arg("report"), "Adaptive steps over the span (s); returns the time covered.")
+      .def_prop_rw(
+          "since_volume", [](S& self) { return self.state->since_volume(); },
+          [](S& self, double t) { self.state->set_since_volume(t); })
+      .def(
+          "predict",
+          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
+             Array<const double> volume, Array<double> pressure, const O& opt, bool correct) {
+            auto P = particles<D>(x, v, mass, volume, pressure);
+            return self.state->predict(P, opt, correct);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"))
       .def("warm_start", [](S& self) { self.state->warm_start(); })
-      .def("pressure_matrix", [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
+      .def("pressure_matrix",
+           [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
       .def("pressure_rhs", [](S& self, const O& opt) { self.state->pressure_rhs(opt); })
       .def("release_walls",
            [](S& self, Array<const double> x) {
@@ -141,22 +202,21 @@ void bind_dim(nb::module_& m) {
            [](S& self, const O& opt, Report& report) {
              return self.state->viscous_predictor(opt, report);
            })
-      .def("finish",
-           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-              Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
-              Report& report) {
-             auto P = particles<D>(x, v, mass, volume, pressure);
-             return self.state->finish(P, opt, correct, report);
-           })
+      .def(
+          "finish",
+          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
+             Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
+             Report& report) {
+            auto P = particles<D>(x, v, mass, volume, pressure);
+            return self.state->finish(P, opt, correct, report);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), nb::arg("report"))
       .def_prop_ro("phase_seconds",
                    [](S& self) {
                      const auto& t = self.state->phase_seconds();
                      return std::vector<double>(t.begin(), t.end());
                    })
-      .def_prop_ro("p_node",
-                   [](nb::handle h) {
-                     return out(nb::cast<S&>(h).state->p_node(), h);
-                   })
+      .def_prop_ro("p_node", [](nb::handle h) { return out(nb::cast<S&>(h).state->p_node(), h); })
       .def_prop_ro("v_new", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_new(), h); })
       .def_prop_ro("ocontact",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->ocontact(), h); })
@@ -191,20 +251,28 @@ void bind_step(nb::module_& m) {
       .def_rw("fail_size", &Report::fail_size)
       .def_rw("volume_iterations", &Report::volume_iterations)
       .def_rw("last_unknowns", &Report::last_unknowns)
-      .def_rw("viscous_iterations", &Report::viscous_iterations);
+      .def_rw("viscous_iterations", &Report::viscous_iterations)
+      .def_rw("steps", &Report::steps)
+      .def_rw("dt_min", &Report::dt_min)
+      .def_rw("dt_max", &Report::dt_max);
   m.attr("OK") = static_cast<int>(OK);
   m.attr("SINGULAR") = static_cast<int>(SINGULAR);
   m.attr("PRESSURE_NOT_CONVERGED") = static_cast<int>(PRESSURE_NOT_CONVERGED);
   m.attr("VOLUME_NOT_CONVERGED") = static_cast<int>(VOLUME_NOT_CONVERGED);
   m.attr("VISCOUS_NOT_CONVERGED") = static_cast<int>(VISCOUS_NOT_CONVERGED);
+  m.attr("INTERRUPTED") = static_cast<int>(INTERRUPTED);
   m.attr("GAUSS") = static_cast<int>(GAUSS);
   m.attr("DIVERGENCE") = static_cast<int>(DIVERGENCE);
   m.attr("CONSISTENT") = static_cast<int>(CONSISTENT);
-  m.attr("PHASES") = std::vector<std::string>{
-      "binning", "particle to grid", "free surface (node fractions, classify)",
-      "cell integrals (quadrature)", "viscous predictor",
-      "pressure (assembly, multigrid, PCG, walls)", "corrector and walls", "volume correction",
-      "grid to particle"};
+  m.attr("PHASES") = std::vector<std::string>{"binning",
+                                              "particle to grid",
+                                              "free surface (node fractions, classify)",
+                                              "cell integrals (quadrature)",
+                                              "viscous predictor",
+                                              "pressure (assembly, multigrid, PCG, walls)",
+                                              "corrector and walls",
+                                              "volume correction",
+                                              "grid to particle"};
   bind_dim<2>(m);
   bind_dim<3>(m);
 }

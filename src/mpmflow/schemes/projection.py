@@ -48,6 +48,15 @@ class StepReport:
                    int(r.viscous_iterations))
 
 
+@dataclass
+class AdaptiveReport(StepReport):
+    """With time.dt = "auto": also the steps taken and the shortest and longest."""
+
+    steps: int = 0
+    dt_min: float = 0.0
+    dt_max: float = 0.0
+
+
 @register("projection")
 class ProjectionScheme:
     def __init__(self, case, grid, particles):
@@ -67,6 +76,8 @@ class ProjectionScheme:
                                 else pressure.PythonPressure(grid, s))
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
         self.last_unknowns = 0
+        self.auto = case.time.dt == "auto"  # steps set by the flow (advance_span)
+        self.dt_range = [np.inf, 0.0]  # the shortest and longest step taken (auto)
 
     @property
     def p_node(self):
@@ -98,14 +109,18 @@ class ProjectionScheme:
             volume_tol=volume_correction.TOLERANCE,
             volume_max_iterations=volume_correction.MAX_ITERATIONS,
             volume_dmax=volume_correction.MAX_DISPLACEMENT, viscous=self.viscous,
-            model=int(model), model_params=[float(v) for v in padded])
+            model=int(model), model_params=[float(v) for v in padded],
+            courant=float(self.case.time.courant), dt_max=float(self.case.time.max_dt),
+            flip_rate=float(s.flip), volume_interval=float(s.volume_correction_interval))
 
     def state(self):
         """What the scheme carries from one step to the next beyond the particles: the nodal
         pressure and the volume correction's last solution (the warm starts of the next
         solves). Everything else is rebuilt each step."""
         saved = {"p_node": self.core.p_node.copy(),
-                 "last_unknowns": np.array(self.last_unknowns), "steps": np.array(self.steps)}
+                 "last_unknowns": np.array(self.last_unknowns), "steps": np.array(self.steps),
+                 "since_volume": np.array(self.core.since_volume),
+                 "dt_range": np.array(self.dt_range)}
         q = self.core.volume_q
         if q.size:
             saved["volume_q"] = q.copy()
@@ -116,6 +131,9 @@ class ProjectionScheme:
         np.copyto(self.core.p_node, saved["p_node"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
+        if "since_volume" in saved:  # checkpoints written before adaptive steps lack them
+            self.core.since_volume = float(saved["since_volume"])
+            self.dt_range = [float(t) for t in saved["dt_range"]]
         q = self.core.volume_q
         if q.size:
             np.copyto(q, saved["volume_q"])
@@ -139,6 +157,8 @@ class ProjectionScheme:
         the steps (residual: the worst)."""
         O = self.options(dt)
         report = state.Report()
+        if self.auto and self.python_pressure is None:
+            return self._adaptive(O, dt * nsteps, report, where)
         try:
             if self.python_pressure is None:
                 done = self.core.advance(*self._particles(), O, self.steps + 1, nsteps, report)
@@ -153,6 +173,31 @@ class ProjectionScheme:
         if done < nsteps:
             self._fail(report, where(done))
         return StepReport.of(report)
+
+    def _adaptive(self, O, span, report, where):
+        """time.dt = "auto": steps set by the flow over the span (``State.advance_span``)."""
+        s = self.case.solver
+        # the most steps the span can need: every particle at solver.max_speed (the run
+        # stops beyond it), at the Courant number
+        most = int(np.ceil(span * s.max_speed / (O.courant * self.grid.spacing))) + 3
+        covered = self.core.advance_span(*self._particles(), O, span, most, report)
+        done = int(report.steps)
+        self.steps += done
+        self.last_unknowns = int(report.last_unknowns)
+        if done:
+            self.dt_range = [min(self.dt_range[0], report.dt_min),
+                             max(self.dt_range[1], report.dt_max)]
+        if report.status != state.OK:
+            self._fail(report, where(done))
+        if covered < span * (1 - 1e-9):
+            raise SolverError(
+                f"The adaptive steps{where(done)} took {done} steps without reaching the next "
+                f"output time: the flow is faster than solver.max_speed = {s.max_speed:g} m/s "
+                "allows for. Raise solver.max_speed if such speeds are real, or use a fixed "
+                "time.dt.")
+        r = StepReport.of(report)
+        return AdaptiveReport(**vars(r), steps=done, dt_min=float(report.dt_min),
+                              dt_max=float(report.dt_max))
 
     def _python_steps(self, O, nsteps, report, where):
         """The steps with the pressure solved in Python (``pressure.PythonPressure``)."""

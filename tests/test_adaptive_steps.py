@@ -1,0 +1,63 @@
+"""time.dt = "auto" with the projection scheme: each step set by the particles' speeds
+(State.advance_span), within time.max_dt, landing on every output time exactly."""
+
+import json
+
+import numpy as np
+import pytest
+
+from mpmflow import Simulation, load_case
+
+from conftest import EXAMPLES
+
+RHO, G = 1000.0, 9.81
+
+
+def test_a_column_at_rest_takes_the_longest_step_and_stays_exact():
+    """At rest the fastest particle is still, so every step is time.max_dt; the column stays
+    exact to the solve's tolerance, as with a fixed step."""
+    case = load_case(EXAMPLES / "hydrostatic.toml",
+                     ["bodies.0.max=[0.1, 0.2]", "time.dt=auto", "time.max_dt=5e-3",
+                      "time.end=0.2", "output.snapshots=false"])
+    sim = Simulation(case)
+    summary = sim.run()
+    assert sim.steps == 40  # 0.2 s in steps of 5 ms
+    assert summary["adaptive_steps"]["shortest"] == pytest.approx(5e-3)
+    P = sim.particles
+    exact = RHO * G * (0.2 - P.x[:, 1])
+    err = np.sqrt(np.sum((P.pressure - exact) ** 2) / np.sum(exact**2))
+    assert err < 100 * case.solver.tolerance
+    assert np.nanmax(sim.series("max_speed")) < 1e-8
+
+
+def test_the_steps_follow_the_courant_number_and_land_on_every_output(tmp_path):
+    """A dam break: no step is longer than time.courant h / max |v| (checked through the
+    summary's shortest step against the fastest particle of the run), the output rows fall
+    on multiples of output.interval exactly, and halving the Courant number takes more
+    steps."""
+    steps = {}
+    for courant in (1.0, 0.5):
+        out = tmp_path / f"co{courant}"
+        case = load_case(EXAMPLES / "dam_break.toml",
+                         ["grid.spacing=0.008", "time.end=0.3", "time.dt=auto",
+                          f"time.courant={courant}", "output.snapshots=false"])
+        sim = Simulation(case, out_dir=out)
+        summary = sim.run()
+        assert summary["status"] == "completed"
+        steps[courant] = sim.steps
+        times = np.loadtxt(out / "timeseries.csv", delimiter=",", skiprows=1, usecols=0)
+        assert np.array_equal(times, np.round(times / 0.01) * 0.01)
+        fastest = np.nanmax(sim.series("max_speed"))
+        shortest = summary["adaptive_steps"]["shortest"]
+        # the fastest particle seen at an output bounds the speeds some step started from
+        assert shortest <= courant * 0.008 / fastest * (1 + 1e-9)
+        # (the last step of a span is the rest of it, which rounding can leave 1 ulp long)
+        assert summary["adaptive_steps"]["longest"] <= case.time.max_dt * (1 + 1e-12)
+    assert steps[0.5] > 1.5 * steps[1.0]
+
+
+def test_auto_with_a_python_solver_is_refused():
+    from mpmflow.errors import CaseError
+
+    with pytest.raises((CaseError, ValueError), match="linear_solver"):
+        load_case(EXAMPLES / "dam_break.toml", ["time.dt=auto", "solver.linear_solver=amg"])
