@@ -165,10 +165,12 @@ def _resume_command(args):
 
 
 def _run(args):
-    from .case import load_case
-    from .interrupts import stop_on_signals
-    from .output.folder import CLI_HINTS
-    from .simulation import Simulation
+    with early.deferred():  # the compiled extensions load here
+        from .case import load_case
+        from .interrupts import stop_on_signals
+        from .output.folder import CLI_HINTS
+        from .simulation import Simulation
+    early.check()
 
     case = load_case(args.case, args.overrides)
     early.check()

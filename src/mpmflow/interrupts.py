@@ -95,10 +95,23 @@ class EarlySignals:
     def __init__(self):
         self.pending = None
         self.phase = "before"  # "after" once the run has ended
+        self.deferring = False
 
     def _handler(self, signum, frame):
         self.pending = signum
-        raise EarlyStop(signum)
+        if not self.deferring:
+            raise EarlyStop(signum)
+
+    @contextmanager
+    def deferred(self):
+        """Signals are only recorded inside (``check()`` after raises them): an exception
+        raised while a compiled extension initialises (the core, libigl) comes out as an
+        ImportError or SystemError with a traceback instead of as EarlyStop."""
+        self.deferring = True
+        try:
+            yield
+        finally:
+            self.deferring = False
 
     def check(self):
         if self.pending is not None:
