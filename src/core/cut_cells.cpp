@@ -3,42 +3,11 @@
 #include <cmath>
 
 #include "parallel.hpp"
+#include "quadrature.hpp"
 
 namespace mpmflow {
 
 namespace {
-
-// One quadrature point at local coordinates `local` with weight w (m^D) added to a cell's
-// K (NC x NC), C (NC x NC x D) and V (NC): the arithmetic of quadrature.accumulate_point,
-// in its order (kept here until the quadrature port's own is merged).
-template <int D>
-void add_point(const std::array<double, D>& local, double w, double h, View<double, 2> K,
-               View<double, 3> C, View<double, 1> V) {
-  constexpr int NC = 1 << D;
-  const double inv_h = 1.0 / h;
-  std::array<double, NC> N;
-  std::array<std::array<double, D>, NC> dN;
-  for (int a = 0; a < NC; ++a) {
-    double n = 1.0;
-    for (int k = 0; k < D; ++k) n *= ((a >> k) & 1) ? local[k] : 1.0 - local[k];
-    N[a] = n;
-    for (int k = 0; k < D; ++k) {
-      double gk = ((a >> k) & 1) ? 1.0 : -1.0;
-      for (int j = 0; j < D; ++j)
-        if (j != k) gk *= ((a >> j) & 1) ? local[j] : 1.0 - local[j];
-      dN[a][k] = gk * inv_h;
-    }
-  }
-  for (int a = 0; a < NC; ++a) {
-    V(a) += w * N[a];
-    for (int b = 0; b < NC; ++b) {
-      double kk = 0.0;
-      for (int k = 0; k < D; ++k) kk += dN[a][k] * dN[b][k];
-      K(a, b) += w * kk;
-      for (int k = 0; k < D; ++k) C(a, b, k) += w * N[a] * dN[b][k];
-    }
-  }
-}
 
 // Gauss point gp (of 2^(D-1)) of the face normal to axis k on `side` (0, 1) of the
 // (sub-)cell with local centre `centre` (its offsets +-gs already scaled), into `local`.
@@ -134,7 +103,7 @@ void cut_cell_tensors(const Grid<D>& g, View<const double> phi_node, View<const 
             for (int gp = 0; gp < NC; ++gp) {
               for (int k = 0; k < D; ++k)
                 local[k] = centre[k] + (((gp >> k) & 1) ? gauss : -gauss) / dsub;
-              add_point<D>(local, wvol, h, Km, Cm, Vm);
+              accumulate_point<D>(g, local.data(), wvol, Km, Cm, Vm);
             }
           }
           // faces: 2^(D-1) Gauss points on each sub-face

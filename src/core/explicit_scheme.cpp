@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "parallel.hpp"
+#include "transfer.hpp"
 
 namespace mpmflow {
 
@@ -121,29 +122,6 @@ void wall_contact(const Grid<D>& g, View<double, 2> u, View<bool, 2> contact, bo
           if (m != k) u(i, m) = 0.0;
     }
   });
-}
-
-// Put particle p back inside the box [0, upper] if it left it (mirrored across the wall, at
-// least margin inside, its velocity into the wall removed); true if it was moved. (The rule
-// of kernels/transfer.py, put_inside.)
-template <int D>
-inline bool put_back_inside(View<double, 2> x, View<double, 2> v, index_t p,
-                            View<const double> upper, double margin) {
-  bool out = false;
-  for (int k = 0; k < D; ++k) {
-    const double lo = margin;
-    const double hi = upper(k) - margin;
-    if (x(p, k) < 0.0) {
-      x(p, k) = std::min(std::max(-x(p, k), lo), hi);
-      if (v(p, k) < 0.0) v(p, k) = 0.0;
-      out = true;
-    } else if (x(p, k) > upper(k)) {
-      x(p, k) = std::max(std::min(2.0 * upper(k) - x(p, k), hi), lo);
-      if (v(p, k) > 0.0) v(p, k) = 0.0;
-      out = true;
-    }
-  }
-  return out;
 }
 
 // |v_p| (m/s).
@@ -382,7 +360,7 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
           v(p, k) = flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
           x(p, k) += dt * pic[k];
         }
-        if (put_back_inside<D>(x, v, p, upper, margin)) ++out;
+        if (put_inside<D>(x, v, p, upper, margin)) ++out;
       }
       count[t] = out;
     });
