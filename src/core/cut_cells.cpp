@@ -35,13 +35,6 @@ void face_point(const std::array<double, D>& local, double w, double* M) {
     for (int b = 0; b < NC; ++b) M[a * NC + b] += w * N[a] * N[b];
 }
 
-template <int D>
-constexpr double power(double x) {  // x^D as Numba's x**D: x * x (* x)
-  double r = x;
-  for (int k = 1; k < D; ++k) r *= x;
-  return r;
-}
-
 }  // namespace
 
 template <int D>
@@ -88,7 +81,7 @@ void cut_cell_tensors(const Grid<D>& g, View<const double> phi_node, View<const 
           for (index_t i = 0; i < Wm.size(); ++i) Wm[i] = 0.0;
           index_t solid = 0;
           // volume: 2^D Gauss points in each fluid sub-cell
-          const double wvol = power<D>(sub) / NC;
+          const double wvol = int_power(sub, D) / NC;
           for (index_t q = 0; q < total; ++q) {
             index_t rq = q;
             for (int k = 0; k < D; ++k) {
@@ -107,7 +100,7 @@ void cut_cell_tensors(const Grid<D>& g, View<const double> phi_node, View<const 
             }
           }
           // faces: 2^(D-1) Gauss points on each sub-face
-          const double wface = power<D - 1>(sub) / (1 << (D - 1));
+          const double wface = int_power(sub, D - 1) / (1 << (D - 1));
           for (int k = 0; k < D; ++k) {
             for (int side = 0; side < 2; ++side) {
               const index_t j = cx[k] + (side == 1 ? 1 : -1);
@@ -162,7 +155,7 @@ void face_mass(const Grid<D>& g, View<double, 3> Wf) {
   const double gauss = 0.5 / std::sqrt(3.0);
   std::array<double, D> local, centre;
   centre.fill(0.5);
-  const double w = power<D - 1>(g.h) / (1 << (D - 1));
+  const double w = int_power(g.h, D - 1) / (1 << (D - 1));
   for (int k = 0; k < D; ++k)
     for (int side = 0; side < 2; ++side)
       for (int gp = 0; gp < (1 << (D - 1)); ++gp) {

@@ -17,6 +17,19 @@
 namespace mpmflow {
 
 constexpr int corners(int D) { return 1 << D; }
+
+// x^n for n >= 0 by repeated squaring (the roundings of Python's float ** int; for n <= 3
+// every order of the products gives the same bits): cell volumes h^D, face areas h^(D-1).
+inline double int_power(double x, int n) {
+  double r = 1.0;
+  while (true) {
+    if (n & 1) r *= x;
+    n >>= 1;
+    if (!n) break;
+    x *= x;
+  }
+  return r;
+}
 constexpr int stencil_size(int D) { return D == 2 ? 9 : 27; }
 
 template <int D>

@@ -10,18 +10,6 @@ namespace mpmflow {
 
 namespace {
 
-// a^b as Numba computes a float to an integer power (binary powering), for the same bits.
-inline double int_power(double a, int b) {
-  double r = 1.0;
-  while (true) {
-    if (b & 1) r *= a;
-    b >>= 1;
-    if (!b) break;
-    a *= a;
-  }
-  return r;
-}
-
 // accumulate_point on raw rows (K: NC*NC or null, C: NC*NC*D, V: NC), the products in the
 // order of the Numba kernel.
 template <int D>

@@ -5,6 +5,7 @@
 
 #include "parallel.hpp"
 #include "rheology.hpp"
+#include "stencil.hpp"
 
 namespace mpmflow {
 
@@ -14,72 +15,14 @@ namespace {
 constexpr index_t FREE = 0;
 constexpr index_t HELD = -1;
 
-// x^n for n >= 0 by repeated squaring (Numba's float ** int: the same roundings)
-double int_power(double x, int n) {
-  double r = 1.0;
-  while (true) {
-    if (n & 1) r *= x;
-    n >>= 1;
-    if (!n) break;
-    x *= x;
-  }
-  return r;
-}
-
-// The stencil tables of a grid: slot[a][b] the slot of corner b seen from corner a of the
-// same cell, offset[s] the flat node offset of slot s.
-template <int D>
-struct Stencil {
-  static constexpr int NC = 1 << D;
-  static constexpr int NS = stencil_size(D);
-  std::array<std::array<int, NC>, NC> slot{};
-  std::array<index_t, NS> offset{};
-
-  explicit Stencil(const Grid<D>& g) {
-    for (int a = 0; a < NC; ++a)
-      for (int b = 0; b < NC; ++b) {
-        int s = 0, p3 = 1;
-        for (int k = 0; k < D; ++k) {
-          s += (((b >> k) & 1) - ((a >> k) & 1) + 1) * p3;
-          p3 *= 3;
-        }
-        slot[a][b] = s;
-      }
-    for (int s = 0; s < NS; ++s) {
-      index_t o = 0;
-      int r = s;
-      for (int k = 0; k < D; ++k) {
-        o += (r % 3 - 1) * g.ns[k];
-        r /= 3;
-      }
-      offset[s] = o;
-    }
-  }
-};
-
-// Cell b (0 <= b < 2^D) of the node with coordinates ix: its flat index (-1 outside the
-// grid) and the node's corner a in it.
-template <int D>
-index_t node_cell(const Grid<D>& g, const index_t* ix, int b, int& a) {
-  index_t c = 0;
-  a = 0;
-  for (int k = 0; k < D; ++k) {
-    const int bit = (b >> k) & 1;
-    const index_t j = ix[k] - 1 + bit;
-    if (j < 0 || j >= g.cells[k]) return -1;
-    c += j * g.cs[k];
-    if (bit == 0) a += 1 << k;
-  }
-  return c;
-}
-
 // The rows of node i (one per unknown component): the Numba _node_rows.
 template <int D>
-void node_rows(const Grid<D>& g, index_t i, const index_t* ix, const Stencil<D>& st,
-               View<const double, 4> T, const std::array<double, (1 << D) * (1 << D)>& Kg,
-               View<const double> weight, View<const double> node_mass, double dt,
-               View<const double, 2> u, View<const index_t, 2> row, View<const index_t> off,
-               View<index_t, 3> cols, View<double, 3> vals, View<double> rhs, View<index_t> node) {
+void node_rows(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix,
+               const StencilTables<D>& st, View<const double, 4> T,
+               const std::array<double, (1 << D) * (1 << D)>& Kg, View<const double> weight,
+               View<const double> node_mass, double dt, View<const double, 2> u,
+               View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
+               View<double, 3> vals, View<double> rhs, View<index_t> node) {
   constexpr int NC = 1 << D;
   constexpr int NS = stencil_size(D);
   constexpr int centre = NS / 2;
@@ -89,8 +32,9 @@ void node_rows(const Grid<D>& g, index_t i, const index_t* ix, const Stencil<D>&
     if (r < 0) continue;
     S.fill(0.0);
     for (int b = 0; b < NC; ++b) {
-      int a;
-      const index_t c = node_cell<D>(g, ix, b, a);
+      const NodeCell cell = node_cell<D>(g, ix, b);
+      const index_t c = cell.c;
+      const int a = cell.a;
       if (c < 0) continue;
       const double w = weight(c);
       if (w == 0.0) continue;
@@ -240,15 +184,15 @@ void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weig
               View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
               View<double, 3> vals, View<double> rhs, View<index_t> node) {
   constexpr int NC = 1 << D;
-  const Stencil<D> st(g);
+  const StencilTables<D> st = tables<D>(g);
   std::array<double, NC * NC> Kg{};
   for (int a = 0; a < NC; ++a)
     for (int b = 0; b < NC; ++b)
       for (int m = 0; m < D; ++m) Kg[a * NC + b] += T(a, b, m, m);
   // every node writes only its own rows: any order gives the same bits
   parallel_for(g.nnodes, [&](index_t i) {
-    index_t ix[D];
-    g.node_coords(i, ix);
+    std::array<index_t, D> ix;
+    g.node_coords(i, ix.data());
     node_rows<D>(g, i, ix, st, T, Kg, weight, node_mass, dt, u, row, off, cols, vals, rhs, node);
   });
 }
