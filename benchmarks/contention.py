@@ -5,7 +5,7 @@ Issue 17: with one other busy process on the second core a run was 2.6 times slo
 1.3 times as slow as the same run alone with the better of 1 or 2 threads.
 
 Runs `mpmflow run examples/dam_break.toml` (each its own process, after one warm-up run
-that fills Numba's cache) in these settings, --repeat times each, interleaved (so that a
+that fills the page cache) in these settings, --repeat times each, interleaved (so that a
 drift of the machine's speed spreads over all of them):
 
 - alone, execution.threads = 1, 2, ... up to --pool (and "auto");
@@ -16,7 +16,7 @@ drift of the machine's speed spreads over all of them):
 and prints, per setting, the median time loop (summary.json's wall_seconds) and whole
 process, the threads "auto" chose (summary.json's threads), and the ratio of each busy
 "auto" run to the better of the alone runs with a fixed count. The busy process runs only
-during the busy settings. Numba's pool is --pool threads (NUMBA_NUM_THREADS; default: the
+during the busy settings. the core's pool is --pool threads (OMP_NUM_THREADS; default: the
 usable CPUs); MPMFLOW_THREADS is removed from the runs' environment.
 
     python benchmarks/contention.py [--repeat 5] [--pool 2] [--set key=value ...]
@@ -46,7 +46,7 @@ TARGET = 1.3
 def run_case(out, threads, pool, overrides):
     """(time loop s, whole process s, threads chosen) of one run."""
     env = {k: v for k, v in os.environ.items() if k != "MPMFLOW_THREADS"}
-    env["NUMBA_NUM_THREADS"] = str(pool)
+    env["OMP_NUM_THREADS"] = str(pool)
     cmd = [sys.executable, "-m", "mpmflow.cli", "run", str(CASE), "--out", str(out), "-q",
            "--overwrite", "--set", f"execution.threads={threads}"]
     for item in overrides:
@@ -84,7 +84,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--pool", type=int, default=len(os.sched_getaffinity(0)),
-                    help="Numba's threads (NUMBA_NUM_THREADS of the runs)")
+                    help="the core's threads (OMP_NUM_THREADS of the runs)")
     ap.add_argument("--set", action="append", default=[], dest="overrides",
                     metavar="KEY=VALUE", help="override a case key (e.g. time.end=0.02 for a "
                     "check that the script works)")
@@ -96,7 +96,7 @@ def main():
         settings += [(busy, cpu, t) for t in ["auto"] + fixed]
     results = {s: [] for s in settings}
     with tempfile.TemporaryDirectory() as tmp:
-        run_case(Path(tmp) / "warm", 1, args.pool, ["time.end=0.01"])  # Numba's cache
+        run_case(Path(tmp) / "warm", 1, args.pool, ["time.end=0.01"])  # the page cache
         for k in range(args.repeat):
             for setting in settings:
                 where, cpu, threads = setting
@@ -118,7 +118,7 @@ def main():
     best = min(r["loop_s"] for r in rows if r["where"] == "alone" and r["threads"] != "auto")
     best_wall = min(r["wall_s"] for r in rows
                     if r["where"] == "alone" and r["threads"] != "auto")
-    print(f"\nexamples/dam_break.toml {' '.join(args.overrides)}, Numba pool {args.pool}, "
+    print(f"\nexamples/dam_break.toml {' '.join(args.overrides)}, thread pool {args.pool}, "
           f"median of {args.repeat}; ratio = time loop / the better alone run with a fixed "
           f"count ({best:.2f} s; whole process {best_wall:.2f} s)\n")
     print("| setting | execution.threads | threads chosen | time loop | whole process | ratio "

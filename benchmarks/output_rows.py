@@ -22,7 +22,7 @@ steps cost the same all along, which a dam break's do not) with an output row ev
     python benchmarks/output_rows.py [--rows 10000] [--src OTHER_CHECKOUT/src]
 
 --src runs another checkout (e.g. the commit before issue 17) with this environment.
-Run it with NUMBA_NUM_THREADS=1 on a shared machine. Appends a JSON record to
+Run it with OMP_NUM_THREADS=1 on a shared machine. Appends a JSON record to
 benchmarks/results.jsonl (not tracked).
 """
 
@@ -81,7 +81,7 @@ def main():
     record = {"label": "output_rows", "rows": n, "src": args.src or "this checkout",
               "machine": machine(), "date": time.strftime("%Y-%m-%d")}
     with tempfile.TemporaryDirectory() as tmp:
-        run(Path(tmp) / "warm", 10, args.src)  # Numba's cache
+        run(Path(tmp) / "warm", 10, args.src)  # the page cache
         for label, rows in (("short", n), ("long", 2 * n)):
             out = Path(tmp) / label
             wall, summary = run(out, rows, args.src)

@@ -2,8 +2,8 @@
 
 Runs the dam break of examples/dam_break.toml at 0.004, 0.002 and 0.001 m (26k, 104k and
 416k particles; dt scaled with the mesh: 1e-3, 5e-4, 2.5e-4 s) from rest for the same
-simulated time (default 0.1 s), each in its own process (after one short warm-up run that
-loads Numba's cache), and reports the time-loop seconds per step (median over --repeat
+simulated time (default 0.1 s), each in its own process (after one short warm-up run), and
+reports the time-loop seconds per step (median over --repeat
 runs), the fitted exponent of time per step against particle count, the peak resident
 memory of each process, and the speed-up from 1 to 2 threads on the largest case.
 
@@ -59,7 +59,7 @@ def child(spacing, dt, end, dim):
 
 
 def run_child(spacing, dt, end, threads, dim):
-    env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), MPMFLOW_THREADS=str(threads))
     out = subprocess.run([sys.executable, __file__, "--child", str(spacing), str(dt), str(end),
                           str(dim)],
                          check=True, capture_output=True, text=True, env=env).stdout
