@@ -23,20 +23,28 @@ side at x = 1.992 m cut given the fraction of them that lies in the column, so t
 volume is exact (checked from checkMesh's total volume and interFoam's first "Phase-1
 volume fraction").
 
-Function objects record what mpmflow's probes record, every 0.005 s of flow (at the first
-step past each): p at P1-P8 (`probes`; each sensor moved half a cell off the box face it
-sits on, into the water, as the face of the staircased box is not at the sensor), and the
-water level at H1-H4 (`interfaceHeight`), in the case's postProcessing/ folder.
+Function objects record what mpmflow's probes record, every 0.005 s of flow (at the step
+nearest each): p at P1-P8 (`probes`; each sensor moved half a cell off the box face it
+sits on, into the water, as the face of the staircased box is not at the sensor), and
+alpha.water at the cell centres along the vertical line through each level gauge H1-H4
+(`probes` again: v1912 has no interfaceHeight), in the case's postProcessing/ folder; the
+script sums the latter into levels (sum of alpha times the cell height) and writes
+probes.csv in the case (time, P1-P8 in Pa, H1-H4 in m), as mpmflow's probes.csv. The tank
+is closed, so p is fixed by a reference: 0 at the centre of the top row of cells (pRefPoint,
+always air), which puts the air at the floor about 10 Pa above 0. p_rgh is solved by GAMG
+(--solver pcg: PCG-DIC, as the 2D dam break's script).
 
 Times the whole of blockMesh, topoSet, subsetMesh, setFields and interFoam (serial) as one:
 wall (perf_counter) and CPU (user + system of the children, resource.getrusage). Prints the
-cell count and the number of time steps interFoam took. With --pairs N it also runs
+cell count and the number of time steps interFoam took (checkMesh runs after the timing,
+on the first case: cells, the box patch's faces, the mesh's volume). With --pairs N it also runs
 
     python -m mpmflow.cli run examples/spheric_test2.toml --out DIR --quiet --overwrite \
         --set grid.spacing=S --set time.end=E
 
-(the example's outputs, threads as users run it) as a whole process, alternating with
-interFoam, after one short warm-up run, and prints the medians and the ratio. Appends a
+(the example's outputs, threads as users run it; mpmflow puts the end wall on the grid at
+3.24 m where 3.22 m is not whole cells) as a whole process, after interFoam in each pair,
+after one short warm-up run (the page cache), and prints the medians and the ratio. Appends a
 record to benchmarks/results.jsonl.
 
     python benchmarks/peers/interfoam_spheric.py [--spacing 0.04] [--end 6] [--pairs N]
@@ -44,6 +52,7 @@ record to benchmarks/results.jsonl.
 """
 
 import argparse
+import json
 import math
 import os
 import re
@@ -74,6 +83,7 @@ PRESSURE = {"P1": ((0.8245, 0.471, 0.021), 0), "P2": ((0.8245, 0.471, 0.061), 0)
             "P7": ((0.7235, 0.471, 0.161), 2), "P8": ((0.6835, 0.471, 0.161), 2)}
 LEVEL = {"H1": (0.496, 0.5, 0.0), "H2": (0.992, 0.5, 0.0), "H3": (1.488, 0.5, 0.0),
          "H4": (2.638, 0.5, 0.0)}
+NUMBER = r"([-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)"
 APPS = ("blockMesh", "topoSet", "subsetMesh", "setFields", "interFoam")
 
 
@@ -114,7 +124,9 @@ def files(spacing, end, solver):
         p = [x, y, z]
         p[axis] += h[axis] / 2
         probes.append(f"({p[0]:.9g} {p[1]:.9g} {p[2]:.9g})")
-    gauges = [f"({x} {y} {z})" for x, y, z in LEVEL.values()]
+    # the level gauges: alpha along the vertical line through each, at the cell centres
+    columns = [f"({x} {y} {(k + 0.5) * h[2]:.9g})" for x, y, _ in LEVEL.values()
+               for k in range(n[2])]
     (bx0, by0, bz0), (bx1, by1, bz1) = BOX
     linear = ("p_rgh { solver PCG; preconditioner DIC; tolerance 1e-07; relTol 0.05; }"
               if solver == "pcg" else
@@ -122,7 +134,7 @@ def files(spacing, end, solver):
     pcorr = ('"pcorr.*" { solver PCG; preconditioner DIC; tolerance 1e-5; relTol 0; }'
              if solver == "pcg" else
              '"pcorr.*" { solver GAMG; smoother DIC; tolerance 1e-5; relTol 0; }')
-    walls = ("walls { type %s; } box { type %s; }")
+    walls = "walls { type %s; } box { type %s; }"
     return {
         ("system", "controlDict", "dictionary"): f"""
 application interFoam;
@@ -157,12 +169,12 @@ functions
     }}
     level
     {{
-        type interfaceHeight;
-        libs ("libfieldFunctionObjects.so");
+        type probes;
+        libs ("libsampling.so");
         writeControl runTime;
         writeInterval 0.005;
-        alpha alpha.water;
-        locations ( {' '.join(gauges)} );
+        fields (alpha.water);
+        probeLocations ( {' '.join(columns)} );
     }}
 }}
 """,
@@ -223,7 +235,7 @@ solvers
 PIMPLE
 {{
     momentumPredictor no; nOuterCorrectors 1; nCorrectors 3; nNonOrthogonalCorrectors 0;
-    pRefCell 0; pRefValue 0;
+    pRefPoint ({lx / 2} {ly / 2} {lz - h[2] / 2}); pRefValue 0;
 }}
 relaxationFactors {{ equations {{ ".*" 1; }} }}
 """,
@@ -306,17 +318,46 @@ def interfoam_facts(case, prefix):
     facts = {"cells": int(re.search(r"^\s*cells:\s+(\d+)", check, re.M).group(1)),
              "mesh_ok": "Mesh OK." in check,
              "steps": len(re.findall(r"^Time = ", log, re.M))}
-    volume = float(re.search(r"Total volume = ([-0-9.eE+]+)", check).group(1))
+    volume = float(re.search(r"Total volume = " + NUMBER, check).group(1))
     box = re.search(r"^\s*box\s+(\d+)\s+\d+", check, re.M)
     facts["box_faces"] = int(box.group(1)) if box else None
-    first = re.search(r"Phase-1 volume fraction = ([-0-9.eE+]+)", log)
+    first = re.search(r"Phase-1 volume fraction = " + NUMBER, log)
     if first:
         facts["water_volume"] = float(first.group(1)) * volume
     facts["mesh_volume"] = volume
-    clock = re.findall(r"ExecutionTime = ([0-9.eE+]+) s\s+ClockTime = ([0-9.eE+]+) s", log)
+    clock = re.findall(r"ExecutionTime = " + NUMBER + r" s\s+ClockTime = " + NUMBER + " s", log)
     if clock:
         facts["interfoam_execution_s"] = float(clock[-1][0])
     return facts
+
+
+def read_probes(path):
+    """(times, rows of values) from a probes function object's file of a scalar field."""
+    rows = [line.split() for line in path.read_text().splitlines()
+            if line.strip() and not line.lstrip().startswith("#")]
+    return [float(r[0]) for r in rows], [[float(v) for v in r[1:]] for r in rows]
+
+
+def write_probes_csv(case, spacing):
+    """case/probes.csv: time, P1-P8 (p, Pa) and H1-H4 (level, m) from the function objects'
+    output; the number of rows (0 where the output is missing)."""
+    pressure = case / "postProcessing" / "pressure" / "0" / "p"
+    alpha = case / "postProcessing" / "level" / "0" / "alpha.water"
+    if not (pressure.exists() and alpha.exists()):
+        return 0
+    nz = cells(spacing)[2]
+    dz = TANK[2] / nz
+    tp, p = read_probes(pressure)
+    ta, a = read_probes(alpha)
+    levels = {round(t, 9): [sum(r[g * nz:(g + 1) * nz]) * dz for g in range(len(LEVEL))]
+              for t, r in zip(ta, a)}
+    lines = ["time," + ",".join([*PRESSURE, *LEVEL])]
+    for t, r in zip(tp, p):
+        h = levels.get(round(t, 9))
+        if h is not None:
+            lines.append(",".join(f"{v:.8g}" for v in (t, *r, *h)))
+    (case / "probes.csv").write_text("\n".join(lines) + "\n")
+    return len(lines) - 1
 
 
 def run_mpmflow(out, spacing, end):
@@ -330,7 +371,6 @@ def run_mpmflow(out, spacing, end):
 
 def mpmflow_steps(out):
     try:
-        import json
         summary = json.loads((Path(out) / "summary.json").read_text())
     except (OSError, ValueError):
         return None
@@ -371,12 +411,14 @@ def main():
         theirs.append(run_interfoam(case, prefix))
         if facts is None:
             facts = interfoam_facts(case, prefix)
+            facts["probe_rows"] = write_probes_csv(case, args.spacing)
             water = (WATER[1][0] - WATER[0][0]) * (WATER[1][1] - WATER[0][1]) * WATER[1][2]
             print(f"interFoam: {facts['cells']} cells (checkMesh: "
                   f"{'Mesh OK' if facts['mesh_ok'] else 'FAILED, see log.checkMesh'}; "
                   f"box patch {facts['box_faces']} faces; volume {facts['mesh_volume']:.6g} "
                   f"m^3), water {facts.get('water_volume', float('nan')):.6g} m^3 "
-                  f"(column {water:.6g} m^3), {facts['steps']} time steps to {args.end} s",
+                  f"(column {water:.6g} m^3), {facts['steps']} time steps to {args.end} s; "
+                  f"probes.csv {facts['probe_rows']} rows",
                   flush=True)
         line = f"interFoam {theirs[-1][0]:.2f} s wall, {theirs[-1][1]:.2f} s CPU"
         if args.pairs:
