@@ -19,17 +19,6 @@ void coords_of(index_t i, const std::array<index_t, D>& dims, std::array<index_t
   }
 }
 
-// The colour of node i: sum_k (i_k mod 2) 2^k.
-template <int D>
-int colour_of(index_t i, const std::array<index_t, D>& dims) {
-  int c = 0;
-  for (int k = 0; k < D; ++k) {
-    c += static_cast<int>((i % dims[k]) % 2) << k;
-    i /= dims[k];
-  }
-  return c;
-}
-
 // y = A x (subtract: y = b - A x) for rows lo to hi - 1; NS slots a row (0: cols' width).
 template <int NS>
 void matvec_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
@@ -158,12 +147,13 @@ void copy(View<const double> from, View<double> to) {
 }
 
 // The contributions of fine rows r0 to r1 - 1 to P^T A P; the slot of coarse column J in
-// coarse row I from their coarse coordinates (the Numba kernel's slot table gives the same
+// coarse row I from their coarse coordinates, sum_k (J_k - I_k + 1) 3^k = NS / 2 + h(J) - h(I)
+// with h(I) = sum_k I_k 3^k (chash) (the Numba kernel's slot table gives the same
 // slots where it is used).
 template <int D>
 void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<const double, 2> vals,
                    View<const index_t, 2> pcols, View<const double, 2> pw,
-                   View<const index_t, 2> ccoord, View<index_t, 2> ccols, View<double, 2> cvals) {
+                   View<const index_t> chash, View<index_t, 2> ccols, View<double, 2> cvals) {
   constexpr int NP = 1 << D;
   constexpr int NS = stencil_size(D);
   for (index_t r = r0; r < r1; ++r) {
@@ -171,6 +161,7 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
       const index_t I = pcols(r, a);
       if (I < 0) break;  // P's entries of a row come first, then -1
       const double wa = pw(r, a);
+      const index_t base = NS / 2 - chash(I);
       for (int s = 0; s < NS; ++s) {
         const index_t j = cols(r, s);
         if (j < 0) continue;
@@ -178,11 +169,7 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
         for (int b = 0; b < NP; ++b) {
           const index_t J = pcols(j, b);
           if (J < 0) break;
-          index_t slot = 0, p3 = 1;
-          for (int k = 0; k < D; ++k) {
-            slot += (ccoord(J, k) - ccoord(I, k) + 1) * p3;
-            p3 *= 3;
-          }
+          const index_t slot = base + chash(J);
           ccols(I, slot) = J;
           cvals(I, slot) += v * pw(j, b);
         }
@@ -252,6 +239,7 @@ void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals
     f.node = node;
   }
   nlev_ = 1;
+  coordinates(level_[0]);
   while (level_[nlev_ - 1].n > coarsest) {
     coarse_level(nlev_ - 1);
     if (level_[nlev_].n == 0) break;
@@ -290,7 +278,7 @@ void Multigrid<D>::coarse_level(index_t l) {
   for (index_t i = 0; i < ncn; ++i) crow(i) = -1;
   const index_t n = f.n;
   for (index_t r = 0; r < n; ++r) {
-    coords_of<D>(f.node(r), f.dims, ix);
+    for (int k = 0; k < D; ++k) ix[k] = f.coord(r, k);
     bool even = true;
     index_t ci = 0, stride = 1;
     for (int k = 0; k < D; ++k) {
@@ -317,7 +305,7 @@ void Multigrid<D>::coarse_level(index_t l) {
   f.pcols = f.pcols_store.template sized<2>({n, NP});
   f.pw = f.pw_store.template sized<2>({n, NP});
   for (index_t r = 0; r < n; ++r) {
-    coords_of<D>(f.node(r), f.dims, ix);
+    for (int k = 0; k < D; ++k) ix[k] = f.coord(r, k);
     int m = 0;
     for (int a = 0; a < NP; ++a) {
       f.pcols(r, a) = -1;
@@ -355,10 +343,15 @@ void Multigrid<D>::coarse_level(index_t l) {
       }
     }
   }
-  View<index_t, 2> ccoord = ccoord_store_.template sized<2>({nc, D});
+  coordinates(c);
+  View<index_t> chash = ccoord_store_.sized(nc);
   for (index_t I = 0; I < nc; ++I) {
-    coords_of<D>(cnode(I), cdims, ix);
-    for (int k = 0; k < D; ++k) ccoord(I, k) = ix[k];
+    index_t h = 0, p3 = 1;
+    for (int k = 0; k < D; ++k) {
+      h += c.coord(I, k) * p3;
+      p3 *= 3;
+    }
+    chash(I) = h;
   }
 }
 
@@ -375,9 +368,9 @@ void Multigrid<D>::galerkin(index_t l) {
   }
   c.cols = ccols;
   c.vals = cvals;
-  View<const index_t, 2> ccoord = ccoord_store_.template view<2>({nc, D});
+  View<const index_t> chash = ccoord_store_.view(nc);
   if (n < PARALLEL_ROWS) {
-    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, ccoord, ccols, cvals);
+    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccols, cvals);
     return;
   }
   // strips of whole slabs (nodes of equal last coordinate), at least 2 each: fine row r adds
@@ -402,7 +395,7 @@ void Multigrid<D>::galerkin(index_t l) {
                      for (index_t t = lo; t < hi; ++t) {
                        const index_t u = 2 * t + parity;
                        galerkin_rows<D>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols, f.pw,
-                                        ccoord, ccols, cvals);
+                                        chash, ccols, cvals);
                      }
                    },
                    n);
@@ -414,11 +407,26 @@ void Multigrid<D>::colour_rows(Level& lv) {
   constexpr int NCOL = 1 << D;
   lv.rows = lv.rows_store.sized(lv.n);
   lv.cstart.fill(0);
-  for (index_t r = 0; r < lv.n; ++r) lv.cstart[colour_of<D>(lv.node(r), lv.dims) + 1] += 1;
+  auto colour = [&](index_t r) {  // sum_k (i_k mod 2) 2^k
+    int c = 0;
+    for (int k = 0; k < D; ++k) c += static_cast<int>(lv.coord(r, k) % 2) << k;
+    return c;
+  };
+  for (index_t r = 0; r < lv.n; ++r) lv.cstart[colour(r) + 1] += 1;
   for (int k = 0; k < NCOL; ++k) lv.cstart[k + 1] += lv.cstart[k];
   std::array<index_t, NCOL> fill{};
   for (int k = 0; k < NCOL; ++k) fill[k] = lv.cstart[k];
-  for (index_t r = 0; r < lv.n; ++r) lv.rows(fill[colour_of<D>(lv.node(r), lv.dims)]++) = r;
+  for (index_t r = 0; r < lv.n; ++r) lv.rows(fill[colour(r)]++) = r;
+}
+
+template <int D>
+void Multigrid<D>::coordinates(Level& lv) {
+  lv.coord = lv.coord_store.template sized<2>({lv.n, D});
+  std::array<index_t, D> ix{};
+  for (index_t r = 0; r < lv.n; ++r) {
+    coords_of<D>(lv.node(r), lv.dims, ix);
+    for (int k = 0; k < D; ++k) lv.coord(r, k) = ix[k];
+  }
 }
 
 // The dense coarsest operator and its Cholesky factor L (A = L L^T, lower, row-major), by
