@@ -90,6 +90,57 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
   }
 }
 
+// The first forward sweep from x = 0 (no fill needed): a row of colour c reads only its
+// neighbours of colours before c (updated in this sweep); the others still hold 0, and
+// subtracting v 0 leaves the sum as it was, so skipping them gives the values of a
+// sweep after x = 0. The neighbour at slot s has colour c ^ odd(s) (odd(s): the axes
+// along which the offset of slot s is odd).
+template <int NS>
+void gs_first_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
+                   View<double> x, View<const index_t> rows, index_t lo, index_t hi,
+                   const int* slots, int nslots) {
+  constexpr int centre = NS / 2;
+  const index_t* C = cols.data();
+  const double* V = vals.data();
+  double* X = x.data();
+  for (index_t k = lo; k < hi; ++k) {
+    const index_t r = rows(k);
+    const index_t* c = C + r * NS;
+    const double* v = V + r * NS;
+    double acc = b(r);
+    for (int t = 0; t < nslots; ++t) {
+      const int s = slots[t];
+      if (c[s] >= 0) acc -= v[s] * X[c[s]];
+    }
+    X[r] = acc / v[centre];
+  }
+}
+
+template <int D>
+void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
+                        View<const double> b, View<double> x, View<const index_t> rows,
+                        const std::array<index_t, (1 << D) + 1>& cstart) {
+  constexpr int NCOL = 1 << D;
+  constexpr int NS = stencil_size(D);
+  const index_t n = cols.extent(0);
+  for (int colour = 0; colour < NCOL; ++colour) {
+    int slots[NS];
+    int nslots = 0;
+    for (int s = 0, p3 = 1, odd = 0; s < NS; ++s, odd = 0, p3 = 1) {
+      for (int k = 0; k < D; ++k, p3 *= 3)
+        if ((s / p3) % 3 != 1) odd |= 1 << k;
+      if ((colour ^ odd) < colour) slots[nslots++] = s;
+    }
+    const index_t lo = cstart[colour], hi = cstart[colour + 1];
+    for_each_chunk(
+        hi - lo,
+        [&](index_t, index_t a, index_t z) {
+          gs_first_rows<NS>(cols, vals, b, x, rows, lo + a, lo + z, slots, nslots);
+        },
+        n);
+  }
+}
+
 // r_c = P^T r_f (serial: the sums in the order of the fine rows).
 template <int NP>
 void restrict_to(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> rf,
@@ -485,8 +536,11 @@ void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
   for (index_t l = 0; l + 1 < nlev_; ++l) {
     Level& lv = level_[l];
     const View<double> xv = xl(l);
-    fill(xv, 0.0);
-    for (int s = 0; s < sweeps; ++s)
+    if (sweeps > 0)
+      gauss_seidel_first<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart);
+    else
+      fill(xv, 0.0);
+    for (int s = 1; s < sweeps; ++s)
       gauss_seidel<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart, true);
     residual(lv.cols, lv.vals, xv, bl(l), lv.r);
     restrict_to<NP>(lv.pcols, lv.pw, lv.r, level_[l + 1].b);
