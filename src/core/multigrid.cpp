@@ -44,7 +44,7 @@ void apply(View<const index_t, 2> cols, View<const double, 2> vals, View<const d
   static_assert(PARALLEL_ROWS == SERIAL_BELOW, "for_each_chunk's cut-off is the levels'");
   const index_t n = cols.extent(0);
   const index_t ns = cols.extent(1);
-  for_each_chunk(n, [&](index_t, index_t lo, index_t hi) {
+  for_each_range(n, [&](index_t, index_t lo, index_t hi) {
     if (ns == 9)
       matvec_rows<9>(cols, vals, x, b, y, lo, hi, subtract);
     else if (ns == 27)
@@ -81,7 +81,7 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
   for (int k = 0; k < NCOL; ++k) {
     const int colour = forward ? k : NCOL - 1 - k;
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
-    for_each_chunk(
+    for_each_range(
         hi - lo,
         [&](index_t, index_t a, index_t z) {
           gs_rows<stencil_size(D)>(cols, vals, b, x, rows, lo + a, lo + z);
@@ -132,7 +132,7 @@ void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
       if ((colour ^ odd) < colour) slots[nslots++] = s;
     }
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
-    for_each_chunk(
+    for_each_range(
         hi - lo,
         [&](index_t, index_t a, index_t z) {
           gs_first_rows<NS>(cols, vals, b, x, rows, lo + a, lo + z, slots, nslots);
@@ -158,7 +158,7 @@ void restrict_to(View<const index_t, 2> pcols, View<const double, 2> pw, View<co
 template <int NP>
 void prolong_add(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> ec,
                  View<double> xf) {
-  for_each_chunk(pcols.extent(0), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(pcols.extent(0), [&](index_t, index_t lo, index_t hi) {
     for (index_t r = lo; r < hi; ++r) {
       double acc = 0.0;
       for (int a = 0; a < NP; ++a) {
@@ -173,7 +173,7 @@ void prolong_add(View<const index_t, 2> pcols, View<const double, 2> pw, View<co
 // CG updates: x += alpha p, r -= alpha q (step), or p = z + beta p.
 void cg_update(View<double> x, View<double> r, View<double> p, View<const double> q,
                View<const double> z, double alpha, double beta, bool step) {
-  for_each_chunk(r.size(), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(r.size(), [&](index_t, index_t lo, index_t hi) {
     if (step) {
       for (index_t i = lo; i < hi; ++i) {
         x(i) += alpha * p(i);
@@ -186,13 +186,13 @@ void cg_update(View<double> x, View<double> r, View<double> p, View<const double
 }
 
 void fill(View<double> v, double value) {
-  for_each_chunk(v.size(), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(v.size(), [&](index_t, index_t lo, index_t hi) {
     for (index_t i = lo; i < hi; ++i) v(i) = value;
   });
 }
 
 void copy(View<const double> from, View<double> to) {
-  for_each_chunk(to.size(), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(to.size(), [&](index_t, index_t lo, index_t hi) {
     for (index_t i = lo; i < hi; ++i) to(i) = from(i);
   });
 }

@@ -66,6 +66,19 @@ void for_each_chunk(index_t n, F&& body, index_t work = -1) {
   for (index_t t = 0; t < nchunks; ++t) body(t, t * n / nchunks, (t + 1) * n / nchunks);
 }
 
+// The same for bodies whose result does not depend on how [0, n) is cut (no per-chunk
+// partials): on the calling thread (work < SERIAL_BELOW) one call body(0, 0, n) instead of
+// one per chunk (the small levels of a multigrid cycle would pay a call per row or two).
+template <class F>
+void for_each_range(index_t n, F&& body, index_t work = -1) {
+  if (work < 0) work = n;
+  if (work < SERIAL_BELOW) {
+    body(index_t(0), index_t(0), n);
+    return;
+  }
+  for_each_chunk(n, body, work);
+}
+
 // The sum over the chunks of [0, n) of body(lo, hi) (each chunk's partial, then the
 // partials in chunk order): the same bits on any number of threads.
 template <class T, class F>
