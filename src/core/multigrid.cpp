@@ -19,17 +19,6 @@ void coords_of(index_t i, const std::array<index_t, D>& dims, std::array<index_t
   }
 }
 
-// The colour of node i: sum_k (i_k mod 2) 2^k.
-template <int D>
-int colour_of(index_t i, const std::array<index_t, D>& dims) {
-  int c = 0;
-  for (int k = 0; k < D; ++k) {
-    c += static_cast<int>((i % dims[k]) % 2) << k;
-    i /= dims[k];
-  }
-  return c;
-}
-
 // y = A x (subtract: y = b - A x) for rows lo to hi - 1; NS slots a row (0: cols' width).
 template <int NS>
 void matvec_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
@@ -55,7 +44,7 @@ void apply(View<const index_t, 2> cols, View<const double, 2> vals, View<const d
   static_assert(PARALLEL_ROWS == SERIAL_BELOW, "for_each_chunk's cut-off is the levels'");
   const index_t n = cols.extent(0);
   const index_t ns = cols.extent(1);
-  for_each_chunk(n, [&](index_t, index_t lo, index_t hi) {
+  for_each_range(n, [&](index_t, index_t lo, index_t hi) {
     if (ns == 9)
       matvec_rows<9>(cols, vals, x, b, y, lo, hi, subtract);
     else if (ns == 27)
@@ -92,10 +81,61 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
   for (int k = 0; k < NCOL; ++k) {
     const int colour = forward ? k : NCOL - 1 - k;
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
-    for_each_chunk(
+    for_each_range(
         hi - lo,
         [&](index_t, index_t a, index_t z) {
           gs_rows<stencil_size(D)>(cols, vals, b, x, rows, lo + a, lo + z);
+        },
+        n);
+  }
+}
+
+// The first forward sweep from x = 0 (no fill needed): a row of colour c reads only its
+// neighbours of colours before c (updated in this sweep); the others still hold 0, and
+// subtracting v 0 leaves the sum as it was, so skipping them gives the values of a
+// sweep after x = 0. The neighbour at slot s has colour c ^ odd(s) (odd(s): the axes
+// along which the offset of slot s is odd).
+template <int NS>
+void gs_first_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
+                   View<double> x, View<const index_t> rows, index_t lo, index_t hi,
+                   const int* slots, int nslots) {
+  constexpr int centre = NS / 2;
+  const index_t* C = cols.data();
+  const double* V = vals.data();
+  double* X = x.data();
+  for (index_t k = lo; k < hi; ++k) {
+    const index_t r = rows(k);
+    const index_t* c = C + r * NS;
+    const double* v = V + r * NS;
+    double acc = b(r);
+    for (int t = 0; t < nslots; ++t) {
+      const int s = slots[t];
+      if (c[s] >= 0) acc -= v[s] * X[c[s]];
+    }
+    X[r] = acc / v[centre];
+  }
+}
+
+template <int D>
+void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
+                        View<const double> b, View<double> x, View<const index_t> rows,
+                        const std::array<index_t, (1 << D) + 1>& cstart) {
+  constexpr int NCOL = 1 << D;
+  constexpr int NS = stencil_size(D);
+  const index_t n = cols.extent(0);
+  for (int colour = 0; colour < NCOL; ++colour) {
+    int slots[NS];
+    int nslots = 0;
+    for (int s = 0, p3 = 1, odd = 0; s < NS; ++s, odd = 0, p3 = 1) {
+      for (int k = 0; k < D; ++k, p3 *= 3)
+        if ((s / p3) % 3 != 1) odd |= 1 << k;
+      if ((colour ^ odd) < colour) slots[nslots++] = s;
+    }
+    const index_t lo = cstart[colour], hi = cstart[colour + 1];
+    for_each_range(
+        hi - lo,
+        [&](index_t, index_t a, index_t z) {
+          gs_first_rows<NS>(cols, vals, b, x, rows, lo + a, lo + z, slots, nslots);
         },
         n);
   }
@@ -118,7 +158,7 @@ void restrict_to(View<const index_t, 2> pcols, View<const double, 2> pw, View<co
 template <int NP>
 void prolong_add(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> ec,
                  View<double> xf) {
-  for_each_chunk(pcols.extent(0), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(pcols.extent(0), [&](index_t, index_t lo, index_t hi) {
     for (index_t r = lo; r < hi; ++r) {
       double acc = 0.0;
       for (int a = 0; a < NP; ++a) {
@@ -133,7 +173,7 @@ void prolong_add(View<const index_t, 2> pcols, View<const double, 2> pw, View<co
 // CG updates: x += alpha p, r -= alpha q (step), or p = z + beta p.
 void cg_update(View<double> x, View<double> r, View<double> p, View<const double> q,
                View<const double> z, double alpha, double beta, bool step) {
-  for_each_chunk(r.size(), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(r.size(), [&](index_t, index_t lo, index_t hi) {
     if (step) {
       for (index_t i = lo; i < hi; ++i) {
         x(i) += alpha * p(i);
@@ -146,24 +186,25 @@ void cg_update(View<double> x, View<double> r, View<double> p, View<const double
 }
 
 void fill(View<double> v, double value) {
-  for_each_chunk(v.size(), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(v.size(), [&](index_t, index_t lo, index_t hi) {
     for (index_t i = lo; i < hi; ++i) v(i) = value;
   });
 }
 
 void copy(View<const double> from, View<double> to) {
-  for_each_chunk(to.size(), [&](index_t, index_t lo, index_t hi) {
+  for_each_range(to.size(), [&](index_t, index_t lo, index_t hi) {
     for (index_t i = lo; i < hi; ++i) to(i) = from(i);
   });
 }
 
 // The contributions of fine rows r0 to r1 - 1 to P^T A P; the slot of coarse column J in
-// coarse row I from their coarse coordinates (the Numba kernel's slot table gives the same
+// coarse row I from their coarse coordinates, sum_k (J_k - I_k + 1) 3^k = NS / 2 + h(J) - h(I)
+// with h(I) = sum_k I_k 3^k (chash) (the Numba kernel's slot table gives the same
 // slots where it is used).
 template <int D>
 void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<const double, 2> vals,
                    View<const index_t, 2> pcols, View<const double, 2> pw,
-                   View<const index_t, 2> ccoord, View<index_t, 2> ccols, View<double, 2> cvals) {
+                   View<const index_t> chash, View<index_t, 2> ccols, View<double, 2> cvals) {
   constexpr int NP = 1 << D;
   constexpr int NS = stencil_size(D);
   for (index_t r = r0; r < r1; ++r) {
@@ -171,6 +212,7 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
       const index_t I = pcols(r, a);
       if (I < 0) break;  // P's entries of a row come first, then -1
       const double wa = pw(r, a);
+      const index_t base = NS / 2 - chash(I);
       for (int s = 0; s < NS; ++s) {
         const index_t j = cols(r, s);
         if (j < 0) continue;
@@ -178,11 +220,7 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
         for (int b = 0; b < NP; ++b) {
           const index_t J = pcols(j, b);
           if (J < 0) break;
-          index_t slot = 0, p3 = 1;
-          for (int k = 0; k < D; ++k) {
-            slot += (ccoord(J, k) - ccoord(I, k) + 1) * p3;
-            p3 *= 3;
-          }
+          const index_t slot = base + chash(J);
           ccols(I, slot) = J;
           cvals(I, slot) += v * pw(j, b);
         }
@@ -252,6 +290,7 @@ void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals
     f.node = node;
   }
   nlev_ = 1;
+  coordinates(level_[0]);
   while (level_[nlev_ - 1].n > coarsest) {
     coarse_level(nlev_ - 1);
     if (level_[nlev_].n == 0) break;
@@ -290,7 +329,7 @@ void Multigrid<D>::coarse_level(index_t l) {
   for (index_t i = 0; i < ncn; ++i) crow(i) = -1;
   const index_t n = f.n;
   for (index_t r = 0; r < n; ++r) {
-    coords_of<D>(f.node(r), f.dims, ix);
+    for (int k = 0; k < D; ++k) ix[k] = f.coord(r, k);
     bool even = true;
     index_t ci = 0, stride = 1;
     for (int k = 0; k < D; ++k) {
@@ -317,7 +356,7 @@ void Multigrid<D>::coarse_level(index_t l) {
   f.pcols = f.pcols_store.template sized<2>({n, NP});
   f.pw = f.pw_store.template sized<2>({n, NP});
   for (index_t r = 0; r < n; ++r) {
-    coords_of<D>(f.node(r), f.dims, ix);
+    for (int k = 0; k < D; ++k) ix[k] = f.coord(r, k);
     int m = 0;
     for (int a = 0; a < NP; ++a) {
       f.pcols(r, a) = -1;
@@ -355,10 +394,15 @@ void Multigrid<D>::coarse_level(index_t l) {
       }
     }
   }
-  View<index_t, 2> ccoord = ccoord_store_.template sized<2>({nc, D});
+  coordinates(c);
+  View<index_t> chash = ccoord_store_.sized(nc);
   for (index_t I = 0; I < nc; ++I) {
-    coords_of<D>(cnode(I), cdims, ix);
-    for (int k = 0; k < D; ++k) ccoord(I, k) = ix[k];
+    index_t h = 0, p3 = 1;
+    for (int k = 0; k < D; ++k) {
+      h += c.coord(I, k) * p3;
+      p3 *= 3;
+    }
+    chash(I) = h;
   }
 }
 
@@ -375,9 +419,9 @@ void Multigrid<D>::galerkin(index_t l) {
   }
   c.cols = ccols;
   c.vals = cvals;
-  View<const index_t, 2> ccoord = ccoord_store_.template view<2>({nc, D});
+  View<const index_t> chash = ccoord_store_.view(nc);
   if (n < PARALLEL_ROWS) {
-    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, ccoord, ccols, cvals);
+    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccols, cvals);
     return;
   }
   // strips of whole slabs (nodes of equal last coordinate), at least 2 each: fine row r adds
@@ -402,7 +446,7 @@ void Multigrid<D>::galerkin(index_t l) {
                      for (index_t t = lo; t < hi; ++t) {
                        const index_t u = 2 * t + parity;
                        galerkin_rows<D>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols, f.pw,
-                                        ccoord, ccols, cvals);
+                                        chash, ccols, cvals);
                      }
                    },
                    n);
@@ -414,11 +458,26 @@ void Multigrid<D>::colour_rows(Level& lv) {
   constexpr int NCOL = 1 << D;
   lv.rows = lv.rows_store.sized(lv.n);
   lv.cstart.fill(0);
-  for (index_t r = 0; r < lv.n; ++r) lv.cstart[colour_of<D>(lv.node(r), lv.dims) + 1] += 1;
+  auto colour = [&](index_t r) {  // sum_k (i_k mod 2) 2^k
+    int c = 0;
+    for (int k = 0; k < D; ++k) c += static_cast<int>(lv.coord(r, k) % 2) << k;
+    return c;
+  };
+  for (index_t r = 0; r < lv.n; ++r) lv.cstart[colour(r) + 1] += 1;
   for (int k = 0; k < NCOL; ++k) lv.cstart[k + 1] += lv.cstart[k];
   std::array<index_t, NCOL> fill{};
   for (int k = 0; k < NCOL; ++k) fill[k] = lv.cstart[k];
-  for (index_t r = 0; r < lv.n; ++r) lv.rows(fill[colour_of<D>(lv.node(r), lv.dims)]++) = r;
+  for (index_t r = 0; r < lv.n; ++r) lv.rows(fill[colour(r)]++) = r;
+}
+
+template <int D>
+void Multigrid<D>::coordinates(Level& lv) {
+  lv.coord = lv.coord_store.template sized<2>({lv.n, D});
+  std::array<index_t, D> ix{};
+  for (index_t r = 0; r < lv.n; ++r) {
+    coords_of<D>(lv.node(r), lv.dims, ix);
+    for (int k = 0; k < D; ++k) lv.coord(r, k) = ix[k];
+  }
 }
 
 // The dense coarsest operator and its Cholesky factor L (A = L L^T, lower, row-major), by
@@ -477,8 +536,11 @@ void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
   for (index_t l = 0; l + 1 < nlev_; ++l) {
     Level& lv = level_[l];
     const View<double> xv = xl(l);
-    fill(xv, 0.0);
-    for (int s = 0; s < sweeps; ++s)
+    if (sweeps > 0)
+      gauss_seidel_first<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart);
+    else
+      fill(xv, 0.0);
+    for (int s = 1; s < sweeps; ++s)
       gauss_seidel<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart, true);
     residual(lv.cols, lv.vals, xv, bl(l), lv.r);
     restrict_to<NP>(lv.pcols, lv.pw, lv.r, level_[l + 1].b);

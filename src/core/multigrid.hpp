@@ -77,21 +77,23 @@ class Multigrid {
     View<const double, 2> vals;
     View<const index_t> node;
     View<index_t> rows;
+    View<index_t, 2> coord;  // n x D: the grid coordinates of node(r)
     View<index_t, 2> pcols;  // n x NP, columns on the next level (-1: none; entries first)
     View<double, 2> pw;      // n x NP
     View<double> b, x, r;    // right-hand side, solution, residual (level 0: b, x given)
-    Buffer<index_t> cols_store, node_store, rows_store, pcols_store;
+    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store;
     Buffer<double> vals_store, pw_store, b_store, x_store, r_store;
   };
   void coarse_level(index_t l);  // level l + 1's unknowns and P of level l
   void galerkin(index_t l);      // level l + 1's operator P^T A P
+  void coordinates(Level& lv);   // lv.coord from lv.node (the only divisions of a setup)
   void colour_rows(Level& lv);
   void factor();  // dense Cholesky factor of the coarsest level
   void cholesky_solve(View<const double> b, View<double> x);
 
   std::vector<Level> level_;  // grown, never shrunk; the first nlev_ are in use
   index_t nlev_ = 0;
-  Buffer<index_t> crow_store_, ccoord_store_, row_cum_store_;  // setup scratch
+  Buffer<index_t> crow_store_, ccoord_store_, row_cum_store_;  // setup scratch (ccoord: h(I))
   Buffer<double> factor_store_;                                // coarsest: L, n x n
   Buffer<double> r_store_, p_store_, q_store_, z_store_;       // CG vectors
 };

@@ -43,7 +43,11 @@ inline void set_threads(int n) {
 // body(i) for i in [0, n).
 template <class F>
 void parallel_for(index_t n, F&& body) {
-#pragma omp parallel for schedule(static) if (n >= SERIAL_BELOW)
+  if (n < SERIAL_BELOW) {
+    for (index_t i = 0; i < n; ++i) body(i);
+    return;
+  }
+#pragma omp parallel for schedule(static)
   for (index_t i = 0; i < n; ++i) body(i);
 }
 
@@ -54,8 +58,25 @@ template <class F>
 void for_each_chunk(index_t n, F&& body, index_t work = -1) {
   const index_t nchunks = std::min(CHUNKS, std::max<index_t>(n, 1));
   if (work < 0) work = n;
-#pragma omp parallel for schedule(static) if (work >= SERIAL_BELOW)
+  if (work < SERIAL_BELOW) {  // no parallel region at all: even an if(false) one costs ~1 us
+    for (index_t t = 0; t < nchunks; ++t) body(t, t * n / nchunks, (t + 1) * n / nchunks);
+    return;
+  }
+#pragma omp parallel for schedule(static)
   for (index_t t = 0; t < nchunks; ++t) body(t, t * n / nchunks, (t + 1) * n / nchunks);
+}
+
+// The same for bodies whose result does not depend on how [0, n) is cut (no per-chunk
+// partials): on the calling thread (work < SERIAL_BELOW) one call body(0, 0, n) instead of
+// one per chunk (the small levels of a multigrid cycle would pay a call per row or two).
+template <class F>
+void for_each_range(index_t n, F&& body, index_t work = -1) {
+  if (work < 0) work = n;
+  if (work < SERIAL_BELOW) {
+    body(index_t(0), index_t(0), n);
+    return;
+  }
+  for_each_chunk(n, body, work);
 }
 
 // The sum over the chunks of [0, n) of body(lo, hi) (each chunk's partial, then the
@@ -64,8 +85,12 @@ template <class T, class F>
 T reduce_chunks(index_t n, F&& body) {
   const index_t nchunks = std::min(CHUNKS, std::max<index_t>(n, 1));
   T part[CHUNKS];
-#pragma omp parallel for schedule(static) if (n >= SERIAL_BELOW)
-  for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  if (n < SERIAL_BELOW) {
+    for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  } else {
+#pragma omp parallel for schedule(static)
+    for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  }
   T total = part[0];
   for (index_t t = 1; t < nchunks; ++t) total += part[t];
   return total;
@@ -77,8 +102,12 @@ template <class T, class F, class C>
 T reduce_chunks(index_t n, F&& body, C&& combine) {
   const index_t nchunks = std::min(CHUNKS, std::max<index_t>(n, 1));
   T part[CHUNKS];
-#pragma omp parallel for schedule(static) if (n >= SERIAL_BELOW)
-  for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  if (n < SERIAL_BELOW) {
+    for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  } else {
+#pragma omp parallel for schedule(static)
+    for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
+  }
   T total = part[0];
   for (index_t t = 1; t < nchunks; ++t) total = combine(total, part[t]);
   return total;
