@@ -17,6 +17,13 @@ void cell_index(const Grid<D>& g, View<const double, 2> x, View<index_t> cell);
 void counting_sort(View<const index_t> cell, index_t ncells, View<index_t> start,
                    View<index_t> order);
 
+// counting_sort and cell_volume_fraction in one: the volumes are summed into theta in the
+// counting pass (particle order within each cell, from 0: the same sums), so the particles
+// are read in their own order only.
+void sort_with_fraction(View<const index_t> cell, index_t ncells, View<const double> volume,
+                        double cell_volume, View<const double> open_, View<index_t> start,
+                        View<index_t> order, View<double> theta);
+
 // theta_e = sum of the particle volumes in cell e / cell volume, over the fluid part of a
 // cell an obstacle cuts (open_: the fluid fraction).
 void cell_volume_fraction(View<const index_t> order, View<const index_t> start,

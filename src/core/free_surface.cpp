@@ -10,10 +10,12 @@ namespace mpmflow {
 template <int D>
 void nodal_fraction(const Grid<D>& g, View<const double> theta, View<const double> open_,
                     View<double> node_f) {
+  const auto offset = cell_offsets<D>(g);
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
     double fsum = 0.0, ncell = 0.0;
+    const index_t first = interior_first_cell<D>(g, ix);
     for (int b = 0; b < (1 << D); ++b) {
-      const index_t c = cell_of_node<D>(g, ix, b);
+      const index_t c = first >= 0 ? first + offset[b] : cell_of_node<D>(g, ix, b);
       if (c >= 0 && open_(c) > 0.0) {
         fsum += open_(c) * std::min(theta(c), 1.0);
         ncell += open_(c);
@@ -42,11 +44,13 @@ template <int D>
 index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
                        View<const index_t> static_slot, View<const double> node_f, bool subcell,
                        View<index_t> node_row) {
+  const auto offset = cell_offsets<D>(g);
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
     bool unknown = !(subcell && node_f(i) <= 0.5);
     bool fluid = false;  // some cell of the node lies outside every solid
+    const index_t first = interior_first_cell<D>(g, ix);
     for (int b = 0; b < (1 << D); ++b) {
-      const index_t c = cell_of_node<D>(g, ix, b);
+      const index_t c = first >= 0 ? first + offset[b] : cell_of_node<D>(g, ix, b);
       if (c >= 0 && static_slot(c) >= 0) {
         fluid = true;
         if (cell_slot(c) < 0) unknown = false;

@@ -26,6 +26,27 @@ inline index_t cell_of_node(const Grid<D>& g, const std::array<index_t, D>& ix, 
   return c;
 }
 
+// The flat offset of a node's cell b from its cell 0 (the one below it along every axis).
+template <int D>
+inline std::array<index_t, (1 << D)> cell_offsets(const Grid<D>& g) {
+  std::array<index_t, (1 << D)> off{};
+  for (int b = 0; b < (1 << D); ++b)
+    for (int k = 0; k < D; ++k) off[b] += ((b >> k) & 1) * g.cs[k];
+  return off;
+}
+
+// The node's cell 0 when all 2^D cells of the node lie in the grid (then cell b is this
+// plus cell_offsets[b], as cell_of_node gives it), else -1.
+template <int D>
+inline index_t interior_first_cell(const Grid<D>& g, const std::array<index_t, D>& ix) {
+  index_t c = 0;
+  for (int k = 0; k < D; ++k) {
+    if (ix[k] < 1 || ix[k] >= g.cells[k]) return -1;
+    c += (ix[k] - 1) * g.cs[k];
+  }
+  return c;
+}
+
 // Nodal volume fraction node_f (nnodes, dimensionless): the mean of the node's in-domain
 // cells' theta, each clipped to 1, weighted by the cells' fluid fraction open_ (a cell
 // inside a solid does not count); 0 for a node with no such cell.

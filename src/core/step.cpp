@@ -117,8 +117,7 @@ void State<D>::bin_particles(const Particles<D>& P) {
   auto start = start_.view(nc + 1);
   auto theta = theta_.view(nc);
   cell_index<D>(grid_, P.x, cell);
-  counting_sort(cell, nc, start, order);
-  cell_volume_fraction(order, start, P.volume, cell_volume_, T_.open, theta);
+  sort_with_fraction(cell, nc, P.volume, cell_volume_, T_.open, start, order, theta);
   if (obstacles_) sliver_fractions<D>(grid_, T_.open, theta);
 }
 

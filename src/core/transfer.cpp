@@ -39,30 +39,133 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
 
 namespace {
 
-// Particle-to-grid of the particles of cell slabs r0 to r1 - 1, cell by cell.
+// scatter_cell_volume for the particles of one cell c (coordinates cx), with the 3^D cell
+// centres around c held in acell (stencil slots; beyond the grid: unused): a particle of
+// cell c reaches only these (its lower centre along each axis is c - 1 or c, clamped). The
+// same additions in the same order as scatter_cell_volume, particle after particle.
+template <int D>
+inline void load_cell_volume(const Grid<D>& g, index_t c, std::array<index_t, D>& cx,
+                             std::array<double, Grid<D>::NS>& acell, View<const double> cell_vol) {
+  g.cell_coords(c, cx.data());
+  for (int b = 0; b < Grid<D>::NS; ++b) {
+    index_t j = c;
+    bool inside = true;
+    int rem = b;
+    for (int k = 0; k < D; ++k) {
+      const index_t jk = cx[k] + rem % 3 - 1;
+      rem /= 3;
+      inside = inside && jk >= 0 && jk < g.cells[k];
+      j += (jk - cx[k]) * g.cs[k];
+    }
+    acell[b] = inside ? cell_vol[j] : 0.0;
+  }
+}
+
+template <int D>
+inline void store_cell_volume(const Grid<D>& g, index_t c, const std::array<index_t, D>& cx,
+                              const std::array<double, Grid<D>::NS>& acell, View<double> cell_vol) {
+  for (int b = 0; b < Grid<D>::NS; ++b) {
+    index_t j = c;
+    bool inside = true;
+    int rem = b;
+    for (int k = 0; k < D; ++k) {
+      const index_t jk = cx[k] + rem % 3 - 1;
+      rem /= 3;
+      inside = inside && jk >= 0 && jk < g.cells[k];
+      j += (jk - cx[k]) * g.cs[k];
+    }
+    if (inside) cell_vol[j] = acell[b];
+  }
+}
+
+template <int D>
+inline void add_cell_volume(const Grid<D>& g, const double* x, double volume,
+                            const std::array<index_t, D>& cx,
+                            std::array<double, Grid<D>::NS>& acell) {
+  std::array<double, D> frac;
+  std::array<index_t, D> first;
+  for (int k = 0; k < D; ++k) {
+    double s = x[k] * g.inv_h;
+    if (!(s >= 0.0))
+      s = 0.0;
+    else if (s > g.cells[k])
+      s = static_cast<double>(g.cells[k]);
+    s -= 0.5;
+    const index_t i0 = static_cast<index_t>(s + 1.0) - 1;  // floor: s >= -1/2
+    frac[k] = s - i0;
+    first[k] = i0;
+  }
+  for (int a = 0; a < (1 << D); ++a) {
+    int b = 0, p3 = 1;
+    double w = volume;
+    for (int k = 0; k < D; ++k) {
+      const int up = (a >> k) & 1;
+      index_t i = first[k] + up;
+      w *= up ? frac[k] : 1.0 - frac[k];
+      if (i < 0)
+        i = 0;
+      else if (i > g.cells[k] - 1)
+        i = g.cells[k] - 1;
+      b += static_cast<int>(i - cx[k] + 1) * p3;
+      p3 *= 3;
+    }
+    acell[b] += w;
+  }
+}
+
+// Particle-to-grid of the particles of cell slabs r0 to r1 - 1, cell by cell. The particles
+// of one cell share their 2^D nodes: the nodes' sums are held in registers while the cell's
+// particles are added (from the nodes' values, in particle order, so the same additions in
+// the same order as one node update per particle), then stored once.
 template <int D>
 void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 2> x,
                    View<const double, 2> v, View<const double> mass, View<const double> volume,
                    View<const index_t> order, View<const index_t> start, View<double> node_mass,
                    View<double, 2> node_mom, View<double> node_vol, View<double> cell_vol) {
   constexpr int NC = Grid<D>::NC;
+  constexpr int NS = Grid<D>::NS;
   std::array<double, NC> w;
   const index_t slab = g.cs[D - 1];
   const bool cells_too = cell_vol.size() > 0;
-  for (index_t s = start(r0 * slab); s < start(r1 * slab); ++s) {
-    const index_t p = order(s);
-    const index_t base = g.weights_at(&x(p, 0), w.data());
-    const double m = mass(p);
-    std::array<double, D> vp;
-    for (int k = 0; k < D; ++k) vp[k] = v(p, k);
+  std::array<index_t, D> cx;
+  std::array<double, NS> acell;  // the cell centres around cell c: stencil slots
+  for (index_t c = r0 * slab; c < r1 * slab; ++c) {
+    const index_t s0 = start(c), s1 = start(c + 1);
+    if (s0 == s1) continue;
+    // every particle of cell c has the cell's first node as its base (cell_index and
+    // weights_at clamp alike)
+    const index_t base = g.cell_first_node(c);
+    if (cells_too) load_cell_volume<D>(g, c, cx, acell, cell_vol);
+    std::array<double, NC> am, av;
+    std::array<std::array<double, D>, NC> amom;
     for (int a = 0; a < NC; ++a) {
       const index_t i = base + g.corner[a];
-      const double wm = w[a] * m;
-      node_mass[i] += wm;
-      node_vol[i] += w[a] * volume(p);
-      for (int k = 0; k < D; ++k) node_mom(i, k) += wm * vp[k];
+      am[a] = node_mass[i];
+      av[a] = node_vol[i];
+      for (int k = 0; k < D; ++k) amom[a][k] = node_mom(i, k);
     }
-    if (cells_too) scatter_cell_volume<D>(g, x, p, volume(p), cell_vol);
+    for (index_t s = s0; s < s1; ++s) {
+      const index_t p = order(s);
+      g.weights_at(&x(p, 0), w.data());
+      const double m = mass(p);
+      const double vol = volume(p);
+      std::array<double, D> vp;
+      for (int k = 0; k < D; ++k) vp[k] = v(p, k);
+      for (int a = 0; a < NC; ++a) {
+        const double wm = w[a] * m;
+        am[a] += wm;
+        av[a] += w[a] * vol;
+        for (int k = 0; k < D; ++k) amom[a][k] += wm * vp[k];
+      }
+      if (cells_too) add_cell_volume<D>(g, &x(p, 0), vol, cx, acell);
+    }
+    if (cells_too) store_cell_volume<D>(g, c, cx, acell, cell_vol);
+    for (int a = 0; a < NC; ++a) {
+      const index_t i = base + g.corner[a];
+      node_mass[i] = am[a];
+      node_vol[i] = av[a];
+      for (int k = 0; k < D; ++k) node_mom(i, k) = amom[a][k];
+    }
   }
 }
 

@@ -131,24 +131,37 @@ void face_displacements(const Grid<D>& g, View<const index_t> cell_row,
                         double dmax, const std::array<View<double>, D>& faces) {
   for (int k = 0; k < D; ++k) {
     const View<double> f = faces[k];
-    parallel_for(f.size(), [&](index_t idx) {
-      // the face's index along k, and the cell at index 0 along k with its other coordinates
-      index_t face = idx, c = 0, ik = 0;
-      for (int j = 0; j < D; ++j) {
-        const index_t n = j == k ? g.cells[j] + 1 : g.cells[j];
-        const index_t ij = face % n;
-        face /= n;
-        if (j == k)
-          ik = ij;
-        else
-          c += ij * g.cs[j];
-      }
-      const index_t b = c + ik * g.cs[k];
-      if (ik == 0 || ik == g.cells[k] || static_slot(b) < 0 || static_slot(b - g.cs[k]) < 0)
-        f[idx] = 0.0;
-      else
-        f[idx] = face_value(cell_row, q, b - g.cs[k], b, scale, dmax);
-    });
+    // faces normal to k: cells[j] + (j == k) along each axis j, axis 0 fastest; slabs along
+    // the last axis in chunks, the coordinates stepped face by face (no division)
+    std::array<index_t, D> n;
+    for (int j = 0; j < D; ++j) n[j] = g.cells[j] + (j == k ? 1 : 0);
+    index_t per = 1;
+    for (int j = 0; j < D - 1; ++j) per *= n[j];
+    for_each_chunk(
+        n[D - 1],
+        [&](index_t, index_t lo, index_t hi) {
+          std::array<index_t, D> ix{};
+          ix[D - 1] = lo;
+          for (index_t idx = lo * per; idx < hi * per; ++idx) {
+            // b: the cell above the face along k (ix[k] < cells[k]), a = b - cs[k] below it
+            const index_t ik = ix[k];
+            if (ik == 0 || ik == g.cells[k]) {
+              f[idx] = 0.0;
+            } else {
+              index_t b = 0;
+              for (int j = 0; j < D; ++j) b += ix[j] * g.cs[j];
+              if (static_slot(b) < 0 || static_slot(b - g.cs[k]) < 0)
+                f[idx] = 0.0;
+              else
+                f[idx] = face_value(cell_row, q, b - g.cs[k], b, scale, dmax);
+            }
+            for (int j = 0; j < D; ++j) {
+              if (++ix[j] < n[j] || j == D - 1) break;
+              ix[j] = 0;
+            }
+          }
+        },
+        f.size());
   }
 }
 
