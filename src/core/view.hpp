@@ -84,16 +84,28 @@ class View {
 // Storage the core owns: sized to a capacity outside the step and grown (never shrunk)
 // when a run needs more; kernels see it only through views. A device backend replaces
 // the host array by device memory behind the same interface.
+//
+// New storage reads as zeros. It comes from calloc, whose large blocks are pages the system
+// maps on first write: a buffer sized to a bound (the volume correction's rows for every
+// cell of the grid) costs memory only for the part a run writes, as NumPy's empty arrays
+// did before the core.
 template <class T>
 class Buffer {
+  static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_destructible_v<T>,
+                "a Buffer holds plain numbers");
+  struct Free {
+    void operator()(T* p) const { std::free(p); }
+  };
+
  public:
   // Make room for n elements, keeping the first capacity() ones; returns true if the
   // storage moved (views taken before are then stale).
   bool reserve(index_t n) {
     if (n <= capacity_) return false;
-    auto grown = std::make_unique<T[]>(static_cast<std::size_t>(n));
-    std::copy(data_.get(), data_.get() + capacity_, grown.get());
-    data_ = std::move(grown);
+    T* grown = static_cast<T*>(std::calloc(static_cast<std::size_t>(n), sizeof(T)));
+    if (grown == nullptr) throw std::bad_alloc();
+    std::copy(data_.get(), data_.get() + capacity_, grown);
+    data_.reset(grown);
     capacity_ = n;
     return true;
   }
@@ -122,7 +134,7 @@ class Buffer {
   }
 
  private:
-  std::unique_ptr<T[]> data_;
+  std::unique_ptr<T, Free> data_;
   index_t capacity_ = 0;
 };
 

@@ -30,9 +30,9 @@ from .grid import Grid
 MB = 2**20
 # measured (benchmarks/memory.py): see the module docstring
 PROGRAM = 70 * MB  # Python, NumPy, SciPy and the compiled core
-PER_PARTICLE = 100  # B: x, v (2 each), pressure, mass, volume, the cell index and order
-PER_NODE = 230  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
-PER_UNKNOWN = 700  # B: matrix (9 entries), multigrid levels, CG vectors
+PER_PARTICLE = 84  # B: x, v (2 each), pressure, mass, volume, the cell index and order
+PER_NODE = 195  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
+PER_UNKNOWN = 590  # B: matrix (9 entries), multigrid levels, CG vectors
 SPREAD = 1.25  # unknowns over the run / unknowns at the start (the material spreads)
 PER_ROW = 8  # B per value of a row kept in memory (time series and probes)
 SNAPSHOT = 185  # B per particle while a snapshot is written (meshio's copies)
