@@ -8,9 +8,16 @@ nothing compiles at run time.
 
 import numpy as np
 
-from . import _core
+try:
+    from . import _core
+except ImportError as err:  # a source tree without the install's build
+    raise ImportError(
+        f"mpmflow's compiled core (mpmflow._core) could not be loaded ({err}). It is built "
+        "when the package is installed: run `make setup`, or `pip install -e .` in the "
+        "repository (needs a C++17 compiler with OpenMP and CMake >= 3.18).") from err
 
 CHUNKS = _core.CHUNKS
+POOL = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
 
 
 def max_threads():
@@ -186,7 +193,7 @@ def strips(row_cum, nstrips, min_rows, bounds):
     bounds[t] to bounds[t + 1] - 1. Returns the number of strips."""
     return int(_core.strips(np.ascontiguousarray(row_cum, dtype=np.int64), int(nstrips),
                             int(min_rows), bounds))
-POOL = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
+
 
 # --- step ---
 OK, SINGULAR = _core.OK, _core.SINGULAR
@@ -222,8 +229,7 @@ def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscou
                _floats(o.K), _floats(o.C), _floats(o.V), _floats(o.F), _floats(o.Wf),
                _ints(o.node), _floats(np.reshape(o.normal, (-1, D))),
                np.ascontiguousarray(o.no_slip, dtype=np.bool_),
-               _floats(np.reshape(viscous_T, (-1,) + (1,) * 3) if np.size(viscous_T) == 0
-                       else viscous_T),
+               _floats(viscous_T),
                bool(volume_correction), bool(viscous))
 
 
