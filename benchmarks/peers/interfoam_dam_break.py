@@ -274,7 +274,7 @@ def main():
                          "/usr/bin/openfoamNNNN launcher). On Debian: apt install openfoam.")
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="peers_"))
     base.mkdir(parents=True, exist_ok=True)
-    run_mpmflow(base / "mpmflow_warmup")  # fills Numba's cache, as any first run does
+    run_mpmflow(base / "mpmflow_warmup")  # the page cache, as any first run fills it
     ours, theirs = [], []
     for k in range(args.pairs):
         ours.append(run_mpmflow(base / "mpmflow"))
