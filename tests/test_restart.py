@@ -220,3 +220,47 @@ def test_extending_a_run_whose_end_is_not_an_output_time(tmp_path):
             assert row["step"] == other["step"]
             for key in ("front", "height", "kinetic_energy", "max_pressure"):
                 assert row[key] == pytest.approx(other[key], rel=1e-6, abs=1e-9), key
+
+
+def _probe_case(data, *more):
+    return load_case(EXAMPLES / "dam_break.toml", COMMON + [
+        "time.end=0.06",
+        f"probes=[{{name='p', quantity='pressure', position=[0.05, 0.0], "
+        f"data={{path='{data}', column='p [Pa]'}}}}]", *more])
+
+
+def test_restart_refuses_a_case_file_whose_content_changed(tmp_path):
+    """A checkpoint records the content of every file the case reads (here a probe's
+    measured series); a restart after that file changed is refused, naming the file, while
+    the unchanged file restarts (issue 24: an STL moved between run and restart was read
+    without a word)."""
+    data = tmp_path / "measured.csv"
+    data.write_text("time [s],p [Pa]\n0.0,0.0\n1.0,100.0\n")
+    out = tmp_path / "run"
+    Simulation(_probe_case(data), out).run()
+    saved = read(checkpoints(out)[-1])[1]["files"]
+    assert list(saved) == ["probes.0.data.path"] and len(saved["probes.0.data.path"]["sha256"]) == 64
+    later = _probe_case(data, "time.end=0.09")
+    Simulation.resume(later, out).close()  # same file: accepted
+    data.write_text("time [s],p [Pa]\n0.0,0.0\n1.0,200.0\n")  # the same size, other values
+    with pytest.raises(CaseError) as err:
+        Simulation.resume(_probe_case(data, "time.end=0.09"), out)
+    msg = str(err.value)
+    assert "`probes.0.data.path`" in msg and str(data) in msg and "changed" in msg
+
+
+def test_restart_refuses_a_moved_mesh(tmp_path):
+    """The issue's case: an obstacle's STL moved by 0.05 m between the run and its restart."""
+    import trimesh
+
+    stl = tmp_path / "cube.stl"
+    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).apply_translation([0.3, 0.02, 0.01]).export(stl)
+    args = ["time.end=0.02", "time.dt=1e-3", "grid.spacing=0.008", "checkpoint.interval=0.01",
+            "output.snapshots=false",
+            f"obstacles=[{{type='mesh', path='{stl}'}}]"]
+    out = tmp_path / "run"
+    Simulation(load_case(EXAMPLES / "dam_break_3d.toml", args), out).run()
+    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).apply_translation([0.35, 0.02, 0.01]).export(stl)
+    with pytest.raises(CaseError, match=r"`obstacles\.0\.path`"):
+        Simulation.resume(load_case(EXAMPLES / "dam_break_3d.toml", [*args, "time.end=0.04"]),
+                          out)

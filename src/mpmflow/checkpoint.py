@@ -5,12 +5,15 @@ particle arrays, the scheme's state carried between steps (``scheme.state()``), 
 meta the time, step, time step, output schedule, counters, the resolved case, and where
 each output file ended when it was written (rows and bytes of timeseries.csv and
 probes.csv, the number of snapshots): state, not history, so a checkpoint's size does not
-grow with the run's length. A restart cuts the output files back to those positions.
+grow with the run's length. A restart cuts the output files back to those positions. The meta also holds a content hash
+(SHA-256) of every file the case reads (meshes, probes' data): a restart whose files differ
+from those the run started with is refused, naming the file.
 mpmflow draws no random numbers, so there is no random state to keep. Files are written
 atomically (and fsynced) and the latest ``KEEP`` are kept. Format 2 (format 1 carried every
 row written so far).
 """
 
+import hashlib
 import json
 import re
 import zipfile
@@ -121,3 +124,50 @@ def check_same_case(saved, current, path, may_change=("time.end", "execution.thr
             f"settings except time.end (which may be later, to extend the run) and "
             f"execution.threads. Use "
             f"--set {key}={json.dumps(saved_value)}, or start a new run in another folder.")
+
+
+def case_files(case):
+    """{case key: absolute path} of every file the case reads: the meshes of bodies and
+    obstacles, the probes' data."""
+    files = {}
+    for group in ("bodies", "obstacles"):
+        for k, spec in enumerate(getattr(case, group)):
+            if spec.type == "mesh":
+                files[f"{group}.{k}.path"] = str(Path(spec.path).expanduser())
+    for k, probe in enumerate(case.probes):
+        if probe.data is not None:
+            files[f"probes.{k}.data.path"] = str(Path(probe.data.path).expanduser())
+    return files
+
+
+def file_hashes(case):
+    """{case key: {"path", "sha256"}} of the files the case reads, as they are now."""
+    out = {}
+    for key, path in case_files(case).items():
+        digest = hashlib.sha256()
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+        out[key] = {"path": path, "sha256": digest.hexdigest()}
+    return out
+
+
+def check_same_files(saved, current, path):
+    """Refuse to continue a checkpoint whose case files changed since the run started
+    (CaseError naming the file). ``saved``: the checkpoint's ``files`` (None in checkpoints
+    written before they were recorded: nothing to compare)."""
+    if saved is None:
+        return
+    for key, old in sorted(saved.items()):
+        new = current.get(key)
+        if new is not None and new["sha256"] == old["sha256"]:
+            continue
+        where = new["path"] if new is not None else old["path"]
+        raise CaseError(
+            f"--restart: the file `{key}` = {where} is not the one checkpoint {path} was "
+            f"written with: its content changed since the run started (SHA-256 "
+            f"{old['sha256'][:12]}... then, "
+            f"{new['sha256'][:12] + '...' if new is not None else 'no such entry'} now). The "
+            "particles moved in the old geometry and data; continuing with the new would mix "
+            "the two without a word. Put the original file back, or start a new run in "
+            "another folder (or with --overwrite).")

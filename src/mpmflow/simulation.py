@@ -84,6 +84,9 @@ class Simulation:
         self.case = case
         setting_from(case.execution.threads)  # a bad MPMFLOW_THREADS is refused here
         self.memory = memory.check(case)
+        # the content of the files the case reads, as this run reads them (checkpoints keep
+        # it, and a restart with other files is refused)
+        self._files = checkpoint.file_hashes(case)
         self.grid = build_grid(case)
         self.particles = build_particles(case, self.grid)
         if self.particles.count == 0:
@@ -158,7 +161,7 @@ class Simulation:
                 "k_checkpoint": self.k_checkpoint, "counters": asdict(self.counters),
                 "outputs": outputs, "mass0": self.mass0,
                 "volume0": self.volume0, "count0": self.count0,
-                "wall_seconds": self._wall_seconds()}
+                "wall_seconds": self._wall_seconds(), "files": self._files}
         self.last_checkpoint = checkpoint.write(self.out_dir, self.steps, arrays, meta)
 
     _META = ("case", "time", "steps", "dt", "k_out", "k_snap", "k_checkpoint", "counters",
@@ -216,6 +219,7 @@ class Simulation:
             raise checkpoint.CheckpointError(path, "it lacks " + ", ".join(missing))
         case = revalidate(case)
         checkpoint.check_same_case(meta["case"], resolved(case), path)
+        checkpoint.check_same_files(meta.get("files"), checkpoint.file_hashes(case), path)
         if meta["time"] >= case.time.end:
             raise CaseError(
                 f"--restart: checkpoint {path} is at t = {meta['time']:.6g} s, which already "
