@@ -9,7 +9,9 @@
 #include <nanobind/stl/vector.h>
 
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <typeinfo>
 #include <vector>
 
 #include "arrays.hpp"
@@ -49,7 +51,14 @@ class SignalCheck {
 template <class T, int R>
 View<const T, R> table(nb::object a, const char* name, std::vector<nb::object>& keep) {
   keep.push_back(a);
-  return view<const T, R>(nb::cast<Array<const T>>(a), name);
+  // no conversion: a converted copy would die with this call and leave the view dangling
+  try {
+    return view<const T, R>(nb::cast<Array<const T>>(a, false), name);
+  } catch (const std::bad_cast&) {
+    throw std::invalid_argument(std::string("the step's table ") + name +
+                                " must be a C-contiguous NumPy array of the core's type "
+                                "(float64, int64 or bool): mpmflow.state.step_state makes one");
+  }
 }
 
 template <class T, int R>
