@@ -54,6 +54,22 @@ HEADER = """FoamFile
 }}
 """
 
+# the discretisation of both interFoam cases (this one and interfoam_spheric.py)
+FV_SCHEMES = """
+ddtSchemes { default Euler; }
+gradSchemes { default Gauss linear; }
+divSchemes
+{
+    div(rhoPhi,U) Gauss linearUpwind grad(U);
+    div(phi,alpha) Gauss vanLeer;
+    div(phirb,alpha) Gauss linear;
+    div(((rho*nuEff)*dev2(T(grad(U))))) Gauss linear;
+}
+laplacianSchemes { default Gauss linear corrected; }
+interpolationSchemes { default linear; }
+snGradSchemes { default corrected; }
+"""
+
 FILES = {
     ("system", "controlDict", "dictionary"): """
 application interFoam;
@@ -102,20 +118,7 @@ regions
                  fieldValues ( volScalarFieldValue alpha.water 0.5 ); }}
 );
 """,
-    ("system", "fvSchemes", "dictionary"): """
-ddtSchemes { default Euler; }
-gradSchemes { default Gauss linear; }
-divSchemes
-{
-    div(rhoPhi,U) Gauss linearUpwind grad(U);
-    div(phi,alpha) Gauss vanLeer;
-    div(phirb,alpha) Gauss linear;
-    div(((rho*nuEff)*dev2(T(grad(U))))) Gauss linear;
-}
-laplacianSchemes { default Gauss linear corrected; }
-interpolationSchemes { default linear; }
-snGradSchemes { default corrected; }
-""",
+    ("system", "fvSchemes", "dictionary"): FV_SCHEMES,
     ("system", "fvSolution", "dictionary"): """
 solvers
 {

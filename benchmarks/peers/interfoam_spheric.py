@@ -69,7 +69,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from dam_break import machine, save  # noqa: E402
-from interfoam_dam_break import HEADER, openfoam_command  # noqa: E402
+from interfoam_dam_break import FV_SCHEMES, HEADER, openfoam_command  # noqa: E402
 
 EXAMPLE = ROOT / "examples" / "spheric_test2.toml"
 TANK = (3.22, 1.0, 1.0)  # m
@@ -207,20 +207,7 @@ defaultFieldValues ( volScalarFieldValue alpha.water 0 );
 regions
 (
 """ + "\n".join(regions) + "\n);\n",
-        ("system", "fvSchemes", "dictionary"): """
-ddtSchemes { default Euler; }
-gradSchemes { default Gauss linear; }
-divSchemes
-{
-    div(rhoPhi,U) Gauss linearUpwind grad(U);
-    div(phi,alpha) Gauss vanLeer;
-    div(phirb,alpha) Gauss linear;
-    div(((rho*nuEff)*dev2(T(grad(U))))) Gauss linear;
-}
-laplacianSchemes { default Gauss linear corrected; }
-interpolationSchemes { default linear; }
-snGradSchemes { default corrected; }
-""",
+        ("system", "fvSchemes", "dictionary"): FV_SCHEMES,
         ("system", "fvSolution", "dictionary"): f"""
 solvers
 {{

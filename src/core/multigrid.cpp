@@ -255,9 +255,7 @@ double dot(View<const double> a, View<const double> b) {
   });
 }
 
-index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
-                  View<const double> b, View<double> r) {
-  residual(cols, vals, x, b, r);
+index_t largest_magnitude(View<const double> r) {
   index_t worst = 0;
   double big = -1.0;
   for (index_t i = 0; i < r.size(); ++i) {
@@ -269,6 +267,12 @@ index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<
     }
   }
   return worst;
+}
+
+index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+                  View<const double> b, View<double> r) {
+  residual(cols, vals, x, b, r);
+  return largest_magnitude(r);
 }
 
 template <int D>

@@ -40,6 +40,8 @@ void residual(View<const index_t, 2> cols, View<const double, 2> vals, View<cons
 // thread count; shorter vectors are summed in index order (the Numba kernel called np.dot
 // there, which sums in BLAS's order: the two differ by rounding, ~1e-16 relative).
 double dot(View<const double> a, View<const double> b);
+// The index of the largest |r_i| (NaN counts as largest; the first of equals).
+index_t largest_magnitude(View<const double> r);
 // The row of the largest |b - A x| (NaN counts as largest); r: scratch of n values.
 index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
                   View<const double> b, View<double> r);

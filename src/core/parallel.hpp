@@ -79,25 +79,8 @@ void for_each_range(index_t n, F&& body, index_t work = -1) {
   for_each_chunk(n, body, work);
 }
 
-// The sum over the chunks of [0, n) of body(lo, hi) (each chunk's partial, then the
-// partials in chunk order): the same bits on any number of threads.
-template <class T, class F>
-T reduce_chunks(index_t n, F&& body) {
-  const index_t nchunks = std::min(CHUNKS, std::max<index_t>(n, 1));
-  T part[CHUNKS];
-  if (n < SERIAL_BELOW) {
-    for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
-  } else {
-#pragma omp parallel for schedule(static)
-    for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
-  }
-  T total = part[0];
-  for (index_t t = 1; t < nchunks; ++t) total += part[t];
-  return total;
-}
-
-// The same with another associative combination of the partials (e.g. the largest),
-// taken in chunk order.
+// The partials of the chunks of [0, n), body(lo, hi), combined by an associative operation
+// (e.g. the largest) in chunk order.
 template <class T, class F, class C>
 T reduce_chunks(index_t n, F&& body, C&& combine) {
   const index_t nchunks = std::min(CHUNKS, std::max<index_t>(n, 1));
@@ -111,6 +94,13 @@ T reduce_chunks(index_t n, F&& body, C&& combine) {
   T total = part[0];
   for (index_t t = 1; t < nchunks; ++t) total = combine(total, part[t]);
   return total;
+}
+
+// The sum over the chunks of [0, n) of body(lo, hi) (each chunk's partial, then the
+// partials in chunk order): the same bits on any number of threads.
+template <class T, class F>
+T reduce_chunks(index_t n, F&& body) {
+  return reduce_chunks<T>(n, body, [](const T& a, const T& b) { return a + b; });
 }
 
 // out[i] = sum of in[j] for j < i, for i in [0, n]; out has n + 1 entries (in and out

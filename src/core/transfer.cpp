@@ -39,6 +39,22 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
 
 namespace {
 
+// Cell j at stencil slot b (0 <= b < 3^D) around cell c with coordinates cx; false when
+// it lies beyond the grid.
+template <int D>
+inline bool neighbour_cell(const Grid<D>& g, index_t c, const std::array<index_t, D>& cx, int b,
+                           index_t& j) {
+  j = c;
+  bool inside = true;
+  for (int k = 0; k < D; ++k) {
+    const index_t jk = cx[k] + b % 3 - 1;
+    b /= 3;
+    inside = inside && jk >= 0 && jk < g.cells[k];
+    j += (jk - cx[k]) * g.cs[k];
+  }
+  return inside;
+}
+
 // scatter_cell_volume for the particles of one cell c (coordinates cx), with the 3^D cell
 // centres around c held in acell (stencil slots; beyond the grid: unused): a particle of
 // cell c reaches only these (its lower centre along each axis is c - 1 or c, clamped). The
@@ -48,16 +64,8 @@ inline void load_cell_volume(const Grid<D>& g, index_t c, std::array<index_t, D>
                              std::array<double, Grid<D>::NS>& acell, View<const double> cell_vol) {
   g.cell_coords(c, cx.data());
   for (int b = 0; b < Grid<D>::NS; ++b) {
-    index_t j = c;
-    bool inside = true;
-    int rem = b;
-    for (int k = 0; k < D; ++k) {
-      const index_t jk = cx[k] + rem % 3 - 1;
-      rem /= 3;
-      inside = inside && jk >= 0 && jk < g.cells[k];
-      j += (jk - cx[k]) * g.cs[k];
-    }
-    acell[b] = inside ? cell_vol[j] : 0.0;
+    index_t j;
+    acell[b] = neighbour_cell<D>(g, c, cx, b, j) ? cell_vol[j] : 0.0;
   }
 }
 
@@ -65,16 +73,8 @@ template <int D>
 inline void store_cell_volume(const Grid<D>& g, index_t c, const std::array<index_t, D>& cx,
                               const std::array<double, Grid<D>::NS>& acell, View<double> cell_vol) {
   for (int b = 0; b < Grid<D>::NS; ++b) {
-    index_t j = c;
-    bool inside = true;
-    int rem = b;
-    for (int k = 0; k < D; ++k) {
-      const index_t jk = cx[k] + rem % 3 - 1;
-      rem /= 3;
-      inside = inside && jk >= 0 && jk < g.cells[k];
-      j += (jk - cx[k]) * g.cs[k];
-    }
-    if (inside) cell_vol[j] = acell[b];
+    index_t j;
+    if (neighbour_cell<D>(g, c, cx, b, j)) cell_vol[j] = acell[b];
   }
 }
 
@@ -82,35 +82,14 @@ template <int D>
 inline void add_cell_volume(const Grid<D>& g, const double* x, double volume,
                             const std::array<index_t, D>& cx,
                             std::array<double, Grid<D>::NS>& acell) {
-  std::array<double, D> frac;
-  std::array<index_t, D> first;
-  for (int k = 0; k < D; ++k) {
-    double s = x[k] * g.inv_h;
-    if (!(s >= 0.0))
-      s = 0.0;
-    else if (s > g.cells[k])
-      s = static_cast<double>(g.cells[k]);
-    s -= 0.5;
-    const index_t i0 = static_cast<index_t>(s + 1.0) - 1;  // floor: s >= -1/2
-    frac[k] = s - i0;
-    first[k] = i0;
-  }
-  for (int a = 0; a < (1 << D); ++a) {
+  cell_centre_hat<D>(g, x, volume, [&](const std::array<index_t, D>& i, double w) {
     int b = 0, p3 = 1;
-    double w = volume;
     for (int k = 0; k < D; ++k) {
-      const int up = (a >> k) & 1;
-      index_t i = first[k] + up;
-      w *= up ? frac[k] : 1.0 - frac[k];
-      if (i < 0)
-        i = 0;
-      else if (i > g.cells[k] - 1)
-        i = g.cells[k] - 1;
-      b += static_cast<int>(i - cx[k] + 1) * p3;
+      b += static_cast<int>(i[k] - cx[k] + 1) * p3;
       p3 *= 3;
     }
     acell[b] += w;
-  }
+  });
 }
 
 // Particle-to-grid of the particles of cell slabs r0 to r1 - 1, cell by cell. The particles

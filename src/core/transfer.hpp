@@ -17,17 +17,17 @@
 
 namespace mpmflow {
 
-// Add ``volume`` (m^3) at particle p to the cell centres with the multilinear hat of the
-// cell-centred grid. A wall mirrors the particles next to it: a ghost cell's weight goes to
-// its mirror, the cell against the wall, so a uniform material reads full up to the walls.
-// Points beyond the grid (and NaN) count at its edge.
-template <int D>
-inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index_t p, double volume,
-                                View<double> cell_vol) {
+// The multilinear hat of the cell-centred grid at point x (D coordinates, m): for each of
+// its 2^D corners, body(i, w) with i the corner cell's coordinates and w = volume times its
+// weight. A wall mirrors the points next to it: a ghost cell's weight goes to its mirror,
+// the cell against the wall, so a uniform material reads full up to the walls. Points
+// beyond the grid (and NaN) count at its edge.
+template <int D, class F>
+inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&& body) {
   std::array<double, D> frac;
   std::array<index_t, D> first;
   for (int k = 0; k < D; ++k) {
-    double s = x(p, k) * g.inv_h;
+    double s = x[k] * g.inv_h;
     if (!(s >= 0.0))
       s = 0.0;
     else if (s > g.cells[k])
@@ -38,20 +38,30 @@ inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index
     first[k] = i0;
   }
   for (int a = 0; a < (1 << D); ++a) {
-    index_t c = 0;
+    std::array<index_t, D> i;
     double w = volume;
     for (int k = 0; k < D; ++k) {
       const int up = (a >> k) & 1;
-      index_t i = first[k] + up;
+      i[k] = first[k] + up;
       w *= up ? frac[k] : 1.0 - frac[k];
-      if (i < 0)
-        i = 0;
-      else if (i > g.cells[k] - 1)
-        i = g.cells[k] - 1;
-      c += i * g.cs[k];
+      if (i[k] < 0)
+        i[k] = 0;
+      else if (i[k] > g.cells[k] - 1)
+        i[k] = g.cells[k] - 1;
     }
-    cell_vol[c] += w;
+    body(i, w);
   }
+}
+
+// Add ``volume`` (m^3) at particle p to the cell centres (cell_centre_hat).
+template <int D>
+inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index_t p, double volume,
+                                View<double> cell_vol) {
+  cell_centre_hat<D>(g, &x(p, 0), volume, [&](const std::array<index_t, D>& i, double w) {
+    index_t c = 0;
+    for (int k = 0; k < D; ++k) c += i[k] * g.cs[k];
+    cell_vol[c] += w;
+  });
 }
 
 // Where particle p samples the face values of the volume correction: along an axis j whose

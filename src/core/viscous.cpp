@@ -215,19 +215,10 @@ void apply_blocks(View<const index_t, 3> cols, View<const double, 3> vals, View<
 
 index_t worst_row(View<const index_t, 3> cols, View<const double, 3> vals, View<const index_t> off,
                   View<const double> x, View<const double> rhs, View<double> r, View<double> tmp) {
-  const index_t n = rhs.size();
   apply_blocks(cols, vals, off, x, r, tmp);
-  index_t worst = 0;
-  double big = -1.0;
-  for (index_t i = 0; i < n; ++i) {
-    const double a = std::abs(rhs(i) - r(i));
-    if (!(a <= big)) {
-      big = a;
-      worst = i;
-      if (a != a) break;
-    }
-  }
-  return worst;
+  const index_t n = rhs.size();
+  for (index_t i = 0; i < n; ++i) r(i) = rhs(i) - r(i);
+  return largest_magnitude(r.head(n));
 }
 
 template <int D>

@@ -48,6 +48,21 @@ class SignalCheck {
   std::unique_ptr<nb::python_error> error_;
 };
 
+// chunk(between) without the GIL, with SignalCheck's between(); a handler's exception is
+// raised once the chunk has stopped.
+template <class F>
+auto run_chunk(F&& chunk) {
+  SignalCheck check;
+  const auto between = check.between();
+  decltype(chunk(between)) result;
+  {
+    nb::gil_scoped_release release;
+    result = chunk(between);
+  }
+  check.raise_if_any();
+  return result;
+}
+
 template <class T, int R>
 View<const T, R> table(nb::object a, const char* name, std::vector<nb::object>& keep) {
   keep.push_back(a);
@@ -158,14 +173,9 @@ void bind_dim(nb::module_& m) {
              Array<const double> volume, Array<double> pressure, const O& opt, index_t first,
              index_t nsteps, Report& report) {
             auto P = particles<D>(x, v, mass, volume, pressure);
-            SignalCheck check;
-            index_t done;
-            {
-              nb::gil_scoped_release release;
-              done = self.state->advance(P, opt, first, nsteps, report, check.between());
-            }
-            check.raise_if_any();
-            return done;
+            return run_chunk([&](const auto& between) {
+              return self.state->advance(P, opt, first, nsteps, report, between);
+            });
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("first"), nb::arg("nsteps"),
           nb::arg("report"),
@@ -176,14 +186,9 @@ void bind_dim(nb::module_& m) {
              Array<const double> volume, Array<double> pressure, const O& opt, double span,
              index_t max_steps, Report& report) {
             auto P = particles<D>(x, v, mass, volume, pressure);
-            SignalCheck check;
-            double covered;
-            {
-              nb::gil_scoped_release release;
-              covered = self.state->advance_span(P, opt, span, max_steps, report, check.between());
-            }
-            check.raise_if_any();
-            return covered;
+            return run_chunk([&](const auto& between) {
+              return self.state->advance_span(P, opt, span, max_steps, report, between);
+            });
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("span"), nb::arg("max_steps"),
           nb::arg("report"), "Adaptive steps over the span (s); returns the time covered.")
