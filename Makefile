@@ -14,7 +14,7 @@ CORE := CMakeLists.txt $(wildcard src/core/*.hpp src/core/*.cpp src/core/binding
 $(VENV)/.installed: pyproject.toml $(CORE)
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "scikit-build-core>=0.10" "nanobind>=2.4"
+	$(BIN)/python -m pip install --quiet "scikit-build-core>=0.10" "nanobind>=2.4" "cmake>=3.18" ninja
 	@echo "building the core (C++, about a minute on 2 cores the first time)"
 	$(BIN)/python -m pip install --quiet --no-build-isolation -e ".[test,plot]"
 	touch $@
