@@ -1,12 +1,14 @@
 """Probes (probes.py): pressure sensors and level gauges in 2D and 3D, probes.csv, the measured
 series a case names (probes.N.data) and their figure (mpmflow plot)."""
 
+import tomllib
+
 import numpy as np
 import pytest
 from PIL import Image
 
-from mpmflow import load_case, open_run
-from mpmflow.case import validate_case
+from mpmflow import load_case, open_run, probes
+from mpmflow.case import apply_overrides, validate_case
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.grid import Grid
@@ -259,3 +261,65 @@ def test_plot_without_probes_draws_no_probe_figure(tmp_path):
     assert main(["plot", str(run)]) == 0
     assert (run / "plots" / "timeseries.png").is_file()
     assert not (run / "plots" / "probes.png").exists()
+
+
+def _column_with_block(example, block, depth, points, overrides):
+    """The column at rest at the default seeding density (particles_per_cell = 2), a solid
+    block standing on the floor in it (obstacles.0: min, max), pressure sensors at
+    ``points`` (fit), and the run's caps and fallbacks."""
+    with open(EXAMPLES / example, "rb") as f:
+        data = tomllib.load(f)
+    del data["bodies"][0]["particles_per_cell"]
+    data["bodies"][0]["around_obstacles"] = True
+    data["obstacles"] = [{"type": "box", "min": block[0], "max": block[1]}]
+    data["output"]["snapshots"] = False
+    apply_overrides(data, overrides)
+    case = validate_case(data)
+    assert case.bodies[0].particles_per_cell == 2  # the default
+    case.probes = _pressure_probes(points, "fit")
+    sim = Simulation(case, None)
+    sim.run()
+    for name, point in points.items():
+        exact = RHO * G * (depth - point[-1])
+        value = sim.probe_series(f"{name}_fit")[-1]
+        assert abs(value - exact) <= 1e-6 * RHO * G * depth, (name, value, exact)
+    return sim
+
+
+def test_sensors_at_the_default_density_read_rho_g_h_on_the_floor_walls_and_an_obstacle():
+    """Issue 24, item 1: at particles_per_cell = 2 (the default) a one-cell window of a 2D
+    floor sensor holds 4 particles, fewer than a fit's 6, and the probe read the window's
+    mean, half a cell of head low (1422.45 Pa for 1471.5 Pa at 0.15 m). The default window
+    now holds a fit's particles, so the floor, a side wall and the faces of a block standing
+    in the water read rho g (H - z) to 1e-6."""
+    depth = 0.15
+    points = {"floor": [0.05, 0.0], "wall": [0.0, 0.07], "right_wall": [0.1, 0.03],
+              "block_top": [0.075, 0.04], "block_side": [0.06, 0.02]}
+    sim = _column_with_block("hydrostatic.toml", ([0.06, 0.0], [0.09, 0.04]), depth,
+                             points, {"time.end": 0.02, "bodies.0.max": [0.1, depth]})
+    assert sim.fallbacks.rows() == []
+    assert probes.window(sim.case.probes[0], sim.grid, sim.case) == 2 * sim.grid.spacing
+
+
+def test_sensors_at_the_default_density_read_rho_g_h_in_3d():
+    depth = 0.2
+    points = {"floor": [0.05, 0.025, 0.0], "wall": [0.0, 0.025, 0.1],
+              "wall_y": [0.03, 0.0, 0.1], "block_top": [0.075, 0.025, 0.05],
+              "block_side": [0.05, 0.025, 0.025]}
+    sim = _column_with_block("hydrostatic_3d.toml",
+                             ([0.05, 0.0, 0.0], [0.1, 0.05, 0.05]), depth, points,
+                             {"time.end": 0.02, "grid.spacing": 0.025,
+                              "bodies.0.max": [0.1, 0.05, depth]})
+    assert sim.fallbacks.rows() == []
+
+
+def test_a_sparse_window_is_widened_and_the_widening_is_counted():
+    """A window set to half a cell holds at most one particle layer: the fit widens it
+    and still reads rho g H exactly; the summary counts each widening."""
+    sim = _run("hydrostatic.toml", [{"name": "floor", "quantity": "pressure",
+                                     "position": [0.05, 0.0], "window": 0.004}],
+               {"time.end": 0.02})
+    assert abs(sim.probe_series("floor")[-1] - RHO * G * H) <= 1e-6 * RHO * G * H
+    (row,) = sim.fallbacks.rows()
+    assert (row["what"], row["where"]) == ("probe window widened", "probe floor")
+    assert row["count"] == len(sim.probe_series("floor"))

@@ -423,16 +423,19 @@ class Probe(_Section):
         "the domain.",
         min_length=2, max_length=3, examples=[[0.42, 0.01]])
     window: Optional[float] = Field(
-        None, gt=0, description="Side of a pressure probe's window (m); none = one grid cell "
-        "(grid.spacing). A larger window averages more particles (less noise, less "
-        "resolution).")
+        None, gt=0, description="Side of a pressure probe's window (m); none = the fewest "
+        "whole grid cells that hold the 2 (D + 1) particles of a fit at the sparsest body's "
+        "particles_per_cell (one cell at 3 or more per axis in 2D, 2 or more in 3D; two "
+        "cells at the default 2 in 2D). A larger window averages more particles (less "
+        "noise, less resolution).")
     estimate: Literal["fit", "mean"] = Field(
         "fit", description="How a pressure probe reads its window's particles: \"fit\" = "
         "the value at position of the plane p = a + b.(x - position) fitted to them by least "
         "squares, the pressure AT the point (exact on a hydrostatic column, also for a sensor "
-        "on a wall, whose window lies beside it; falls back to the mean with too few "
-        "particles or particles in one layer, and reads 0 for a negative value among "
-        "pressures that are not); \"mean\" = their mean pressure, the pressure at their "
+        "on a wall, whose window lies beside it; with too few particles or particles in one "
+        "layer the window is widened to 2 and 3 times its side, then the probe reads the "
+        "mean, each counted in summary.json's caps_and_fallbacks; reads 0 for a negative "
+        "value among pressures that are not); \"mean\" = their mean pressure, the pressure at their "
         "centre (half a window from a wall sensor: rho g window/2 low on the column at "
         "rest).")
     data: Optional[ProbeData] = Field(

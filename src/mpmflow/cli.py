@@ -215,6 +215,8 @@ def _run(args):
     if not args.quiet:
         print(f"mpmflow: {summary['steps']} steps, {summary['particles']} particles, "
               f"{summary['wall_seconds']:.2f} s wall; results in {out}", file=sys.stderr)
+    if sim.fallbacks:
+        print(f"mpmflow: note: {sim.fallbacks.line()}", file=sys.stderr)
     return 0
 
 

@@ -5,24 +5,28 @@ the schema's descriptions (docs/reference.md). In 2D and 3D alike (the vertical 
 axis):
 
 - ``pressure`` (Pa): the water's pressure at the probe's point, from the particles in a
-  window (a square, in 3D a cube, of side ``probes.N.window``, one grid cell by default)
-  around it. The window is centred on the point, except that along an axis where the point
+  window (a square, in 3D a cube, of side ``probes.N.window``; by default the fewest whole
+  grid cells that hold 2 (D + 1) particles at the bodies' seeding density: one cell at
+  ``particles_per_cell`` >= 3 in 2D and >= 2 in 3D, two at the default 2 in 2D) around it. The window is centred on the point, except that along an axis where the point
   lies on a wall it lies on the water's side of the wall (from the wall one window inward),
   and it is cut at any other wall it would cross. ``estimate = "fit"`` (the default) fits
   p = a + b.(x - point) to the window's particles by least squares and reads a, the
   pressure AT the point; ``"mean"`` is the window's mean particle pressure, the pressure
   near the window's centre of particles (half a cell from a wall sensor's point: on the
   hydrostatic column that reads rho g h/2 low). A window without particles reads 0 (a dry
-  sensor reads the atmosphere's gauge pressure); a fit with too few particles, or particles
-  in one layer, falls back to the mean; a fit below 0 in a window of pressures that are
-  not negative reads 0 (the point lies above the water).
+  sensor reads the atmosphere's gauge pressure). A fit needs 2 (D + 1) particles spread
+  over the window: with fewer, or particles in one layer, the window is widened (twice,
+  then three times its side) until it holds enough, and where even that fails the probe
+  reads the mean; a fit below 0 in a window of pressures that are not negative reads 0
+  (the point lies above the water). Each widening, mean and 0 is counted in the run's
+  summary (``mpmflow.fallbacks``).
 - ``level`` (m): the water level above the gauge's foot on the vertical line through
   ``position`` (x in 2D; x and y in 3D). The cell volume fraction f is interpolated
   linearly in x (bilinearly in x and y in 3D) between the cell columns around the line; the
   level is where that profile first drops below 1/2 going up from the foot (linear between
   cell centres), minus the foot's height: the top of the water layer above the foot, 0 when
-  the foot is dry, the grid's top minus the foot when it never drops. Splashes above the
-  layer are not counted.
+  the foot is dry, the grid's top minus the foot when it never drops (counted in the
+  summary: the water may reach higher). Splashes above the layer are not counted.
 
 Cost: the particles are binned by cell once per output anyway (``cells.bin_particles``);
 a pressure probe reads only the particles of the cells its window overlaps, so the probes
@@ -60,9 +64,20 @@ def header(case):
     return ["time [s]"] + [f"{p.name} [{UNITS[p.quantity]}]" for p in case.probes]
 
 
-def window(probe, grid):
-    """The side (m) of a pressure probe's window: probes.N.window, else one grid cell."""
-    return float(probe.window) if probe.window is not None else grid.spacing
+def window(probe, grid, case):
+    """The side (m) of a pressure probe's window: probes.N.window, else the fewest whole
+    grid cells that hold the 2 (D + 1) particles of a fit at the sparsest body's seeding
+    density (particles_per_cell along each axis)."""
+    if probe.window is not None:
+        return float(probe.window)
+    per_axis = min((b.particles_per_cell for b in case.bodies), default=1)
+    need = fit_minimum(grid.dim) ** (1.0 / grid.dim) / per_axis
+    return grid.spacing * max(1, int(np.ceil(need - 1e-9)))
+
+
+def fit_minimum(dim):
+    """The particles a fit of p = a + b.(x - point) needs in its window: 2 (D + 1)."""
+    return 2 * (dim + 1)
 
 
 def window_box(point, side, size, solid_distance=None):
@@ -119,39 +134,59 @@ def window_particles(grid, particles, bins, lo, hi):
     return idx[inside]
 
 
-def pressure_at(grid, particles, bins, probe, solid_distance=None):
-    """The pressure (Pa) a pressure probe reads (see the module docstring)."""
-    side = window(probe, grid)
-    lo, hi = window_box(probe.position, side, grid.size, solid_distance)
+WIDER = (1.0, 2.0, 3.0)  # the window's side, in its own, when it is too sparse for a fit
+
+
+def pressure_at(grid, particles, bins, probe, case, solid_distance=None, note=None):
+    """The pressure (Pa) a pressure probe reads (see the module docstring). ``note(what)``
+    is told of each fallback that acted (a key of ``fallbacks.WHAT``)."""
+    note = note or (lambda what: None)
+    side0 = window(probe, grid, case)
+    for grow in WIDER if probe.estimate == "fit" else WIDER[:1]:
+        side = side0 * grow
+        lo, hi = window_box(probe.position, side, grid.size, solid_distance)
+        idx = window_particles(grid, particles, bins, lo, hi)
+        if idx.size == 0:
+            if grow == 1.0:
+                return 0.0  # a dry sensor
+            break
+        p = particles.pressure[idx]
+        if probe.estimate == "mean":
+            return float(p.mean())
+        value = _fit(particles.x[idx], p, probe.position, side, grid.dim)
+        if value is not None:
+            if grow > 1.0:
+                note("probe window widened")
+            if value < 0.0 <= float(p.min()):
+                note("probe fit below 0 read as 0")
+                return 0.0
+            return value
+    lo, hi = window_box(probe.position, side0, grid.size, solid_distance)
     idx = window_particles(grid, particles, bins, lo, hi)
-    if idx.size == 0:
-        return 0.0
-    p = particles.pressure[idx]
-    mean = float(p.mean())
-    if probe.estimate == "mean":
-        return mean
-    dim = grid.dim
-    if idx.size < 2 * (dim + 1):
-        return mean
-    X = np.empty((idx.size, dim + 1))
+    note("probe fit fell back to the window mean")
+    return float(particles.pressure[idx].mean())
+
+
+def _fit(x, p, point, side, dim):
+    """a of the plane p = a + b.(x - point) fitted to the particles (x, p) by least squares;
+    None when they are too few or lie in one layer (the gradient along its normal is then
+    undetermined)."""
+    if p.size < fit_minimum(dim):
+        return None
+    X = np.empty((p.size, dim + 1))
     X[:, 0] = 1.0
-    X[:, 1:] = (particles.x[idx] - np.asarray(probe.position)) / side
-    # particles in one layer (a thin wet film, a row at the surface) leave the gradient
-    # along the layer's normal undetermined: then the mean
+    X[:, 1:] = (x - np.asarray(point)) / side
     centred = X[:, 1:] - X[:, 1:].mean(axis=0)
     spread = np.linalg.svd(centred, compute_uv=False)
-    if spread[-1] < FLAT * np.sqrt(idx.size):
-        return mean
-    coef = np.linalg.lstsq(X, p, rcond=None)[0]
-    value = float(coef[0])
-    if value < 0.0 <= float(p.min()):
-        return 0.0
-    return value
+    if spread[-1] < FLAT * np.sqrt(p.size):
+        return None
+    return float(np.linalg.lstsq(X, p, rcond=None)[0][0])
 
 
-def level_at(grid, f, foot):
+def level_at(grid, f, foot, note=None):
     """Water level (m) above ``foot`` on the vertical line through it (see the module
-    docstring); ``f``: the cell volume fractions (``diagnostics.volume_fraction_field``)."""
+    docstring); ``f``: the cell volume fractions (``diagnostics.volume_fraction_field``);
+    ``note(what)`` is told when the level is cut at the grid's top."""
     h, dim = grid.spacing, grid.dim
     col = 0.0
     # the column of f on the line: linear in each horizontal axis between the two cell
@@ -174,6 +209,8 @@ def level_at(grid, f, foot):
     k0 = int(np.clip(np.floor(z0 / h), 0, grid.cells[-1] - 1))
     below = np.flatnonzero(col[k0:] < 0.5)
     if below.size == 0:
+        if note is not None:
+            note("level gauge reached the grid's top")
         return float(grid.size[-1]) - z0
     k = k0 + below[0]
     if k == k0:
@@ -182,17 +219,22 @@ def level_at(grid, f, foot):
     return float(max(z - z0, 0.0))
 
 
-def measure(case, grid, particles, bins, time, solid_distance=None):
+def measure(case, grid, particles, bins, time, solid_distance=None, fallbacks=None):
     """One row of probes.csv: {"time": t, name: value, ...}. ``bins``: the particles binned
     by cell (``cells.bin_particles``) at this state; ``solid_distance``: the obstacles' hook
-    (module docstring)."""
+    (module docstring); ``fallbacks``: a ``fallbacks.Fallbacks`` that counts the fallbacks
+    that acted."""
     row = {"time": time}
     f = None
     for probe in case.probes:
+        def note(what, name=probe.name):
+            if fallbacks is not None:
+                fallbacks.count(what, f"probe {name}", time=time)
         if probe.quantity == "pressure":
-            row[probe.name] = pressure_at(grid, particles, bins, probe, solid_distance)
+            row[probe.name] = pressure_at(grid, particles, bins, probe, case, solid_distance,
+                                          note)
         else:
             if f is None:
                 f = volume_fraction_field(grid, bins.theta)
-            row[probe.name] = level_at(grid, f, probe.position)
+            row[probe.name] = level_at(grid, f, probe.position, note)
     return row

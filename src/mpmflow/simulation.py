@@ -25,6 +25,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from . import checkpoint, memory, probes
+from .fallbacks import Fallbacks
 from ._version import __version__
 from .case import resolved, revalidate
 from .cells import bin_particles
@@ -113,6 +114,7 @@ class Simulation:
         self.steps = 0
         self.counters = Counters()
         self.notices = []
+        self.fallbacks = Fallbacks()  # the caps and fallbacks that acted
         if self.grid.adjusted(case.domain.size):
             used = " x ".join(f"{s:.6g}" for s in self.grid.size)
             asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
@@ -159,6 +161,7 @@ class Simulation:
                 "time": self.time, "steps": self.steps, "dt": self.dt,
                 "k_out": self.k_out, "k_snap": self.k_snap,
                 "k_checkpoint": self.k_checkpoint, "counters": asdict(self.counters),
+                "fallbacks": self.fallbacks.rows(),
                 "outputs": outputs, "mass0": self.mass0,
                 "volume0": self.volume0, "count0": self.count0,
                 "wall_seconds": self._wall_seconds(), "files": self._files}
@@ -237,6 +240,7 @@ class Simulation:
             sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
                                 if k.startswith("scheme.")})
             sim.counters = Counters(**meta["counters"])
+            sim.fallbacks = Fallbacks(meta.get("fallbacks", ()))
         except (KeyError, TypeError, ValueError) as err:
             raise checkpoint.CheckpointError(path, f"its scheme state or counters do not fit: "
                                         f"{type(err).__name__}: {err}") from None
@@ -362,7 +366,7 @@ class Simulation:
             solids = getattr(self.scheme, "solids", None)
             values = probes.measure(self.case, self.grid, self.particles, bins, self.time,
                                     solids.distance if solids is not None and solids.solids
-                                    else None)
+                                    else None, self.fallbacks)
             self._probes.append(values)
             if self._outputs.probes is not None:
                 self._outputs.probes.append(values)
@@ -512,6 +516,8 @@ class Simulation:
         self.time = t0 + n * dt
         c = self.counters
         c.moved_inside += report.moved_inside
+        self.fallbacks.count("particles put back inside the domain or out of an obstacle",
+                             "domain walls and obstacles", report.moved_inside, self.time)
         c.solves += report.solves
         c.iterations += report.iterations
         c.iterations_since_output += report.iterations
@@ -593,11 +599,12 @@ class Simulation:
                                 "model": self.case.material.model}
                                if self.case.material.model != "water" else None),
             "notices": self.notices,
+            "caps_and_fallbacks": self.fallbacks.rows(),
             "threads": self.threads.record() if self.threads is not None else None,
             "memory_estimate_bytes": self.memory.as_dict(),
             "probes": {p.name: {"quantity": p.quantity, "position": p.position,
                                 "unit": probes.UNITS[p.quantity],
-                                **({"window": probes.window(p, self.grid),
+                                **({"window": probes.window(p, self.grid, self.case),
                                     "estimate": p.estimate}
                                    if p.quantity == "pressure" else {})}
                        for p in self.case.probes},
