@@ -23,6 +23,13 @@ constexpr int NEWTONIAN = 1;
 constexpr int HERSCHEL_BULKLEY = 2;
 constexpr int MU_I = 3;
 
+// The cap of a regularised model (Pa s; +inf for the others).
+inline double viscosity_cap(int model, View<const double> par) {
+  if (model == HERSCHEL_BULKLEY) return par[3];
+  if (model == MU_I) return par[5];
+  return HUGE_VAL;
+}
+
 // The effective viscosity (Pa s) of ``model`` at strain rate ``rate`` (1/s) and pressure
 // ``p`` (Pa; a negative pressure counts as 0: a granular material has no strength without
 // confinement). WATER (inviscid) and unknown codes: 0.

@@ -12,6 +12,7 @@
 #include "parallel.hpp"
 #include "pressure_system.hpp"
 #include "quadrature.hpp"
+#include "rheology.hpp"
 #include "transfer.hpp"
 #include "viscous.hpp"
 #include "volume_correction.hpp"
@@ -381,6 +382,13 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_old, p, O.model,
                     View<const double>(O.model_params.data(), {8}), eta_.view(nc),
                     eta_weight_.view(nc));
+  {
+    const double cap = viscosity_cap(O.model, View<const double>(O.model_params.data(), {8}));
+    auto eta = eta_.view(nc);
+    auto weight = eta_weight_.view(nc);
+    for (index_t c = 0; c < nc; ++c)
+      if (weight(c) > 0.0 && eta(c) >= cap) report.capped += 1;
+  }
   auto base = v_c_.template view<2>({nn, D});
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
   auto vu = vu_.template view<2>({nn, D});
@@ -462,8 +470,11 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
   }
   for (index_t c = 0; c < nc; ++c) Q(c) = 0.0;
   for (index_t r = 0; r < n; ++r) Q(rows(r)) = q(r);
-  face_displacements<D>(grid_, cell_row, T_.static_slot, q, O.volume_rate * grid_.h,
-                        O.volume_dmax * grid_.h, faces);
+  const double dmax = O.volume_dmax * grid_.h;
+  face_displacements<D>(grid_, cell_row, T_.static_slot, q, O.volume_rate * grid_.h, dmax, faces);
+  for (int k = 0; k < D; ++k)
+    for (index_t i = 0; i < faces[k].size(); ++i)
+      if (std::abs(faces[k](i)) >= dmax) report.clamped += 1;
   return OK;
 }
 

@@ -56,6 +56,8 @@ struct Report {
   index_t steps = 0;    // the steps taken
   double dt_min = 0.0;  // the shortest and longest step taken (s)
   double dt_max = 0.0;
+  index_t capped = 0;   // cells whose viscosity was held at the model's cap (per step)
+  index_t clamped = 0;  // faces whose volume-correction displacement was clamped
 };
 
 // The phases of a step, as timed by State (seconds summed over the steps of a run).

@@ -26,6 +26,7 @@ from threadpoolctl import threadpool_limits
 
 from . import checkpoint, memory, probes
 from .fallbacks import Fallbacks
+from .materials import stiffness
 from ._version import __version__
 from .case import resolved, revalidate
 from .cells import bin_particles
@@ -115,6 +116,10 @@ class Simulation:
         self.counters = Counters()
         self.notices = []
         self.fallbacks = Fallbacks()  # the caps and fallbacks that acted
+        try:  # a viscous material too stiff for the time step: refused, or told
+            self.notices += stiffness.check(case, self.particles, self.dt)
+        except ValueError as err:
+            raise CaseError(str(err)) from None
         if self.grid.adjusted(case.domain.size):
             used = " x ".join(f"{s:.6g}" for s in self.grid.size)
             asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
@@ -518,6 +523,12 @@ class Simulation:
         c.moved_inside += report.moved_inside
         self.fallbacks.count("particles put back inside the domain or out of an obstacle",
                              "domain walls and obstacles", report.moved_inside, self.time)
+        self.fallbacks.count("viscosity held at material.max_viscosity",
+                             f"material ({self.case.material.model})",
+                             getattr(report, "capped", 0), self.time)
+        self.fallbacks.count("volume correction displacement clamped at half a cell per step",
+                             "solver.volume_correction", getattr(report, "clamped", 0),
+                             self.time)
         c.solves += report.solves
         c.iterations += report.iterations
         c.iterations_since_output += report.iterations

@@ -268,7 +268,9 @@ void bind_step(nb::module_& m) {
       .def_rw("viscous_iterations", &Report::viscous_iterations)
       .def_rw("steps", &Report::steps)
       .def_rw("dt_min", &Report::dt_min)
-      .def_rw("dt_max", &Report::dt_max);
+      .def_rw("dt_max", &Report::dt_max)
+      .def_rw("capped", &Report::capped)
+      .def_rw("clamped", &Report::clamped);
   m.attr("OK") = static_cast<int>(OK);
   m.attr("SINGULAR") = static_cast<int>(SINGULAR);
   m.attr("PRESSURE_NOT_CONVERGED") = static_cast<int>(PRESSURE_NOT_CONVERGED);

@@ -31,6 +31,8 @@ class StepReport:
     released: int = 0
     moved_inside: int = 0
     viscous_iterations: int = 0  # of the viscous solves (viscous materials)
+    capped: int = 0  # cell-steps with the viscosity held at material.max_viscosity
+    clamped: int = 0  # face-steps with the volume correction's displacement clamped
 
     def merge(self, other):
         return StepReport(max(self.unknowns, other.unknowns), self.solves + other.solves,
@@ -38,14 +40,15 @@ class StepReport:
                           max(self.max_iterations, other.max_iterations),
                           max(self.residual, other.residual), self.released + other.released,
                           self.moved_inside + other.moved_inside,
-                          self.viscous_iterations + other.viscous_iterations)
+                          self.viscous_iterations + other.viscous_iterations,
+                          self.capped + other.capped, self.clamped + other.clamped)
 
     @classmethod
     def of(cls, r):
         """From the compiled step's ``Report``."""
         return cls(int(r.unknowns), int(r.solves), int(r.iterations), int(r.max_iterations),
                    float(r.residual), int(r.released), int(r.moved),
-                   int(r.viscous_iterations))
+                   int(r.viscous_iterations), int(r.capped), int(r.clamped))
 
 
 @dataclass
