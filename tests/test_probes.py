@@ -323,3 +323,32 @@ def test_a_sparse_window_is_widened_and_the_widening_is_counted():
     (row,) = sim.fallbacks.rows()
     assert (row["what"], row["where"]) == ("probe window widened", "probe floor")
     assert row["count"] == len(sim.probe_series("floor"))
+
+
+def test_fallbacks_are_in_the_summary_on_the_last_line_and_survive_a_restart(tmp_path, capsys):
+    """A widened window is counted once per output (t = 0 to 0.04 s) in summary.json's caps_and_fallbacks,
+    named on the run's last line, and a run stopped and restarted counts the whole run."""
+    import json
+    import signal
+
+    args = ["run", str(EXAMPLES / "hydrostatic.toml"), "--set", "time.end=0.04",
+            "--set", "output.snapshots=false", "--set", "checkpoint.interval=0.01",
+            "--set", "probes=[{name='floor', quantity='pressure', position=[0.05, 0.0], "
+            "window=0.004}]"]
+    assert main(args + ["--out", str(tmp_path / "whole")]) == 0
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "probe window widened (probe floor: 5 outputs)" in last, last
+    (row,) = json.loads((tmp_path / "whole" / "summary.json").read_text())["caps_and_fallbacks"]
+    assert (row["count"], row["first_time"], row["last_time"]) == (5, 0.0, 0.04)
+
+    case = load_case(EXAMPLES / "hydrostatic.toml", [a for a in args[3::2]])
+    first = Simulation(case, tmp_path / "parts")
+
+    def stop(sim):
+        if sim.time >= 0.02 - 1e-12:
+            sim.stop_signal = signal.SIGINT
+    first.on_output = stop
+    assert first.run()["status"] == "interrupted"
+    rest = Simulation.resume(case, tmp_path / "parts")
+    assert rest.run()["status"] == "completed"
+    assert rest.fallbacks.rows() == [row]
