@@ -313,20 +313,23 @@ def test_sensors_at_the_default_density_read_rho_g_h_in_3d():
     assert sim.fallbacks.rows() == []
 
 
-def test_a_sparse_window_is_widened_and_the_widening_is_counted():
-    """A window set to half a cell holds at most one particle layer: the fit widens it
-    and still reads rho g H exactly; the summary counts each widening."""
+def test_a_window_too_sparse_for_a_fit_reads_the_mean_and_says_so():
+    """A floor window set to 0.004 m holds one layer of particles (at 0.0025 m, 4 per
+    cell axis on the 0.01 m mesh): the probe reads their mean, the pressure of that layer,
+    and the summary counts it at every output."""
     sim = _run("hydrostatic.toml", [{"name": "floor", "quantity": "pressure",
                                      "position": [0.05, 0.0], "window": 0.004}],
                {"time.end": 0.02})
-    assert abs(sim.probe_series("floor")[-1] - RHO * G * H) <= 1e-6 * RHO * G * H
+    np.testing.assert_allclose(sim.probe_series("floor")[-1], RHO * G * (H - 0.0025),
+                               rtol=1e-7)
     (row,) = sim.fallbacks.rows()
-    assert (row["what"], row["where"]) == ("probe window widened", "probe floor")
+    assert (row["what"], row["where"]) == ("probe fit fell back to the window mean",
+                                           "probe floor")
     assert row["count"] == len(sim.probe_series("floor"))
 
 
 def test_fallbacks_are_in_the_summary_on_the_last_line_and_survive_a_restart(tmp_path, capsys):
-    """A widened window is counted once per output (t = 0 to 0.04 s) in summary.json's caps_and_fallbacks,
+    """A fit's fallback to the mean is counted once per output (t = 0 to 0.04 s) in summary.json's caps_and_fallbacks,
     named on the run's last line, and a run stopped and restarted counts the whole run."""
     import json
     import signal
@@ -337,7 +340,7 @@ def test_fallbacks_are_in_the_summary_on_the_last_line_and_survive_a_restart(tmp
             "window=0.004}]"]
     assert main(args + ["--out", str(tmp_path / "whole")]) == 0
     last = capsys.readouterr().err.strip().splitlines()[-1]
-    assert "probe window widened (probe floor: 5 outputs)" in last, last
+    assert "probe fit fell back to the window mean (probe floor: 5 outputs)" in last, last
     (row,) = json.loads((tmp_path / "whole" / "summary.json").read_text())["caps_and_fallbacks"]
     assert (row["count"], row["first_time"], row["last_time"]) == (5, 0.0, 0.04)
 

@@ -432,10 +432,9 @@ class Probe(_Section):
         "fit", description="How a pressure probe reads its window's particles: \"fit\" = "
         "the value at position of the plane p = a + b.(x - position) fitted to them by least "
         "squares, the pressure AT the point (exact on a hydrostatic column, also for a sensor "
-        "on a wall, whose window lies beside it; with too few particles or particles in one "
-        "layer the window is widened to 2 and 3 times its side, then the probe reads the "
-        "mean, each counted in summary.json's caps_and_fallbacks; reads 0 for a negative "
-        "value among pressures that are not); \"mean\" = their mean pressure, the pressure at their "
+        "on a wall, whose window lies beside it; falls back to the mean with too few "
+        "particles or particles in one layer, and reads 0 for a negative value among "
+        "pressures that are not, each counted in summary.json's caps_and_fallbacks); \"mean\" = their mean pressure, the pressure at their "
         "centre (half a window from a wall sensor: rho g window/2 low on the column at "
         "rest).")
     data: Optional[ProbeData] = Field(

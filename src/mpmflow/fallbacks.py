@@ -11,7 +11,6 @@ reports the whole run.
 
 # what acted -> the unit its count is in
 WHAT = {
-    "probe window widened": "outputs",
     "probe fit fell back to the window mean": "outputs",
     "probe fit below 0 read as 0": "outputs",
     "level gauge reached the grid's top": "outputs",

@@ -49,7 +49,9 @@ TOL_ARREST = 0.2
 WHY_ARREST = ("the arrest condition is the shallow-layer limit; the deposit is 0.05 m deep "
               "over 0.3 m (aspect 1/6), whose corrections are of that order")
 TOL_STOPPED = 1e-3
-WHY_STOPPED = "a creep of the capped viscosity is far below 1 mm/s (|tau| / cap ~ 5e-4 1/s)"
+WHY_STOPPED = ("a creep of the capped viscosity is far below 1 mm/s (|tau| / cap ~ 5e-4 1/s); "
+               "the split of the viscous and pressure steps allows up to 0.6 |g| dt = 2.9 "
+               "mm/s at this step (materials/stiffness.py): a miss may be the split's")
 
 
 def lube(a):
