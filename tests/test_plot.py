@@ -102,3 +102,59 @@ def test_plot_of_a_run_whose_snapshots_are_all_gone(small_run, tmp_path, capsys)
     err = capsys.readouterr().err
     assert err.count("is missing") == 3 and "wrote 1 figures" in err
     assert (run / "plots" / "timeseries.png").is_file()
+
+
+def _figures(monkeypatch):
+    """{file name: figure} of what the plots save (the files are written as usual)."""
+    from mpmflow import plots
+
+    saved, save = {}, plots.save
+
+    def record(fig, path, dpi):
+        saved[path.name] = fig
+        save(fig, path, dpi)
+
+    monkeypatch.setattr(plots, "save", record)
+    return saved
+
+
+def _panels(fig):
+    return [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+
+
+def test_snapshot_overview_names_its_axes_with_units(small_run, tmp_path, monkeypatch):
+    """snapshots.png had no axis labels: each panel names x in m, the first y in m (the
+    panels share the plane), and the colour bar is the pressure in Pa."""
+    saved = _figures(monkeypatch)
+    assert main(["plot", str(_copy(small_run, tmp_path))]) == 0
+    fig = saved["snapshots.png"]
+    panels = _panels(fig)
+    assert len(panels) == 3  # t = 0, 0.1, 0.2 s
+    assert [ax.get_xlabel() for ax in panels] == ["x [m]"] * 3
+    assert [ax.get_ylabel() for ax in panels] == ["y [m]", "", ""]
+    assert [ax.get_ylabel() for ax in fig.axes if ax not in panels] == ["pressure [Pa]"]
+    one = _panels(saved["particles_000001.png"])[0]
+    assert (one.get_xlabel(), one.get_ylabel()) == ("x [m]", "y [m]")
+
+
+def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
+    """In 3D the figures show the mid-width x-z slice: the axes are x and z in m, and the
+    overview's title says which slice."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from mpmflow.mpl import pyplot
+    from mpmflow.plots import plot_snapshots
+
+    x = np.column_stack([np.linspace(0.0, 0.3, 50), np.full(50, 0.15), np.linspace(0, 0.1, 50)])
+    snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
+                             read=lambda: {"x": x, "pressure": np.linspace(0, 500, 50)})
+             for k, t in enumerate((0.0, 0.1))]
+    summary = {"grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01}}
+    saved = _figures(monkeypatch)
+    plot_snapshots(snaps, summary, tmp_path, pyplot(), [])
+    fig = saved["snapshots.png"]
+    assert [ax.get_xlabel() for ax in _panels(fig)] == ["x [m]", "x [m]"]
+    assert _panels(fig)[0].get_ylabel() == "z [m]"
+    assert fig._suptitle.get_text() == "slice y = 0.15 m +- 0.005 m"

@@ -186,6 +186,14 @@ def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
     return art
 
 
+def _name_axes(ax, names, caption="", y=True):
+    """The plane's axes named with their unit; in 3D the x label says which slice it is
+    (an overview passes it to its title instead, its panels being too narrow for it)."""
+    ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
+    if y:
+        ax.set_ylabel(f"{names[1]} [m]")
+
+
 def plot_snapshots(snaps, summary, folder, plt, notes):
     """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths.
     Snapshots that cannot be read (missing, damaged) are left out with a note."""
@@ -223,22 +231,25 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
         art = _draw(ax, xy, p, t, size, vmax, plt, solid)
         fig.colorbar(art, ax=ax, label="pressure [Pa]")
-        ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
-        ax.set_ylabel(f"{names[1]} [m]")
+        _name_axes(ax, names, caption)
         out = folder / "snapshots" / (Path(f).stem + ".png")
         save(fig, out, DPI)
         written.append(out)
     pick = np.unique(np.linspace(0, len(data) - 1, min(6, len(data))).round().astype(int))
     fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
                              layout="constrained")
-    for ax, k in zip(axes[0], pick):
+    for j, (ax, k) in enumerate(zip(axes[0], pick)):
         art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt, solid)
+        _name_axes(ax, names, y=j == 0)
     fig.colorbar(art, ax=axes[0].tolist(), label="pressure [Pa]")
+    if caption:
+        fig.suptitle(caption, fontsize=9)
     save(fig, folder / "snapshots.png", DPI)
     written.append(folder / "snapshots.png")
     fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
     art = _draw(ax, data[0][1], data[0][2], data[0][0], size, vmax, plt, solid)
     fig.colorbar(art, ax=ax, label="pressure [Pa]")
+    _name_axes(ax, names, caption)
     writer = PillowWriter(fps=4)
     tmp = folder / ".animation.partial.gif"  # Pillow picks the format from the suffix
     try:
