@@ -158,3 +158,92 @@ def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
     assert [ax.get_xlabel() for ax in _panels(fig)] == ["x [m]", "x [m]"]
     assert _panels(fig)[0].get_ylabel() == "z [m]"
     assert fig._suptitle.get_text() == "slice y = 0.15 m +- 0.005 m"
+
+
+def _with_probes(run, pressure, level, positions=True):
+    """The run given ``pressure`` pressure probes on a grid over the tank and ``level``
+    level gauges along the floor: probes.csv (sine series) and their summary.json entries
+    (what a run with so many probes writes, without running it)."""
+    import json
+
+    import numpy as np
+
+    t = np.linspace(0.0, 0.2, 21)
+    probes = {f"p{k}": ("Pa", [0.01 + 0.4 * (k % 50) / 50, 0.01 + 0.4 * (k // 50) / 50])
+              for k in range(pressure)}
+    probes.update({f"l{k}": ("m", [0.4 * k / max(level, 1), 0.0]) for k in range(level)})
+    header = ["time [s]"] + [f"{n} [{u}]" for n, (u, _) in probes.items()]
+    rows = [[f"{x:.6g}" for x in [tk, *(np.sin(tk + k) for k in range(len(probes)))]]
+            for tk in t]
+    (run / "probes.csv").write_text("\n".join(map(",".join, [header, *rows])) + "\n")
+    summary = json.loads((run / "summary.json").read_text())
+    summary["probes"] = {n: {"quantity": "pressure" if u == "Pa" else "level", "unit": u,
+                             "position": xy} for n, (u, xy) in probes.items()}
+    if not positions:  # a run still going: no summary.json yet
+        (run / "summary.json").unlink()
+    else:
+        (run / "summary.json").write_text(json.dumps(summary))
+    return list(probes)
+
+
+def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path,
+                                                            monkeypatch):
+    """2,000 probes took 18 s to plot (a Line2D and a legend entry each) and the legend
+    overflowed the figure. Over LEGEND_MAX probes a panel draws them as one LineCollection
+    coloured by the probes' position, with a colour bar and no legend; the work is a handful
+    of artists whatever the number of probes (a regression guard that does not time)."""
+    from matplotlib.collections import LineCollection
+
+    run = _copy(small_run, tmp_path)
+    _with_probes(run, 1500, 500)
+    saved = _figures(monkeypatch)
+    assert main(["plot", str(run)]) == 0
+    fig = saved["probes.png"]
+    panels, bars = _panels(fig), [ax for ax in fig.axes if ax not in _panels(fig)]
+    assert [ax.get_ylabel() for ax in panels] == ["pressure [Pa]", "water level [m]"]
+    for ax, n, along in zip(panels, (1500, 500), ("x", "x")):
+        collections = [c for c in ax.collections if isinstance(c, LineCollection)]
+        assert [len(c.get_segments()) for c in collections] == [n]
+        assert ax.get_lines() == [] and ax.get_legend() is None
+        assert len(ax.get_children()) < 30
+        assert ax.get_title() == f"{n} probes, coloured by position"
+    assert [b.get_ylabel() for b in bars] == ["probe's x [m]", "probe's x [m]"]
+    assert panels[-1].get_xlabel() == "time [s]"
+
+
+def _probes_figure(run, monkeypatch):
+    """probes.png's figure alone (what `mpmflow plot` draws, without the snapshots)."""
+    from mpmflow import open_run
+    from mpmflow.mpl import pyplot
+    from mpmflow.plots import plot_probes
+
+    results, saved = open_run(run), _figures(monkeypatch)
+    plot_probes(results.probes, results.summary, results.units, run / "probes.png", pyplot(),
+                [])
+    return saved["probes.png"]
+
+
+def test_plot_of_many_probes_without_positions_says_what_the_colour_is(small_run, tmp_path,
+                                                                       monkeypatch):
+    """A run still going has no summary.json, so no probe positions: the colour is the
+    probe's column in probes.csv, and the colour bar says so (not a position)."""
+    run = _copy(small_run, tmp_path)
+    _with_probes(run, 20, 0, positions=False)
+    fig = _probes_figure(run, monkeypatch)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["pressure [Pa]",
+                                                    "probe's column in probes.csv"]
+    assert fig.axes[0].get_title() == "20 probes"
+
+
+def test_plot_of_a_few_probes_names_each_in_the_legend(small_run, tmp_path, monkeypatch):
+    """Up to LEGEND_MAX probes per panel: a line and a legend entry each, each its own
+    colour."""
+    from mpmflow.plots import LEGEND_MAX
+
+    run = _copy(small_run, tmp_path)
+    names = _with_probes(run, LEGEND_MAX, 2)
+    pressure, level = _panels(_probes_figure(run, monkeypatch))
+    labels = [t.get_text() for t in pressure.get_legend().get_texts()]
+    assert labels == names[:LEGEND_MAX]
+    assert len({line.get_color() for line in pressure.get_lines()}) == LEGEND_MAX
+    assert [t.get_text() for t in level.get_legend().get_texts()] == names[LEGEND_MAX:]

@@ -7,7 +7,8 @@ writes into the plot folder:
                        pressure noise and wetted volume ratio against time;
 - ``probes.png``       (with probes) the probes' series, one panel per quantity (pressures
                        in Pa, levels in m), each over the measured series the case names
-                       (``probes.N.data``), drawn dashed in the probe's colour;
+                       (``probes.N.data``), drawn dashed in the probe's colour; over
+                       LEGEND_MAX probes on a panel, coloured by position, no legend;
 - ``snapshots/particles_NNNNNN.png``   each snapshot, particles coloured by pressure;
 - ``snapshots.png``    up to six snapshots side by side (an overview);
 - ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter).
@@ -100,9 +101,15 @@ def measured_series(data):
     return values[keep, 0], values[keep, 1]
 
 
+# probes a panel names in a legend: while each has its own colour of matplotlib's cycle
+LEGEND_MAX = 10
+
+
 def plot_probes(probes, summary, units, path, plt, notes):
     """probes.png: one panel per quantity, each probe's series and its measured series.
-    ``probes``: probes.csv's columns; ``units``: {probe: "Pa" | "m"}."""
+    Up to LEGEND_MAX probes on a panel are named in its legend; more are coloured by
+    position (``_lines_by_position``). ``probes``: probes.csv's columns; ``units``:
+    {probe: "Pa" | "m"}."""
     t = probes["time"]
     names = [n for n in probes if n != "time"]
     data = {p.get("name"): p.get("data") for p in summary.get("case", {}).get("probes", [])}
@@ -110,8 +117,14 @@ def plot_probes(probes, summary, units, path, plt, notes):
     fig, axes = plt.subplots(len(panels), 1, figsize=(10, 3.2 * len(panels) + 0.6),
                              sharex=True, squeeze=False)
     for ax, unit in zip(axes[:, 0], panels):
-        for k, name in enumerate(n for n in names if units.get(n) == unit):
-            line, = ax.plot(t, probes[name], color=f"C{k % 10}", label=name)
+        group = [n for n in names if units.get(n) == unit]
+        if len(group) <= LEGEND_MAX:
+            colours = [ax.plot(t, probes[n], color=f"C{k}", label=n)[0].get_color()
+                       for k, n in enumerate(group)]
+        else:
+            colours = _lines_by_position(ax, t, probes, group, summary, plt)
+        measured = False
+        for name, colour in zip(group, colours):
             ref = data.get(name)
             if ref:
                 try:
@@ -119,10 +132,17 @@ def plot_probes(probes, summary, units, path, plt, notes):
                 except CaseError as err:
                     notes.append(f"{err}; probes.png shows {name} without it.")
                     continue
-                ax.plot(te, ve, "--", color=line.get_color(), lw=0.8, alpha=0.8,
+                measured = True
+                ax.plot(te, ve, "--", color=colour, lw=0.8, alpha=0.8,
                         label=f"{name}, measured ({ref['column']})")
         ax.set_ylabel(QUANTITY[unit][1])
-        ax.legend(fontsize=7, loc="best", ncol=2)
+        if len(group) <= LEGEND_MAX:
+            ax.legend(fontsize=7, loc="best", ncol=2)
+        elif measured:  # the line styles only: a probe is told by its colour
+            from matplotlib.lines import Line2D
+
+            ax.legend([Line2D([], [], color="0.3"), Line2D([], [], color="0.3", ls="--")],
+                      ["simulated", "measured"], fontsize=7, loc="upper right")
         ax.grid(alpha=0.3)
         ax.set_xlim(t[0] if len(t) else 0.0, t[-1] if len(t) > 1 else 1.0)
     axes[-1, 0].set_xlabel("time [s]")
@@ -130,6 +150,39 @@ def plot_probes(probes, summary, units, path, plt, notes):
                  fontsize=10)
     fig.tight_layout()
     save(fig, path, DPI)
+
+
+def probe_positions(summary):
+    """{probe: position (m)} as summary.json records them ({} while a run has none)."""
+    return {name: p.get("position") for name, p in summary.get("probes", {}).items()}
+
+
+def _lines_by_position(ax, t, probes, group, summary, plt):
+    """More probes than a legend can tell apart on one panel: one thin line each, all in
+    one LineCollection (2,000 Line2D and their legend took 10 to 18 s to draw, and the
+    legend overflowed the figure), coloured by the probe's position along the axis in which
+    the panel's probes lie furthest apart, with a colour bar of that coordinate. Without
+    the positions (a run still going has no summary.json) the colour is the probe's column
+    in probes.csv, and the colour bar says so. Returns each probe's colour."""
+    from matplotlib.collections import LineCollection
+
+    where = probe_positions(summary)
+    xyz = [where.get(n) for n in group]
+    if all(p is not None for p in xyz) and len({len(p) for p in xyz}) == 1:
+        xyz = np.asarray(xyz, dtype=float)
+        axis = int(np.argmax(np.ptp(xyz, axis=0)))
+        value, label = xyz[:, axis], f"probe's {'xyz'[axis]} [m]"
+    else:
+        value, label = np.arange(1.0, len(group) + 1), "probe's column in probes.csv"
+    lines = LineCollection([np.column_stack([t, probes[n]]) for n in group], cmap="viridis",
+                           linewidths=0.6)
+    lines.set_array(value)
+    ax.add_collection(lines)
+    ax.autoscale_view()
+    ax.set_title(f"{len(group)} probes, coloured by position" if label.endswith("[m]") else
+                 f"{len(group)} probes", fontsize=8)
+    plt.colorbar(lines, ax=ax, label=label, pad=0.01)
+    return [lines.cmap(lines.norm(v)) for v in value]
 
 
 def side_view(x, p, size, spacing):
