@@ -175,3 +175,35 @@ def test_a_signal_in_the_first_second_stops_with_a_message(tmp_path, signum, del
         summary = json.loads((out / "summary.json").read_text())
         assert summary["status"] == "interrupted"
         assert (out / summary["last_checkpoint"]).is_file()
+
+
+def _progress_frames(out, end, *extra):
+    """The progress bar's frames of ``mpmflow run`` on a small column, as (time shown, step
+    shown); tqdm told by its environment to draw at every update (it reads it on import)."""
+    import os
+    import re
+
+    env = dict(os.environ, TQDM_MININTERVAL="0", TQDM_MINITERS="0")
+    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
+                          EXAMPLES / "hydrostatic.toml", "--out", out, "--set",
+                          "grid.spacing=0.02", "--set", "output.snapshots=false", "--set",
+                          f"time.end={end}", *extra], capture_output=True, text=True,
+                         env=env, timeout=300)
+    assert res.returncode == 0, res.stderr
+    return [(round(float(t), 3), int(s)) for t, s in
+            re.findall(r"t = ([0-9.]+)/[0-9.]+ s \[[^\]]*\], step (\d+)", res.stderr)]
+
+
+def test_progress_bar_shows_the_steps_taken_by_the_time_it_shows(tmp_path):
+    """The step count lagged the time by one output interval (t = 0.02 s beside step 10 at
+    1 ms steps): each frame now shows the steps the run had taken at the time beside it,
+    from step 0 at t = 0, and a restart's frames go on from its checkpoint's step."""
+    out = tmp_path / "run"
+    frames = _progress_frames(out, 0.03)
+    rows = list(csv.DictReader(open(out / "timeseries.csv")))
+    taken = {round(float(r["time"]), 3): int(r["step"]) for r in rows}
+    assert sorted(set(frames)) == sorted(taken.items())  # every output, and only those
+    assert taken == {0.0: 0, 0.01: 10, 0.02: 20, 0.03: 30}
+    frames = _progress_frames(out, 0.05, "--restart")
+    assert frames[0] == (0.03, 30) and sorted(set(frames)) == [(0.03, 30), (0.04, 40),
+                                                                (0.05, 50)]

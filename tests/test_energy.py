@@ -55,3 +55,49 @@ def test_consistent_surface_quadrature_only_takes_energy_out():
     e, wave = _sloshing_energy(["solver.surface_quadrature=consistent"])
     assert np.max(e - e[0]) < 0.02 * wave
     assert e[-1] < e[0]
+
+
+def _energy_panel(series, summary, monkeypatch, tmp_path):
+    """The energy panel of timeseries.png, as plot_timeseries drew it (save intercepted)."""
+    from mpmflow import plots
+    from mpmflow.mpl import pyplot
+
+    figures = []
+    monkeypatch.setattr(plots, "save", lambda fig, path, dpi: figures.append(fig))
+    plots.plot_timeseries(series, summary, tmp_path / "timeseries.png", pyplot())
+    ax = figures[0].axes[1]
+    return ax, {line.get_label(): line.get_ydata() for line in ax.get_lines()}
+
+
+def test_total_energy_change_starts_at_zero_for_a_body_thrown_in(tmp_path, monkeypatch):
+    """A block released at 1 m/s: "total - initial" is 0 at t = 0 (it started at the initial
+    kinetic energy: only the initial potential energy was subtracted), and it is the change
+    of kinetic plus potential energy after; the axis states J/m (2D)."""
+    from mpmflow import open_run
+
+    case = load_case(EXAMPLES / "hydrostatic.toml", [
+        "output.snapshots=false", "time.end=0.03", "bodies.0.max=[0.05,0.1]",
+        "bodies.0.velocity=[1.0,0.0]", "bodies.0.particles_per_cell=2"])
+    Simulation(case, tmp_path / "run").run()
+    run = open_run(tmp_path / "run")
+    ke, pe = run.timeseries["kinetic_energy"], run.timeseries["potential_energy"]
+    assert ke[0] == pytest.approx(0.5 * 1000.0 * 0.05 * 0.1 * 1.0**2)  # J/m
+    ax, lines = _energy_panel(run.timeseries, run.summary, monkeypatch, tmp_path)
+    assert lines["total - initial"][0] == 0.0
+    assert np.array_equal(lines["total - initial"], ke + pe - (ke[0] + pe[0]))
+    assert np.array_equal(lines["potential - initial"], pe - pe[0])
+    assert ax.get_ylabel() == "energy [J/m]"
+
+
+def test_energy_axis_states_its_unit_in_3d_and_while_the_run_goes(tmp_path, monkeypatch):
+    """3D energies are in J (the summary's units); a run still going has no summary, and the
+    label says both units rather than guess J/m."""
+    series = {c: np.array([0.0, 0.01]) for c in ("time", "front", "height", "max_speed",
+                                                 "max_pressure", "pressure_noise",
+                                                 "volume_ratio")}
+    series.update(kinetic_energy=np.array([0.26, 0.5]), potential_energy=np.array([3.0, 2.8]))
+    ax, lines = _energy_panel(series, {"units": {"kinetic_energy": "J"}}, monkeypatch, tmp_path)
+    assert ax.get_ylabel() == "energy [J]"
+    assert lines["total - initial"].tolist() == [0.0, (0.5 + 2.8) - (0.26 + 3.0)]
+    ax, _ = _energy_panel(series, {}, monkeypatch, tmp_path)
+    assert ax.get_ylabel() == "energy [J/m in 2D, J in 3D]"

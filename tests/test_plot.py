@@ -102,3 +102,148 @@ def test_plot_of_a_run_whose_snapshots_are_all_gone(small_run, tmp_path, capsys)
     err = capsys.readouterr().err
     assert err.count("is missing") == 3 and "wrote 1 figures" in err
     assert (run / "plots" / "timeseries.png").is_file()
+
+
+def _figures(monkeypatch):
+    """{file name: figure} of what the plots save (the files are written as usual)."""
+    from mpmflow import plots
+
+    saved, save = {}, plots.save
+
+    def record(fig, path, dpi):
+        saved[path.name] = fig
+        save(fig, path, dpi)
+
+    monkeypatch.setattr(plots, "save", record)
+    return saved
+
+
+def _panels(fig):
+    return [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+
+
+def test_snapshot_overview_names_its_axes_with_units(small_run, tmp_path, monkeypatch):
+    """snapshots.png had no axis labels: each panel names x in m, the first y in m (the
+    panels share the plane), and the colour bar is the pressure in Pa."""
+    saved = _figures(monkeypatch)
+    assert main(["plot", str(_copy(small_run, tmp_path))]) == 0
+    fig = saved["snapshots.png"]
+    panels = _panels(fig)
+    assert len(panels) == 3  # t = 0, 0.1, 0.2 s
+    assert [ax.get_xlabel() for ax in panels] == ["x [m]"] * 3
+    assert [ax.get_ylabel() for ax in panels] == ["y [m]", "", ""]
+    assert [ax.get_ylabel() for ax in fig.axes if ax not in panels] == ["pressure [Pa]"]
+    one = _panels(saved["particles_000001.png"])[0]
+    assert (one.get_xlabel(), one.get_ylabel()) == ("x [m]", "y [m]")
+
+
+def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
+    """In 3D the figures show the mid-width x-z slice: the axes are x and z in m, and the
+    overview's title says which slice."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from mpmflow.mpl import pyplot
+    from mpmflow.plots import plot_snapshots
+
+    x = np.column_stack([np.linspace(0.0, 0.3, 50), np.full(50, 0.15), np.linspace(0, 0.1, 50)])
+    snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
+                             read=lambda: {"x": x, "pressure": np.linspace(0, 500, 50)})
+             for k, t in enumerate((0.0, 0.1))]
+    summary = {"grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01}}
+    saved = _figures(monkeypatch)
+    plot_snapshots(snaps, summary, tmp_path, pyplot(), [])
+    fig = saved["snapshots.png"]
+    assert [ax.get_xlabel() for ax in _panels(fig)] == ["x [m]", "x [m]"]
+    assert _panels(fig)[0].get_ylabel() == "z [m]"
+    assert fig._suptitle.get_text() == "slice y = 0.15 m +- 0.005 m"
+
+
+def _with_probes(run, pressure, level, positions=True):
+    """The run given ``pressure`` pressure probes on a grid over the tank and ``level``
+    level gauges along the floor: probes.csv (sine series) and their summary.json entries
+    (what a run with so many probes writes, without running it)."""
+    import json
+
+    import numpy as np
+
+    t = np.linspace(0.0, 0.2, 21)
+    probes = {f"p{k}": ("Pa", [0.01 + 0.4 * (k % 50) / 50, 0.01 + 0.4 * (k // 50) / 50])
+              for k in range(pressure)}
+    probes.update({f"l{k}": ("m", [0.4 * k / max(level, 1), 0.0]) for k in range(level)})
+    header = ["time [s]"] + [f"{n} [{u}]" for n, (u, _) in probes.items()]
+    rows = [[f"{x:.6g}" for x in [tk, *(np.sin(tk + k) for k in range(len(probes)))]]
+            for tk in t]
+    (run / "probes.csv").write_text("\n".join(map(",".join, [header, *rows])) + "\n")
+    summary = json.loads((run / "summary.json").read_text())
+    summary["probes"] = {n: {"quantity": "pressure" if u == "Pa" else "level", "unit": u,
+                             "position": xy} for n, (u, xy) in probes.items()}
+    if not positions:  # a run still going: no summary.json yet
+        (run / "summary.json").unlink()
+    else:
+        (run / "summary.json").write_text(json.dumps(summary))
+    return list(probes)
+
+
+def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path,
+                                                            monkeypatch):
+    """2,000 probes took 18 s to plot (a Line2D and a legend entry each) and the legend
+    overflowed the figure. Over LEGEND_MAX probes a panel draws them as one LineCollection
+    coloured by the probes' position, with a colour bar and no legend; the work is a handful
+    of artists whatever the number of probes (a regression guard that does not time)."""
+    from matplotlib.collections import LineCollection
+
+    run = _copy(small_run, tmp_path)
+    _with_probes(run, 1500, 500)
+    saved = _figures(monkeypatch)
+    assert main(["plot", str(run)]) == 0
+    fig = saved["probes.png"]
+    panels, bars = _panels(fig), [ax for ax in fig.axes if ax not in _panels(fig)]
+    assert [ax.get_ylabel() for ax in panels] == ["pressure [Pa]", "water level [m]"]
+    for ax, n, along in zip(panels, (1500, 500), ("x", "x")):
+        collections = [c for c in ax.collections if isinstance(c, LineCollection)]
+        assert [len(c.get_segments()) for c in collections] == [n]
+        assert ax.get_lines() == [] and ax.get_legend() is None
+        assert len(ax.get_children()) < 30
+        assert ax.get_title() == f"{n} probes, coloured by position"
+    assert [b.get_ylabel() for b in bars] == ["probe's x [m]", "probe's x [m]"]
+    assert panels[-1].get_xlabel() == "time [s]"
+
+
+def _probes_figure(run, monkeypatch):
+    """probes.png's figure alone (what `mpmflow plot` draws, without the snapshots)."""
+    from mpmflow import open_run
+    from mpmflow.mpl import pyplot
+    from mpmflow.plots import plot_probes
+
+    results, saved = open_run(run), _figures(monkeypatch)
+    plot_probes(results.probes, results.summary, results.units, run / "probes.png", pyplot(),
+                [])
+    return saved["probes.png"]
+
+
+def test_plot_of_many_probes_without_positions_says_what_the_colour_is(small_run, tmp_path,
+                                                                       monkeypatch):
+    """A run still going has no summary.json, so no probe positions: the colour is the
+    probe's column in probes.csv, and the colour bar says so (not a position)."""
+    run = _copy(small_run, tmp_path)
+    _with_probes(run, 20, 0, positions=False)
+    fig = _probes_figure(run, monkeypatch)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["pressure [Pa]",
+                                                    "probe's column in probes.csv"]
+    assert fig.axes[0].get_title() == "20 probes"
+
+
+def test_plot_of_a_few_probes_names_each_in_the_legend(small_run, tmp_path, monkeypatch):
+    """Up to LEGEND_MAX probes per panel: a line and a legend entry each, each its own
+    colour."""
+    from mpmflow.plots import LEGEND_MAX
+
+    run = _copy(small_run, tmp_path)
+    names = _with_probes(run, LEGEND_MAX, 2)
+    pressure, level = _panels(_probes_figure(run, monkeypatch))
+    labels = [t.get_text() for t in pressure.get_legend().get_texts()]
+    assert labels == names[:LEGEND_MAX]
+    assert len({line.get_color() for line in pressure.get_lines()}) == LEGEND_MAX
+    assert [t.get_text() for t in level.get_legend().get_texts()] == names[LEGEND_MAX:]

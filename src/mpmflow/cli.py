@@ -138,21 +138,24 @@ def _parser():
     return p
 
 
-def _progress_bar(end, quiet, start=0.0):
-    """A tqdm bar over simulated time, and its update callback."""
+def _progress_bar(end, quiet, start=0.0, step=0):
+    """A tqdm bar over simulated time with the step count, and its update callback.
+    ``start``, ``step``: where the run begins (a restart's time and step)."""
     if quiet:
         return None, None
     from tqdm import tqdm
 
     bar = tqdm(total=end, initial=start, unit="s", unit_scale=False, dynamic_ncols=True, file=sys.stderr,
                bar_format="{l_bar}{bar}| t = {n:.3f}/{total:.3f} s [{elapsed}<{remaining}]"
-                          "{postfix}")
+                          "{postfix}", postfix=f"step {step}")
     last = [start]
 
     def update(t, step, end_):
+        # the step count before the time: update() draws the bar, and a count set after it
+        # was drawn beside the next output's time (one output interval behind)
+        bar.set_postfix_str(f"step {step}", refresh=False)
         bar.update(t - last[0])
         last[0] = t
-        bar.set_postfix_str(f"step {step}", refresh=False)
 
     return bar, update
 
@@ -198,7 +201,8 @@ def _run(args):
         for note in sim.notices:
             print(f"mpmflow: note: {note}", file=sys.stderr)
         early.check()
-        bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time)
+        bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time,
+                                    step=sim.steps)
         sim.progress = update
         try:
             with stop_on_signals(sim):

@@ -7,7 +7,8 @@ writes into the plot folder:
                        pressure noise and wetted volume ratio against time;
 - ``probes.png``       (with probes) the probes' series, one panel per quantity (pressures
                        in Pa, levels in m), each over the measured series the case names
-                       (``probes.N.data``), drawn dashed in the probe's colour;
+                       (``probes.N.data``), drawn dashed in the probe's colour; over
+                       LEGEND_MAX probes on a panel, coloured by position, no legend;
 - ``snapshots/particles_NNNNNN.png``   each snapshot, particles coloured by pressure;
 - ``snapshots.png``    up to six snapshots side by side (an overview);
 - ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter).
@@ -26,18 +27,36 @@ from .results import open_run
 DPI = 80
 
 
+def energy_changes(series):
+    """(potential - initial, total - initial) of a run's timeseries, total = kinetic +
+    potential energy, each the change since the first row. The initial total holds the
+    initial kinetic energy too: a body released with a velocity starts with it, and
+    subtracting only the initial potential energy started "total - initial" at the initial
+    kinetic energy (+0.26 J for stl_drop_3d's blob at 1 m/s) as if energy had been made."""
+    potential = series["potential_energy"]
+    total = series["kinetic_energy"] + potential
+    return potential - potential[0], total - total[0]
+
+
+def energy_label(summary):
+    """The energy axis' label: per metre of depth in 2D (J/m), absolute in 3D (J), as the
+    summary's units say. A run still going has no summary yet, and timeseries.csv does not
+    say its dimension: the label then gives both rather than guess one."""
+    unit = summary.get("units", {}).get("kinetic_energy")
+    return f"energy [{unit}]" if unit else "energy [J/m in 2D, J in 3D]"
+
+
 def plot_timeseries(series, summary, path, plt):
     t = series["time"]
     fig, ax = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     ax[0, 0].plot(t, series["front"], label="surge front")
     ax[0, 0].plot(t, series["height"], label="column height")
     ax[0, 0].set_ylabel("m")
+    potential, total = energy_changes(series)
     ax[0, 1].plot(t, series["kinetic_energy"], label="kinetic")
-    ax[0, 1].plot(t, series["potential_energy"] - series["potential_energy"][0],
-                  label="potential - initial")
-    ax[0, 1].plot(t, series["kinetic_energy"] + series["potential_energy"]
-                  - series["potential_energy"][0], "k--", label="total - initial")
-    ax[0, 1].set_ylabel(summary.get("units", {}).get("kinetic_energy", "J/m"))
+    ax[0, 1].plot(t, potential, label="potential - initial")
+    ax[0, 1].plot(t, total, "k--", label="total - initial")
+    ax[0, 1].set_ylabel(energy_label(summary))
     ax[1, 0].plot(t, series["max_speed"], label="largest particle speed [m/s]")
     right = ax[1, 0].twinx()
     right.plot(t, series["max_pressure"], "C3", label="largest pressure [Pa]")
@@ -82,9 +101,15 @@ def measured_series(data):
     return values[keep, 0], values[keep, 1]
 
 
+# probes a panel names in a legend: while each has its own colour of matplotlib's cycle
+LEGEND_MAX = 10
+
+
 def plot_probes(probes, summary, units, path, plt, notes):
     """probes.png: one panel per quantity, each probe's series and its measured series.
-    ``probes``: probes.csv's columns; ``units``: {probe: "Pa" | "m"}."""
+    Up to LEGEND_MAX probes on a panel are named in its legend; more are coloured by
+    position (``_lines_by_position``). ``probes``: probes.csv's columns; ``units``:
+    {probe: "Pa" | "m"}."""
     t = probes["time"]
     names = [n for n in probes if n != "time"]
     data = {p.get("name"): p.get("data") for p in summary.get("case", {}).get("probes", [])}
@@ -92,8 +117,14 @@ def plot_probes(probes, summary, units, path, plt, notes):
     fig, axes = plt.subplots(len(panels), 1, figsize=(10, 3.2 * len(panels) + 0.6),
                              sharex=True, squeeze=False)
     for ax, unit in zip(axes[:, 0], panels):
-        for k, name in enumerate(n for n in names if units.get(n) == unit):
-            line, = ax.plot(t, probes[name], color=f"C{k % 10}", label=name)
+        group = [n for n in names if units.get(n) == unit]
+        if len(group) <= LEGEND_MAX:
+            colours = [ax.plot(t, probes[n], color=f"C{k}", label=n)[0].get_color()
+                       for k, n in enumerate(group)]
+        else:
+            colours = _lines_by_position(ax, t, probes, group, summary, plt)
+        measured = False
+        for name, colour in zip(group, colours):
             ref = data.get(name)
             if ref:
                 try:
@@ -101,10 +132,17 @@ def plot_probes(probes, summary, units, path, plt, notes):
                 except CaseError as err:
                     notes.append(f"{err}; probes.png shows {name} without it.")
                     continue
-                ax.plot(te, ve, "--", color=line.get_color(), lw=0.8, alpha=0.8,
+                measured = True
+                ax.plot(te, ve, "--", color=colour, lw=0.8, alpha=0.8,
                         label=f"{name}, measured ({ref['column']})")
         ax.set_ylabel(QUANTITY[unit][1])
-        ax.legend(fontsize=7, loc="best", ncol=2)
+        if len(group) <= LEGEND_MAX:
+            ax.legend(fontsize=7, loc="best", ncol=2)
+        elif measured:  # the line styles only: a probe is told by its colour
+            from matplotlib.lines import Line2D
+
+            ax.legend([Line2D([], [], color="0.3"), Line2D([], [], color="0.3", ls="--")],
+                      ["simulated", "measured"], fontsize=7, loc="upper right")
         ax.grid(alpha=0.3)
         ax.set_xlim(t[0] if len(t) else 0.0, t[-1] if len(t) > 1 else 1.0)
     axes[-1, 0].set_xlabel("time [s]")
@@ -112,6 +150,39 @@ def plot_probes(probes, summary, units, path, plt, notes):
                  fontsize=10)
     fig.tight_layout()
     save(fig, path, DPI)
+
+
+def probe_positions(summary):
+    """{probe: position (m)} as summary.json records them ({} while a run has none)."""
+    return {name: p.get("position") for name, p in summary.get("probes", {}).items()}
+
+
+def _lines_by_position(ax, t, probes, group, summary, plt):
+    """More probes than a legend can tell apart on one panel: one thin line each, all in
+    one LineCollection (2,000 Line2D and their legend took 10 to 18 s to draw, and the
+    legend overflowed the figure), coloured by the probe's position along the axis in which
+    the panel's probes lie furthest apart, with a colour bar of that coordinate. Without
+    the positions (a run still going has no summary.json) the colour is the probe's column
+    in probes.csv, and the colour bar says so. Returns each probe's colour."""
+    from matplotlib.collections import LineCollection
+
+    where = probe_positions(summary)
+    xyz = [where.get(n) for n in group]
+    if all(p is not None for p in xyz) and len({len(p) for p in xyz}) == 1:
+        xyz = np.asarray(xyz, dtype=float)
+        axis = int(np.argmax(np.ptp(xyz, axis=0)))
+        value, label = xyz[:, axis], f"probe's {'xyz'[axis]} [m]"
+    else:
+        value, label = np.arange(1.0, len(group) + 1), "probe's column in probes.csv"
+    lines = LineCollection([np.column_stack([t, probes[n]]) for n in group], cmap="viridis",
+                           linewidths=0.6)
+    lines.set_array(value)
+    ax.add_collection(lines)
+    ax.autoscale_view()
+    ax.set_title(f"{len(group)} probes, coloured by position" if label.endswith("[m]") else
+                 f"{len(group)} probes", fontsize=8)
+    plt.colorbar(lines, ax=ax, label=label, pad=0.01)
+    return [lines.cmap(lines.norm(v)) for v in value]
 
 
 def side_view(x, p, size, spacing):
@@ -168,6 +239,14 @@ def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
     return art
 
 
+def _name_axes(ax, names, caption="", y=True):
+    """The plane's axes named with their unit; in 3D the x label says which slice it is
+    (an overview passes it to its title instead, its panels being too narrow for it)."""
+    ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
+    if y:
+        ax.set_ylabel(f"{names[1]} [m]")
+
+
 def plot_snapshots(snaps, summary, folder, plt, notes):
     """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths.
     Snapshots that cannot be read (missing, damaged) are left out with a note."""
@@ -205,22 +284,25 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
         art = _draw(ax, xy, p, t, size, vmax, plt, solid)
         fig.colorbar(art, ax=ax, label="pressure [Pa]")
-        ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
-        ax.set_ylabel(f"{names[1]} [m]")
+        _name_axes(ax, names, caption)
         out = folder / "snapshots" / (Path(f).stem + ".png")
         save(fig, out, DPI)
         written.append(out)
     pick = np.unique(np.linspace(0, len(data) - 1, min(6, len(data))).round().astype(int))
     fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
                              layout="constrained")
-    for ax, k in zip(axes[0], pick):
+    for j, (ax, k) in enumerate(zip(axes[0], pick)):
         art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt, solid)
+        _name_axes(ax, names, y=j == 0)
     fig.colorbar(art, ax=axes[0].tolist(), label="pressure [Pa]")
+    if caption:
+        fig.suptitle(caption, fontsize=9)
     save(fig, folder / "snapshots.png", DPI)
     written.append(folder / "snapshots.png")
     fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
     art = _draw(ax, data[0][1], data[0][2], data[0][0], size, vmax, plt, solid)
     fig.colorbar(art, ax=ax, label="pressure [Pa]")
+    _name_axes(ax, names, caption)
     writer = PillowWriter(fps=4)
     tmp = folder / ".animation.partial.gif"  # Pillow picks the format from the suffix
     try:
