@@ -92,7 +92,13 @@ def test_only_simple_polygons_are_accepted():
     assert shapes.polygon_problem([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]) is None
     assert "no area" in shapes.polygon_problem([[0, 0], [1, 1], [2, 2]])
     crossing = shapes.polygon_problem([[0, 0], [2, 0], [0, 1], [2, 2], [0, 2]])
-    assert "edges 1 (corners 1 to 2) and 4 (corners 4 to 0) cross or touch" in crossing
+    assert "edges 1 (corners 1 to 2) and 4 (corners 4 to 0) touch" in crossing
+    # a bow tie's two loops enclose areas that cancel: it was said to "enclose no area"
+    bow_tie = shapes.polygon_problem([[0.2, 0.0], [0.25, 0.05], [0.25, 0.0], [0.2, 0.05]])
+    assert bow_tie == ("vertices: the polygon's edges 0 (corners 0 to 1) and 2 (corners 2 to "
+                       "3) cross, so it is not a simple polygon; list its corners in order "
+                       "around the boundary")
+    assert "lie on one line" in shapes.polygon_problem([[0, 0], [1, 0], [2, 0], [3, 0]])
 
 
 def test_polygon_against_a_box_on_random_points():

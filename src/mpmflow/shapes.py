@@ -309,14 +309,30 @@ class Mesh(Shape):
 
 
 def polygon_problem(vertices):
-    """Why these corners (m) are not a simple polygon (no area, edges that cross or touch),
-    or None. O(n^2) in the corners: a case's polygon has tens, not thousands."""
+    """Why these corners (m) are not a simple polygon (all on one line, edges that cross or
+    touch), or None. O(n^2) in the corners: a case's polygon has tens, not thousands. The
+    crossing edges are looked for before the area: a bow tie's two loops can enclose areas
+    that cancel, and "no area" would hide that its edges cross."""
     v = np.asarray(vertices, dtype=float)
-    n = len(v)
+    d = v - v[0]
+    far = d[np.argmax(np.abs(d).sum(axis=1))]
+    if not np.any(far[0] * d[:, 1] - far[1] * d[:, 0]):
+        return ("vertices: the polygon's corners lie on one line, so they enclose no area; "
+                "give its corners in order around its boundary")
+    crossing = _crossing_edges(v)
+    if crossing:
+        return crossing
     area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
     if not abs(area) > 0:
         return ("vertices: the polygon's corners enclose no area; give its corners in order "
                 "around its boundary")
+    return None
+
+
+def _crossing_edges(v):
+    """The message for the first two edges of the polygon v that cross (each passes
+    through the other's inside) or touch, or None."""
+    n = len(v)
 
     def cross(o, a, b):
         return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
@@ -330,11 +346,12 @@ def polygon_problem(vertices):
             if (j + 1) % n == i:
                 continue  # the last edge and the first share a corner
             c, d = v[j], v[(j + 1) % n]
-            if (cross(c, d, a) * cross(c, d, b) <= 0 and cross(a, b, c) * cross(a, b, d) <= 0
-                    and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
+            sides = (cross(c, d, a) * cross(c, d, b), cross(a, b, c) * cross(a, b, d))
+            if (max(sides) <= 0 and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
+                how = "cross" if max(sides) < 0 else "touch"
                 return (f"vertices: the polygon's edges {i} (corners {i} to {(i + 1) % n}) and "
-                        f"{j} (corners {j} to {(j + 1) % n}) cross or touch, so it is not a "
-                        "simple polygon; list its corners in order around the boundary")
+                        f"{j} (corners {j} to {(j + 1) % n}) {how}, so it is not a simple "
+                        "polygon; list its corners in order around the boundary")
     return None
 
 
