@@ -113,6 +113,10 @@ class Simulation:
         self.steps = 0
         self.counters = Counters()
         self.notices = []
+        # what reading the mesh files had to decide (a binary STL's wrong triangle count)
+        for shape in ([case.body_shape(k) for k in range(len(case.bodies))]
+                      + [case.obstacle_shape(k) for k in range(len(case.obstacles))]):
+            self.notices += getattr(shape, "notes", [])
         if self.grid.adjusted(case.domain.size):
             used = " x ".join(f"{s:.6g}" for s in self.grid.size)
             asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
