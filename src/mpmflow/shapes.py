@@ -383,8 +383,14 @@ def _stl_bytes(raw):
     not used (a truncated file then shows as an open surface, refused with that note).
     When they are not, the file is cut inside a triangle or has bytes appended, and which
     triangles are meant is a guess: MeshFileError."""
-    if len(raw) < STL_HEADER or _is_ascii_stl(raw):
+    if _is_ascii_stl(raw):
         return raw, None
+    if b"\0" not in raw:  # text (no binary STL is without a NUL byte) that is not an STL
+        raise MeshFileError("is text, but not an ASCII STL (which starts with \"solid\"); "
+                            "export the surface again as STL (binary or ASCII) or OBJ.")
+    if len(raw) < STL_HEADER:
+        raise MeshFileError(f"has {len(raw)} bytes, fewer than the {STL_HEADER}-byte header of "
+                            "a binary STL, and is not an ASCII STL; export it again.")
     count = int.from_bytes(raw[80:84], "little")
     body = len(raw) - STL_HEADER
     if count * STL_TRIANGLE == body:
@@ -408,14 +414,21 @@ def _is_ascii_stl(raw):
     return raw.lstrip()[:5].lower() == b"solid" and b"\0" not in raw
 
 
+BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
+
+
+def _has_bom(raw):
+    """Text that starts with a byte-order mark (no binary STL header does, in practice)."""
+    return any(raw.startswith(bom) for bom, _ in BOMS)
+
+
 def _text_bytes(raw):
     """Text (an ASCII STL, an OBJ) as UTF-8 for trimesh. trimesh decodes other text with
     charset_normalizer's guess, a module it does not install (a Latin-1 solid name, "solid
     W\xfcrfel", failed with "No module named 'charset_normalizer'"); the keywords and numbers
     of both formats are ASCII, so reading the bytes as Latin-1 (every byte a character)
     changes only names, never the geometry. A byte-order mark names its encoding."""
-    for bom, encoding in ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe", "utf-16"),
-                          (b"\xfe\xff", "utf-16")):
+    for bom, encoding in BOMS:
         if raw.startswith(bom):
             try:
                 return raw.decode(encoding).encode("utf-8")
@@ -448,19 +461,35 @@ def _read_mesh(path, stamp):
     raw = Path(path).read_bytes()
     kind = Path(path).suffix.lower()[1:]
     note = None
+    if not raw.strip():
+        raise MeshFileError("holds no triangles: the file is empty; export the closed "
+                            "surface of the solid as STL or OBJ.")
+    if kind == "obj" or _has_bom(raw):
+        raw = _text_bytes(raw)
     if kind == "stl":
         raw, note = _stl_bytes(raw)
-    if kind == "obj" or _is_ascii_stl(raw):
-        raw = _text_bytes(raw)
-    mesh = trimesh.load(io.BytesIO(raw), file_type=kind, force="mesh")
-    vertices = np.asarray(mesh.vertices, dtype=float)
-    faces = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+        if _is_ascii_stl(raw):
+            raw = _text_bytes(raw)
+    # unprocessed first, and quietly: trimesh's constructor checks the stored normals
+    # against the corners, arithmetic that warns on inf or nan coordinates; such a file is
+    # refused right below, before its vertices are merged
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        mesh = trimesh.load(io.BytesIO(raw), file_type=kind, force="mesh", process=False)
+    if not np.isfinite(np.asarray(mesh.vertices, dtype=float)).all():
+        return np.asarray(mesh.vertices, dtype=float), np.zeros((1, 3), np.int64), 0, 0, note
+    # a binary STL's triangles share no vertex until equal corners are merged: exactly
+    # equal ones (writers repeat a corner's coordinates bit for bit), not trimesh's
+    # merge_vertices, which rounds the coordinates to integers of 1e-8 units and so breaks
+    # (int64 overflow) beyond about 1e10 file units
+    vertices, shared = np.unique(np.asarray(mesh.vertices, dtype=float), axis=0,
+                                 return_inverse=True)
+    faces = shared.reshape(-1)[np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)]
     # a triangle with a repeated corner (after merging equal vertices) has no area and
     # no solid angle: it is no part of the surface, and its edge from a corner to itself
     # would count as an open edge
     faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
                   & (faces[:, 0] != faces[:, 2])]
-    if len(faces) == 0 or not np.isfinite(vertices).all():
+    if len(faces) == 0:
         return vertices, faces, 0, 0, note
     mesh = trimesh.Trimesh(vertices, faces, process=False)
     boundary = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
@@ -544,12 +573,18 @@ def _check_extent(key, shown, scale, vertices, v, faces):
         _refuse(key, f"{shown} encloses no volume: its corners span {size} (file units), "
                 "flat or a single point, so it has no inside; export the closed surface of "
                 "the solid.")
-    if not (np.isfinite(v).all() and np.all(v.max(axis=0) > v.min(axis=0))):
+    scaled = vertices * float(scale)
+    if not (np.isfinite(scaled).all() and np.all(scaled.max(axis=0) > scaled.min(axis=0))):
         raise ValueError(
             f"{key}.scale = {scale:g} takes the coordinates of {shown} (up to "
             f"{np.abs(vertices).max():.4g} file units) beyond what a floating-point number "
             "holds; give the factor from the file's units to metres (1: metres, 0.001: "
             "millimetres).")
+    if not (np.isfinite(v).all() and np.all(v.max(axis=0) > v.min(axis=0))):
+        raise ValueError(
+            f"{key}.translate moves {shown} (up to {np.abs(scaled).max():.4g} m across) so "
+            "far that its coordinates lose its shape; give the shift (m) that places it in "
+            "the domain.")
 
 
 # --------------------------------------------------------------------------- case tables
