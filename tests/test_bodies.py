@@ -153,3 +153,44 @@ def test_a_domain_the_bodies_fill_is_refused_before_the_run(tmp_path, capsys):
     assert "Traceback" not in err and not (tmp_path / "o").exists()
     assert main(["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(tmp_path / "p"), "-q",
                  "--set", "bodies.0.max=[0.1, 0.29]", "--set", "time.end=0.01"]) == 0
+
+
+def test_a_body_that_seeds_no_particle_is_refused_naming_it(tmp_path, capsys):
+    """A 1 m cube read with scale = 0.001 (a file in metres taken for millimetres) beside
+    a pool was dropped without a word (alone, the run was refused without naming it): any
+    body that seeds no particle is refused, naming it, its size, the particle spacing and
+    the fix."""
+    import trimesh
+
+    cube = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
+    cube.apply_translation([0.5, 0.5, 0.5])
+    cube.export(tmp_path / "cube.stl")
+    (tmp_path / "case.toml").write_text(
+        '[domain]\nsize = [0.3, 0.3, 0.3]\n[grid]\nspacing = 0.05\n[time]\ndt = 1e-3\n'
+        'end = 2e-3\n[output]\ninterval = 1e-3\n'
+        '[[bodies]]\nmin = [0, 0, 0]\nmax = [0.3, 0.3, 0.1]\n'
+        '[[bodies]]\ntype = "mesh"\npath = "cube.stl"\nscale = 0.001\n'
+        'translate = [0.1, 0.1, 0.15]\n')
+    for extra in ([], ["--set", "bodies=[{type = 'mesh', path = 'cube.stl', scale = 0.001, "
+                       "translate = [0.1, 0.1, 0.15]}]"]):
+        code = main(["run", str(tmp_path / "case.toml"), "--out", str(tmp_path / "o"), "-q",
+                     *extra])
+        err = capsys.readouterr().err
+        k = 0 if extra else 1
+        assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert (f"bodies.{k} (a mesh) seeds no particle: it spans 0.001 x 0.001 x 0.001 m "
+                "(from [0.1, 0.1, 0.15] to [0.101, 0.101, 0.151] m), and no point of its "
+                f"particle lattice, spaced grid.spacing / bodies.{k}.particles_per_cell = "
+                "0.05 / 2 = 0.025 m, lies inside it, so the run would leave it out. Check "
+                f"bodies.{k}.scale = 0.001: it converts the file's units to metres (1 for a "
+                "file in metres, 0.001 for millimetres).") in err, err
+        assert not (tmp_path / "o").exists()
+    # a box thinner than a particle spacing, beside another (2D)
+    with pytest.raises(CaseError) as err:
+        _case([FLOOR, {"min": [0.2006, 0.1], "max": [0.2014, 0.2], "particles_per_cell": 4}])
+    assert ("bodies.1 (a box) seeds no particle: it spans 0.0008 x 0.1 m (from [0.2006, 0.1] "
+            "to [0.2014, 0.2] m), and no point of its particle lattice, spaced grid.spacing / "
+            "bodies.1.particles_per_cell = 0.004 / 4 = 0.001 m, lies inside it, so the run "
+            "would leave it out. Make it larger than one particle spacing (bodies.1.min/max), "
+            "raise bodies.1.particles_per_cell (at most 16) or refine grid.spacing, or "
+            "remove bodies.1.") in str(err.value)

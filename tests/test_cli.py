@@ -207,3 +207,63 @@ def test_progress_bar_shows_the_steps_taken_by_the_time_it_shows(tmp_path):
     frames = _progress_frames(out, 0.05, "--restart")
     assert frames[0] == (0.03, 30) and sorted(set(frames)) == [(0.03, 30), (0.04, 40),
                                                                 (0.05, 50)]
+
+
+OBSTACLE_CASE = (
+    '[domain]\nsize = [0.3, 0.3]\n[grid]\nspacing = 0.01\n[time]\ndt = 1e-3\nend = 2e-3\n'
+    '[output]\ninterval = 1e-3\nsnapshots = false\n[[bodies]]\nmin = [0.0, 0.0]\n'
+    'max = [0.1, 0.1]\n[[obstacles]]\nmin = [0.2, 0.0]\nmax = [0.25, 0.05]\n')
+
+
+def _run_in_process(tmp_path, capsys, text, *args):
+    from mpmflow.cli import main
+
+    (tmp_path / "case.toml").write_text(text)
+    out = tmp_path / "o"
+    code = main(["run", str(tmp_path / "case.toml"), "--out", str(out), "-q", "--overwrite",
+                 *args])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return code, err
+
+
+@pytest.mark.parametrize("text, args, message", [
+    # an index out of range for obstacles gave an example naming bodies
+    (OBSTACLE_CASE, ["--set", "obstacles.3.min=[0.2, 0.0]"],
+     "--set obstacles.3.min: `obstacles` has 1 entry; use an index from 0 to 0, e.g. --set "
+     "obstacles.0.min=[0.2, 0.0]."),
+    (OBSTACLE_CASE, ["--set", "obstacles.3={min = [0.2, 0.1], max = [0.25, 0.15]}"],
+     "--set obstacles.3: `obstacles` has 1 entry; use an index from 0 to 0, e.g. --set "
+     "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}, or --set 'obstacles.1={type = "
+     "\"box\", min = [...], max = [...]}' to add one."),
+    # a case without obstacles: "obstacles: Input should be a valid list"
+    (OBSTACLE_CASE.split("[[obstacles]]")[0], ["--set", "obstacles.0.min=[0.2, 0.0]"],
+     "--set obstacles.0.min: `obstacles` has no entries; add one first, e.g. --set "
+     "'obstacles.0={type = \"box\", min = [...], max = [...]}', or a [[obstacles]] table in "
+     "the case file."),
+    # [[obstacle]] suggested `obstacles.0.min`
+    (OBSTACLE_CASE.replace("[[obstacles]]", "[[obstacle]]"), [],
+     "unknown key `obstacle`. Did you mean `obstacles` ([[obstacles]] tables)?"),
+    (OBSTACLE_CASE, ["--set", "obstacle.0.max=[0.25, 0.06]"],
+     "unknown case key `obstacle.0.max`. Did you mean `obstacles.0.max`?"),
+])
+def test_list_keys_are_named_in_their_messages(tmp_path, capsys, text, args, message):
+    code, err = _run_in_process(tmp_path, capsys, text, *args)
+    assert code == 2 and err.count("\n") == 1 and message in err, err
+
+
+def test_a_whole_table_of_a_list_can_be_set(tmp_path, capsys):
+    """--set obstacles.0={...} was an unknown key though --set obstacles=[...] worked: an
+    index replaces that table, the next index adds one."""
+    from mpmflow import load_case
+
+    (tmp_path / "case.toml").write_text(OBSTACLE_CASE)
+    loaded = load_case(tmp_path / "case.toml", [
+        "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}",
+        "obstacles.1={type = 'disc', centre = [0.2, 0.25], radius = 0.03}",
+        "bodies.0={min = [0.0, 0.0], max = [0.1, 0.05]}"])
+    assert [o.type for o in loaded.obstacles] == ["box", "disc"]
+    assert loaded.obstacles[0].min == [0.2, 0.1] and loaded.bodies[0].max == [0.1, 0.05]
+    code, err = _run_in_process(tmp_path, capsys, OBSTACLE_CASE, "--set",
+                                "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}")
+    assert code == 0, err

@@ -160,3 +160,15 @@ def test_a_case_from_a_pipe(tmp_path):
         f.write((EXAMPLES / "hydrostatic.toml").read_text())
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err
+
+
+@pytest.mark.parametrize("example, power", [("hydrostatic.toml", "square"),
+                                            ("hydrostatic_3d.toml", "cube")])
+def test_the_memory_refusal_says_how_memory_grows(monkeypatch, example, power):
+    """The 3D refusal said memory grows as the inverse square of grid.spacing: the
+    particles and nodes go as its inverse cube in 3D."""
+    monkeypatch.setattr(memory, "available", lambda: (memory.PROGRAM, "the test's budget"))
+    with pytest.raises(CaseError) as err:
+        memory.check(load_case(EXAMPLES / example))
+    assert f"Make the case smaller: grid.spacing (memory grows as its inverse {power}), " \
+        "bodies.N.particles_per_cell" in str(err.value)

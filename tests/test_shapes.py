@@ -3,8 +3,10 @@ closed meshes read from files (and refused when open, empty or missing), seeded 
 to the sizing counts, and each bad geometry refused with its key and fix (exit code 2)."""
 
 import os
+import struct
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -92,7 +94,13 @@ def test_only_simple_polygons_are_accepted():
     assert shapes.polygon_problem([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]) is None
     assert "no area" in shapes.polygon_problem([[0, 0], [1, 1], [2, 2]])
     crossing = shapes.polygon_problem([[0, 0], [2, 0], [0, 1], [2, 2], [0, 2]])
-    assert "edges 1 (corners 1 to 2) and 4 (corners 4 to 0) cross or touch" in crossing
+    assert "edges 1 (corners 1 to 2) and 4 (corners 4 to 0) touch" in crossing
+    # a bow tie's two loops enclose areas that cancel: it was said to "enclose no area"
+    bow_tie = shapes.polygon_problem([[0.2, 0.0], [0.25, 0.05], [0.25, 0.0], [0.2, 0.05]])
+    assert bow_tie == ("vertices: the polygon's edges 0 (corners 0 to 1) and 2 (corners 2 to "
+                       "3) cross, so it is not a simple polygon; list its corners in order "
+                       "around the boundary")
+    assert "lie on one line" in shapes.polygon_problem([[0, 0], [1, 0], [2, 0], [3, 0]])
 
 
 def test_polygon_against_a_box_on_random_points():
@@ -163,6 +171,119 @@ def test_meshes_that_are_open_empty_missing_or_unreadable_are_refused(tmp_path):
     (tmp_path / "junk.obj").write_text("this is not an obj file\n")
     with pytest.raises(ValueError, match="junk.obj"):
         shapes.load_mesh(tmp_path / "junk.obj", key="obstacles.0")
+
+
+def _cube_triangles():
+    """The 12 triangles (12, 3, 3) of the unit cube [0, 1]^3, facing outwards."""
+    cube = trimesh.creation.box(extents=[1, 1, 1])
+    return cube.vertices[cube.faces] + 0.5
+
+
+def binary_stl(triangles, count=None, header=b"binary"):
+    """A binary STL's bytes: 80-byte header, triangle count (``count``: the header's, by
+    default the true one), then each triangle (normal, 3 corners, attribute)."""
+    out = [header.ljust(80, b" "), struct.pack("<I", len(triangles) if count is None
+                                                else count)]
+    out += [struct.pack("<12fH", 0.0, 0.0, 0.0, *np.ravel(t), 0) for t in triangles]
+    return b"".join(out)
+
+
+def ascii_stl(triangles, name="cube"):
+    lines = [f"solid {name}"]
+    for t in triangles:
+        lines += ["facet normal 0 0 0", "outer loop"]
+        lines += [f"vertex {x:.9g} {y:.9g} {z:.9g}" for x, y, z in t]
+        lines += ["endloop", "endfacet"]
+    return "\n".join(lines + [f"endsolid {name}", ""])
+
+
+def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
+    """They were refused with "No module named 'charset_normalizer'" and advice to export
+    again: an ASCII STL with a Latin-1 solid name, binary STLs whose header count is off.
+    A binary count off is read as the file's size says (the note tells the user); a file
+    cut inside a triangle is refused, saying so."""
+    tri = _cube_triangles()
+    files = {
+        "latin1.stl": ascii_stl(tri, "Würfel").encode("latin-1"),
+        "utf8.stl": ascii_stl(tri, "Würfel").encode("utf-8"),
+        "latin1.obj": ("o Würfel\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in
+                                               tri.reshape(-1, 3))
+                       + "".join(f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}\n"
+                                 for k in range(12))).encode("latin-1"),
+        "right.stl": binary_stl(tri, header=b"solid but binary"),
+        "too_many.stl": binary_stl(tri, count=15),
+        "too_few.stl": binary_stl(tri, count=3),
+        "zero.stl": binary_stl(tri, count=0, header=b"solid streamed"),
+    }
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+        mesh = shapes.load_mesh(tmp_path / name, key="bodies.1", shown=name)
+        assert mesh.volume() == pytest.approx(1.0) and len(mesh.faces) == 12, name
+        assert mesh.contains([[0.5, 0.5, 0.5], [1.5, 0.5, 0.5]]).tolist() == [True, False]
+        counted = {"too_many.stl": 15, "too_few.stl": 3, "zero.stl": 0}.get(name)
+        assert mesh.notes == ([] if counted is None else [
+            f"bodies.1.path = '{name}': the binary STL's header counts {counted} triangles "
+            "but its 684 bytes hold 12; the 12 triangles of the file were read"])
+    (tmp_path / "cut.stl").write_bytes(binary_stl(tri)[:-7])
+    with pytest.raises(ValueError) as err:
+        shapes.load_mesh(tmp_path / "cut.stl", key="obstacles.0", shown="cut.stl")
+    assert str(err.value) == (
+        "obstacles.0.path = 'cut.stl' is a binary STL whose header counts 12 triangles (684 "
+        "bytes), but the file has 677 bytes: 11 whole triangles and 43 bytes more, so it is "
+        "cut short inside a triangle or has bytes appended, and which triangles it holds is "
+        "unclear; export it again from your CAD tool.")
+    # cut at a triangle's end: the 11 triangles are read, and the open surface refused
+    # with the count's note
+    (tmp_path / "short.stl").write_bytes(binary_stl(tri)[:-50])
+    with pytest.raises(ValueError, match=r"'short.stl' is not a closed surface \(the binary "
+                       r"STL's header counts 12 triangles but its 634 bytes hold 11; the 11 "
+                       r"triangles of the file were read\): 3 boundary edges"):
+        shapes.load_mesh(tmp_path / "short.stl", key="obstacles.0", shown="short.stl")
+
+
+def test_a_wrong_count_is_a_notice_of_the_run(tmp_path):
+    (tmp_path / "cube.stl").write_bytes(binary_stl(_cube_triangles() * 0.06, count=0))
+    case = _case(BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]},
+                         {"type": "mesh", "path": "cube.stl", "translate": [0.07, 0.07, 0.2]}],
+                 base_dir=tmp_path)
+    from mpmflow import Simulation
+    notices = Simulation(case).notices
+    assert [n for n in notices if "cube.stl" in n] == [
+        f"bodies.1.path = '{tmp_path / 'cube.stl'}': the binary STL's header counts 0 "
+        "triangles but its 684 bytes hold 12; the 12 triangles of the file were read"]
+
+
+def test_a_folder_as_the_mesh_path_is_named_a_folder(tmp_path):
+    """It was reported as missing."""
+    (tmp_path / "parts.stl").mkdir()
+    with pytest.raises(ValueError) as err:
+        shapes.load_mesh(tmp_path / "parts.stl", key="obstacles.0", shown="parts.stl")
+    assert str(err.value) == (
+        "obstacles.0.path = 'parts.stl' is a folder, not a file; give the path of an STL or "
+        "OBJ file (relative paths are taken from the case file's folder).")
+
+
+def test_a_mesh_enclosing_no_volume_is_refused_without_a_library_warning(tmp_path):
+    """A zero-size mesh printed trimesh's RuntimeWarning (with its file and line) and, as
+    an obstacle, was said to be 0 m thin: "refine grid.spacing to at most 0 m"."""
+    tri = _cube_triangles()
+    flat = tri.copy()
+    flat[..., 2] = 0.0
+    (tmp_path / "point.stl").write_bytes(binary_stl(tri * 0.0))
+    (tmp_path / "flat.stl").write_bytes(binary_stl(flat))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any library warning fails the test
+        with pytest.raises(CaseError) as err:
+            _case(BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
+                  [{"type": "mesh", "path": "flat.stl", "scale": 0.1,
+                    "translate": [0.05, 0.05, 0.15]}], base_dir=tmp_path)
+        assert "obstacles.0.path = 'flat.stl' encloses no volume: its corners span 1 x 1 x 0 " \
+            "(file units), flat or a single point, so it has no inside; export the closed " \
+            "surface of the solid." in str(err.value)
+        assert "at most 0 m" not in str(err.value)
+        with pytest.raises(ValueError, match="'point.stl' holds no triangles .*only triangles "
+                           "with no area"):
+            shapes.load_mesh(tmp_path / "point.stl", key="obstacles.0", shown="point.stl")
 
 
 def test_an_inside_out_mesh_is_turned_outwards(tmp_path):

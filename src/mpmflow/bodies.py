@@ -156,6 +156,24 @@ def particle_count(body, grid_spacing, shape=None, obstacles=()):
         return math.inf
 
 
+def seeds_any(body, grid_spacing, shape=None):
+    """Whether the body keeps at least one lattice point, obstacles aside: exact for a box
+    (its count, O(1)); for another shape a pass over the lattice points of its bounding box
+    that stops at the first chunk holding one. A body whose box holds more than MAX_PASS
+    points (or too many to count) is taken to seed some: the memory check refuses it."""
+    try:
+        if is_box(body):
+            return _count(body, grid_spacing) > 0
+        s = grid_spacing / body.particles_per_cell
+        lo, hi = seed_region(body, shape, s)
+        if lattice_count(lo, hi, s) > MAX_PASS:
+            return True
+        return any(in_body(body, shape, points, s).any()
+                   for points in lattice_chunks(lo, hi, s))
+    except OverflowError:
+        return True
+
+
 def _pass(body, shape, region, s, obstacles, carved=False):
     """Lattice points in region the body keeps (carved: that the obstacles remove)."""
     lo, hi = region

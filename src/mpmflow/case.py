@@ -996,6 +996,16 @@ def _generic(dotted):
 
 
 def _suggest(dotted):
+    parts = dotted.split(".")
+    if parts[0] not in Case.model_fields:
+        # a misspelt section or list ([[obstacle]]): the whole key's nearest match would be
+        # some key under it (obstacles.0.min), not the name the user meant
+        top = difflib.get_close_matches(parts[0], list(Case.model_fields), n=1, cutoff=0.6)
+        fixed = ".".join(top + parts[1:])
+        if top and (len(parts) == 1 or _generic(fixed) in KNOWN_KEYS):
+            tables = f" ([[{top[0]}]] tables)" if len(parts) == 1 and top[0] in LIST_KEYS \
+                else ""
+            return f" Did you mean `{fixed}`{tables}?"
     match = difflib.get_close_matches(_generic(dotted), KNOWN_KEYS, n=1, cutoff=0.6)
     if not match:
         return ""
@@ -1030,20 +1040,47 @@ def apply_overrides(data, overrides):
         node = data
         for depth, part in enumerate(parts[:-1]):
             if isinstance(node, list):
-                if not part.isdigit() or int(part) >= len(node):
-                    raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth])}` has "
-                                    f"{len(node)} entries; use an index from 0 to "
-                                    f"{len(node) - 1}, e.g. --set bodies.0.max=[0.1, 0.2].")
+                _check_index(label, key, parts, depth, node, value)
                 node = node[int(part)]
-            else:
-                node = node.setdefault(part, {})
+            else:  # a list of tables the case file leaves out starts empty
+                node = node.setdefault(part, [] if depth == 0 and part in LIST_KEYS else {})
             if not isinstance(node, (dict, list)):
                 raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth + 1])}` is a value, not a "
                                 "section." + _suggest(key))
+        if isinstance(node, list) and len(parts) == 2:  # a whole table: obstacles.0={...}
+            _check_index(label, key, parts, 1, node, value, append=True)
+            node[int(parts[1]):int(parts[1]) + 1] = [_parse_value(value.strip()) if parse
+                                                     else value]
+            continue
         if _generic(key) not in KNOWN_KEYS and key not in LIST_KEYS:
             raise CaseError(f"{label} {key}: unknown case key `{key}`.{_suggest(key)} "
                             "Run `mpmflow keys` for the list of keys.")
         node[parts[-1]] = _parse_value(value.strip()) if parse else value
+
+
+def _check_index(label, key, parts, depth, entries, value, append=False):
+    """parts[depth] indexes the list ``entries`` (the tables of parts[depth - 1]), or, for a
+    whole table (``append``), is the next index; CaseError naming the list otherwise."""
+    name, part = ".".join(parts[:depth]), parts[depth]
+    n = len(entries)
+    if part.isdigit() and (int(part) < n or append and int(part) == n):
+        return
+    after = ".".join(parts[depth + 1:])
+    shown = value.strip() if isinstance(value, str) else "..."
+    table = _TABLE_EXAMPLES.get(name, "{...}")
+    if n == 0:
+        raise CaseError(f"{label} {key}: `{name}` has no entries; add one first, e.g. --set "
+                        f"'{name}.0={table}', or a [[{name}]] table in the case file.")
+    example = f"{name}.{n - 1}" + (f".{after}" if after else "")
+    more = "" if after else f", or --set '{name}.{n}={table}' to add one"
+    raise CaseError(f"{label} {key}: `{name}` has {n} entr{'y' if n == 1 else 'ies'}; use an "
+                    f"index from 0 to {n - 1}, e.g. --set {example}={shown}{more}.")
+
+
+_TABLE_EXAMPLES = {  # a table of each list, for messages
+    "bodies": '{type = "box", min = [...], max = [...]}',
+    "obstacles": '{type = "box", min = [...], max = [...]}',
+    "probes": '{name = "p1", quantity = "pressure", position = [...]}'}
 
 
 def _shape_loc(parts):

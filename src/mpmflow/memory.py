@@ -199,7 +199,9 @@ def check(case, est=None):
     budget, source = available()
     if est.total <= budget:
         return est
-    settings = ("grid.spacing (memory grows as its inverse square), "
+    # the particles and the nodes go as (1 / grid.spacing)^D: the square in 2D, the cube in 3D
+    power = {2: "square", 3: "cube"}[len(case.domain.size)]
+    settings = (f"grid.spacing (memory grows as its inverse {power}), "
                 "bodies.N.particles_per_cell")
     if case.output.snapshots and math.isfinite(est.passing_bytes):
         settings += ", output.snapshots = false (a snapshot needs "  \

@@ -11,6 +11,7 @@ that involve the other shapes and the obstacles:
   (refused, not warned: a wall of less than two cells holds at most one row of grid nodes,
   and the water would leak through it or round it);
 * two bodies of which one is not a box that overlap: some lattice point seeded by both;
+* a body that seeds no particle (smaller or thinner than a particle spacing);
 * a body overlapping an obstacle, unless it says ``around_obstacles = true`` (then the
   lattice points inside obstacles are left out when seeding, so water can fill a tank
   round a pier); a body lying wholly inside obstacles in any case;
@@ -93,7 +94,10 @@ def check(case, body_shapes, obstacle_shapes):
                 f"than {THIN} grid cells (grid.spacing = {h:g} m): the grid holds at most one "
                 "row of nodes inside it, so water would leak through or round it; make it at "
                 f"least {THIN * h:.4g} m thick, or refine grid.spacing to at most "
-                f"{width / THIN:.4g} m")
+                f"{width / THIN:.4g} m"
+                + (f" (or, if the file is not in metres, check obstacles.{k}.scale = "
+                   f"{obstacle.scale:g}, the factor from its units to metres)"
+                   if getattr(obstacle, "type", "") == "mesh" else ""))
         if obstacle.name is not None:
             if obstacle.name in names:
                 raise ValueError(
@@ -101,6 +105,7 @@ def check(case, body_shapes, obstacle_shapes):
                     f"{names[obstacle.name]}; give each obstacle its own name")
             names[obstacle.name] = k
     _bodies_apart(case, body_shapes)
+    _bodies_seeded(case, body_shapes)
     for k, probe in enumerate(case.probes):
         for j, (obstacle, shape) in enumerate(zip(case.obstacles, obstacle_shapes)):
             depth = -float(shape.signed_distance(np.asarray([probe.position], dtype=float))[0])
@@ -133,6 +138,39 @@ def _bodies_apart(case, body_shapes):
                         "adding mass that is not there. Bodies may touch but not overlap: "
                         f"move or shrink one of them ({_move_keys('bodies', i, a)} or "
                         f"{_move_keys('bodies', j, b)})")
+
+
+def _bodies_seeded(case, body_shapes):
+    """Every body seeds at least one particle: one that seeds none (smaller or thinner
+    than a particle spacing, often a mesh whose scale is off by a thousand) would be left
+    out of the run without a word. (A body that obstacles take whole: empty_body_message.)"""
+    h = case.grid.spacing
+    for k, (body, shape) in enumerate(zip(case.bodies, body_shapes)):
+        if not geometry.seeds_any(body, h, shape):
+            raise ValueError(_too_small_message(case, k, body, shape))
+
+
+_SIZE_KEYS = {"box": "min/max", "cylinder": "radius/length", "sphere": "radius",
+              "disc": "radius", "polygon": "vertices", "mesh": "scale"}
+
+
+def _too_small_message(case, k, body, shape):
+    h, ppc = case.grid.spacing, body.particles_per_cell
+    kind = getattr(body, "type", "box")
+    lo, hi = (body.min, body.max) if kind == "box" else shape.bounds()
+    size = " x ".join(f"{b - a:.4g}" for a, b in zip(lo, hi))
+    head = (f"{_what('bodies', k, body)} seeds no particle: it spans {size} m (from {_v(lo)} "
+            f"to {_v(hi)} m), and no point of its particle lattice, spaced grid.spacing / "
+            f"bodies.{k}.particles_per_cell = {h:g} / {ppc} = {h / ppc:.4g} m, lies inside "
+            "it, so the run would leave it out. ")
+    resize = (f"make it larger than one particle spacing (bodies.{k}.{_SIZE_KEYS[kind]}), "
+              f"raise bodies.{k}.particles_per_cell (at most 16) or refine grid.spacing, or "
+              f"remove bodies.{k}")
+    if kind == "mesh":
+        return head + (f"Check bodies.{k}.scale = {body.scale:g}: it converts the file's "
+                       "units to metres (1 for a file in metres, 0.001 for millimetres). "
+                       f"If it is right, {resize}.")
+    return head + resize[0].upper() + resize[1:] + "."
 
 
 def _shared(P, shape_p, Q, shape_q, s):

@@ -18,6 +18,7 @@ from libigl (``igl``: fast winding number, point-to-mesh distance).
 """
 
 import functools
+import io
 import math
 from pathlib import Path
 
@@ -309,14 +310,30 @@ class Mesh(Shape):
 
 
 def polygon_problem(vertices):
-    """Why these corners (m) are not a simple polygon (no area, edges that cross or touch),
-    or None. O(n^2) in the corners: a case's polygon has tens, not thousands."""
+    """Why these corners (m) are not a simple polygon (all on one line, edges that cross or
+    touch), or None. O(n^2) in the corners: a case's polygon has tens, not thousands. The
+    crossing edges are looked for before the area: a bow tie's two loops can enclose areas
+    that cancel, and "no area" would hide that its edges cross."""
     v = np.asarray(vertices, dtype=float)
-    n = len(v)
+    d = v - v[0]
+    far = d[np.argmax(np.abs(d).sum(axis=1))]
+    if not np.any(far[0] * d[:, 1] - far[1] * d[:, 0]):
+        return ("vertices: the polygon's corners lie on one line, so they enclose no area; "
+                "give its corners in order around its boundary")
+    crossing = _crossing_edges(v)
+    if crossing:
+        return crossing
     area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
     if not abs(area) > 0:
         return ("vertices: the polygon's corners enclose no area; give its corners in order "
                 "around its boundary")
+    return None
+
+
+def _crossing_edges(v):
+    """The message for the first two edges of the polygon v that cross (each passes
+    through the other's inside) or touch, or None."""
+    n = len(v)
 
     def cross(o, a, b):
         return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
@@ -330,11 +347,12 @@ def polygon_problem(vertices):
             if (j + 1) % n == i:
                 continue  # the last edge and the first share a corner
             c, d = v[j], v[(j + 1) % n]
-            if (cross(c, d, a) * cross(c, d, b) <= 0 and cross(a, b, c) * cross(a, b, d) <= 0
-                    and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
+            sides = (cross(c, d, a) * cross(c, d, b), cross(a, b, c) * cross(a, b, d))
+            if (max(sides) <= 0 and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
+                how = "cross" if max(sides) < 0 else "touch"
                 return (f"vertices: the polygon's edges {i} (corners {i} to {(i + 1) % n}) and "
-                        f"{j} (corners {j} to {(j + 1) % n}) cross or touch, so it is not a "
-                        "simple polygon; list its corners in order around the boundary")
+                        f"{j} (corners {j} to {(j + 1) % n}) {how}, so it is not a simple "
+                        "polygon; list its corners in order around the boundary")
     return None
 
 
@@ -344,59 +362,229 @@ def _refuse(key, text):
     raise ValueError(f"{key}.path = {text}")
 
 
+STL_HEADER = 84  # bytes: an 80-byte free header, then the triangle count (uint32)
+STL_TRIANGLE = 50  # bytes: normal, three vertices (float32 each), a 2-byte attribute
+
+
+class MeshFileError(ValueError):
+    """A mesh file whose bytes say it is damaged (the message says how)."""
+
+
+def _stl_bytes(raw):
+    """(the STL bytes for trimesh, a note or None): a binary STL whose header count
+    disagrees with the file's size, with its count set to the triangles the file holds.
+
+    trimesh reads a binary STL only when 84 + 50 x its header's count is the file's size,
+    and otherwise takes it for ASCII text, which it is not: it then fails with a decoding
+    error, or reads no triangles. Writers that stream (and cannot go back to fill in the
+    count) leave the count 0 or wrong, while the triangles are all there. When the bytes
+    after the header are a whole number of 50-byte triangles, which triangles the file
+    holds is unambiguous: they are read, and the note tells the user that the count was
+    not used (a truncated file then shows as an open surface, refused with that note).
+    When they are not, the file is cut inside a triangle or has bytes appended, and which
+    triangles are meant is a guess: MeshFileError."""
+    if _is_ascii_stl(raw):
+        return raw, None
+    if b"\0" not in raw:  # text (no binary STL is without a NUL byte) that is not an STL
+        raise MeshFileError("is text, but not an ASCII STL (which starts with \"solid\"); "
+                            "export the surface again as STL (binary or ASCII) or OBJ.")
+    if len(raw) < STL_HEADER:
+        raise MeshFileError(f"has {len(raw)} bytes, fewer than the {STL_HEADER}-byte header of "
+                            "a binary STL, and is not an ASCII STL; export it again.")
+    count = int.from_bytes(raw[80:84], "little")
+    body = len(raw) - STL_HEADER
+    if count * STL_TRIANGLE == body:
+        return raw, None
+    held, rest = divmod(body, STL_TRIANGLE)
+    if rest:
+        raise MeshFileError(
+            f"is a binary STL whose header counts {count:,} triangles "
+            f"({STL_HEADER + STL_TRIANGLE * count:,} bytes), but the file has {len(raw):,} "
+            f"bytes: {held:,} whole triangles and {rest} bytes more, so it is cut short "
+            "inside a triangle or has bytes appended, and which triangles it holds is "
+            "unclear; export it again from your CAD tool.")
+    note = (f"the binary STL's header counts {count:,} triangles but its {len(raw):,} bytes "
+            f"hold {held:,}; the {held:,} triangles of the file were read")
+    return raw[:80] + held.to_bytes(4, "little") + raw[STL_HEADER:], note
+
+
+def _is_ascii_stl(raw):
+    """An ASCII STL: it starts with ``solid`` and holds no NUL byte (binary triangles hold
+    many: the attribute bytes, coordinates 0.0; a binary header may start with "solid")."""
+    return raw.lstrip()[:5].lower() == b"solid" and b"\0" not in raw
+
+
+BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
+
+
+def _has_bom(raw):
+    """Text that starts with a byte-order mark (no binary STL header does, in practice)."""
+    return any(raw.startswith(bom) for bom, _ in BOMS)
+
+
+def _text_bytes(raw):
+    """Text (an ASCII STL, an OBJ) as UTF-8 for trimesh. trimesh decodes other text with
+    charset_normalizer's guess, a module it does not install (a Latin-1 solid name, "solid
+    W\xfcrfel", failed with "No module named 'charset_normalizer'"); the keywords and numbers
+    of both formats are ASCII, so reading the bytes as Latin-1 (every byte a character)
+    changes only names, never the geometry. A byte-order mark names its encoding."""
+    for bom, encoding in BOMS:
+        if raw.startswith(bom):
+            try:
+                return raw.decode(encoding).encode("utf-8")
+            except UnicodeDecodeError:
+                raise MeshFileError(f"starts with a {encoding.upper()} byte-order mark but "
+                                    f"is not {encoding.upper()} text; save it as plain "
+                                    "(ASCII) text, or export it again.") from None
+    try:
+        raw.decode("utf-8")
+        return raw
+    except UnicodeDecodeError:
+        return raw.decode("latin-1").encode("utf-8")
+
+
+def _signed_volume(vertices, faces):
+    """The volume (m^3, in file units cubed) a closed, outward-oriented surface encloses, by
+    the divergence theorem (trimesh's ``volume`` also divides by it, with a warning when
+    it is 0)."""
+    v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
+    return float(np.einsum("ij,ij->i", v0, np.cross(v1, v2)).sum()) / 6.0
+
+
 @functools.lru_cache(maxsize=16)
 def _read_mesh(path, stamp):
-    """(vertices, faces, boundary edge count) of a mesh file; ``stamp`` (size, mtime)
-    invalidates the cache when the file changes."""
+    """(vertices, faces, boundary edge count, unmatched, note) of a mesh file; ``stamp``
+    (size, mtime) invalidates the cache when the file changes. ``note``: what the reading
+    had to decide (a binary STL's wrong count), or None."""
     import trimesh
 
-    mesh = trimesh.load(path, force="mesh")
-    vertices = np.asarray(mesh.vertices, dtype=float)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
+    raw = Path(path).read_bytes()
+    kind = Path(path).suffix.lower()[1:]
+    note = None
+    if not raw.strip():
+        raise MeshFileError("holds no triangles: the file is empty; export the closed "
+                            "surface of the solid as STL or OBJ.")
+    if kind == "obj" or _has_bom(raw):
+        raw = _text_bytes(raw)
+    if kind == "stl":
+        raw, note = _stl_bytes(raw)
+        if _is_ascii_stl(raw):
+            raw = _text_bytes(raw)
+    # unprocessed first, and quietly: trimesh's constructor checks the stored normals
+    # against the corners, arithmetic that warns on inf or nan coordinates; such a file is
+    # refused right below, before its vertices are merged
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        mesh = trimesh.load(io.BytesIO(raw), file_type=kind, force="mesh", process=False)
+    if not np.isfinite(np.asarray(mesh.vertices, dtype=float)).all():
+        return np.asarray(mesh.vertices, dtype=float), np.zeros((1, 3), np.int64), 0, 0, note
+    # a binary STL's triangles share no vertex until equal corners are merged: exactly
+    # equal ones (writers repeat a corner's coordinates bit for bit), not trimesh's
+    # merge_vertices, which rounds the coordinates to integers of 1e-8 units and so breaks
+    # (int64 overflow) beyond about 1e10 file units
+    vertices, shared = np.unique(np.asarray(mesh.vertices, dtype=float), axis=0,
+                                 return_inverse=True)
+    faces = shared.reshape(-1)[np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)]
+    # a triangle with a repeated corner (after merging equal vertices) has no area and
+    # no solid angle: it is no part of the surface, and its edge from a corner to itself
+    # would count as an open edge
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
+                  & (faces[:, 0] != faces[:, 2])]
     if len(faces) == 0:
-        return vertices, faces, 0, 0
+        return vertices, faces, 0, 0, note
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
     boundary = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
     oriented = boundary == 0 and mesh.is_winding_consistent
-    if oriented and mesh.volume < 0:
+    if oriented and _signed_volume(vertices, faces) < 0:
         faces = faces[:, ::-1]  # inside out: turn the triangles to face outwards
     unmatched = 0 if oriented or boundary else 1
-    return vertices, faces, boundary, unmatched
+    return vertices, faces, boundary, unmatched, note
 
 
-def load_mesh(path, scale=1.0, translate=(0.0, 0.0, 0.0), key="mesh", shown=None):
-    """A closed Mesh from an STL or OBJ file (read by trimesh): file units times ``scale``
-    are metres, then moved by ``translate`` (m). ValueError, naming ``key``, for a file that
-    is missing, unreadable, empty or not a closed surface. ``shown``: the path as the
-    user wrote it, for messages."""
-    path = Path(path)
-    shown = repr(str(shown if shown is not None else path))
-    if not path.is_file():
+def _read(path, key, shown):
+    """_read_mesh, with what the file system and trimesh raise as the user's message."""
+    if path.is_dir():
+        _refuse(key, f"{shown} is a folder, not a file; give the path of an STL or OBJ file "
+                "(relative paths are taken from the case file's folder).")
+    if not path.exists():
         _refuse(key, f"{shown} does not exist (relative paths are taken from the case file's "
                 "folder); give the path of an STL or OBJ file.")
     if path.suffix.lower() not in (".stl", ".obj"):
         _refuse(key, f"{shown} is not an STL or OBJ file (its name ends in "
                 f"{path.suffix or 'nothing'!r}); export the surface as .stl or .obj.")
-    stat = path.stat()
     try:
-        vertices, faces, boundary, unmatched = _read_mesh(str(path.resolve()),
-                                                          (stat.st_size, stat.st_mtime_ns))
+        stat = path.stat()
+        return _read_mesh(str(path.resolve()), (stat.st_size, stat.st_mtime_ns))
+    except MeshFileError as err:
+        _refuse(key, f"{shown} {err}")
+    except OSError as err:
+        _refuse(key, f"{shown} cannot be read ({err.strerror or err}); check the file's "
+                "permissions, or give another path.")
     except Exception as err:  # trimesh raises many kinds on a bad file
         _refuse(key, f"{shown} cannot be read as a triangle mesh ({type(err).__name__}: "
                 f"{err}); export it again from your CAD tool as STL or OBJ.")
+
+
+def load_mesh(path, scale=1.0, translate=(0.0, 0.0, 0.0), key="mesh", shown=None):
+    """A closed Mesh from an STL or OBJ file (read by trimesh): file units times ``scale``
+    are metres, then moved by ``translate`` (m). ValueError, naming ``key``, for a file that
+    is missing, unreadable, empty, not a closed surface or enclosing no volume. ``shown``:
+    the path as the user wrote it, for messages.
+
+    Read as the file is, not as its writer may have meant it: ASCII text of any encoding
+    (names aside, STL and OBJ are ASCII), and a binary STL whose header count disagrees
+    with its size by the triangles it holds, when that is unambiguous (``_stl_bytes``; the
+    mesh's ``notes`` then say so, and the run prints them); refused otherwise."""
+    path = Path(path)
+    shown = repr(str(shown if shown is not None else path))
+    vertices, faces, boundary, unmatched, note = _read(path, key, shown)
+    said = f" ({note})" if note else ""
     if len(faces) == 0:
-        _refuse(key, f"{shown} holds no triangles (an empty or non-triangle file); export "
-                "the closed surface of the solid as STL or OBJ.")
+        _refuse(key, f"{shown} holds no triangles{said} (an empty or non-triangle file, or "
+                "only triangles with no area); export the closed surface of the solid as "
+                "STL or OBJ.")
+    if not np.isfinite(vertices).all():
+        _refuse(key, f"{shown} holds coordinates that are not numbers (nan or inf){said}; "
+                "export it again from your CAD tool.")
     if boundary:
-        _refuse(key, f"{shown} is not a closed surface: {boundary} boundary edges (edges of "
-                "only one triangle), so its inside is not defined; close the mesh in your "
-                "CAD tool or with trimesh.repair.fill_holes, and check it with "
+        _refuse(key, f"{shown} is not a closed surface{said}: {boundary} boundary edges "
+                "(edges of only one triangle), so its inside is not defined; close the mesh "
+                "in your CAD tool or with trimesh.repair.fill_holes, and check it with "
                 "trimesh.load(path).is_watertight.")
     if unmatched:
-        _refuse(key, f"{shown} is closed but its triangles are not consistently oriented "
-                "(neighbours list their shared edge in the same direction); fix the normals "
-                "in your CAD tool or with trimesh.repair.fix_normals.")
+        _refuse(key, f"{shown} is closed but its triangles are not consistently oriented"
+                f"{said} (neighbours list their shared edge in the same direction); fix the "
+                "normals in your CAD tool or with trimesh.repair.fix_normals.")
     v = vertices * float(scale) + np.asarray(translate, dtype=float)
-    return Mesh(v, faces)
+    _check_extent(key, shown, scale, vertices, v, faces)
+    mesh = Mesh(v, faces)
+    mesh.notes = [f"{key}.path = {shown}: {note}"] if note else []
+    return mesh
+
+
+def _check_extent(key, shown, scale, vertices, v, faces):
+    """A mesh that encloses no volume (flat, or all its corners at one point; measured in
+    the file's units, a tiny scale aside), or whose coordinates times ``scale`` leave the
+    floating-point range, is refused: its inside is empty, and every size measured from it
+    (an obstacle's thickness) would be 0."""
+    extent = vertices.max(axis=0) - vertices.min(axis=0)
+    volume = abs(_signed_volume(vertices, faces))
+    if not (np.all(extent > 0) and volume > 1e-12 * float(extent.max()) ** 3):
+        size = " x ".join(f"{e:.4g}" for e in extent)
+        _refuse(key, f"{shown} encloses no volume: its corners span {size} (file units), "
+                "flat or a single point, so it has no inside; export the closed surface of "
+                "the solid.")
+    scaled = vertices * float(scale)
+    if not (np.isfinite(scaled).all() and np.all(scaled.max(axis=0) > scaled.min(axis=0))):
+        raise ValueError(
+            f"{key}.scale = {scale:g} takes the coordinates of {shown} (up to "
+            f"{np.abs(vertices).max():.4g} file units) beyond what a floating-point number "
+            "holds; give the factor from the file's units to metres (1: metres, 0.001: "
+            "millimetres).")
+    if not (np.isfinite(v).all() and np.all(v.max(axis=0) > v.min(axis=0))):
+        raise ValueError(
+            f"{key}.translate moves {shown} (up to {np.abs(scaled).max():.4g} m across) so "
+            "far that its coordinates lose its shape; give the shift (m) that places it in "
+            "the domain.")
 
 
 # --------------------------------------------------------------------------- case tables

@@ -120,6 +120,10 @@ class Simulation:
             self.notices += stiffness.check(case, self.particles, self.dt)
         except ValueError as err:
             raise CaseError(str(err)) from None
+        # what reading the mesh files had to decide (a binary STL's wrong triangle count)
+        for shape in ([case.body_shape(k) for k in range(len(case.bodies))]
+                      + [case.obstacle_shape(k) for k in range(len(case.obstacles))]):
+            self.notices += getattr(shape, "notes", [])
         if self.grid.adjusted(case.domain.size):
             used = " x ".join(f"{s:.6g}" for s in self.grid.size)
             asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
