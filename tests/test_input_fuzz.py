@@ -261,7 +261,8 @@ def _run_case(text, files=None):
         assert len(lines) == 1 and lines[0].startswith("mpmflow: error: "), (err, text)
     if code == 3:
         assert any(cause in err for cause in ("The run blew up", "did not converge",
-                                              "became unstable", "is singular")), err
+                                              "became unstable", "is singular",
+                                              "could not be set up")), err
     return code, err
 
 

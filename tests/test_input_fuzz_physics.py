@@ -9,6 +9,7 @@ import json
 import tomllib
 
 import hypothesis.strategies as st
+import pytest
 from hypothesis import HealthCheck, given, settings
 
 from mpmflow import memory
@@ -77,6 +78,7 @@ def physics_case(draw):
     return to_toml(data)
 
 
+@pytest.mark.filterwarnings("error")  # a numerical warning is a defect as a traceback is
 def test_materials_and_probes_run_or_fail_cleanly(monkeypatch):
     """The property over CASES cases, and a check that it was not vacuous: cases of every
     model ran and cases were refused."""

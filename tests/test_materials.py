@@ -295,3 +295,14 @@ def test_granular_example_states_the_speed_its_deposit_creeps_at(tmp_path):
     assert abs(min(shares) - share_lo) <= 0.51 and abs(max(shares) - share_hi) <= 0.51
     front = run.timeseries["front"]
     assert abs(front[late][0] - front0) <= 5.1e-4 and abs(front[late][-1] - front1) <= 5.1e-4
+
+
+def test_a_cap_beyond_double_precision_is_refused():
+    """The property test's find: max_viscosity = 1e30 Pa s made the viscous system's
+    stiffness eta dt / (rho h^2) 1e26, and the run failed later in the pressure solver's
+    set-up with advice about the step; it is refused up front, naming the cap."""
+    case = load_case(ROOT / HYDRO, BINGHAM + ["material.max_viscosity=1e30"])
+    with pytest.raises(CaseError) as err:
+        Simulation(case)
+    assert "material.max_viscosity = 1e+30 Pa s" in str(err.value)
+    assert "no digits left" in str(err.value)

@@ -835,6 +835,12 @@ class Case(_Section):
                 box = " x ".join(f"[0, {s:g}]" for s in size)
                 raise ValueError(f"probes.{k}.position = {probe.position} m lies outside the "
                                  f"domain {box} m; move it inside")
+            if probe.window is not None and probe.window > max(size):
+                raise ValueError(f"probes.{k}.window = {probe.window:g} m is wider than the "
+                                 f"domain (largest side {max(size):g} m), so it would read "
+                                 "particles anywhere; give a window of a few grid cells "
+                                 f"(grid.spacing = {self.grid.spacing:g} m), or none for "
+                                 "the default")
         for k, body in enumerate(self.bodies):
             speed = float(np.linalg.norm(body.velocity))
             if not speed <= self.solver.max_speed:

@@ -18,6 +18,7 @@ are off by about 1.5 S (measured on a 0.1 m block at S = 0.06, 0.25 and 1: 8%, 3
 
 import numpy as np
 
+CONDITION = 1e10  # eta dt / (rho h^2) above which the viscous solve has no digits left
 REFUSE = 1.0  # S above which a Newtonian material's motion is mostly the split's error
 TELL = 0.03  # S above which the expected error (about 1.5 S) is told: 5% and more
 ERROR_PER_S = 1.5  # relative error of the creep speed per unit of S (measured, see above)
@@ -52,6 +53,14 @@ def check(case, particles, dt):
     particles at the start."""
     m = case.material
     eta, key = stiffest(m)
+    h = case.grid.spacing
+    if key is not None and eta * dt / (m.density * h * h) > CONDITION:
+        raise ValueError(
+            f"{key} = {eta:g} Pa s with material.density = {m.density:g} kg/m^3, time step "
+            f"{dt:g} s and grid.spacing = {h:g} m makes the viscous system's stiffness "
+            f"eta dt / (rho h^2) = {eta * dt / (m.density * h * h):.3g}, beyond "
+            f"{CONDITION:g}, where its solve in double precision has no digits left; lower "
+            f"{key} (1e5 Pa s is a usual cap for yield-stress and granular materials)")
     g = float(np.linalg.norm(case.physics.gravity))
     H = depth(particles, case.physics.gravity)
     if key is None or g == 0.0 or H == 0.0:
