@@ -111,6 +111,9 @@ def _columns(grid, depths):
     return f
 
 
+FIRST = "first_drop"
+
+
 def test_level_in_3d_interpolates_the_four_cell_columns_around_the_gauge_bilinearly():
     """Columns filled to 4, 4, 4 and 8 cells (the deep one at i = j = 1): at the point
     between their centres each weighs 1/4, the profile is 1 below 4 cells and 1/4 from 4 to 8,
@@ -120,18 +123,54 @@ def test_level_in_3d_interpolates_the_four_cell_columns_around_the_gauge_bilinea
     h = 0.1
     grid = Grid(h, (2, 2, 12))
     f = _columns(grid, np.array([[4, 4], [4, 8]]))
-    np.testing.assert_allclose(level_at(grid, f, [h, h, 0.0]), (3.5 + 0.5 / 0.75) * h)
+    np.testing.assert_allclose(level_at(grid, f, [h, h, 0.0], gauge=FIRST), (3.5 + 0.5 / 0.75) * h)
     at = 0.5 * h + 0.75 * h
-    np.testing.assert_allclose(level_at(grid, f, [at, at, 0.0]), (7.5 + 1 / 9) * h)
+    np.testing.assert_allclose(level_at(grid, f, [at, at, 0.0], gauge=FIRST), (7.5 + 1 / 9) * h)
     # the centre of a column reads that column alone
-    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 0.0]), 8 * h)
-    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 2 * h]), 6 * h)
+    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 0.0], gauge=FIRST), 8 * h)
+    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 2 * h], gauge=FIRST), 6 * h)
     # the same rule as in 2D: the plane y = 0.5 h of the 3D field is the 2D field
     grid2 = Grid(h, (2, 12))
     f2 = _columns(grid2, np.array([4, 8]))
-    assert level_at(grid2, f2, [at, 0.0]) == pytest.approx((7.5 + 0.25 / 0.75) * h)
+    assert level_at(grid2, f2, [at, 0.0], gauge=FIRST) == pytest.approx((7.5 + 0.25 / 0.75) * h)
     f3 = _columns(grid, np.array([[4, 4], [8, 8]]))
-    assert level_at(grid, f3, [at, 0.3 * h, 0.0]) == pytest.approx(level_at(grid2, f2, [at, 0]))
+    assert level_at(grid, f3, [at, 0.3 * h, 0.0], gauge=FIRST) == pytest.approx(
+        level_at(grid2, f2, [at, 0], gauge=FIRST))
+
+
+def test_the_integral_gauge_reads_the_water_on_its_line_gathered_into_one_layer():
+    """The default gauge (issue 25): the integral of the interpolated fraction from the foot
+    up. The columns above: at the point between them each weighs 1/4, so 4 h full and 4 h
+    at 1/4: 5 h; three quarters of the way to the deep one, 4 h + 4 h 9/16; the centre of
+    the deep column 8 h, from a foot at 2 h 6 h, from a foot at 2.5 h 5.5 h."""
+    h = 0.1
+    grid = Grid(h, (2, 2, 12))
+    f = _columns(grid, np.array([[4, 4], [4, 8]]))
+    np.testing.assert_allclose(level_at(grid, f, [h, h, 0.0]), 5 * h)
+    at = 0.5 * h + 0.75 * h
+    np.testing.assert_allclose(level_at(grid, f, [at, at, 0.0]), (4 + 4 * 9 / 16) * h)
+    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 0.0]), 8 * h)
+    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 2 * h]), 6 * h)
+    np.testing.assert_allclose(level_at(grid, f, [1.5 * h, 1.5 * h, 2.5 * h]), 5.5 * h)
+
+
+def test_an_aerated_foot_or_a_splash_under_each_gauge():
+    """The SPHERIC drop-outs: a bore 8 cells deep over a foot cell 40% full (air
+    entrained at the floor) reads 0 with "first_drop" and 7.4 cells with the integral; a
+    drop of one cell two cells above a 4-cell layer is left out by "first_drop" and counted
+    by its volume in the integral."""
+    h = 0.01
+    grid = Grid(h, (1, 12))
+    bore = np.zeros((1, 12))
+    bore[0, :8] = 1.0
+    bore[0, 0] = 0.4
+    assert level_at(grid, bore, [0.005, 0.0], gauge=FIRST) == 0.0
+    np.testing.assert_allclose(level_at(grid, bore, [0.005, 0.0]), 7.4 * h)
+    splash = np.zeros((1, 12))
+    splash[0, :4] = 1.0
+    splash[0, 6] = 1.0
+    np.testing.assert_allclose(level_at(grid, splash, [0.005, 0.0], gauge=FIRST), 4 * h)
+    np.testing.assert_allclose(level_at(grid, splash, [0.005, 0.0]), 5 * h)
 
 
 def test_the_window_lies_on_the_water_side_of_a_wall_and_of_an_obstacle_face():

@@ -412,10 +412,8 @@ class Probe(_Section):
         "as probes.N.estimate says; 0 when no particle is in the window (a dry sensor reads "
         "the atmosphere's gauge pressure). \"level\" = a water-level gauge on the vertical "
         "line through position (x in 2D; x and y in 3D): the level (m) above the gauge's foot "
-        "position, where the cell volume fraction, interpolated linearly (bilinearly in 3D) "
-        "between the cell columns around the line, first drops below 1/2 going up from the "
-        "foot, minus the foot's height (the top of the water layer; 0 when the foot is dry, "
-        "splashes above the layer are not counted).",
+        "position, read from the cell volume fraction interpolated linearly (bilinearly in "
+        "3D) between the cell columns around the line, as probes.N.gauge says.",
         examples=["pressure"])
     position: list[float] = Field(
         description="Where the probe is (m): the sensor's point for \"pressure\", the foot of "
@@ -437,6 +435,16 @@ class Probe(_Section):
         "pressures that are not, each counted in summary.json's caps_and_fallbacks); \"mean\" = their mean pressure, the pressure at their "
         "centre (half a window from a wall sensor: rho g window/2 low on the column at "
         "rest).")
+    gauge: Literal["integral", "first_drop"] = Field(
+        "integral", description="How a level probe reads the volume fraction f on its line: "
+        "\"integral\" = the integral of f from the foot up (m), the water's depth gathered "
+        "into one layer, as a resistance or capacitance wave probe reads its wetted wire "
+        "(and OpenFOAM's interfaceHeight): a splash or spray above the layer counts by its "
+        "volume, an air pocket under the surface counts out by its volume, an aerated cell "
+        "at the foot lowers it by its air only; \"first_drop\" = the height above the foot "
+        "where f first drops below 1/2 going up (the top of the first layer: 0 when the "
+        "foot's cell is less than half full, splashes above the layer not counted). Level "
+        "probes only.")
     data: Optional[ProbeData] = Field(
         None, description="The measured series to compare with ([probes.data] table: path, "
         "column, time_column): `mpmflow plot` draws it beside the probe's.")

@@ -23,11 +23,18 @@ axis):
   moved the first impact at P1 by 0.025 s at 0.05 m).
 - ``level`` (m): the water level above the gauge's foot on the vertical line through
   ``position`` (x in 2D; x and y in 3D). The cell volume fraction f is interpolated
-  linearly in x (bilinearly in x and y in 3D) between the cell columns around the line; the
-  level is where that profile first drops below 1/2 going up from the foot (linear between
-  cell centres), minus the foot's height: the top of the water layer above the foot, 0 when
-  the foot is dry, the grid's top minus the foot when it never drops (counted in the
-  summary: the water may reach higher). Splashes above the layer are not counted.
+  linearly in x (bilinearly in x and y in 3D) between the cell columns around the line.
+  ``probes.N.gauge = "integral"`` (the default) reads the integral of f along the line from
+  the foot up, f constant in each cell: the water's depth if it were gathered into one
+  layer, as a resistance or capacitance wave probe reads its wetted wire and CFD codes
+  compare (OpenFOAM's interfaceHeight); a splash above the layer and the spray in it
+  count by their volume, an air pocket under the surface counts out by its volume, a
+  single aerated cell at the foot lowers the reading by its air only.
+  ``"first_drop"`` reads where the profile first drops below 1/2 going up from the foot
+  (linear between cell centres), minus the foot's height: the top of the first layer above
+  the foot, 0 when the foot's cell is less than half full (so one aerated cell under a
+  deep bore reads a dry gauge), the grid's top minus the foot when it never drops (counted
+  in the summary: the water may reach higher); splashes above the layer are not counted.
 
 Cost: the particles are binned by cell once per output anyway (``cells.bin_particles``);
 a pressure probe reads only the particles of the cells its window overlaps, so the probes
@@ -173,10 +180,29 @@ def _fit(x, p, point, side, dim):
     return float(np.linalg.lstsq(X, p, rcond=None)[0][0])
 
 
-def level_at(grid, f, foot, note=None):
-    """Water level (m) above ``foot`` on the vertical line through it (see the module
-    docstring); ``f``: the cell volume fractions (``diagnostics.volume_fraction_field``);
-    ``note(what)`` is told when the level is cut at the grid's top."""
+def level_at(grid, f, foot, note=None, gauge="integral"):
+    """Water level (m) above ``foot`` on the vertical line through it, as ``gauge`` reads it
+    (see the module docstring); ``f``: the cell volume fractions
+    (``diagnostics.volume_fraction_field``); ``note(what)`` is told when a "first_drop"
+    level is cut at the grid's top."""
+    col = _column(grid, f, foot)
+    if gauge == "integral":
+        return _integral(grid, col, float(foot[-1]))
+    return _first_drop(grid, col, float(foot[-1]), note)
+
+
+def _integral(grid, col, z0):
+    """The integral (m) of the column's fractions ``col`` (constant in each cell) from
+    height z0 (m) to the grid's top."""
+    h = grid.spacing
+    k0 = int(np.clip(np.floor(z0 / h), 0, grid.cells[-1] - 1))
+    part = (k0 + 1) * h - z0  # the foot's cell above the foot
+    return float(max(col[k0] * part + h * np.sum(col[k0 + 1:]), 0.0))
+
+
+def _column(grid, f, foot):
+    """The column of f on the vertical line through ``foot`` (one value per cell along the
+    last axis)."""
     h, dim = grid.spacing, grid.dim
     col = 0.0
     # the column of f on the line: linear in each horizontal axis between the two cell
@@ -193,9 +219,13 @@ def level_at(grid, f, foot, note=None):
             w *= wk if c else 1.0 - wk
         if w:
             col = col + w * f[tuple(i + c for i, c in zip(lows, corner))]
-    col = np.broadcast_to(col, (grid.cells[-1],))
-    z0 = float(foot[-1])
-    zc = grid.cell_centres(dim - 1)
+    return np.broadcast_to(col, (grid.cells[-1],))
+
+
+def _first_drop(grid, col, z0, note):
+    """Where the column ``col`` first drops below 1/2 above z0, minus z0 (m)."""
+    h = grid.spacing
+    zc = grid.cell_centres(grid.dim - 1)
     k0 = int(np.clip(np.floor(z0 / h), 0, grid.cells[-1] - 1))
     below = np.flatnonzero(col[k0:] < 0.5)
     if below.size == 0:
@@ -226,5 +256,5 @@ def measure(case, grid, particles, bins, time, solid_distance=None, fallbacks=No
         else:
             if f is None:
                 f = volume_fraction_field(grid, bins.theta)
-            row[probe.name] = level_at(grid, f, probe.position, note)
+            row[probe.name] = level_at(grid, f, probe.position, note, probe.gauge)
     return row
