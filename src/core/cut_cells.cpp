@@ -9,6 +9,9 @@ namespace mpmflow {
 
 namespace {
 
+constexpr double FLAT_GRADIENT = 1e-2;  // |grad phi| below this: no direction to push along
+constexpr double MAX_PUSH = 2.0;        // cells: the longest push-out step
+
 // Gauss point gp (of 2^(D-1)) of the face normal to axis k on `side` (0, 1) of the
 // (sub-)cell with local centre `centre` (its offsets +-gs already scaled), into `local`.
 template <int D>
@@ -193,8 +196,16 @@ index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
       for (int it = 0; it < 4; ++it) {
         double g2 = 0.0;
         for (int k = 0; k < D; ++k) g2 += grad[k] * grad[k];
-        if (g2 == 0.0) break;
-        const double step = (margin - phi) / g2;
+        // phi is a distance: |grad phi| is about 1 across a face the grid resolves. Where
+        // it is far below (a cell whose corners all read one value, as the wall shift of
+        // obstacles.node_distance makes the corner cell of an obstacle touching two or three
+        // walls), the gradient is round-off (5.6e-17 measured) and gives no direction: a
+        // Newton step along it threw a particle 1.6e15 m. The particle stays where it is.
+        if (g2 < FLAT_GRADIENT * FLAT_GRADIENT) break;
+        double step = (margin - phi) / g2;
+        // nor does one step move a particle further than MAX_PUSH cells
+        const double length = std::abs(step) * std::sqrt(g2);
+        if (length > MAX_PUSH * g.h) step *= MAX_PUSH * g.h / length;
         for (int k = 0; k < D; ++k) x(p, k) += step * grad[k];
         phi = interpolate_phi<D>(g, phi_node, xc, p, grad);
         if (phi >= margin) break;

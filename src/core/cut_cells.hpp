@@ -51,8 +51,9 @@ double interpolate_phi(const Grid<D>& g, View<const double> phi_node, View<const
                        index_t p, double* grad);
 
 // Particles inside an obstacle (interpolated phi < margin, m) moved out along grad phi to
-// phi = margin (up to 4 Newton steps), their velocity into the solid removed (x, v: n x D,
-// in place). Returns how many were moved.
+// phi = margin (up to 4 Newton steps, each at most 2 cells long; none where |grad phi| <
+// 0.01, a flat cell that gives no direction), their velocity into the solid removed (x, v:
+// n x D, in place). Returns how many were moved.
 template <int D>
 index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                  View<const double> phi_node, double margin);

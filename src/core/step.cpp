@@ -10,6 +10,7 @@
 #include "free_surface.hpp"
 #include "ghost_pressure.hpp"
 #include "parallel.hpp"
+#include "pockets.hpp"
 #include "pressure_system.hpp"
 #include "quadrature.hpp"
 #include "rheology.hpp"
@@ -276,6 +277,7 @@ void State<D>::warm_start() {
 template <int D>
 bool State<D>::pressure_matrix(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
+  npockets_ = 0;
   auto v_star = v_star_.template view<2>({nn, D});
   auto node_row = node_row_.view(nn);
   start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row,
@@ -291,8 +293,33 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
   assemble_matrix<D>(grid_, I_.slot, I_.K, node_row, node_f_.view(nn), O.subcell, O.theta_min, cols,
                      vals, anchored);
   for (index_t r = 0; r < n; ++r)
-    if (anchored(r)) return true;
+    if (anchored(r)) {
+      anchor_pockets(O);
+      return true;
+    }
   return false;
+}
+
+template <int D>
+void State<D>::anchor_pockets(const Options<D>& O) {
+  // water sealed off from the free surface (src/core/pockets.hpp): its pressure is fixed up to
+  // a constant only, set by p = 0 at its highest node (against gravity), so that it presses
+  // on its walls (p >= 0 under gravity) and the contact conditions hold it
+  const index_t n = nrows_;
+  auto rows = rows_.view(n);
+  auto anchored = anchored_.view(n);
+  npockets_ = find_pockets(
+      cols_.template view<2>({n, NS}), vals_.template view<2>({n, NS}),
+      [&](index_t r) { return anchored(r); },
+      [&](index_t r) {
+        index_t ix[D];
+        grid_.node_coords(rows(r), ix);
+        double z = 0.0;
+        for (int k = 0; k < D; ++k) z -= O.gravity[k] * static_cast<double>(ix[k]);
+        return z;
+      },
+      component_.sized(n), pocket_order_.sized(n), pockets_.sized(n));
+  pocket_mean_.reserve(2 * npockets_);
 }
 
 template <int D>
@@ -310,6 +337,11 @@ void State<D>::pressure_rhs(const Options<D>& O) {
   assemble_rhs<D>(grid_, I_.rhs_slot, I_.rhs_C, I_.rhs_V, node_vol_.view(nn), rows_.view(nrows_),
                   v_c, contact, O.wall_flux, O.expansion / O.dt, O.rho / O.dt, T_.static_slot,
                   T_.F_static, T_.Wf_static, ocontact, rhs_.view(nrows_));
+  if (npockets_ > 0) {
+    auto mean = pocket_mean_.view(2 * npockets_);
+    apply_pockets(component_.view(nrows_), pockets_.view(npockets_), mean.head(npockets_),
+                  View<double>(mean.data() + npockets_, {npockets_}), rhs_.view(nrows_));
+  }
 }
 
 template <int D>
@@ -453,6 +485,26 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
   auto cols = vol_cols_.template view<2>({n, NS});
   auto vals = vol_vals_.template view<2>({n, NS});
   auto rhs = vol_rhs_.view(n);
+  {
+    // water sealed off from every empty cell (src/core/pockets.hpp) keeps its volume: only
+    // its mean-free excess is moved about within it. A row touches air where its diagonal
+    // (every face with flux) exceeds its couplings to other rows.
+    auto part = vol_part_.sized(n);
+    auto anchors = vol_anchors_.sized(n);
+    const index_t pockets = find_pockets(
+        cols, vals,
+        [&](index_t r) {
+          double sum = 0.0;
+          for (int s = 0; s < NS; ++s) sum += vals(r, s);
+          return sum > 0.5;  // unit couplings: 0 or a whole number
+        },
+        [](index_t) { return 0.0; }, part, vol_order_.sized(n), anchors);
+    if (pockets > 0) {
+      auto mean = vol_mean_.sized(2 * pockets);
+      apply_pockets(part, anchors.head(pockets), mean.head(pockets),
+                    View<double>(mean.data() + pockets, {pockets}), rhs);
+    }
+  }
   auto Q = q_.view(nc);
   auto q = qx_.view(n);
   for (index_t r = 0; r < n; ++r) q(r) = Q(rows(r));

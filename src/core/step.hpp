@@ -203,6 +203,7 @@ class State {
   void node_fractions(const Options<D>& O);
   void cell_integrals(const Particles<D>& P, const Options<D>& O);
   void classify_nodes(const Options<D>& O);
+  void anchor_pockets(const Options<D>& O);
 
   int step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
   std::array<double, NPHASES> phase_seconds_{};
@@ -223,6 +224,10 @@ class State {
   Buffer<double> theta_, node_mass_, node_mom_, node_vol_, v_old_, v_star_, v_c_, v_new_, node_f_;
   Buffer<bool> enclosed_;
   Buffer<index_t> slot_, surface_slot_, node_row_, rows_, partial_, listed_;
+  // sealed pockets of the pressure system (pockets.hpp): each row's pocket, the held rows
+  Buffer<index_t> component_, pocket_order_, pockets_;
+  Buffer<double> pocket_mean_;
+  index_t npockets_ = 0;
   Buffer<bool> contact_, ocontact_, anchored_;
   Buffer<double> p_node_;
   Buffer<double> K_, C_, V_, Cs_, Vs_, Vcells_;  // the step's element integrals
@@ -232,6 +237,8 @@ class State {
   // volume correction
   Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];
   Buffer<index_t> cell_row_, vol_cols_, vol_rows_;
+  Buffer<index_t> vol_part_, vol_order_, vol_anchors_;  // its sealed pockets
+  Buffer<double> vol_mean_;
   Multigrid<D> volume_mg_;
   // viscous predictor
   Buffer<double> eta_, eta_weight_, vu_, vvals_, vrhs_, vx_, vwork_;

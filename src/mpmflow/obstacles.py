@@ -177,6 +177,21 @@ def _not_last(shape, axis):
 
 
 
+def in_solid_cells(tables, grid, x):
+    """Which of the points ``x`` (n, D) lie in cells the grid takes as wholly solid (fluid
+    fraction 0). Where an obstacle touches two or three walls, the wall shift
+    (``node_distance``) closes the corner between it and the walls within the first cell, so
+    lattice points outside the obstacle's own shape can lie there: no flow reaches them, phi
+    is flat there (no direction to push them out along) and, held by nothing, they fell
+    freely in place."""
+    if not tables.present:
+        return np.zeros(x.shape[0], dtype=bool)
+    cells = np.array([int(c) for c in grid.cells])
+    ci = np.clip(np.floor(x / grid.spacing).astype(np.int64), 0, cells - 1)
+    strides = np.cumprod(np.concatenate([[1], cells[:-1]]))
+    return tables.open[ci @ strides] <= 0.0
+
+
 def of_case(case, grid):
     """The tables of the case's ``[[obstacles]]`` (none: empty tables)."""
     specs = getattr(case, "obstacles", None) or []

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from . import checkpoint, memory, probes
+from . import checkpoint, memory, obstacles, probes
 from .fallbacks import Fallbacks
 from .materials import stiffness
 from ._version import __version__
@@ -40,7 +40,7 @@ from .output.summary import write_summary
 from .output.timeseries import (COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter,
                                 read_table)
 from .output.timeseries import units as timeseries_units
-from .particles import Particles
+from .particles import Particles, subset
 from .schemes import make_scheme
 from .setup_case import build_grid, build_particles
 from .stability import case_stable_time_step, sound_speed, time_step
@@ -96,6 +96,23 @@ class Simulation:
                             "particle spacing (grid.spacing / bodies.N.particles_per_cell). "
                             "Enlarge the bodies or raise particles_per_cell.")
         self.scheme = make_scheme(case, self.grid, self.particles)
+        self.notices = []
+        solids = getattr(self.scheme, "solids", None)
+        if solids is not None:
+            inside = obstacles.in_solid_cells(solids, self.grid, self.particles.x)
+            if inside.all():
+                raise CaseError(
+                    "Every particle lies in cells the grid takes as solid: the bodies fill "
+                    "only the space that obstacles touching the walls close off on this grid. "
+                    f"Refine grid.spacing (now {case.grid.spacing:g} m) or move the bodies.")
+            if inside.any():
+                self.particles = subset(self.particles, ~inside)
+                self.scheme.particles = self.particles
+                self.notices.append(
+                    f"{int(inside.sum())} particle{'s' if inside.sum() > 1 else ''} seeded "
+                    "round an obstacle lie in cells the grid takes as solid (where an obstacle touches two or three walls, the "
+                    "corner between it and the walls is closed within the first cell) and "
+                    "are left out; a finer grid.spacing resolves that corner")
         if hasattr(self.scheme, "check_free_surface"):
             try:
                 self.scheme.check_free_surface()
@@ -114,7 +131,6 @@ class Simulation:
         self.time = 0.0
         self.steps = 0
         self.counters = Counters()
-        self.notices = []
         self.fallbacks = Fallbacks()  # the caps and fallbacks that acted
         try:  # a viscous material too stiff for the time step: refused, or told
             self.notices += stiffness.check(case, self.particles, self.dt)
