@@ -16,8 +16,8 @@ namespace mpmflow {
 // Neumann problem: the trapped water keeps its volume), and its row with the largest height(r)
 // (ties: the lowest r) is held at 0, its couplings removed (the matrix stays symmetric positive
 // definite; with a consistent right-hand side the dropped equation holds by itself). The
-// solution then is the Neumann solution with 0 at that row. rhs may be empty: only the matrix
-// Writes the held rows to anchors(0 ...) and
+// solution then is the Neumann solution with 0 at that row. Writes the held rows to
+// anchors(0 ...) and
 // each row's part to part (pocket number, or -1 outside pockets); order: n of scratch.
 // Returns the number of pockets.
 template <class Anchored, class Height>

@@ -369,6 +369,7 @@ template <int D>
 int State<D>::pressure_multigrid(const Options<D>& O, Report& report) {
   warm_start();
   const bool anchored = pressure_matrix(O);
+  report.pockets += npockets_;
   const index_t n = nrows_;
   if (n == 0) return OK;
   if (!anchored) return SINGULAR;

@@ -58,6 +58,7 @@ struct Report {
   double dt_max = 0.0;
   index_t capped = 0;   // cells whose viscosity was held at the model's cap (per step)
   index_t clamped = 0;  // faces whose volume-correction displacement was clamped
+  index_t pockets = 0;  // pressure pockets sealed from the free surface, held at 0 at their top
 };
 
 // The phases of a step, as timed by State (seconds summed over the steps of a run).
@@ -179,6 +180,8 @@ class State {
   index_t release_walls(View<const double> x);  // the solution in; returns nodes released
   void extend_pressure(const Options<D>& O);
   void warm_start();  // the last pressure at this step's unknowns into x0, p_node cleared
+  // the sealed pockets of the last pressure_matrix (pockets.hpp), each held at 0 at its top
+  index_t pockets() const { return npockets_; }
   int viscous_predictor(const Options<D>& O, Report& report);
   int finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
 

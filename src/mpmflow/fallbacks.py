@@ -17,6 +17,7 @@ WHAT = {
     "particles put back inside the domain or out of an obstacle": "particle-steps",
     "viscosity held at material.max_viscosity": "cell-steps",
     "volume correction displacement clamped at half a cell per step": "face-steps",
+    "water sealed from the free surface held at p = 0 at its top": "pocket-steps",
 }
 
 

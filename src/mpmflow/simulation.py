@@ -549,6 +549,8 @@ class Simulation:
         self.fallbacks.count("volume correction displacement clamped at half a cell per step",
                              "solver.volume_correction", getattr(report, "clamped", 0),
                              self.time)
+        self.fallbacks.count("water sealed from the free surface held at p = 0 at its top",
+                             "pressure system", getattr(report, "pockets", 0), self.time)
         c.solves += report.solves
         c.iterations += report.iterations
         c.iterations_since_output += report.iterations

@@ -206,6 +206,7 @@ void bind_dim(nb::module_& m) {
       .def("warm_start", [](S& self) { self.state->warm_start(); })
       .def("pressure_matrix",
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
+      .def_prop_ro("pockets", [](S& self) { return self.state->pockets(); })
       .def("pressure_rhs", [](S& self, const O& opt) { self.state->pressure_rhs(opt); })
       .def("release_walls",
            [](S& self, Array<const double> x) {
@@ -270,7 +271,8 @@ void bind_step(nb::module_& m) {
       .def_rw("dt_min", &Report::dt_min)
       .def_rw("dt_max", &Report::dt_max)
       .def_rw("capped", &Report::capped)
-      .def_rw("clamped", &Report::clamped);
+      .def_rw("clamped", &Report::clamped)
+      .def_rw("pockets", &Report::pockets);
   m.attr("OK") = static_cast<int>(OK);
   m.attr("SINGULAR") = static_cast<int>(SINGULAR);
   m.attr("PRESSURE_NOT_CONVERGED") = static_cast<int>(PRESSURE_NOT_CONVERGED);

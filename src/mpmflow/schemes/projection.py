@@ -33,6 +33,7 @@ class StepReport:
     viscous_iterations: int = 0  # of the viscous solves (viscous materials)
     capped: int = 0  # cell-steps with the viscosity held at material.max_viscosity
     clamped: int = 0  # face-steps with the volume correction's displacement clamped
+    pockets: int = 0  # pocket-steps: water sealed from the free surface held at 0 at its top
 
     def merge(self, other):
         return StepReport(max(self.unknowns, other.unknowns), self.solves + other.solves,
@@ -41,14 +42,15 @@ class StepReport:
                           max(self.residual, other.residual), self.released + other.released,
                           self.moved_inside + other.moved_inside,
                           self.viscous_iterations + other.viscous_iterations,
-                          self.capped + other.capped, self.clamped + other.clamped)
+                          self.capped + other.capped, self.clamped + other.clamped,
+                          self.pockets + other.pockets)
 
     @classmethod
     def of(cls, r):
         """From the compiled step's ``Report``."""
         return cls(int(r.unknowns), int(r.solves), int(r.iterations), int(r.max_iterations),
                    float(r.residual), int(r.released), int(r.moved),
-                   int(r.viscous_iterations), int(r.capped), int(r.clamped))
+                   int(r.viscous_iterations), int(r.capped), int(r.clamped), int(r.pockets))
 
 
 @dataclass
@@ -215,6 +217,7 @@ class ProjectionScheme:
                 report.status = status
                 return k
             self.python_pressure.solve(self.core, O, report, where(k))
+            report.pockets += self.core.pockets
             status = self.core.finish(*self._particles(), O, correct, report)
             if status != state.OK:
                 report.status = status
