@@ -228,8 +228,8 @@ def test_validate_checks_scikit_image_before_running_spheric(tmp_path, capsys, m
     monkeypatch.setitem(sys.modules, "skimage", None)
     assert main(["validate", "--out", str(tmp_path / "a"), "--quick", "--case", "spheric"]) == 2
     err = capsys.readouterr().err
-    assert ("mpmflow validate (the SPHERIC case's 3D pictures) needs scikit-image: pip "
-            "install 'mpmflow[plot]'") in err
+    assert ("mpmflow validate (the SPHERIC case's 3D pictures) needs scikit-image for the 3D "
+            "water surface: pip install 'mpmflow[plot]'") in err
     assert "Traceback" not in err and not (tmp_path / "a").exists()
     monkeypatch.setattr(validation, "EXAMPLES", tmp_path / "no_examples")
     assert main(["validate", "--out", str(tmp_path / "b"), "--quick", "--case", "volume"]) == 2
