@@ -374,13 +374,15 @@ def plot_surfaces(fields, summary, folder, plt, notes):
         save(fig, out, DPI)
         written.append(out)
     pick = overview(len(surfaces))
-    fig = plt.figure(figsize=(3.2 * len(pick), 3.3))
+    cols = min(3, len(pick))  # up to three a row: a 3D box wants the width
+    rows = -(-len(pick) // cols)
+    fig = plt.figure(figsize=(4.4 * cols, 3.0 * rows + 0.3))
     for j, k in enumerate(pick):
         t, _, verts, faces = surfaces[k]
-        ax = fig.add_subplot(1, len(pick), j + 1, projection="3d")
+        ax = fig.add_subplot(rows, cols, j + 1, projection="3d")
         draw_surface(ax, verts, faces, solids, size, f"t = {t:.3f} s")
     fig.suptitle("water surface (volume fraction 1/2)", fontsize=9, y=0.995)
-    fig.subplots_adjust(0, 0.04, 1, 0.87, wspace=0.05)
+    fig.subplots_adjust(0, 0.03, 1, 1 - 0.4 / (3.0 * rows + 0.3), wspace=0.05, hspace=0.1)
     save(fig, folder / "surfaces.png", DPI)
     written.append(folder / "surfaces.png")
     return written

@@ -148,7 +148,7 @@ def _shaded(triangles, rgb, alpha):
 def draw_surface(ax, verts, faces, obstacles, size, title=None, labels=True):
     """Draw the water's surface (``verts``, ``faces``) and the obstacles' triangles on a 3D
     axes ``ax`` over the domain [0, size] (m); returns the collection. A long domain is
-    zoomed in (its box leaves the axes' corners empty), up to 1.4 for 3 to 1 and longer."""
+    zoomed in (its box leaves the axes' corners empty), up to 1.25 for 3 to 1 and longer."""
     from matplotlib.ticker import MaxNLocator
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -163,7 +163,7 @@ def draw_surface(ax, verts, faces, obstacles, size, title=None, labels=True):
     ax.set_ylim(0, size[1])
     ax.set_zlim(0, size[2])
     ratio = float(max(size)) / float(sorted(size)[1])  # the longest side over the middle
-    ax.set_box_aspect(size, zoom=float(np.clip(0.95 + 0.2 * (ratio - 1.0), 0.95, 1.4)))
+    ax.set_box_aspect(size, zoom=float(np.clip(0.95 + 0.15 * (ratio - 1.0), 0.95, 1.25)))
     ax.view_init(**VIEW)
     longest = float(max(size))
     for axis, name, side in zip((ax.xaxis, ax.yaxis, ax.zaxis), "xyz", size):
