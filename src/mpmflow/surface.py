@@ -73,7 +73,8 @@ def water_surface(f, spacing):
     padded = np.pad(np.asarray(f, dtype=float), 1)
     verts, faces, _, _ = need_skimage().marching_cubes(padded, LEVEL, spacing=(spacing,) * 3,
                                                        allow_degenerate=False)
-    return verts.astype(float) - 0.5 * spacing, faces  # padded index i is the cell centred at (i - 1/2) h
+    # the padded field's index i is the cell centred at (i - 1/2) h
+    return verts.astype(float) - 0.5 * spacing, faces
 
 
 def surface_area(verts, faces):
