@@ -78,7 +78,7 @@ def test_front_and_height_of_an_extruded_field_are_the_2d_ones():
 
 def test_3d_outputs_read_back_and_plot(tmp_path):
     """Snapshots keep z, energies are in J (not J/m), and `mpmflow plot` draws the x-z slice
-    through the middle of the width."""
+    through the middle of the width and, beside it, the water's surface in 3D."""
     pytest.importorskip("matplotlib")
     from mpmflow import open_run
     from mpmflow.plots import plot_run, side_view
@@ -97,3 +97,82 @@ def test_3d_outputs_read_back_and_plot(tmp_path):
     np.testing.assert_array_equal(xz, snap["x"][in_slice][:, [0, 2]])
     figures = plot_run(tmp_path / "o", tmp_path / "plots")
     assert any(f.name == "snapshots.png" for f in figures)
+    # beside each slice its water surface, and their overview
+    names = {f.relative_to(tmp_path / "plots").as_posix() for f in figures}
+    for k in range(len(run.snapshots)):
+        assert {f"snapshots/particles_{k:06d}.png", f"snapshots/surface_{k:06d}.png"} <= names
+    assert "surfaces.png" in names and all(f.stat().st_size > 1000 for f in figures)
+
+
+@pytest.mark.parametrize("depth", [0.195, 0.2])
+def test_water_surface_of_a_column_at_rest_is_the_column(depth):
+    """The marching-cubes surface (volume fraction 1/2) of the 3D column at rest, its top
+    half a cell off the grid (the top cells half full) and on a grid line: every vertex
+    lies on the column's faces (the surface is closed on the walls and the floor), and
+    its top is the water's depth (float32 vertices: to 1e-6 m)."""
+    from mpmflow.surface import volume_fraction, water_surface
+
+    case = load_case(EXAMPLES / "hydrostatic_3d.toml", [f"bodies.0.max=[0.1, 0.05, {depth}]",
+                                                         "output.snapshots=false"])
+    sim = Simulation(case)
+    f = volume_fraction(sim.particles.x, sim.particles.volume, sim.grid.spacing,
+                        sim.grid.cells)
+    assert f.shape == (10, 5, 30) and f.max() == 1.0
+    verts, faces = water_surface(f, sim.grid.spacing)
+    hi = np.array([0.1, 0.05, depth])
+    np.testing.assert_allclose(verts.min(axis=0), 0.0, atol=1e-6)
+    np.testing.assert_allclose(verts.max(axis=0), hi, atol=1e-6)
+    # the distance of each vertex to the column's surface (all lie inside its box)
+    to_face = np.minimum(verts, hi - verts).min(axis=1)
+    assert to_face.min() >= -1e-6 and to_face.max() <= 1e-6
+    top = verts[:, 2] > depth - 0.25 * sim.grid.spacing
+    np.testing.assert_allclose(verts[top, 2], depth, atol=1e-6)
+
+
+def test_water_surface_area_of_whole_cells_is_the_box_with_chamfered_edges():
+    """On whole cells (top on a grid line), marching cubes draws the column's box with
+    every edge cut by a chamfer of legs h/2: the area is the box's less (1 - 1/sqrt 2) h
+    per metre of edge, to within the eight corners' (h/2)^2 each (0.3% of the area; the
+    chamfers alone are 6%)."""
+    from mpmflow.surface import surface_area, volume_fraction, water_surface
+
+    case = load_case(EXAMPLES / "hydrostatic_3d.toml", ["bodies.0.max=[0.1, 0.05, 0.2]",
+                                                         "output.snapshots=false"])
+    sim = Simulation(case)
+    h = sim.grid.spacing
+    f = volume_fraction(sim.particles.x, sim.particles.volume, h, sim.grid.cells)
+    area = surface_area(*water_surface(f, h))
+    a, b, c = 0.1, 0.05, 0.2
+    box, edges = 2 * (a * b + b * c + c * a), 4 * (a + b + c)
+    chamfered = box - (1 - 1 / np.sqrt(2)) * h * edges
+    assert abs(area - chamfered) <= 8 * (h / 2) ** 2
+    assert area < box - 0.05 * box
+
+
+def test_a_dry_field_has_no_surface_and_obstacles_are_drawn_as_their_surfaces():
+    """No cell at 1/2: no triangles (not an error). The obstacles' triangles: a box's six
+    faces exactly, a cylinder (marching cubes on its signed distance) within 3% of its
+    area, every vertex within a sample of its surface."""
+    from mpmflow.case import resolved
+    from mpmflow.surface import obstacle_triangles, surface_area, water_surface
+
+    verts, faces = water_surface(np.full((4, 3, 5), 0.49), 0.01)
+    assert verts.shape == (0, 3) and faces.shape == (0, 3)
+    case = load_case(EXAMPLES / "stl_drop_3d.toml", [
+        "obstacles=[{type = 'box', min = [0.2, 0.05, 0.0], max = [0.25, 0.15, 0.04]}, "
+        "{type = 'cylinder', centre = [0.0637, 0.1513, 0.0], axis = [0, 0, 1], "
+        "radius = 0.0213, length = 0.15}]"])
+    notes = []
+    tris = obstacle_triangles({"case": resolved(case)}, notes)
+    assert notes == []
+    box, cyl = tris[:12], tris[12:]
+    flat = box.reshape(-1, 3)
+    assert surface_area(flat, np.arange(len(flat)).reshape(-1, 3)) == pytest.approx(
+        2 * (0.05 * 0.1 + 0.1 * 0.04 + 0.04 * 0.05), rel=1e-12)
+    r, length = 0.0213, 0.15
+    flat = cyl.reshape(-1, 3)
+    exact = 2 * np.pi * r * length + 2 * np.pi * r**2
+    assert surface_area(flat, np.arange(len(flat)).reshape(-1, 3)) == pytest.approx(exact,
+                                                                                     rel=0.03)
+    d = case.obstacle_shape(1).signed_distance(flat)
+    assert np.abs(d).max() <= 0.1 * length / 32  # a tenth of a sample

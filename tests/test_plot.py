@@ -149,7 +149,8 @@ def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
 
     x = np.column_stack([np.linspace(0.0, 0.3, 50), np.full(50, 0.15), np.linspace(0, 0.1, 50)])
     snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
-                             read=lambda: {"x": x, "pressure": np.linspace(0, 500, 50)})
+                             read=lambda: {"x": x, "pressure": np.linspace(0, 500, 50),
+                                           "mass": np.full(50, 1e-3)})
              for k, t in enumerate((0.0, 0.1))]
     summary = {"grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01}}
     saved = _figures(monkeypatch)
@@ -247,3 +248,74 @@ def test_plot_of_a_few_probes_names_each_in_the_legend(small_run, tmp_path, monk
     assert labels == names[:LEGEND_MAX]
     assert len({line.get_color() for line in pressure.get_lines()}) == LEGEND_MAX
     assert [t.get_text() for t in level.get_legend().get_texts()] == names[LEGEND_MAX:]
+
+
+def test_3d_run_draws_the_water_surface_beside_the_slice(tmp_path, monkeypatch):
+    """In 3D `mpmflow plot` draws, beside each snapshot's slice (particles_NNNNNN.png), the
+    water's surface (snapshots/surface_NNNNNN.png) and an overview of the same snapshots
+    (surfaces.png): 3D axes named x, y, z in m over the domain, the surface of the block
+    of particles as one collection of triangles. A snapshot without water (its volume
+    fraction under 1/2 everywhere) is drawn empty, not refused."""
+    from types import SimpleNamespace
+
+    import numpy as np
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    from mpmflow.mpl import pyplot
+    from mpmflow.plots import plot_snapshots
+
+    axes = [np.arange(0.0025, a, 0.005) for a in (0.1, 0.3, 0.1)]  # 8 particles per cell
+    x = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    mass = np.full(len(x), 1000.0 * 0.005 ** 3)
+    frames = {0.0: mass, 0.1: mass, 0.2: 0.4 * mass}  # the last: a fraction 0.4 everywhere
+    snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
+                             read=lambda m=m: {"x": x, "pressure": x[:, 2], "mass": m})
+             for k, (t, m) in enumerate(frames.items())]
+    summary = {"grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01, "cells": [30] * 3},
+               "case": {"material": {"density": 1000.0}}}
+    saved = _figures(monkeypatch)
+    written = plot_snapshots(snaps, summary, tmp_path, pyplot(), [])
+    names = [f"surface_{k:06d}.png" for k in range(3)]
+    assert [p.name for p in written[-4:]] == [*names, "surfaces.png"]
+    for p in written:
+        assert p.stat().st_size > 1000, p
+    overview = saved["surfaces.png"]
+    assert len(overview.axes) == 3
+    for fig in (overview, *(saved[n] for n in names)):
+        for ax in fig.axes:
+            assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("x [m]", "y [m]",
+                                                                           "z [m]")
+            assert ax.get_xlim() == (0.0, 0.3) and ax.get_zlim() == (0.0, 0.3)
+    assert overview._suptitle.get_text() == "water surface (volume fraction 1/2)"
+    (full,) = [c for c in saved[names[0]].axes[0].collections
+               if isinstance(c, Poly3DCollection)]
+    assert saved[names[0]].axes[0].get_title() == "t = 0.000 s"
+    (empty,) = [c for c in saved[names[2]].axes[0].collections
+                if isinstance(c, Poly3DCollection)]
+    assert len(full.get_facecolor()) > 100 and len(empty.get_facecolor()) == 0
+
+
+def test_3d_pictures_without_scikit_image_are_left_out_with_a_note(tmp_path, monkeypatch):
+    """Without scikit-image the slices are drawn and the note says how to get the 3D
+    pictures (not a traceback after the slices)."""
+    import sys
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from mpmflow.mpl import pyplot
+    from mpmflow.plots import plot_snapshots
+
+    monkeypatch.setitem(sys.modules, "skimage", None)
+    x = np.random.default_rng(1).uniform(0.0, 0.1, (200, 3))
+    snaps = [SimpleNamespace(time=0.0, path=tmp_path / "particles_000000.vtu",
+                             read=lambda: {"x": x, "pressure": x[:, 2],
+                                           "mass": np.full(200, 1e-3)})]
+    summary = {"grid": {"domain_used": [0.1, 0.1, 0.1], "spacing": 0.01}}
+    notes = []
+    written = plot_snapshots(snaps, summary, tmp_path, pyplot(), notes)
+    assert [p.name for p in written] == ["particles_000000.png", "snapshots.png",
+                                         "animation.gif"]
+    assert notes == ["mpmflow plot needs scikit-image for the 3D water surface: pip install "
+                     "'mpmflow[plot]' (or pip install scikit-image). The 3D pictures are "
+                     "left out."]

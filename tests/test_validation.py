@@ -37,7 +37,7 @@ def test_report_has_the_summary_table_first_and_a_csv_row_per_row(quick):
     assert text.index("## Summary") < text.index("## Hydrostatic column")
     assert "| case | quantity | error measure | value | tolerance | result |" in text
     for png in ("hydrostatic.png", "sloshing.png", "dam_break_ar2.png", "dam_break_ar1.png",
-                "lobovsky.png", "volume.png", "long_run.png", "spheric.png"):
+                "lobovsky.png", "volume.png", "long_run.png", "spheric.png", "spheric_3d.png"):
         assert (out / png).stat().st_size > 1000
         assert f"]({png})" in text
     with open(out / "summary.csv") as f:
@@ -222,10 +222,27 @@ def test_validate_checks_matplotlib_and_the_examples_before_running(tmp_path, ca
     assert "Traceback" not in err and not (tmp_path / "b").exists()
 
 
+def test_validate_checks_scikit_image_before_running_spheric(tmp_path, capsys, monkeypatch):
+    """The SPHERIC case's 3D pictures need scikit-image: checked before the runs when the
+    case is among those run, not asked of the others."""
+    monkeypatch.setitem(sys.modules, "skimage", None)
+    assert main(["validate", "--out", str(tmp_path / "a"), "--quick", "--case", "spheric"]) == 2
+    err = capsys.readouterr().err
+    assert ("mpmflow validate (the SPHERIC case's 3D pictures) needs scikit-image for the 3D "
+            "water surface: pip install 'mpmflow[plot]'") in err
+    assert "Traceback" not in err and not (tmp_path / "a").exists()
+    monkeypatch.setattr(validation, "EXAMPLES", tmp_path / "no_examples")
+    assert main(["validate", "--out", str(tmp_path / "b"), "--quick", "--case", "volume"]) == 2
+    assert "scikit-image" not in capsys.readouterr().err  # stopped by the examples instead
+
+
 def test_spheric_test2_first_impact_on_the_box_at_the_coarse_mesh(quick):
     """SPHERIC Test 2 at 0.05 m (quick): the wave reaches the box's front face (P1) within
     the tolerance of the measured 0.393 s, and the impulse of that impact is within 30%
     (measured: 0.017 s and 0.28)."""
-    _, rows, _ = quick
+    out, rows, _ = quick
     assert row(rows, "SPHERIC 2", "0.05 m: first impact at P1").passed
     assert row(rows, "SPHERIC 2", "0.05 m: impulse of the first impact at P1").passed
+    # the 3D pictures at the photograph times the quick run reaches (it ends at 0.75 s)
+    assert "![The water at 0.05 m at 0.4, 0.6 s (the experiment's photograph" in (
+        out / "README.md").read_text()

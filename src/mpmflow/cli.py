@@ -104,13 +104,15 @@ def _parser():
                     help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)")
     pl = sub.add_parser(
         "plot", help="plot a run's time series, probes, particle snapshots and an animation",
-        description="Plot the outputs of a run (needs matplotlib: pip install "
-        "'mpmflow[plot]'): timeseries.png (front and height, energies, largest speed and "
+        description="Plot the outputs of a run (needs matplotlib, and scikit-image for 3D: "
+        "pip install 'mpmflow[plot]'): timeseries.png (front and height, energies, largest speed and "
         "pressure, pressure noise, volume ratio), probes.png (with [[probes]]: pressures and "
         "levels against time, over the measured series named by probes.N.data), "
         "snapshots/particles_NNNNNN.png and "
-        "snapshots.png (particles coloured by pressure) and animation.gif (the snapshots; "
-        "set output.snapshot_interval for more frames).")
+        "snapshots.png (particles coloured by pressure; in 3D the mid-width slice), "
+        "animation.gif (the snapshots; set output.snapshot_interval for more frames) and, in "
+        "3D, snapshots/surface_NNNNNN.png and surfaces.png (the water's surface, where the "
+        "volume fraction is 1/2, and the obstacles).")
     pl.add_argument("run_dir", metavar="DIR", help="the --out folder of a run")
     pl.add_argument("--out", "-o", metavar="DIR2", default=None,
                     help="folder for the figures (default: DIR/plots)")
@@ -268,6 +270,10 @@ def _validate(args):
     # everything the cases need, checked before minutes of runs: matplotlib (the plots),
     # the reference data, the example case files, and a folder whose README.md is ours
     have_matplotlib("mpmflow validate")
+    if not args.cases or "spheric" in args.cases:
+        from .surface import need_skimage
+
+        need_skimage("mpmflow validate (the SPHERIC case's 3D pictures)")
     try:
         data_dir()
     except FileNotFoundError as err:

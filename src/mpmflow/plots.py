@@ -11,7 +11,12 @@ writes into the plot folder:
                        LEGEND_MAX probes on a panel, coloured by position, no legend;
 - ``snapshots/particles_NNNNNN.png``   each snapshot, particles coloured by pressure;
 - ``snapshots.png``    up to six snapshots side by side (an overview);
-- ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter).
+- ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter);
+- in 3D, beside each slice: ``snapshots/surface_NNNNNN.png`` the water's surface (the
+  particles' volume fraction on the grid at 1/2, by marching cubes) and the obstacles in
+  a 3D view, and ``surfaces.png`` the overview's snapshots so (``mpmflow.surface``;
+  separate files, as the 3D box wants another shape of figure than the slice's plane).
+  Without scikit-image they are left out with a note.
 """
 
 import os
@@ -20,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import CaseError
+from .grid import Grid
 from .mpl import pyplot, save
 from .output import check_out_dir
 from .results import open_run
@@ -252,7 +258,7 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
     Snapshots that cannot be read (missing, damaged) are left out with a note."""
     from matplotlib.animation import PillowWriter
 
-    data, readable = [], []
+    data, readable, solid3d = [], [], []
     for snap in snaps:
         try:
             d = snap.read()
@@ -261,6 +267,8 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
             continue
         data.append((snap.time, d["x"], d["pressure"]))
         readable.append((snap.time, snap.path))
+        if d["x"].shape[1] == 3:
+            solid3d.append((snap.time, snap.path, _water(d, summary)))
     snaps = readable
     if not snaps:
         return []
@@ -288,7 +296,7 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         out = folder / "snapshots" / (Path(f).stem + ".png")
         save(fig, out, DPI)
         written.append(out)
-    pick = np.unique(np.linspace(0, len(data) - 1, min(6, len(data))).round().astype(int))
+    pick = overview(len(data))
     fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
                              layout="constrained")
     for j, (ax, k) in enumerate(zip(axes[0], pick)):
@@ -317,6 +325,66 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         tmp.unlink(missing_ok=True)
         plt.close(fig)
     written.append(folder / "animation.gif")
+    if solid3d:
+        written += plot_surfaces(solid3d, summary, folder, plt, notes)
+    return written
+
+
+def overview(n):
+    """Which of n snapshots an overview shows: up to six, evenly spread, first and last."""
+    return np.unique(np.linspace(0, n - 1, min(6, n)).round().astype(int))
+
+
+def _water(d, summary):
+    """The volume fraction field [cx, cy, cz] of one 3D snapshot's particles (``surface``):
+    their volume is mass / material.density."""
+    from .surface import volume_fraction
+
+    grid = summary.get("grid", {})
+    cells = grid.get("cells") or Grid.covering(grid["domain_used"], grid["spacing"]).cells
+    density = summary.get("case", {}).get("material", {}).get("density", 1000.0)
+    return volume_fraction(d["x"], d["mass"] / density, grid["spacing"], cells)
+
+
+def plot_surfaces(fields, summary, folder, plt, notes):
+    """The 3D pictures (``mpmflow.surface``): snapshots/surface_NNNNNN.png for each snapshot
+    (beside its slice particles_NNNNNN.png) and surfaces.png, the overview's snapshots side
+    by side. ``fields``: [(time, snapshot file, volume fraction field)]. Returns the
+    paths."""
+    from .surface import draw_surface, need_skimage, obstacle_triangles, water_surface
+
+    try:
+        need_skimage()
+    except CaseError as err:
+        notes.append(f"{err} The 3D pictures are left out.")
+        return []
+    grid = summary["grid"]
+    size, spacing = grid["domain_used"], grid["spacing"]
+    solids = obstacle_triangles(summary, notes)
+    surfaces = [(t, f, *water_surface(field, spacing)) for t, f, field in fields]
+    width = 6.0
+    height = width * 0.75
+    written = []
+    for t, f, verts, faces in surfaces:
+        fig = plt.figure(figsize=(width, height))
+        ax = fig.add_subplot(projection="3d")
+        draw_surface(ax, verts, faces, solids, size, f"t = {t:.3f} s")
+        fig.subplots_adjust(0, 0, 1, 1)
+        out = folder / "snapshots" / (Path(f).stem.replace("particles", "surface", 1) + ".png")
+        save(fig, out, DPI)
+        written.append(out)
+    pick = overview(len(surfaces))
+    cols = min(3, len(pick))  # up to three a row: a 3D box wants the width
+    rows = -(-len(pick) // cols)
+    fig = plt.figure(figsize=(4.4 * cols, 3.0 * rows + 0.3))
+    for j, k in enumerate(pick):
+        t, _, verts, faces = surfaces[k]
+        ax = fig.add_subplot(rows, cols, j + 1, projection="3d")
+        draw_surface(ax, verts, faces, solids, size, f"t = {t:.3f} s")
+    fig.suptitle("water surface (volume fraction 1/2)", fontsize=9, y=0.995)
+    fig.subplots_adjust(0, 0.03, 1, 1 - 0.4 / (3.0 * rows + 0.3), wspace=0.05, hspace=0.1)
+    save(fig, folder / "surfaces.png", DPI)
+    written.append(folder / "surfaces.png")
     return written
 
 
