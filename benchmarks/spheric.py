@@ -1,7 +1,7 @@
 """SPHERIC Test 2 (examples/spheric_test2.toml) at a given mesh: whole-process wall time and
 peak memory of `mpmflow run`, as a user runs it, with the validation's measures of its probes.
 
-    python benchmarks/spheric.py [--spacing 0.02] [--end 6.0] [--out runs/spheric_bench]
+    python benchmarks/spheric.py [--spacing 0.02] [--end 6.0] [--out runs/spheric_bench] [--set time.dt=auto]
 
 The run is a child process (`mpmflow run ... -q`, snapshots off), timed from the outside;
 the peak resident memory is that child's (``ru_maxrss`` of RUSAGE_CHILDREN). Where 3.22 m
@@ -27,12 +27,14 @@ def main():
     ap.add_argument("--spacing", type=float, default=0.02)
     ap.add_argument("--end", type=float, default=6.0)
     ap.add_argument("--out", default=str(ROOT / "runs" / "spheric_bench"))
+    ap.add_argument("--set", action="append", default=[],
+                    help="more overrides, e.g. --set time.dt=auto")
     args = ap.parse_args()
     from mpmflow import open_run
     from mpmflow.validation import spheric
 
     sets = []
-    for o in spheric.overrides(args.spacing, args.end):
+    for o in spheric.overrides(args.spacing, args.end) + args.set:
         sets += ["--set", o]
     cmd = [sys.executable, "-m", "mpmflow.cli", "run",
            str(ROOT / "examples" / "spheric_test2.toml"),
@@ -60,6 +62,7 @@ def main():
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     record = {"benchmark": "spheric", "commit": commit, "spacing": args.spacing, "end": args.end,
+              "overrides": args.set,
               "particles": run.summary["particles"], "steps": run.summary["steps"],
               "wall_s": wall, "loop_s": run.summary["wall_seconds"], "peak_mb": peak,
               "measures": m, "machine": machine()}
