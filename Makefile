@@ -8,10 +8,13 @@ BIN := $(VENV)/bin
 .PHONY: setup test dam-break validate bench figures clean
 
 CORE := CMakeLists.txt $(wildcard src/core/*.hpp src/core/*.cpp src/core/bindings/*)
+# the editable install maps the package's modules when it is made: a module added, removed
+# or moved changes its folder's time, and the install is made again
+PACKAGE := $(shell find src/mpmflow -type d -not -name __pycache__)
 
 # the compiled core (src/core) is built by the install into build/<wheel tag>; a change to
 # a C++ file installs again, which rebuilds only what changed there
-$(VENV)/.installed: pyproject.toml $(CORE)
+$(VENV)/.installed: pyproject.toml $(CORE) $(PACKAGE)
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet "scikit-build-core>=0.10" "nanobind>=2.4" "cmake>=3.18" ninja

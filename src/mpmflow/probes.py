@@ -1,6 +1,6 @@
 """Probes: pressure sensors and water-level gauges sampled at every output time (probes.csv).
 
-The case's ``[[probes]]`` (``case.Probe``) say what each measures; the definitions are in
+The case's ``[[probes]]`` (``case.sections.Probe``) say what each measures; the definitions are in
 the schema's descriptions (docs/reference.md). In 2D and 3D alike (the vertical is the last
 axis):
 

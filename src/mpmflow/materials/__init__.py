@@ -4,7 +4,7 @@ A material module gives:
 
 * ``NAME``: its name, the value of ``material.model``;
 * ``KEYS``: the ``[material]`` keys that are its parameters (besides ``density`` and
-  ``bulk_modulus``, which every material has); the schema (``mpmflow.case.Material``)
+  ``bulk_modulus``, which every material has); the schema (``mpmflow.case.sections.Material``)
   holds their descriptions and units;
 * ``MODEL``: its code in the compiled rheology (``state``: src/core/rheology.hpp);
 * ``check(m)``: the checks of its parameters, raising ValueError with a message that names

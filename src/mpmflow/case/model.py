@@ -1,0 +1,307 @@
+"""The whole case (``Case``): its sections and the rules between them (bodies inside the
+domain and apart, time step against end, probes inside, ...), checked as one."""
+
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
+
+from .. import bodies as geometry
+from .. import placement, shapes
+from ..grid import Grid
+from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
+from .sections import (MAX_STEPS, Checkpoint, Domain, Execution, GridSettings, Material,
+                       Output, Physics, Probe, Solver, Time, _Section)
+from .shapes import Body, Obstacle
+
+
+
+class Case(_Section):
+    title: str = Field("", description="Free text shown in outputs.")
+    domain: Domain
+    grid: GridSettings
+    bodies: list[Body] = Field(
+        description="Bodies of material ([[bodies]] tables), each of a shape (bodies.N.type).",
+        min_length=1)
+    obstacles: list[Obstacle] = Field(
+        [], description="Fixed rigid obstacles ([[obstacles]] tables): structures the "
+        "material flows round, of the same shapes and shape keys as bodies (obstacles.N.type; "
+        "at least two grid cells thick). Bodies may surround them: the lattice points inside "
+        "an obstacle are not seeded.")
+    material: Material = Material()
+    physics: Physics = Physics()
+    time: Time
+    output: Output = Output()
+    solver: Solver = Solver()
+    checkpoint: Checkpoint = Checkpoint()
+    probes: list[Probe] = Field(
+        [], description="Probes ([[probes]] tables): pressure sensors and water-level gauges "
+        "sampled at every output time into probes.csv (a column per probe, named by "
+        "probes.N.name; time in s).")
+    execution: Execution = Execution()
+
+    _base_dir: Optional[Path] = PrivateAttr(None)  # the case file's folder
+    _shapes: dict = PrivateAttr(default_factory=dict)  # built shapes, by their tables
+    _counts: dict = PrivateAttr(default_factory=dict)  # particle counts, by the geometry
+
+    def __eq__(self, other):
+        """Equal cases: the same settings and folder (the caches of shapes and counts
+        aside)."""
+        if not isinstance(other, Case):
+            return NotImplemented
+        return self.__dict__ == other.__dict__ and self._base_dir == other._base_dir
+
+    @property
+    def base_dir(self):
+        """The folder relative paths of the case (mesh files) start from: the case file's,
+        or the current folder for a case not read from a file."""
+        return self._base_dir if self._base_dir is not None else Path.cwd()
+
+    def _shape(self, kind, k):
+        spec = getattr(self, kind)[k]
+        key = (kind, k, spec.model_dump_json(), str(self.base_dir))
+        if key not in self._shapes:
+            self._shapes[key] = shapes.from_spec(spec, len(self.domain.size), self.base_dir,
+                                                 key=f"{kind}.{k}")
+        return self._shapes[key]
+
+    def body_shape(self, k):
+        """The ``mpmflow.shapes`` shape of bodies.k."""
+        return self._shape("bodies", k)
+
+    def obstacle_shape(self, k):
+        """The ``mpmflow.shapes`` shape of obstacles.k."""
+        return self._shape("obstacles", k)
+
+    def particle_counts(self):
+        """The exact number of particles each body is seeded with (obstacles left out)."""
+        key = (self.model_dump_json(include={"bodies", "obstacles", "grid", "domain"}),
+               str(self.base_dir))
+        if key not in self._counts:
+            obstacles = [self.obstacle_shape(j) for j in range(len(self.obstacles))]
+            self._counts[key] = [
+                geometry.particle_count(b, self.grid.spacing, self.body_shape(k), obstacles)
+                for k, b in enumerate(self.bodies)]
+        return self._counts[key]
+
+    def _same_dimension(self):
+        """Every vector has one entry per axis of domain.size; the defaults (gravity down
+        the last axis, bodies at rest) follow the dimension."""
+        D = len(self.domain.size)
+        if "gravity" not in self.physics.model_fields_set and len(self.physics.gravity) != D:
+            object.__setattr__(self.physics, "gravity", [0.0] * (D - 1) + [-9.81])
+        for body in self.bodies:
+            if "velocity" not in body.model_fields_set and len(body.velocity) != D:
+                object.__setattr__(body, "velocity", [0.0] * D)
+        vectors = [("physics.gravity", self.physics.gravity)]
+        for kind, specs in (("bodies", self.bodies), ("obstacles", self.obstacles)):
+            for k, spec in enumerate(specs):
+                if D not in shapes.DIM_OF[spec.type]:
+                    other = [t for t, d in shapes.DIM_OF.items() if D in d]
+                    raise ValueError(
+                        f"{kind}.{k}.type = {spec.type!r} is a shape of "
+                        f"{shapes.DIM_OF[spec.type][0]}D cases, but domain.size = "
+                        f"{self.domain.size} makes this case {D}D; give {kind}.{k} one of the "
+                        f"{D}D shapes ({', '.join(repr(t) for t in other)})")
+                vectors += [(f"{kind}.{k}.{name}", getattr(spec, name)) for name in spec.VECTORS
+                            if name != "translate" and name != "axis"]
+        for k, body in enumerate(self.bodies):
+            vectors.append((f"bodies.{k}.velocity", body.velocity))
+        vectors += [(f"probes.{k}.position", p.position) for k, p in enumerate(self.probes)]
+        for name, value in vectors:
+            if len(value) != D:
+                raise ValueError(
+                    f"{name} = {value} has {len(value)} entries but domain.size = "
+                    f"{self.domain.size} has {D}: a {D}D case needs {D} entries in every "
+                    f"vector; give {name} {D} entries, or domain.size {len(value)}")
+        if D == 3:
+            for k, body in enumerate(self.bodies):
+                if getattr(body, "surface_amplitude", 0.0):
+                    raise ValueError(
+                        f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
+                        "cosine top surface is defined for 2D cases only so far; use a flat "
+                        "box in 3D (surface_amplitude = 0)")
+
+    @model_validator(mode="after")
+    def _consistent(self, info: ValidationInfo):
+        if info.context and info.context.get("base_dir") is not None:
+            self._base_dir = Path(info.context["base_dir"])
+        size = self.domain.size
+        self._same_dimension()
+        if self.obstacles and self.solver.scheme != "projection":
+            raise ValueError(
+                f"solver.scheme = {self.solver.scheme!r} does not take obstacles so far; run "
+                "cases with [[obstacles]] with solver.scheme = \"projection\", or remove the "
+                "obstacles")
+        if self.material.model != "water" and self.solver.scheme != "projection":
+            raise ValueError(
+                f"solver.scheme = {self.solver.scheme!r} takes inviscid water only; run "
+                f"material.model = {self.material.model!r} with solver.scheme = "
+                "\"projection\" (which solves the viscous stress implicitly), or set "
+                "material.model = \"water\"")
+        folder = (info.context or {}).get("folder") if info is not None else None
+        for k, probe in enumerate(self.probes):
+            if probe.data is not None:
+                _check_probe_data(k, probe, folder)
+        if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
+            raise ValueError(
+                f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
+                f"({size} m); the grid needs at least two cells per side")
+        most = max(s / self.grid.spacing for s in size)
+        if not np.isfinite(most):  # a huge finite count is the memory check's to refuse
+            raise ValueError(
+                f"grid.spacing = {self.grid.spacing:g} m makes {most:.3g} cells along a side "
+                f"of the domain ({size} m), beyond what any computer holds; give a larger "
+                "grid.spacing (the paper's dam break uses 0.004 m)")
+        D = len(size)
+        for k, body in enumerate(self.bodies):
+            volume = (self.grid.spacing / body.particles_per_cell) ** D
+            mass = self.material.density * volume
+            # (a particle volume that underflows is the spacing's: the memory check's)
+            if volume >= np.finfo(float).tiny and not mass >= np.finfo(float).tiny:
+                raise ValueError(
+                    f"material.density = {self.material.density:g} kg/m^3 gives the particles "
+                    f"of bodies.{k} a mass of {mass:g} kg, too small for a floating-point "
+                    "number to hold (masses and energies would be zero); give the density "
+                    "in kg/m^3 (water: 1000)")
+        for k, body in enumerate(self.bodies):
+            if not geometry.is_box(body):
+                continue  # placement.check
+            crest = body.max[1] + abs(body.surface_amplitude)
+            if body.surface_amplitude and crest > size[1] * (1 + 1e-12):
+                raise ValueError(
+                    f"bodies.{k}: the cosine surface reaches max[1] + |surface_amplitude| = "
+                    f"{crest:g} m, above the domain's top at {size[1]:g} m; lower "
+                    f"bodies.{k}.max or surface_amplitude, or enlarge domain.size")
+            for lo, hi, s in zip(body.min, body.max, size):
+                if lo < -1e-12 or hi > s * (1 + 1e-12):
+                    box = " x ".join(f"[0, {s:g}]" for s in size)
+                    raise ValueError(
+                        f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
+                        f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
+        overlap = geometry.overlap_message(self.bodies, self.grid.spacing)
+        if overlap:
+            raise ValueError(overlap)
+        body_shapes = [self.body_shape(k) for k in range(len(self.bodies))]
+        obstacle_shapes = [self.obstacle_shape(k) for k in range(len(self.obstacles))]
+        placement.check(self, body_shapes, obstacle_shapes)
+        if obstacle_shapes:
+            for k, count in enumerate(self.particle_counts()):
+                message = (placement.empty_body_message(self, k, body_shapes[k],
+                                                        obstacle_shapes)
+                           if count == 0 else None)
+                if message:
+                    raise ValueError(message)
+                if not self.bodies[k].around_obstacles:
+                    message = placement.overlap_message(self, k, count, body_shapes[k],
+                                                        obstacle_shapes)
+                    if message:
+                        raise ValueError(message)
+        if self.solver.scheme == "projection":
+            grid = Grid.covering(size, self.grid.spacing)
+            if geometry.fills_grid(self.bodies, self.grid.spacing, grid.size):
+                used = " x ".join(f"{s:.6g}" for s in grid.size)
+                raise ValueError(
+                    f"the bodies fill the whole domain ({used} m on the grid), leaving no "
+                    "free surface: the projection scheme's incompressible material then has "
+                    "no pressure level (the pressure system is singular). Leave empty space "
+                    "above the material, at least one grid cell: lower the top of the bodies "
+                    "(bodies.N.max) or enlarge domain.size")
+        names = set()
+        for k, probe in enumerate(self.probes):
+            if probe.name in names:
+                raise ValueError(f"probes.{k}.name = {probe.name!r} is the name of an earlier "
+                                 "probe; give each probe its own name (its column in "
+                                 "probes.csv)")
+            names.add(probe.name)
+            if any(not 0 <= p <= s * (1 + 1e-12) for p, s in zip(probe.position, size)):
+                box = " x ".join(f"[0, {s:g}]" for s in size)
+                raise ValueError(f"probes.{k}.position = {probe.position} m lies outside the "
+                                 f"domain {box} m; move it inside")
+            if probe.window is not None and probe.window > max(size):
+                raise ValueError(f"probes.{k}.window = {probe.window:g} m is wider than the "
+                                 f"domain (largest side {max(size):g} m), so it would read "
+                                 "particles anywhere; give a window of a few grid cells "
+                                 f"(grid.spacing = {self.grid.spacing:g} m), or none for "
+                                 "the default")
+        for k, body in enumerate(self.bodies):
+            speed = float(np.linalg.norm(body.velocity))
+            if not speed <= self.solver.max_speed:
+                raise ValueError(
+                    f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
+                    f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
+                    f"stop at once; give a slower velocity or raise solver.max_speed")
+        if (self.time.dt == "auto" and self.solver.scheme == "projection"
+                and self.solver.linear_solver != "multigrid"):
+            raise ValueError(
+                "time.dt = \"auto\" runs the projection scheme's steps inside the compiled "
+                f"core, with the multigrid solver; solver.linear_solver = "
+                f"{self.solver.linear_solver!r} solves from Python one fixed step at a time: "
+                "set solver.linear_solver = \"multigrid\", or give time.dt a number")
+        dt = time_step(self)
+        if self.time.end < dt * (1 - 1e-9):
+            raise ValueError(
+                f"time.end = {self.time.end:g} s is shorter than one time step of {dt:.3g} s "
+                f"(time.dt = {self.time.dt!r}); a run takes at least one step: give a later "
+                "time.end, or a smaller time.dt")
+        steps = self.time.end / dt
+        if not steps <= MAX_STEPS:
+            raise ValueError(
+                f"time.end = {self.time.end:g} s is {steps:.3g} steps of {dt:.3g} s, more than "
+                f"the {MAX_STEPS:,} a run can take (checkpoints are numbered by step with 9 "
+                "digits; at a few milliseconds per step that many steps take weeks): give a "
+                "shorter time.end, or a larger time.dt")
+        if self.time.dt != "auto" and self.solver.scheme == "explicit":
+            limit = case_stable_time_step(self)
+            if self.time.dt > limit:
+                c = sound_speed(self.material.bulk_modulus, self.material.density)
+                raise ValueError(
+                    f"time.dt = {self.time.dt:g} s is above the stable step of the explicit "
+                    f"scheme, {limit:.4g} s = grid.spacing / (sound speed + initial speed) = "
+                    f"{self.grid.spacing:g} / ({c:.4g} + {initial_speed(self):.3g}) m/s; set "
+                    f"time.dt to at most {limit:.4g} s, or time.dt = \"auto\" (which uses "
+                    f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
+                    "material.bulk_modulus")
+        if self.time.dt != "auto" and self.output.interval < self.time.dt * (1 - 1e-9):
+            raise ValueError(
+                f"output.interval = {self.output.interval:g} s is shorter than time.dt = "
+                f"{self.time.dt:g} s; make it at least one time step")
+        # once checked: mesh files by absolute path, so that the resolved case
+        # (summary.json) finds them from anywhere (as probes' data)
+        for spec in [*self.bodies, *self.obstacles]:
+            if spec.type == "mesh" and not Path(spec.path).expanduser().is_absolute():
+                path = (self.base_dir / Path(spec.path).expanduser()).resolve()
+                if path.is_file():
+                    object.__setattr__(spec, "path", str(path))
+        return self
+
+def _check_probe_data(k, probe, folder):
+    """probes.k.data: its file exists and names its columns (ValueError otherwise); the path
+    is made absolute (relative to ``folder``, the case file's, else the working folder), so
+    that the resolved case in summary.json finds it from anywhere."""
+    data = probe.data
+    path = Path(data.path).expanduser()
+    if not path.is_absolute():
+        path = (Path(folder) if folder is not None else Path.cwd()) / path
+    path = path.resolve()
+    key = f"probes.{k}.data"
+    try:
+        with open(path, encoding="utf-8") as f:
+            first = f.readline()
+    except OSError as err:
+        raise ValueError(
+            f"{key}.path = {data.path!r}: the file {path} cannot be read ({err.strerror}); give "
+            "the path of the measured series' CSV file, relative to the case file's folder")
+    except UnicodeDecodeError:
+        raise ValueError(f"{key}.path = {data.path!r}: {path} is not a text file; give the "
+                         "path of the measured series' CSV file (a header line, then numbers)")
+    names = [c.strip().strip('"') for c in first.rstrip("\r\n").split(",")]
+    for field in ("time_column", "column"):
+        name = getattr(data, field)
+        if name not in names:
+            raise ValueError(
+                f"{key}.{field} = {name!r} is not a column of {path.name}, whose header names "
+                + ", ".join(repr(n) for n in names[:20]) + (" ..." if len(names) > 20 else "")
+                + f"; set {key}.{field} to one of them, exactly as written")
+    object.__setattr__(data, "path", str(path))

@@ -1,0 +1,226 @@
+"""The shapes of bodies and obstacles in the case file: one model per shape type holding
+only the shape's fields; bodies and obstacles add their own fields to the same shape
+classes (``mpmflow.shapes`` builds the geometry from them)."""
+
+from typing import Annotated, ClassVar, Literal, Optional, Union
+
+from pydantic import Discriminator, Field, Tag, model_validator
+
+from .. import shapes
+from .sections import _Section
+
+
+
+# --------------------------------------------------------------------------- shapes
+# The shape of a body or an obstacle: one class per shape type, holding only the shape's
+# fields; bodies and obstacles add their own fields to the same shape classes
+# (mpmflow.shapes builds the geometry from them).
+
+SHAPE_TYPES = ("box", "cylinder", "sphere", "disc", "polygon", "mesh")
+_TYPE_DOC = (
+    "Shape: \"box\" (the default; min, max), \"disc\" (2D; centre, radius), \"polygon\" "
+    "(2D; vertices), \"sphere\" (3D; centre, radius), \"cylinder\" (3D; centre, axis, "
+    "radius, length) or \"mesh\" (3D; a closed triangle surface from an STL or OBJ file: "
+    "path, scale, translate). Each type takes only its own shape keys.")
+
+
+def _type_field(kind):
+    return Field(kind, description=_TYPE_DOC)
+
+
+def _centre():
+    return Field(description="Centre (m) of a disc or sphere; of a cylinder, the centre of "
+                 "its base, where its axis starts.", min_length=2, max_length=3,
+                 examples=[[0.2, 0.1]])
+
+
+def _radius():
+    return Field(description="Radius (m) of a disc, sphere or cylinder.", gt=0,
+                 examples=[0.05])
+
+
+class _BoxShape(_Section):
+    VECTORS: ClassVar = ("min", "max")
+    type: Literal["box"] = _type_field("box")
+    min: list[float] = Field(description="Lower corner of a box (m).", examples=[[0.0, 0.0]],
+                             min_length=2, max_length=3)
+    max: list[float] = Field(description="Upper corner of a box (m).",
+                             examples=[[0.114, 0.228]], min_length=2, max_length=3)
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if any(b <= a for a, b in zip(self.min, self.max)):
+            raise ValueError("each entry of max must be larger than the entry of min")
+        return self
+
+
+class _CylinderShape(_Section):
+    VECTORS: ClassVar = ("centre", "axis")
+    type: Literal["cylinder"] = _type_field("cylinder")
+    centre: list[float] = _centre()
+    axis: list[float] = Field(
+        description="Direction of a cylinder's axis from the centre of its base (any length; "
+        "[0, 0, 1] stands it upright).", min_length=3, max_length=3, examples=[[0, 0, 1]])
+    radius: float = _radius()
+    length: float = Field(description="Length (m) of a cylinder along its axis.", gt=0,
+                          examples=[0.2])
+
+    @model_validator(mode="after")
+    def _axis(self):
+        if not any(self.axis):
+            raise ValueError("the cylinder's axis must not be [0, 0, 0]; give its direction, "
+                             "e.g. axis = [0, 0, 1]")
+        return self
+
+
+class _SphereShape(_Section):
+    VECTORS: ClassVar = ("centre",)
+    type: Literal["sphere"] = _type_field("sphere")
+    centre: list[float] = _centre()
+    radius: float = _radius()
+
+
+class _DiscShape(_Section):
+    VECTORS: ClassVar = ("centre",)
+    type: Literal["disc"] = _type_field("disc")
+    centre: list[float] = _centre()
+    radius: float = _radius()
+
+
+class _PolygonShape(_Section):
+    VECTORS: ClassVar = ()
+    type: Literal["polygon"] = _type_field("polygon")
+    vertices: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
+        description="Corners of a polygon (2D) in order, [[x, y], ...] (m); the last joins the "
+        "first. Any simple polygon (convex or not; its edges must not cross).", min_length=3,
+        examples=[[[0.2, 0.0], [0.3, 0.0], [0.25, 0.05]]])
+
+    @model_validator(mode="after")
+    def _simple(self):
+        message = shapes.polygon_problem(self.vertices)
+        if message:
+            raise ValueError(message)
+        return self
+
+
+class _MeshShape(_Section):
+    VECTORS: ClassVar = ("translate",)
+    type: Literal["mesh"] = _type_field("mesh")
+    path: str = Field(
+        description="A mesh's file (STL or OBJ, read with trimesh): the closed surface of a "
+        "solid, relative to the case file's folder. Its coordinates are taken in metres "
+        "(times scale).", min_length=1, examples=["geometry/pier.stl"])
+    scale: float = Field(1.0, gt=0, description="Factor from a mesh file's units to metres "
+                         "(1: the file is in metres; 0.001: in millimetres).")
+    translate: list[float] = Field([0.0, 0.0, 0.0], description="Shift (m) applied to a mesh "
+                                   "after scaling.", min_length=3, max_length=3)
+
+
+class _BodyFields(_Section):
+    particles_per_cell: int = Field(
+        2, ge=1, le=16, description="Material points per cell along each axis (4 gives 16 per "
+        "cell in 2D, 64 in 3D). Points sit on a lattice aligned with the grid; a body of any "
+        "shape keeps the lattice points inside it (and outside every obstacle).")
+    velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s); "
+                                  "at rest by default, in 2D and 3D.",
+                                  min_length=2, max_length=3)
+    around_obstacles: bool = Field(
+        False, description="true = fill the body's shape except where obstacles are (water "
+        "in a tank round a pier: the lattice points inside obstacles are not seeded). false "
+        "(default) = a body that overlaps an obstacle is refused, as a likely mistake of "
+        "position.")
+    initial_pressure: Literal["zero", "hydrostatic"] = Field(
+        "zero", description="Initial particle pressure: \"zero\", or \"hydrostatic\" = "
+        "density * |g| * depth below the body's highest point against gravity (for a box its "
+        "highest corner). The "
+        "explicit scheme starts from the matching compression (volume (1 - p/K) m/density), "
+        "which spares it the acoustic transient of a column released without pressure; the "
+        "projection scheme computes the pressure anew in its first step.")
+
+
+class Box(_BodyFields, _BoxShape):
+    surface_amplitude: float = Field(
+        0.0, description="Amplitude A (m) of a cosine top surface (type = \"box\" only), for "
+        "standing-wave "
+        "sloshing: particles are kept where y < max[1] + A cos(pi (x - min[0]) / (max[0] - "
+        "min[0])), half a wavelength across the box (the first sloshing mode of a tank as "
+        "wide as the box); the box is seeded up to max[1] + |A|. 0 = flat top. |A| must be "
+        "smaller than the box's height. With initial_pressure = \"hydrostatic\" the depth is "
+        "measured from this surface.", examples=[0.01])
+
+    @model_validator(mode="after")
+    def _amplitude(self):
+        if abs(self.surface_amplitude) >= self.max[1] - self.min[1]:
+            raise ValueError(
+                f"|surface_amplitude| = {abs(self.surface_amplitude):g} m must be smaller than "
+                f"the box's height max[1] - min[1] = {self.max[1] - self.min[1]:g} m")
+        return self
+
+
+class CylinderBody(_BodyFields, _CylinderShape):
+    pass
+
+
+class SphereBody(_BodyFields, _SphereShape):
+    pass
+
+
+class DiscBody(_BodyFields, _DiscShape):
+    pass
+
+
+class PolygonBody(_BodyFields, _PolygonShape):
+    pass
+
+
+class MeshBody(_BodyFields, _MeshShape):
+    pass
+
+
+class _ObstacleFields(_Section):
+    name: Optional[str] = Field(
+        None, description="Name of the obstacle, for messages and outputs (letters, digits, "
+        "_ . + -); optional.", pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["pier"])
+    walls: Literal["slip", "no_slip", "domain"] = Field(
+        "domain", description="Wall condition on the obstacle's surface: \"slip\", "
+        "\"no_slip\", or \"domain\" = the same as domain.walls.")
+
+
+class BoxObstacle(_ObstacleFields, _BoxShape):
+    pass
+
+
+class CylinderObstacle(_ObstacleFields, _CylinderShape):
+    pass
+
+
+class SphereObstacle(_ObstacleFields, _SphereShape):
+    pass
+
+
+class DiscObstacle(_ObstacleFields, _DiscShape):
+    pass
+
+
+class PolygonObstacle(_ObstacleFields, _PolygonShape):
+    pass
+
+
+class MeshObstacle(_ObstacleFields, _MeshShape):
+    pass
+
+
+def _shape_tag(value):
+    """The ``type`` of a body or obstacle table ("box" when not given)."""
+    kind = value.get("type", "box") if isinstance(value, dict) else getattr(value, "type", "box")
+    return kind if isinstance(kind, str) else repr(kind)
+
+
+def _shape_union(*models):
+    return Annotated[Union[tuple(Annotated[m, Tag(t)] for m, t in zip(models, SHAPE_TYPES))],
+                     Discriminator(_shape_tag)]
+
+
+Body = _shape_union(Box, CylinderBody, SphereBody, DiscBody, PolygonBody, MeshBody)
+Obstacle = _shape_union(BoxObstacle, CylinderObstacle, SphereObstacle, DiscObstacle,
+                        PolygonObstacle, MeshObstacle)
