@@ -427,9 +427,16 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
+  // the walls hold here what the pressure step's contact will hold at its start (it decides
+  // on the normal velocity of v*, which the viscous step leaves unchanged at wall nodes)
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  auto node_row = node_row_.view(nn);
+  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact);
+  start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
   const index_t n =
-      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_sign, O.no_slip,
-                         T_.onode, T_.onormal, T_.ono_slip, base, vu, vrow, voff);
+      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, contact, O.no_slip,
+                         T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff);
   if (n == 0) return OK;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});

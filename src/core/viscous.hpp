@@ -42,15 +42,19 @@ void cell_viscosity(const Grid<D>& g, View<const double> theta, View<const doubl
                     View<const double> p_node, int model, View<const double> par, View<double> eta,
                     View<double> weight);
 
-// The unknowns and held values of the system: u (nn x D) = vstar with the held tangential
-// components of no-slip contacts set to 0; row(i, k) the unknown's number (component by
-// component, each in node order), -1 where held or massless; off (D + 1) the first row of
-// each component. Walls: entries (wall_node, wall_axis, wall_sign); obstacles: entries
-// (onode, onormal: its outward normal, ono_slip: no-slip). Returns the number of unknowns.
+// The unknowns and held values of the system: u (nn x D) = vstar with the no-slip contacts
+// set to 0; row(i, k) the unknown's number (component by component, each in node order), -1
+// where held or massless; off (D + 1) the first row of each component. Walls: entries
+// (wall_node, wall_axis), whose normal component is held (at vstar); a no-slip wall holds
+// every component at 0 where contact(i, axis) (nn x D). Obstacles:
+// entries onode, held (all components) where no-slip (ono_slip) and ocontact(i) (nn).
+// contact and ocontact are the pressure step's starting contact (start_contact,
+// start_obstacles), so that the viscous solve holds exactly the nodes the corrector will.
+// Returns the number of unknowns.
 template <int D>
 index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_node,
-                        View<const index_t> wall_axis, View<const double> wall_sign, bool no_slip,
-                        View<const index_t> onode, View<const double, 2> onormal,
+                        View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
+                        View<const index_t> onode, View<const bool> ocontact,
                         View<const bool> ono_slip, View<const double, 2> vstar, View<double, 2> u,
                         View<index_t, 2> row, View<index_t> off);
 

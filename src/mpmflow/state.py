@@ -334,13 +334,14 @@ def cell_viscosity(cells, h, theta, open_, enclosed, full, v, p_node, model, par
     _viscous_back(weight, weightc)
 
 
-def number_unknowns(node_mass, wall_node, wall_axis, wall_sign, no_slip, onode, onormal,
+def number_unknowns(node_mass, wall_node, wall_axis, contact, no_slip, onode, ocontact,
                     ono_slip, vstar, u, row, off):
     """Number the viscous system's unknowns (``u``, ``row``, ``off`` in place); returns
-    their count."""
+    their count. ``contact`` (nodes x D) and ``ocontact`` (nodes) say where the walls and
+    obstacles hold the material (the pressure step's starting contact)."""
     uc, rowc = _viscous_out(u), _viscous_out(row)
-    n = _core.number_unknowns(node_mass, wall_node, wall_axis, wall_sign, bool(no_slip), onode,
-                              onormal, ono_slip, vstar, uc, rowc, off)
+    n = _core.number_unknowns(node_mass, wall_node, wall_axis, contact, bool(no_slip), onode,
+                              ocontact, ono_slip, vstar, uc, rowc, off)
     _viscous_back(u, uc)
     _viscous_back(row, rowc)
     return n
