@@ -11,8 +11,8 @@ node (the nodal pressure interpolated at the sensor's point), node1 (one cell of
 face), and the nodal pressure at points away from the box (x_*). Prints one JSON object
 (also runs/spheric_noise_TAG.json, the series in runs/spheric_noise_TAG.npz).
 """
+import argparse
 import json
-import sys
 import time as _time
 
 import numpy as np
@@ -26,15 +26,14 @@ from mpmflow.validation import spheric
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 
-args = sys.argv[1:]
-tag = args.pop(0)
-spacing, end = 0.04, 1.0
-if args and args[0] == "--spacing":
-    spacing, args = float(args[1]), args[2:]
-if args and args[0] == "--end":
-    end, args = float(args[1]), args[2:]
-args = [a for a in args if a != "--set"]
-over = spheric.overrides(spacing, end) + ['time.dt="auto"'] + args
+ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+ap.add_argument("tag", help="the run's name in runs/spheric_noise_TAG.*")
+ap.add_argument("--spacing", type=float, default=0.04)
+ap.add_argument("--end", type=float, default=1.0)
+ap.add_argument("--set", action="append", default=[], help="more overrides (key=value)")
+cli = ap.parse_args()
+tag, spacing, end = cli.tag, cli.spacing, cli.end
+over = spheric.overrides(spacing, end) + ['time.dt="auto"'] + cli.set
 case = load_case(EXAMPLES / "spheric_test2.toml", ["output.snapshots=false", *over])
 sim = Simulation(case)
 SENS = ("P1", "P3")
@@ -115,7 +114,7 @@ def noise(y):
     return float(np.sqrt(np.mean((y - ma)[sel] ** 2)))
 
 
-out = {"tag": tag, "over": args, "wall_s": wall, "steps": sim.steps,
+out = {"tag": tag, "over": cli.set, "wall_s": wall, "steps": sim.steps,
        "particles": sim.particles.count}
 wexp = (te >= 0.45) & (te <= 1.0)
 for name in SENS:
