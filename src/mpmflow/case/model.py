@@ -66,6 +66,38 @@ class Case(_Section):
                                                  key=f"{kind}.{k}")
         return self._shapes[key]
 
+    def _periodic_problem(self, size, obstacle_shapes):
+        """What is wrong with domain.periodic for this case (None: nothing)."""
+        periodic = self.domain.periodic or []
+        if not any(periodic):
+            return None
+        axes = "xyz"
+        if self.solver.scheme != "projection":
+            return ("domain.periodic is supported by the projection scheme only; set "
+                    "solver.scheme = \"projection\" or remove domain.periodic")
+        h = self.grid.spacing
+        for k, flag in enumerate(periodic):
+            if not flag:
+                continue
+            n = size[k] / h
+            whole = round(n)
+            if abs(n - whole) > 1e-6 * n or whole % 2 or whole < 4:
+                even = max(4, 2 * round(n / 2))
+                return (f"domain.periodic: along {axes[k]} domain.size = {size[k]:g} m is "
+                        f"{n:.6g} cells of grid.spacing = {h:g} m; a periodic axis needs a "
+                        f"whole, even number of cells, at least 4: make domain.size[{k}] = "
+                        f"{even * h:.6g} m ({even} cells) or change grid.spacing")
+            unit = np.zeros(len(size))
+            unit[k] = 1.0
+            for j, shape in enumerate(obstacle_shapes):
+                lo, hi = -shape.support(-unit), shape.support(unit)
+                if lo <= 0.0 or hi >= size[k]:
+                    return (f"obstacles.{j} reaches the ends of the periodic axis {axes[k]} "
+                            f"(it spans {lo:.6g} to {hi:.6g} m of [0, {size[k]:g}] m); an "
+                            "obstacle must lie inside a periodic axis's ends: move or shrink "
+                            "it, or make the axis a wall (domain.periodic)")
+        return None
+
     def body_shape(self, k):
         """The ``mpmflow.shapes`` shape of bodies.k."""
         return self._shape("bodies", k)
@@ -208,6 +240,9 @@ class Case(_Section):
                     "no pressure level (the pressure system is singular). Leave empty space "
                     "above the material, at least one grid cell: lower the top of the bodies "
                     "(bodies.N.max) or enlarge domain.size")
+        message = self._periodic_problem(size, obstacle_shapes)
+        if message:
+            raise ValueError(message)
         names = set()
         for k, probe in enumerate(self.probes):
             if probe.name in names:
