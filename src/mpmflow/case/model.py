@@ -91,11 +91,11 @@ class Case(_Section):
             unit[k] = 1.0
             for j, shape in enumerate(obstacle_shapes):
                 lo, hi = -shape.support(-unit), shape.support(unit)
-                if lo <= 0.0 or hi >= size[k]:
-                    return (f"obstacles.{j} reaches the ends of the periodic axis {axes[k]} "
-                            f"(it spans {lo:.6g} to {hi:.6g} m of [0, {size[k]:g}] m); an "
-                            "obstacle must lie inside a periodic axis's ends: move or shrink "
-                            "it, or make the axis a wall (domain.periodic)")
+                if lo < h or hi > size[k] - h:
+                    return (f"obstacles.{j} spans {lo:.6g} to {hi:.6g} m along the periodic "
+                            f"axis {axes[k]} of [0, {size[k]:g}] m; an obstacle must stay a "
+                            f"grid cell ({h:g} m) inside a periodic axis's ends: move or "
+                            "shrink it, or make the axis a wall (domain.periodic)")
         return None
 
     def body_shape(self, k):
