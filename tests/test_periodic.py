@@ -126,6 +126,8 @@ def test_a_probe_on_a_periodic_end_reads_across_it():
       "domain.periodic=[true, false]"], r"needs a whole, even number of cells"),
     (["domain.size=[0.11, 0.3]", "bodies.0.max=[0.11, 0.195]",
       "domain.periodic=[true, false]"], r"make domain.size\[0\] = 0.1[02]"),
+    (["domain.size=[1.3, 0.3]", "bodies.0.max=[1.3, 0.195]", "domain.periodic=[true, false]"],
+     r"130 cells halve down to no fewer than 130 points.*e.g. 1.28 m \(128 cells\)"),
     (["domain.periodic=[true, false]", "solver.scheme=explicit", "time.dt=auto",
       "material.bulk_modulus=4e5"], "projection scheme only"),
 ])

@@ -17,6 +17,19 @@ from .shapes import Body, Obstacle
 
 
 
+# A periodic axis is halved by the multigrid while its period stays a multiple of 4
+# (src/core/multigrid.cpp); the points left on the coarsest level enter a dense solve at
+# every step (with the other axes' 2 or 3 points: at most a few hundred unknowns).
+MAX_COARSEST_PERIOD = 64
+
+
+def _coarsest_period(cells):
+    """The points a periodic axis of ``cells`` cells keeps on the coarsest level."""
+    while cells % 4 == 0 and cells >= 8:
+        cells //= 2
+    return cells
+
+
 class Case(_Section):
     title: str = Field("", description="Free text shown in outputs.")
     domain: Domain
@@ -66,7 +79,7 @@ class Case(_Section):
                                                  key=f"{kind}.{k}")
         return self._shapes[key]
 
-    def _periodic_problem(self, size, obstacle_shapes):
+    def _periodic_problem(self, size, obstacle_shapes):  # noqa: C901 - one rule per line
         """What is wrong with domain.periodic for this case (None: nothing)."""
         periodic = self.domain.periodic or []
         if not any(periodic):
@@ -76,6 +89,7 @@ class Case(_Section):
             return ("domain.periodic is supported by the projection scheme only; set "
                     "solver.scheme = \"projection\" or remove domain.periodic")
         h = self.grid.spacing
+        coarsest = 1
         for k, flag in enumerate(periodic):
             if not flag:
                 continue
@@ -89,6 +103,16 @@ class Case(_Section):
                         f"{even * h:.6g} m ({even} cells) or change grid.spacing")
             unit = np.zeros(len(size))
             unit[k] = 1.0
+            left = _coarsest_period(whole)
+            coarsest *= left
+            if coarsest > MAX_COARSEST_PERIOD:
+                better = max(8, round(whole / 8) * 8)
+                return (f"domain.periodic: along {axes[k]} the {whole} cells halve down to "
+                        f"no fewer than {left} points on the pressure solver's coarsest level "
+                        "(a periodic axis halves while its period stays a multiple of 4), "
+                        f"{coarsest} with the other periodic axes, too many for its dense "
+                        f"solve at every step; make domain.size[{k}] a multiple of 8 cells, "
+                        f"e.g. {better * h:.6g} m ({better} cells)")
             for j, shape in enumerate(obstacle_shapes):
                 lo, hi = -shape.support(-unit), shape.support(unit)
                 if lo < h or hi > size[k] - h:
