@@ -225,3 +225,20 @@ def test_study_quick(tmp_path):
     rows = (tmp_path / "study.csv").read_text().splitlines()
     assert len(rows) == 4  # header + projection, explicit real K, explicit reduced K
     assert "time-step ratio" in (tmp_path / "study.md").read_text()
+
+
+@pytest.mark.parametrize("override, feature, instead", [
+    (["obstacles.0={type='box', min=[0.2, 0.0], max=[0.25, 0.05]}"],
+     r"fixed obstacles \(\[\[obstacles\]\]\)", r"remove the \[\[obstacles\]\]"),
+    (["material.model=newtonian", "material.viscosity=0.01"],
+     r"materials other than inviscid water \(material.model\)",
+     'set material.model = "water"'),
+])
+def test_what_the_explicit_scheme_does_not_support_is_refused_with_the_fix(
+        override, feature, instead):
+    """The rule asks the scheme (schemes.SUPPORTS) and names the schemes that would do."""
+    with pytest.raises(CaseError, match=rf'solver.scheme = "explicit" does not support '
+                       rf'{feature}; set solver.scheme = "projection", or {instead}'):
+        load_case(EXAMPLES / "dam_break.toml",
+                  ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
+                   *override])

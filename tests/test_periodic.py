@@ -129,7 +129,9 @@ def test_a_probe_on_a_periodic_end_reads_across_it():
     (["domain.size=[1.3, 0.3]", "bodies.0.max=[1.3, 0.195]", "domain.periodic=[true, false]"],
      r"130 cells halve down to no fewer than 130 points.*e.g. 1.28 m \(128 cells\)"),
     (["domain.periodic=[true, false]", "solver.scheme=explicit", "time.dt=auto",
-      "material.bulk_modulus=4e5"], "projection scheme only"),
+      "material.bulk_modulus=4e5"],
+     r'solver.scheme = "explicit" does not support periodic axes \(domain.periodic\); set '
+     r'solver.scheme = "projection", or remove domain.periodic'),
 ])
 def test_bad_periodic_settings_are_refused_with_the_fix(override, message):
     with pytest.raises(CaseError, match=message):

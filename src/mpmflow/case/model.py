@@ -8,7 +8,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from .. import bodies as geometry
-from .. import placement, shapes
+from .. import placement, schemes, shapes
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
 from .sections import (MAX_STEPS, Checkpoint, Domain, Execution, GridSettings, Material,
@@ -79,15 +79,28 @@ class Case(_Section):
                                                  key=f"{kind}.{k}")
         return self._shapes[key]
 
-    def _periodic_problem(self, size, obstacle_shapes):  # noqa: C901 - one rule per line
+    def _unsupported(self):
+        """The message for a feature the case uses that its scheme does not support (each
+        scheme declares its own, ``schemes.SUPPORTS``); None when there is none."""
+        used = {"obstacles": (bool(self.obstacles), "remove the [[obstacles]]"),
+                "materials": (self.material.model != "water",
+                              "set material.model = \"water\""),
+                "periodic": (any(self.domain.periodic or []), "remove domain.periodic")}
+        name = self.solver.scheme
+        for feature, (uses, instead) in used.items():
+            if uses and not schemes.supports(name, feature):
+                others = " or ".join(f"\"{n}\"" for n in schemes.supporting(feature))
+                return (f"solver.scheme = \"{name}\" does not support "
+                        f"{schemes.FEATURES[feature]}; set solver.scheme = {others}, or "
+                        f"{instead}")
+        return None
+
+    def _periodic_problem(self, size, obstacle_shapes):
         """What is wrong with domain.periodic for this case (None: nothing)."""
         periodic = self.domain.periodic or []
         if not any(periodic):
             return None
         axes = "xyz"
-        if self.solver.scheme != "projection":
-            return ("domain.periodic is supported by the projection scheme only; set "
-                    "solver.scheme = \"projection\" or remove domain.periodic")
         h = self.grid.spacing
         coarsest = 1
         for k, flag in enumerate(periodic):
@@ -185,17 +198,9 @@ class Case(_Section):
             self._base_dir = Path(info.context["base_dir"])
         size = self.domain.size
         self._same_dimension()
-        if self.obstacles and self.solver.scheme != "projection":
-            raise ValueError(
-                f"solver.scheme = {self.solver.scheme!r} does not take obstacles so far; run "
-                "cases with [[obstacles]] with solver.scheme = \"projection\", or remove the "
-                "obstacles")
-        if self.material.model != "water" and self.solver.scheme != "projection":
-            raise ValueError(
-                f"solver.scheme = {self.solver.scheme!r} takes inviscid water only; run "
-                f"material.model = {self.material.model!r} with solver.scheme = "
-                "\"projection\" (which solves the viscous stress implicitly), or set "
-                "material.model = \"water\"")
+        message = self._unsupported()
+        if message:
+            raise ValueError(message)
         folder = (info.context or {}).get("folder") if info is not None else None
         for k, probe in enumerate(self.probes):
             if probe.data is not None:

@@ -1,6 +1,31 @@
-"""Time-integration schemes, registered by the name used in ``solver.scheme``."""
+"""Time-integration schemes, registered by the name used in ``solver.scheme``, each
+declaring what it supports (``SUPPORTS``): the case's rules ask here instead of naming
+schemes."""
 
 SCHEMES = {}
+
+# The features a scheme may support, as the case's rules name them to the user.
+FEATURES = {
+    "obstacles": "fixed obstacles ([[obstacles]])",
+    "materials": "materials other than inviscid water (material.model)",
+    "periodic": "periodic axes (domain.periodic)",
+}
+
+
+def _load():
+    from . import explicit, projection  # noqa: F401  (they register themselves)
+
+
+def supports(name, feature):
+    """True when scheme ``name`` supports ``feature`` (a key of FEATURES)."""
+    _load()
+    return feature in SCHEMES[name].SUPPORTS
+
+
+def supporting(feature):
+    """The names of the schemes that support ``feature``."""
+    _load()
+    return [name for name, cls in SCHEMES.items() if feature in cls.SUPPORTS]
 
 
 def register(name):
@@ -11,6 +36,5 @@ def register(name):
 
 
 def make_scheme(case, grid, particles):
-    from . import explicit, projection  # noqa: F401  (they register themselves)
-
+    _load()
     return SCHEMES[case.solver.scheme](case, grid, particles)

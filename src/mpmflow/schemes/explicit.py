@@ -33,6 +33,8 @@ class ExplicitReport(StepReport):
 
 @register("explicit")
 class ExplicitScheme:
+    SUPPORTS = frozenset()  # water only, walls only (the weakly compressible comparator)
+
     def __init__(self, case, grid, particles):
         self.grid = grid
         self.particles = particles

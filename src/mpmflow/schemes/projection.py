@@ -64,6 +64,8 @@ class AdaptiveReport(StepReport):
 
 @register("projection")
 class ProjectionScheme:
+    SUPPORTS = frozenset({"obstacles", "materials", "periodic"})
+
     def __init__(self, case, grid, particles):
         s = case.solver
         self.case = case
