@@ -67,7 +67,8 @@ without one), 141 the output pipe was closed (mpmflow keys | head)."""
 # checks that the two agree)
 VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
                     "volume", "long_run", "three_d", "spheric", "viscous_wave",
-                    "granular_collapse", "bingham_slump")
+                    "granular_collapse", "bingham_slump", "poiseuille", "bingham_plug",
+                    "mu_i_layer")
 
 
 def _parser():

@@ -16,8 +16,8 @@ import time as _time
 from pathlib import Path
 
 from ..errors import CaseError, SimulationError
-from . import (dam_break, hydrostatic, lobovsky, long_run, materials, sloshing, spheric, three_d,
-               volume)
+from . import (channel_flows, dam_break, hydrostatic, lobovsky, long_run, materials, sloshing,
+               spheric, three_d, volume)
 from .common import EXAMPLES, CaseResult, Row
 
 CASES = {
@@ -33,6 +33,9 @@ CASES = {
     "viscous_wave": materials.run_wave,
     "granular_collapse": materials.run_collapse,
     "bingham_slump": materials.run_slump,
+    "poiseuille": channel_flows.run_poiseuille,
+    "bingham_plug": channel_flows.run_plug,
+    "mu_i_layer": channel_flows.run_layer,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {"hydrostatic": ("hydrostatic.toml",), "sloshing": ("sloshing.toml",),
@@ -42,7 +45,9 @@ EXAMPLE_FILES = {"hydrostatic": ("hydrostatic.toml",), "sloshing": ("sloshing.to
                  "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml"),
                  "spheric": ("spheric_test2.toml",), "viscous_wave": ("sloshing.toml",),
                  "granular_collapse": ("granular_collapse.toml",),
-                 "bingham_slump": ("bingham_slump.toml",)}  # the examples/ files each runs
+                 "bingham_slump": ("bingham_slump.toml",),
+                 "poiseuille": ("poiseuille_film.toml",), "bingham_plug": ("bingham_plug.toml",),
+                 "mu_i_layer": ("mu_i_layer.toml",)}  # the examples/ files each runs
 
 
 def case_names(cases=None):
