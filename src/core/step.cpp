@@ -106,6 +106,7 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
     eta_.reserve(nc);
     eta_weight_.reserve(nc);
     vu_.reserve(nn * D);
+    v_rate_.reserve(nn * D);
     vrow_.reserve(nn * D);
     voff_.reserve(D + 1);
   }
@@ -419,7 +420,18 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto v_old = v_old_.template view<2>({nn, D});
   auto v_star = v_star_.template view<2>({nn, D});
   auto p = p_node_.view(nn);
-  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_old, p, O.model,
+  // the walls hold here what the pressure step's contact will hold at its start (it decides
+  // on the normal velocity of v*, which the viscous step leaves unchanged at wall nodes)
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  auto node_row = node_row_.view(nn);
+  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact);
+  start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
+  // the strain rate of the particles' velocity with the held nodes at rest
+  auto v_rate = v_rate_.template view<2>({nn, D});
+  rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, contact, O.no_slip, T_.onode, ocontact,
+                   T_.ono_slip, v_rate);
+  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_rate, p, O.model,
                     View<const double>(O.model_params.data(), {8}), eta_.view(nc),
                     eta_weight_.view(nc));
   {
@@ -434,13 +446,6 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
-  // the walls hold here what the pressure step's contact will hold at its start (it decides
-  // on the normal velocity of v*, which the viscous step leaves unchanged at wall nodes)
-  auto contact = contact_.template view<2>({nn, D});
-  auto ocontact = ocontact_.view(nn);
-  auto node_row = node_row_.view(nn);
-  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact);
-  start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
   const index_t n =
       number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, contact, O.no_slip,
                          T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff, &grid_);

@@ -244,7 +244,7 @@ class State {
   Buffer<double> vol_mean_;
   Multigrid<D> volume_mg_;
   // viscous predictor
-  Buffer<double> eta_, eta_weight_, vu_, vvals_, vrhs_, vx_, vwork_;
+  Buffer<double> eta_, eta_weight_, vu_, v_rate_, vvals_, vrhs_, vx_, vwork_;
   Buffer<index_t> vrow_, voff_, vcols_, vnode_;
   std::array<Multigrid<D>, D> viscous_mg_;
   // integrals of this step, as views into the buffers above

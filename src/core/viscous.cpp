@@ -138,6 +138,25 @@ void cell_viscosity(const Grid<D>& g, View<const double> theta, View<const doubl
 }
 
 template <int D>
+void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
+                   View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
+                   View<const index_t> onode, View<const bool> ocontact, View<const bool> ono_slip,
+                   View<double, 2> out) {
+  for (index_t i = 0; i < v.size(); ++i) out[i] = v[i];
+  if (no_slip)
+    for (index_t e = 0; e < wall_node.size(); ++e) {
+      const index_t i = wall_node(e), k = wall_axis(e);
+      if (contact(i, k))
+        for (int m = 0; m < D; ++m) out(i, m) = 0.0;
+    }
+  for (index_t e = 0; e < onode.size(); ++e) {
+    const index_t i = onode(e);
+    if (ono_slip(e) && ocontact(i))
+      for (int m = 0; m < D; ++m) out(i, m) = 0.0;
+  }
+}
+
+template <int D>
 index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_node,
                         View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
                         View<const index_t> onode, View<const bool> ocontact,
@@ -300,23 +319,26 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
   return {it, std::sqrt(dot(q, q)) / bnorm};
 }
 
-#define MPMFLOW_VISCOUS(D)                                                                        \
-  template void gauss_gradients<D>(const Grid<D>&, View<double, 4>);                              \
-  template void cell_viscosity<D>(const Grid<D>&, View<const double>, View<const double>,         \
-                                  View<const bool>, double, View<const double, 2>,                \
-                                  View<const double>, int, View<const double>, View<double>,      \
-                                  View<double>);                                                  \
-  template index_t number_unknowns<D>(                                                            \
-      View<const double>, View<const index_t>, View<const index_t>, View<const bool, 2>, bool,    \
-      View<const index_t>, View<const bool>, View<const bool>, View<const double, 2>,             \
-      View<double, 2>, View<index_t, 2>, View<index_t>, const Grid<D>*);                          \
-  template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,            \
-                            View<const double>, double, View<const double, 2>,                    \
-                            View<const index_t, 2>, View<const index_t>, View<index_t, 3>,        \
-                            View<double, 3>, View<double>, View<index_t>);                        \
-  template SolveResult solve<D>(const Grid<D>&, View<const index_t, 3>, View<const double, 3>,    \
-                                View<const index_t>, View<const index_t>, View<const double>,     \
-                                View<double>, double, index_t, int, std::array<Multigrid<D>, D>&, \
+#define MPMFLOW_VISCOUS(D)                                                                         \
+  template void gauss_gradients<D>(const Grid<D>&, View<double, 4>);                               \
+  template void cell_viscosity<D>(const Grid<D>&, View<const double>, View<const double>,          \
+                                  View<const bool>, double, View<const double, 2>,                 \
+                                  View<const double>, int, View<const double>, View<double>,       \
+                                  View<double>);                                                   \
+  template void rate_velocity<D>(View<const double, 2>, View<const index_t>, View<const index_t>,  \
+                                 View<const bool, 2>, bool, View<const index_t>, View<const bool>, \
+                                 View<const bool>, View<double, 2>);                               \
+  template index_t number_unknowns<D>(                                                             \
+      View<const double>, View<const index_t>, View<const index_t>, View<const bool, 2>, bool,     \
+      View<const index_t>, View<const bool>, View<const bool>, View<const double, 2>,              \
+      View<double, 2>, View<index_t, 2>, View<index_t>, const Grid<D>*);                           \
+  template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,             \
+                            View<const double>, double, View<const double, 2>,                     \
+                            View<const index_t, 2>, View<const index_t>, View<index_t, 3>,         \
+                            View<double, 3>, View<double>, View<index_t>);                         \
+  template SolveResult solve<D>(const Grid<D>&, View<const index_t, 3>, View<const double, 3>,     \
+                                View<const index_t>, View<const index_t>, View<const double>,      \
+                                View<double>, double, index_t, int, std::array<Multigrid<D>, D>&,  \
                                 View<double, 2>);
 
 MPMFLOW_VISCOUS(2)

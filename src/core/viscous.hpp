@@ -42,6 +42,19 @@ void cell_viscosity(const Grid<D>& g, View<const double> theta, View<const doubl
                     View<const double> p_node, int model, View<const double> par, View<double> eta,
                     View<double> weight);
 
+// The velocity whose strain rate sets the cells' viscosity (cell_viscosity): the nodal
+// velocity v (nn x D, the particles' velocity on the grid) with the nodes the solve holds at
+// rest set to 0: a no-slip wall node where contact(i, axis), a no-slip obstacle node where
+// ocontact(i) (the holds of number_unknowns). On the grid of the particles a wall node reads
+// the mean velocity of the particles above it (a third of the first node's in a sheared
+// layer), so the cell on the wall read about half its shear rate and a yield-stress material
+// held there at twice its yield stress (docs/method.md, "Viscous materials").
+template <int D>
+void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
+                   View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
+                   View<const index_t> onode, View<const bool> ocontact, View<const bool> ono_slip,
+                   View<double, 2> out);
+
 // The unknowns and held values of the system: u (nn x D) = vstar with the no-slip contacts
 // set to 0; row(i, k) the unknown's number (component by component, each in node order), -1
 // where held or massless; off (D + 1) the first row of each component. Walls: entries
