@@ -29,6 +29,8 @@ def run(threads, settings):
     # 7k pressure unknowns: above multigrid.PARALLEL_ROWS, so the solve's parallel loops
     # and the parallel Galerkin products run too
     ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005"],
+    # APIC's transfers (100k particles: parallel strips and chunks)
+    ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005", "solver.transfer=apic"],
 ])
 def test_dam_break_is_bit_identical_on_one_and_two_threads(settings):
     if state.POOL < 2:
