@@ -3,46 +3,9 @@
 #include <array>
 
 #include "parallel.hpp"
+#include "stencil.hpp"
 
 namespace mpmflow {
-
-namespace {
-
-// The cells around the node with coordinates ix that take part in the system (in the order
-// of their bits b: cell ix - 1 + b): their slot in the element integrals, the node's corner
-// in each, and each cell's first node. Returns how many (at most 2^D).
-template <int D>
-int node_cells(const Grid<D>& g, const std::array<index_t, D>& ix, View<const index_t> cell_slot,
-               std::array<index_t, Grid<D>::NC>& slots, std::array<int, Grid<D>::NC>& local,
-               std::array<index_t, Grid<D>::NC>& base) {
-  int n = 0;
-  for (int b = 0; b < Grid<D>::NC; ++b) {
-    index_t c = 0, first = 0;
-    int a = 0;
-    bool inside = true;
-    for (int k = 0; k < D; ++k) {
-      const int bit = (b >> k) & 1;
-      const index_t j = ix[k] - 1 + bit;
-      if (j < 0 || j >= g.cells[k]) {
-        inside = false;
-        break;
-      }
-      c += j * g.cs[k];
-      first += j * g.ns[k];
-      if (bit == 0) a += 1 << k;
-    }
-    if (!inside) continue;
-    const index_t s = cell_slot(c);
-    if (s < 0) continue;
-    slots[n] = s;
-    local[n] = a;
-    base[n] = first;
-    ++n;
-  }
-  return n;
-}
-
-}  // namespace
 
 template <int D>
 void correct_velocity(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 4> C,

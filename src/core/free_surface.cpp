@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "parallel.hpp"
+#include "periodic.hpp"
 #include "stencil.hpp"
 
 namespace mpmflow {
@@ -56,9 +57,11 @@ index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
         if (cell_slot(c) < 0) unknown = false;
       }
     }
-    node_row(i) = unknown && fluid ? 0 : -1;
+    node_row(i) = unknown && fluid && !g.is_image(ix.data()) ? 0 : -1;
   });
-  return number(node_row);
+  const index_t n = number(node_row);
+  copy_images<D, index_t>(g, node_row.data(), 1);
+  return n;
 }
 
 index_t number(View<index_t> row) {

@@ -14,13 +14,14 @@
 
 namespace mpmflow {
 
-// Flat index of cell b of the node with coordinates ix (-1 when outside the grid).
+// Flat index of cell b of the node with coordinates ix (-1 when outside the grid; wrapped
+// round periodic axes).
 template <int D>
 inline index_t cell_of_node(const Grid<D>& g, const std::array<index_t, D>& ix, int b) {
   index_t c = 0;
   for (int k = 0; k < D; ++k) {
-    const index_t j = ix[k] - 1 + ((b >> k) & 1);
-    if (j < 0 || j >= g.cells[k]) return -1;
+    const index_t j = g.wrap_cell(k, ix[k] - 1 + ((b >> k) & 1));
+    if (j < 0) return -1;
     c += j * g.cs[k];
   }
   return c;
@@ -61,7 +62,8 @@ void enclosed_cells(const Grid<D>& g, View<const double> node_f, View<bool> encl
 // Number the pressure unknowns into node_row (row of each node, -1 = none); returns their
 // count. A node is an unknown when all its in-domain cells outside solids (static_slot >= 0)
 // take part in the system (cell_slot >= 0), there is at least one such cell and, with
-// subcell, node_f > 1/2. Unknowns are numbered in node order.
+// subcell, node_f > 1/2. Unknowns are numbered in node order; an image node (periodic
+// axes) shares its master's row.
 template <int D>
 index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
                        View<const index_t> static_slot, View<const double> node_f, bool subcell,

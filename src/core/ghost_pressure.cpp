@@ -27,7 +27,7 @@ void ghost_values(const Grid<D>& g, View<const index_t> cell_slot, View<const do
     for (int s = 0; s < NS; ++s) {
       const double sv = S[s];
       if (s == centre || sv >= 0.0) continue;
-      const index_t j = i + t.offset[s];
+      const index_t j = neighbour_node<D>(g, i, ix, s, t);
       if (node_row(j) < 0) continue;
       num -= sv * ghost_factor(node_f(j), node_f(i), theta_min) * p_node(j);
       den -= sv;

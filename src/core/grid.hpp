@@ -6,6 +6,12 @@
 // ns_k = ns_{k-1} (cells[k-1] + 1); cells likewise with cs_k. Corner a of a cell
 // (0 <= a < 2^D) is offset (a >> k) & 1 along axis k. A neighbour at offset (d_0, ...) in
 // {-1, 0, 1}^D of a node is stencil slot sum_k (d_k + 1) 3^k (9 slots in 2D, 27 in 3D).
+//
+// Periodic axes: along an axis k with periodic[k], cell cells[k] - 1 neighbours cell 0 and
+// the last plane of nodes (i_k = cells[k]) is an image of the first (i_k = 0): arrays keep
+// every node's plane, and every phase leaves an image's values equal to its master's
+// (fold_images after a scatter, copy_images after a solve). A node's cells and its
+// neighbours wrap round the axis (stencil.hpp); particles live in [0, cells[k] h).
 #pragma once
 
 #include <array>
@@ -44,6 +50,8 @@ struct Grid {
   std::array<index_t, NC> corner{};  // flat offset of each corner from a cell's first node
   index_t nnodes = 0;
   index_t ncells = 0;
+  std::array<bool, D> periodic{};
+  bool any_periodic = false;
 
   Grid() = default;
   Grid(double spacing, const std::array<index_t, D>& c)
@@ -60,6 +68,44 @@ struct Grid {
     corner[0] = 0;
     for (int k = 0; k < D; ++k)
       for (int a = 0; a < (1 << k); ++a) corner[a + (1 << k)] = corner[a] + ns[k];
+  }
+
+  // The same grid, periodic along the axes where p[k] (a periodic axis needs an even number
+  // of cells, at least 4: the multigrid's colours and stencils must not meet across it).
+  Grid with_periodic(const std::array<bool, D>& p) const {
+    Grid g = *this;
+    g.periodic = p;
+    g.any_periodic = false;
+    for (int k = 0; k < D; ++k) g.any_periodic = g.any_periodic || p[k];
+    return g;
+  }
+
+  // Cell coordinate j along axis k (j = -1 to cells[k]) wrapped round a periodic axis; -1
+  // beyond a wall.
+  index_t wrap_cell(int k, index_t j) const {
+    if (j >= 0 && j < cells[k]) return j;
+    if (!periodic[k]) return -1;
+    return j < 0 ? j + cells[k] : j - cells[k];
+  }
+  // Node coordinate j along axis k (j = -1 to cells[k] + 1) wrapped round a periodic axis
+  // (the last plane, an image, is kept); -1 beyond a wall.
+  index_t wrap_node(int k, index_t j) const {
+    if (j >= 0 && j <= cells[k]) return j;
+    if (!periodic[k]) return -1;
+    return j < 0 ? j + cells[k] : j - cells[k];
+  }
+  // True for a node on the last plane of a periodic axis (an image of one on the first).
+  bool is_image(const index_t* ix) const {
+    if (!any_periodic) return false;
+    for (int k = 0; k < D; ++k)
+      if (periodic[k] && ix[k] == cells[k]) return true;
+    return false;
+  }
+  // The master of node i (coordinates ix): its images' planes moved to the first plane.
+  index_t master(index_t i, const index_t* ix) const {
+    for (int k = 0; k < D; ++k)
+      if (periodic[k] && ix[k] == cells[k]) i -= cells[k] * ns[k];
+    return i;
   }
 
   // The cell (0 to n - 1) holding grid coordinate s = x / h; points beyond the grid go to

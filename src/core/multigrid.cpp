@@ -201,10 +201,36 @@ void copy(View<const double> from, View<double> to) {
 // coarse row I from their coarse coordinates, sum_k (J_k - I_k + 1) 3^k = NS / 2 + h(J) - h(I)
 // with h(I) = sum_k I_k 3^k (chash) (the Numba kernel's slot table gives the same
 // slots where it is used).
+//
+// On periodic coarse axes (cperiod[k] > 0) the coordinates' differences wrap round, so the
+// slot comes from the coordinates themselves (ccoord).
+template <int D>
+inline index_t coarse_slot(index_t I, index_t J, View<const index_t> chash,
+                           View<const index_t, 2> ccoord, const std::array<index_t, D>& cperiod,
+                           bool periodic) {
+  constexpr int NS = stencil_size(D);
+  if (!periodic) return NS / 2 - chash(I) + chash(J);
+  index_t slot = 0, p3 = 1;
+  for (int k = 0; k < D; ++k) {
+    index_t d = ccoord(J, k) - ccoord(I, k);
+    if (cperiod[k] > 0) {
+      if (d > 1)
+        d -= cperiod[k];
+      else if (d < -1)
+        d += cperiod[k];
+    }
+    slot += (d + 1) * p3;
+    p3 *= 3;
+  }
+  return slot;
+}
+
 template <int D>
 void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<const double, 2> vals,
                    View<const index_t, 2> pcols, View<const double, 2> pw,
-                   View<const index_t> chash, View<index_t, 2> ccols, View<double, 2> cvals) {
+                   View<const index_t> chash, View<const index_t, 2> ccoord,
+                   const std::array<index_t, D>& cperiod, bool periodic, View<index_t, 2> ccols,
+                   View<double, 2> cvals) {
   constexpr int NP = 1 << D;
   constexpr int NS = stencil_size(D);
   for (index_t r = r0; r < r1; ++r) {
@@ -212,7 +238,6 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
       const index_t I = pcols(r, a);
       if (I < 0) break;  // P's entries of a row come first, then -1
       const double wa = pw(r, a);
-      const index_t base = NS / 2 - chash(I);
       for (int s = 0; s < NS; ++s) {
         const index_t j = cols(r, s);
         if (j < 0) continue;
@@ -220,7 +245,7 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
         for (int b = 0; b < NP; ++b) {
           const index_t J = pcols(j, b);
           if (J < 0) break;
-          const index_t slot = base + chash(J);
+          const index_t slot = coarse_slot<D>(I, J, chash, ccoord, cperiod, periodic);
           ccols(I, slot) = J;
           cvals(I, slot) += v * pw(j, b);
         }
@@ -278,7 +303,7 @@ index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<
 template <int D>
 void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals,
                          View<const index_t> node, const std::array<index_t, D>& dims,
-                         index_t coarsest) {
+                         index_t coarsest, const std::array<index_t, D>& period) {
   static_assert(std::is_nothrow_move_constructible_v<Level>,
                 "levels keep views of their own storage: moving must not copy it");
   if (cols.extent(1) != NS || vals.extent(1) != NS || vals.extent(0) != cols.extent(0) ||
@@ -289,6 +314,7 @@ void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals
     Level& f = level_[0];
     f.n = cols.extent(0);
     f.dims = dims;
+    f.period = period;
     f.cols = cols;
     f.vals = vals;
     f.node = node;
@@ -297,7 +323,8 @@ void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals
   coordinates(level_[0]);
   while (level_[nlev_ - 1].n > coarsest) {
     coarse_level(nlev_ - 1);
-    if (level_[nlev_].n == 0) break;
+    // nothing left, or no axis coarsened any more (periodic axes of few points)
+    if (level_[nlev_].n == 0 || level_[nlev_].n >= level_[nlev_ - 1].n) break;
     galerkin(nlev_ - 1);
     ++nlev_;
   }
@@ -323,10 +350,17 @@ void Multigrid<D>::coarse_level(index_t l) {
   if (static_cast<index_t>(level_.size()) < l + 2) level_.emplace_back();
   Level& f = level_[l];
   Level& c = level_[l + 1];
-  std::array<index_t, D> cdims{}, ix{};
+  std::array<index_t, D> cdims{}, ix{}, cperiod{};
+  // a periodic axis is halved while its coarse period stays even and at least 4; kept
+  // whole (every fine point is a coarse one along it) after that
+  std::array<bool, D> halve{}, whole{};
   index_t ncn = 1;
   for (int k = 0; k < D; ++k) {
-    cdims[k] = f.dims[k] / 2 + 1;
+    const index_t P = f.period[k];
+    whole[k] = P > 0 && !(P % 4 == 0 && P >= 8);
+    halve[k] = P > 0 && !whole[k];
+    cdims[k] = whole[k] ? P : halve[k] ? P / 2 : f.dims[k] / 2 + 1;
+    cperiod[k] = P > 0 ? cdims[k] : 0;
     ncn *= cdims[k];
   }
   View<index_t> crow = crow_store_.sized(ncn);
@@ -337,8 +371,12 @@ void Multigrid<D>::coarse_level(index_t l) {
     bool even = true;
     index_t ci = 0, stride = 1;
     for (int k = 0; k < D; ++k) {
-      if (ix[k] % 2 != 0) even = false;
-      ci += (ix[k] / 2) * stride;
+      if (whole[k]) {
+        ci += ix[k] * stride;
+      } else {
+        if (ix[k] % 2 != 0) even = false;
+        ci += (ix[k] / 2) * stride;
+      }
       stride *= cdims[k];
     }
     if (even) crow(ci) = 0;
@@ -356,6 +394,7 @@ void Multigrid<D>::coarse_level(index_t l) {
     }
   c.n = nc;
   c.dims = cdims;
+  c.period = cperiod;
   c.node = cnode;
   f.pcols = f.pcols_store.template sized<2>({n, NP});
   f.pw = f.pw_store.template sized<2>({n, NP});
@@ -373,7 +412,13 @@ void Multigrid<D>::coarse_level(index_t l) {
       for (int k = 0; k < D; ++k) {
         const int up = (combo >> k) & 1;
         index_t ck;
-        if (ix[k] % 2 == 0) {
+        if (whole[k]) {
+          if (up) {
+            ok = false;
+            break;
+          }
+          ck = ix[k];
+        } else if (ix[k] % 2 == 0) {
           if (up) {
             ok = false;
             break;
@@ -382,6 +427,7 @@ void Multigrid<D>::coarse_level(index_t l) {
         } else {
           ck = ix[k] / 2 + up;
           w *= 0.5;
+          if (halve[k] && ck == cdims[k]) ck = 0;  // across the periodic axis's end
         }
         if (ck >= cdims[k]) {
           ok = false;
@@ -424,8 +470,13 @@ void Multigrid<D>::galerkin(index_t l) {
   c.cols = ccols;
   c.vals = cvals;
   View<const index_t> chash = ccoord_store_.view(nc);
-  if (n < PARALLEL_ROWS) {
-    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccols, cvals);
+  View<const index_t, 2> ccoord = c.coord;
+  bool periodic = false;
+  for (int k = 0; k < D; ++k) periodic = periodic || c.period[k] > 0;
+  // serial when small, or when the last axis is periodic (its first and last slabs meet)
+  if (n < PARALLEL_ROWS || c.period[D - 1] > 0) {
+    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccoord, c.period, periodic, ccols,
+                     cvals);
     return;
   }
   // strips of whole slabs (nodes of equal last coordinate), at least 2 each: fine row r adds
@@ -450,7 +501,7 @@ void Multigrid<D>::galerkin(index_t l) {
                      for (index_t t = lo; t < hi; ++t) {
                        const index_t u = 2 * t + parity;
                        galerkin_rows<D>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols, f.pw,
-                                        chash, ccols, cvals);
+                                        chash, ccoord, c.period, periodic, ccols, cvals);
                      }
                    },
                    n);

@@ -55,8 +55,12 @@ class Multigrid {
   // (allocation only when the hierarchy outgrows it). Throws std::invalid_argument on
   // shapes that do not match, std::runtime_error when the coarsest operator is not positive
   // definite (its Cholesky factor fails, where np.linalg.cholesky raised LinAlgError).
+  // period[k] > 0: axis k is periodic with that many points (the grid's points 0 to
+  // period[k] - 1 carry rows; an even number): its rows' stencils wrap round it, and it is
+  // coarsened while its coarse period stays even and at least 4 (then left as it is).
   void setup(View<const index_t, 2> cols, View<const double, 2> vals, View<const index_t> node,
-             const std::array<index_t, D>& dims, index_t coarsest = COARSEST);
+             const std::array<index_t, D>& dims, index_t coarsest = COARSEST,
+             const std::array<index_t, D>& period = {});
   // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each):
   // sweeps forward colour Gauss-Seidel sweeps down, the dense solve, sweeps backward up.
   void vcycle(View<const double> b, View<double> x, int sweeps);
@@ -74,6 +78,7 @@ class Multigrid {
   struct Level {
     index_t n = 0;
     std::array<index_t, D> dims{};
+    std::array<index_t, D> period{};       // 0: not periodic
     std::array<index_t, NP + 1> cstart{};  // colour k: rows[cstart[k]:cstart[k + 1]]
     View<const index_t, 2> cols;
     View<const double, 2> vals;

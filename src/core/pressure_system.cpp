@@ -17,7 +17,7 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
   const StencilTables<D> t = tables<D>(g);
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
     const index_t r = node_row(i);
-    if (r < 0) return;
+    if (r < 0 || g.is_image(ix.data())) return;  // an image's row is its master's
     std::array<double, NS> S;
     std::array<index_t, NC> slots, base;
     std::array<int, NC> local;
@@ -26,7 +26,7 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
     for (int s = 0; s < NS; ++s) {
       const double sv = S[s];
       if (s == centre || sv == 0.0) continue;
-      const index_t j = i + t.offset[s];
+      const index_t j = neighbour_node<D>(g, i, ix, s, t);
       if (node_row(j) < 0) {
         anch = true;
         if (subcell && sv < 0.0) S[centre] += sv * ghost_factor(node_f(i), node_f(j), theta_min);
@@ -40,7 +40,7 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
         cols(r, s) = -1;
         vals(r, s) = 0.0;
       } else {
-        cols(r, s) = node_row(i + t.offset[s]);
+        cols(r, s) = node_row(neighbour_node<D>(g, i, ix, s, t));
         vals(r, s) = sv;
       }
     }
@@ -57,6 +57,7 @@ double wall_integral(const Grid<D>& g, const std::array<index_t, D>& ix, index_t
   double total = 0.0;
   for (int k = 0; k < D; ++k)
     for (int side = 0; side < 2; ++side) {
+      if (g.periodic[k]) break;  // no wall across a periodic axis
       const index_t wall = side == 0 ? 0 : g.cells[k];
       if (ix[k] != wall) continue;
       const double sign = side == 0 ? -1.0 : 1.0;

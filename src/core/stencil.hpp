@@ -57,7 +57,8 @@ StencilTables<D> tables(const Grid<D>& g) {
 }
 
 // Cell b (0 <= b < 2^D) of a node: its flat index (-1 when outside the grid), its first
-// node, and the node's corner in it.
+// node, and the node's corner in it. Along a periodic axis the cells wrap round: the first
+// plane's node is the upper corner of the last cell (whose upper nodes are the images).
 struct NodeCell {
   index_t c;
   index_t first;
@@ -71,13 +72,29 @@ inline NodeCell node_cell(const Grid<D>& g, const std::array<index_t, D>& ix, in
   int a = 0;
   for (int k = 0; k < D; ++k) {
     const int bit = (b >> k) & 1;
-    const index_t j = ix[k] - 1 + bit;
-    if (j < 0 || j >= g.cells[k]) return {-1, 0, 0};
+    const index_t j = g.wrap_cell(k, ix[k] - 1 + bit);
+    if (j < 0) return {-1, 0, 0};
     c += j * g.cs[k];
     first += j * g.ns[k];
     if (bit == 0) a += 1 << k;
   }
   return {c, first, a};
+}
+
+// The neighbour of node i (coordinates ix) at stencil slot s (t.offset[s] away), wrapped
+// round periodic axes; -1 beyond a wall.
+template <int D>
+inline index_t neighbour_node(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix, int s,
+                              const StencilTables<D>& t) {
+  if (!g.any_periodic) return i + t.offset[s];
+  index_t j = 0;
+  for (int k = 0; k < D; ++k) {
+    const index_t c = g.wrap_node(k, ix[k] + s % 3 - 1);
+    if (c < 0) return -1;
+    j += c * g.ns[k];
+    s /= 3;
+  }
+  return j;
 }
 
 // The cells around the node with coordinates ix that take part in the system

@@ -10,6 +10,7 @@
 #include "free_surface.hpp"
 #include "ghost_pressure.hpp"
 #include "parallel.hpp"
+#include "periodic.hpp"
 #include "pockets.hpp"
 #include "pressure_system.hpp"
 #include "quadrature.hpp"
@@ -235,7 +236,9 @@ void State<D>::classify_nodes(const Options<D>& O) {
   nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn), O.subcell,
                                       node_row);
   auto rows = rows_.view(nrows_);
-  for (index_t i = 0; i < nn; ++i) {
+  // downwards, so that a row an image shares with its master (periodic axes) ends on the
+  // master, the lower index
+  for (index_t i = nn - 1; i >= 0; --i) {
     const index_t r = node_row(i);
     if (r >= 0) rows(r) = i;
   }
@@ -350,6 +353,7 @@ index_t State<D>::release_walls(View<const double> x) {
   auto rows = rows_.view(nrows_);
   auto p = p_node_.view(nn);
   for (index_t r = 0; r < nrows_; ++r) p(rows(r)) = x(r);
+  if (grid_.any_periodic) copy_images<D>(grid_, p);
   auto v_star = v_star_.template view<2>({nn, D});
   auto node_row = node_row_.view(nn);
   return release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, p,
@@ -373,12 +377,15 @@ int State<D>::pressure_multigrid(const Options<D>& O, Report& report) {
   const index_t n = nrows_;
   if (n == 0) return OK;
   if (!anchored) return SINGULAR;
-  std::array<index_t, D> dims{};
-  for (int k = 0; k < D; ++k) dims[k] = grid_.cells[k] + 1;
+  std::array<index_t, D> dims{}, period{};
+  for (int k = 0; k < D; ++k) {
+    dims[k] = grid_.cells[k] + 1;
+    if (grid_.periodic[k]) period[k] = grid_.cells[k];
+  }
   auto cols = cols_.template view<2>({n, NS});
   auto vals = vals_.template view<2>({n, NS});
   auto rows = rows_.view(n);
-  pressure_mg_.setup(cols, vals, rows, dims, COARSEST);
+  pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
   auto x = x_.view(n);
   auto rhs = rhs_.view(n);
   index_t step_iterations = 0;
@@ -436,7 +443,7 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
   const index_t n =
       number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, contact, O.no_slip,
-                         T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff);
+                         T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff, &grid_);
   if (n == 0) return OK;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});
@@ -516,9 +523,12 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
   auto Q = q_.view(nc);
   auto q = qx_.view(n);
   for (index_t r = 0; r < n; ++r) q(r) = Q(rows(r));
-  std::array<index_t, D> dims{};
-  for (int k = 0; k < D; ++k) dims[k] = grid_.cells[k];
-  volume_mg_.setup(cols, vals, rows, dims, COARSEST);
+  std::array<index_t, D> dims{}, period{};
+  for (int k = 0; k < D; ++k) {
+    dims[k] = grid_.cells[k];
+    if (grid_.periodic[k]) period[k] = grid_.cells[k];
+  }
+  volume_mg_.setup(cols, vals, rows, dims, COARSEST, period);
   const SolveResult res = volume_mg_.pcg(rhs, q, O.volume_tol, O.volume_max_iterations, 1);
   report.volume_iterations += res.iterations;
   if (!(res.residual <= O.volume_tol)) {

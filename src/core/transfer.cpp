@@ -24,6 +24,8 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
       work_mp[base + g.corner[a]] += w[a] * mass(p) * pressure(p);
     }
   }
+  fold_images<D>(g, work_m);
+  fold_images<D>(g, work_mp);
   double total = 0.0;
   for (index_t p = 0; p < n; ++p) {
     const index_t base = g.weights_at(&x(p, 0), w.data());
@@ -39,17 +41,17 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
 
 namespace {
 
-// Cell j at stencil slot b (0 <= b < 3^D) around cell c with coordinates cx; false when
-// it lies beyond the grid.
+// Cell j at stencil slot b (0 <= b < 3^D) around cell c with coordinates cx (wrapped round
+// periodic axes); false when it lies beyond the grid.
 template <int D>
 inline bool neighbour_cell(const Grid<D>& g, index_t c, const std::array<index_t, D>& cx, int b,
                            index_t& j) {
   j = c;
   bool inside = true;
   for (int k = 0; k < D; ++k) {
-    const index_t jk = cx[k] + b % 3 - 1;
+    const index_t jk = g.wrap_cell(k, cx[k] + b % 3 - 1);
     b /= 3;
-    inside = inside && jk >= 0 && jk < g.cells[k];
+    inside = inside && jk >= 0;
     j += (jk - cx[k]) * g.cs[k];
   }
   return inside;
@@ -85,7 +87,12 @@ inline void add_cell_volume(const Grid<D>& g, const double* x, double volume,
   cell_centre_hat<D>(g, x, volume, [&](const std::array<index_t, D>& i, double w) {
     int b = 0, p3 = 1;
     for (int k = 0; k < D; ++k) {
-      b += static_cast<int>(i[k] - cx[k] + 1) * p3;
+      index_t d = i[k] - cx[k];  // -1, 0 or 1, or a whole period less or more
+      if (d > 1)
+        d -= g.cells[k];
+      else if (d < -1)
+        d += g.cells[k];
+      b += static_cast<int>(d + 1) * p3;
       p3 *= 3;
     }
     acell[b] += w;
@@ -188,12 +195,20 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
   parallel_for(cell_vol.size(), [&](index_t c) { cell_vol[c] = 0.0; });
   std::array<index_t, 2 * STRIPS + 1> bounds;
   const index_t slab = g.cs[D - 1];
+  // (one strip when the last axis is periodic: the cell volumes of its first and last
+  // strips meet across it)
   const index_t nstrips = strips(
-      g.cells[D - 1], [&](index_t r) { return start(r * slab); }, 2 * STRIPS, 2, bounds.data());
+      g.cells[D - 1], [&](index_t r) { return start(r * slab); },
+      g.periodic[D - 1] ? 1 : 2 * STRIPS, 2, bounds.data());
   for_strips(bounds.data(), nstrips, x.extent(0), [&](index_t r0, index_t r1) {
     scatter_slabs(r0, r1, g, x, v, mass, volume, order, start, node_mass, node_mom, node_vol,
                   cell_vol, affine);
   });
+  if (g.any_periodic) {  // an image's particles belong to its master
+    fold_images<D>(g, node_mass);
+    fold_images<D>(g, node_vol);
+    fold_images<D>(g, node_mom);
+  }
   parallel_for(nn, [&](index_t i) {
     const double m = node_mass[i];
     for (int k = 0; k < D; ++k) {
@@ -268,6 +283,7 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
       if (correct) x(p, k) += disp[k];
     }
     pressure(p) = pp;
+    if (g.any_periodic) wrap_periodic<D>(g, x, p);
     if (put_inside<D>(x, v, p, upper, margin)) moved += 1;
   }
   return moved;

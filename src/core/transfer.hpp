@@ -12,6 +12,7 @@
 #include <array>
 
 #include "grid.hpp"
+#include "periodic.hpp"
 #include "strips.hpp"
 #include "view.hpp"
 
@@ -20,8 +21,8 @@ namespace mpmflow {
 // The multilinear hat of the cell-centred grid at point x (D coordinates, m): for each of
 // its 2^D corners, body(i, w) with i the corner cell's coordinates and w = volume times its
 // weight. A wall mirrors the points next to it: a ghost cell's weight goes to its mirror,
-// the cell against the wall, so a uniform material reads full up to the walls. Points
-// beyond the grid (and NaN) count at its edge.
+// the cell against the wall, so a uniform material reads full up to the walls; a periodic
+// axis wraps round. Points beyond the grid (and NaN) count at its edge.
 template <int D, class F>
 inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&& body) {
   std::array<double, D> frac;
@@ -44,7 +45,9 @@ inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&
       const int up = (a >> k) & 1;
       i[k] = first[k] + up;
       w *= up ? frac[k] : 1.0 - frac[k];
-      if (i[k] < 0)
+      if (g.periodic[k])
+        i[k] = g.wrap_cell(k, i[k]);
+      else if (i[k] < 0)
         i[k] = 0;
       else if (i[k] > g.cells[k] - 1)
         i[k] = g.cells[k] - 1;
@@ -67,7 +70,8 @@ inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index
 // Where particle p samples the face values of the volume correction: along an axis j whose
 // faces it interpolates across (normal to them), between faces nlo[j] and nlo[j] + 1 with
 // the weight normal[j] of the upper one; along an axis whose faces lie at cell centres,
-// between tlo[j] and thi[j] (clamped to the outermost) with weight tangent[j]. Points
+// between tlo[j] and thi[j] (clamped to the outermost; wrapped round a periodic axis) with
+// weight tangent[j]. Points
 // beyond the grid count at its edge.
 template <int D>
 inline void face_samples(const Grid<D>& g, View<const double, 2> x, index_t p,
@@ -87,8 +91,13 @@ inline void face_samples(const Grid<D>& g, View<const double, 2> x, index_t p,
     s -= 0.5;
     i0 = static_cast<index_t>(s + 1.0) - 1;  // floor: s >= -1/2
     tangent[j] = s - i0;
-    tlo[j] = i0 > 0 ? i0 : 0;
-    thi[j] = i0 + 1 < g.cells[j] - 1 ? i0 + 1 : g.cells[j] - 1;
+    if (g.periodic[j]) {
+      tlo[j] = g.wrap_cell(j, i0);
+      thi[j] = g.wrap_cell(j, i0 + 1);
+    } else {
+      tlo[j] = i0 > 0 ? i0 : 0;
+      thi[j] = i0 + 1 < g.cells[j] - 1 ? i0 + 1 : g.cells[j] - 1;
+    }
   }
 }
 
@@ -123,6 +132,20 @@ inline double face_displacement(const Grid<D>& g, int k, View<const double> f,
     acc += w * f[idx];
   }
   return acc;
+}
+
+// Move particle p that left a periodic axis's [0, cells h) by one period (m) back into it.
+template <int D>
+inline void wrap_periodic(const Grid<D>& g, View<double, 2> x, index_t p) {
+  for (int k = 0; k < D; ++k) {
+    if (!g.periodic[k]) continue;
+    const double length = g.cells[k] * g.h;
+    double& xk = x(p, k);
+    if (xk < 0.0)
+      xk += length;
+    else if (xk >= length)
+      xk -= length;
+  }
 }
 
 // Put particle p back inside the box [0, upper] (m) if it left it; true if it was moved.
@@ -184,8 +207,9 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
 // Eqs. (19)-(21): FLIP/PIC velocity update (flip: the FLIP fraction of this step), position
 // update with v^{t+1} evaluated at x_p^t plus the volume correction's displacement (faces:
 // one array per axis, see face_displacement; empty arrays: none), pressure; then particles
-// that left the box [0, upper] are put back inside (put_inside). Returns how many were put
-// back. With affine non-empty (n x D x D: APIC) the velocity is instead the PIC velocity
+// that crossed a periodic axis's end are wrapped round it (wrap_periodic) and those that
+// left the box [0, upper] are put back inside (put_inside). Returns how many were put back.
+// With affine non-empty (n x D x D: APIC) the velocity is instead the PIC velocity
 // sum_i N_i(x_p) v_i^{t+1} and C_p = sum_i v_i^{t+1} (grad N_i(x_p))^T, the gradient of the
 // same interpolated field (for multilinear N_i this is B_p D_p^-1 of Jiang et al. 2015, exact
 // for an affine field); flip and v_old are not used.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "parallel.hpp"
+#include "periodic.hpp"
 #include "rheology.hpp"
 #include "stencil.hpp"
 
@@ -53,7 +54,7 @@ void node_rows(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix,
     for (int m = 0; m < D; ++m)
       for (int s = 0; s < NS; ++s) {
         const double sv = S[m * NS + s];
-        const index_t j = i + st.offset[s];
+        const index_t j = neighbour_node<D>(g, i, ix, s, st);
         if (sv != 0.0 && row(j, m) >= 0) {
           cols(m, r, s) = row(j, m) - off(m);
           vals(m, r, s) = sv;
@@ -141,7 +142,7 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
                         View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
                         View<const index_t> onode, View<const bool> ocontact,
                         View<const bool> ono_slip, View<const double, 2> vstar, View<double, 2> u,
-                        View<index_t, 2> row, View<index_t> off) {
+                        View<index_t, 2> row, View<index_t> off, const Grid<D>* grid) {
   const index_t nn = u.extent(0);
   for (index_t i = 0; i < u.size(); ++i) u[i] = vstar[i];
   for (index_t i = 0; i < nn; ++i)
@@ -175,6 +176,15 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
         u(i, k) = 0.0;
       }
   }
+  const bool periodic = grid != nullptr && grid->any_periodic;
+  if (periodic) {  // an image's unknowns are its master's (numbered below, then copied)
+    std::array<index_t, D> ix;
+    for (index_t i = 0; i < nn; ++i) {
+      grid->node_coords(i, ix.data());
+      if (grid->is_image(ix.data()))
+        for (int k = 0; k < D; ++k) row(i, k) = HELD;
+    }
+  }
   index_t n = 0;
   for (int k = 0; k < D; ++k) {
     off(k) = n;
@@ -182,6 +192,7 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
       if (row(i, k) == FREE) row(i, k) = n++;
   }
   off(D) = n;
+  if (periodic) copy_images<D, index_t>(*grid, row.data(), D);
   return n;
 }
 
@@ -200,6 +211,7 @@ void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weig
   parallel_for(g.nnodes, [&](index_t i) {
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
+    if (g.is_image(ix.data())) return;  // an image's rows are its master's
     node_rows<D>(g, i, ix, st, T, Kg, weight, node_mass, dt, u, row, off, cols, vals, rhs, node);
   });
 }
@@ -234,14 +246,17 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
                   View<double> x, double tol, index_t maxiter, int sweeps,
                   std::array<Multigrid<D>, D>& mg, View<double, 2> work) {
   const index_t n = rhs.size();
-  std::array<index_t, D> dims;
-  for (int k = 0; k < D; ++k) dims[k] = g.cells[k] + 1;
+  std::array<index_t, D> dims, period{};
+  for (int k = 0; k < D; ++k) {
+    dims[k] = g.cells[k] + 1;
+    if (g.periodic[k]) period[k] = g.cells[k];
+  }
   for (int k = 0; k < D; ++k) {
     const index_t lo = off(k), hi = off(k + 1);
     // a component without unknowns has no hierarchy: it is never applied
     if (hi > lo)
       mg[k].setup(block(cols, k, lo, hi), block(vals, k, lo, hi), part(node, lo, hi), dims,
-                  COARSEST);
+                  COARSEST, period);
   }
   View<double> r = work.row(0).head(n), zz = work.row(1).head(n), p = work.row(2).head(n),
                q = work.row(3).head(n), tmp = work.row(4).head(n);
@@ -294,7 +309,7 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
   template index_t number_unknowns<D>(                                                            \
       View<const double>, View<const index_t>, View<const index_t>, View<const bool, 2>, bool,    \
       View<const index_t>, View<const bool>, View<const bool>, View<const double, 2>,             \
-      View<double, 2>, View<index_t, 2>, View<index_t>);                                          \
+      View<double, 2>, View<index_t, 2>, View<index_t>, const Grid<D>*);                          \
   template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,            \
                             View<const double>, double, View<const double, 2>,                    \
                             View<const index_t, 2>, View<const index_t>, View<index_t, 3>,        \

@@ -56,7 +56,7 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
                         View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
                         View<const index_t> onode, View<const bool> ocontact,
                         View<const bool> ono_slip, View<const double, 2> vstar, View<double, 2> u,
-                        View<index_t, 2> row, View<index_t> off);
+                        View<index_t, 2> row, View<index_t> off, const Grid<D>* grid = nullptr);
 
 // The system for the unknowns of number_unknowns (n of them): cols(m, r, s), vals(m, r, s)
 // (D x n x 3^D, kg/s) the couplings of row r to component m (columns numbered within

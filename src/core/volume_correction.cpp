@@ -20,7 +20,7 @@ bool wall_released(const Grid<D>& g, const std::array<index_t, D>& cx,
   for (int k = 0; k < D; ++k) first += cx[k] * g.ns[k];
   for (int k = 0; k < D; ++k)
     for (int side = 0; side < 2; ++side) {
-      if (cx[k] != (side == 0 ? 0 : g.cells[k] - 1)) continue;
+      if (g.periodic[k] || cx[k] != (side == 0 ? 0 : g.cells[k] - 1)) continue;
       for (int a = 0; a < Grid<D>::NC; ++a) {
         if (((a >> k) & 1) != side) continue;
         if (!contact(first + g.corner[a], k)) return true;
@@ -61,11 +61,11 @@ VolumeSystem assemble(const Grid<D>& g, View<const double> theta, View<const dou
       index_t p3 = 1;
       for (int k = 0; k < D; ++k) {
         for (int step = 1; step >= -1; step -= 2) {
-          const index_t j = cx[k] + step;
-          if (j < 0 || j >= g.cells[k] || static_slot(c + step * g.cs[k]) < 0)
-            continue;  // a wall or a solid: no flux
+          const index_t j = g.wrap_cell(k, cx[k] + step);
+          const index_t other = c + (j - cx[k]) * g.cs[k];
+          if (j < 0 || static_slot(other) < 0) continue;  // a wall or a solid: no flux
           diag += 1.0;
-          const index_t nb = cell_row(c + step * g.cs[k]);
+          const index_t nb = cell_row(other);
           if (nb >= 0) {
             const index_t s = centre + step * p3;
             cols(r, s) = nb;
@@ -85,9 +85,9 @@ VolumeSystem assemble(const Grid<D>& g, View<const double> theta, View<const dou
           bool inside = true;
           int rem = b;
           for (int k = 0; k < D; ++k) {
-            const index_t jk = cx[k] + rem % 3 - 1;
+            const index_t jk = g.wrap_cell(k, cx[k] + rem % 3 - 1);
             rem /= 3;
-            if (jk < 0 || jk >= g.cells[k]) {
+            if (jk < 0) {
               inside = false;
               break;
             }
@@ -145,15 +145,18 @@ void face_displacements(const Grid<D>& g, View<const index_t> cell_row,
           for (index_t idx = lo * per; idx < hi * per; ++idx) {
             // b: the cell above the face along k (ix[k] < cells[k]), a = b - cs[k] below it
             const index_t ik = ix[k];
-            if (ik == 0 || ik == g.cells[k]) {
+            if (!g.periodic[k] && (ik == 0 || ik == g.cells[k])) {
               f[idx] = 0.0;
             } else {
+              // b above the face, a below it (across a periodic axis's end: the last cell)
               index_t b = 0;
-              for (int j = 0; j < D; ++j) b += ix[j] * g.cs[j];
-              if (static_slot(b) < 0 || static_slot(b - g.cs[k]) < 0)
+              for (int j = 0; j < D; ++j) b += (j == k ? ik % g.cells[k] : ix[j]) * g.cs[j];
+              const index_t a =
+                  ik == 0 || ik == g.cells[k] ? b + (g.cells[k] - 1) * g.cs[k] : b - g.cs[k];
+              if (static_slot(b) < 0 || static_slot(a) < 0)
                 f[idx] = 0.0;
               else
-                f[idx] = face_value(cell_row, q, b - g.cs[k], b, scale, dmax);
+                f[idx] = face_value(cell_row, q, a, b, scale, dmax);
             }
             for (int j = 0; j < D; ++j) {
               if (++ix[j] < n[j] || j == D - 1) break;

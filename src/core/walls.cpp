@@ -5,7 +5,8 @@ namespace mpmflow {
 template <int D>
 index_t wall_pair_count(const Grid<D>& g) {
   index_t total = 0;
-  for (int k = 0; k < D; ++k) total += 2 * (g.nnodes / (g.cells[k] + 1));
+  for (int k = 0; k < D; ++k)
+    if (!g.periodic[k]) total += 2 * (g.nnodes / (g.cells[k] + 1));
   return total;
 }
 
@@ -15,6 +16,7 @@ index_t wall_pairs(const Grid<D>& g, View<index_t> node, View<index_t> axis, Vie
   index_t ix[D];
   for (int k = 0; k < D; ++k)
     for (index_t i = 0; i < g.nnodes; ++i) {
+      if (g.periodic[k]) break;  // no wall across a periodic axis
       g.node_coords(i, ix);
       if (ix[k] != 0) continue;
       for (int side = 0; side < 2; ++side) {

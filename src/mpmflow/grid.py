@@ -12,10 +12,14 @@ class Grid:
 
     spacing: float
     cells: tuple[int, ...]
+    #: periodic[k]: axis k wraps round (its last plane of nodes is an image of its first);
+    #: empty: no periodic axis
+    periodic: tuple[bool, ...] = ()
 
     @classmethod
-    def covering(cls, size, spacing, rtol=1e-6):
-        """The grid of the given spacing that covers the box [0, size].
+    def covering(cls, size, spacing, rtol=1e-6, periodic=None):
+        """The grid of the given spacing that covers the box [0, size], periodic along the
+        axes where ``periodic[k]`` (None: none).
 
         Walls lie on grid lines, so a side that is not a whole number of cells is extended
         to the next whole cell (by less than one spacing); ``adjusted`` tells the caller.
@@ -25,7 +29,8 @@ class Grid:
             n = length / spacing
             counts.append(max(1, int(round(n)) if abs(n - round(n)) <= rtol * n else
                           int(np.ceil(n))))
-        return cls(float(spacing), tuple(counts))
+        flags = tuple(bool(p) for p in periodic) if periodic and any(periodic) else ()
+        return cls(float(spacing), tuple(counts), flags)
 
     def adjusted(self, size, rtol=1e-6):
         """True when the grid's extent differs from the requested domain size."""

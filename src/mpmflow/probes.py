@@ -88,11 +88,12 @@ def fit_minimum(dim):
     return 2 * (dim + 1)
 
 
-def window_box(point, side, size, solid_distance=None):
+def window_box(point, side, size, solid_distance=None, periodic=()):
     """The (lo, hi) corners (m) of the window of side ``side`` around ``point`` in the
     domain [0, size] (see the module docstring: on a wall the window lies on the water's
     side; elsewhere it is centred and cut at the walls; ``solid_distance`` moves it off a
-    solid obstacle)."""
+    solid obstacle). Along a periodic axis (``periodic[k]``) there is no wall: the window
+    stays centred and may reach beyond the ends (``window_particles`` wraps it round)."""
     point = np.asarray(point, dtype=float)
     size = np.asarray(size, dtype=float)
     centre = point.copy()
@@ -100,12 +101,16 @@ def window_box(point, side, size, solid_distance=None):
         centre = _off_solid(centre, side, solid_distance)
     lo, hi = centre - 0.5 * side, centre + 0.5 * side
     tol = ON_WALL * side
+    wraps = np.zeros(point.size, dtype=bool)
+    wraps[:len(periodic)] = periodic
     for k in range(point.size):
+        if wraps[k]:
+            continue
         if point[k] <= tol:
             lo[k], hi[k] = 0.0, side
         elif point[k] >= size[k] - tol:
             lo[k], hi[k] = size[k] - side, size[k]
-    return np.maximum(lo, 0.0), np.minimum(hi, size)
+    return np.where(wraps, lo, np.maximum(lo, 0.0)), np.where(wraps, hi, np.minimum(hi, size))
 
 
 def _off_solid(centre, side, solid_distance):
@@ -126,7 +131,31 @@ def _off_solid(centre, side, solid_distance):
 
 def window_particles(grid, particles, bins, lo, hi):
     """Indices of the particles in the box [lo, hi] (both ends included), read from the
-    cells the box overlaps (``bins``: ``cells.bin_particles``), not from all particles."""
+    cells the box overlaps (``bins``: ``cells.bin_particles``), not from all particles,
+    and their positions seen from the box: along a periodic axis a box reaching beyond an
+    end takes the particles of the other end too, moved by one period."""
+    size = grid.size
+    shifts = [np.zeros(grid.dim)]
+    for k, flag in enumerate(grid.periodic):
+        if flag and (lo[k] < 0.0 or hi[k] > size[k]):
+            step = np.zeros(grid.dim)
+            step[k] = -size[k] if lo[k] < 0.0 else size[k]
+            shifts += [s + step for s in shifts]
+    found, where = [], []
+    for shift in shifts:  # particles at x lie in the box moved by -shift at x + shift
+        a, b = np.maximum(lo - shift, 0.0), np.minimum(hi - shift, size)
+        if np.any(a > b):
+            continue
+        idx = _box_particles(grid, particles, bins, a, b)
+        found.append(idx)
+        where.append(particles.x[idx] + shift)
+    if len(found) == 1:
+        return found[0], where[0]
+    return np.concatenate(found), np.concatenate(where)
+
+
+def _box_particles(grid, particles, bins, lo, hi):
+    """Indices of the particles in the box [lo, hi] inside the domain."""
     h, cells = grid.spacing, grid.cells
     first = [int(np.clip(np.floor(a / h), 0, n - 1)) for a, n in zip(lo, cells)]
     last = [int(np.clip(np.floor(b / h), 0, n - 1)) for b, n in zip(hi, cells)]
@@ -147,14 +176,14 @@ def pressure_at(grid, particles, bins, probe, case, solid_distance=None, note=No
     is told of each fallback that acted (a key of ``fallbacks.WHAT``)."""
     note = note or (lambda what: None)
     side = window(probe, grid, case)
-    lo, hi = window_box(probe.position, side, grid.size, solid_distance)
-    idx = window_particles(grid, particles, bins, lo, hi)
+    lo, hi = window_box(probe.position, side, grid.size, solid_distance, grid.periodic)
+    idx, x = window_particles(grid, particles, bins, lo, hi)
     if idx.size == 0:
         return 0.0  # a dry sensor
     p = particles.pressure[idx]
     if probe.estimate == "mean":
         return float(p.mean())
-    value = _fit(particles.x[idx], p, probe.position, side, grid.dim)
+    value = _fit(x, p, probe.position, side, grid.dim)
     if value is None:
         note("probe fit fell back to the window mean")
         return float(p.mean())

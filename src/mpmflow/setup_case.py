@@ -10,7 +10,7 @@ from .particles import Particles, lattice_in_box, seed_box, subset
 
 
 def build_grid(case):
-    return Grid.covering(case.domain.size, case.grid.spacing)
+    return Grid.covering(case.domain.size, case.grid.spacing, periodic=case.domain.periodic)
 
 
 def build_particles(case, grid):

@@ -47,15 +47,17 @@ def particle_cell_tensors(x, volume, order, start, cells_list, h, cells, K, C, V
                                 [int(c) for c in cells], K, C, V)
 
 
-def wall_pairs(cells):
+def wall_pairs(cells, periodic=()):
     """(node, axis, sign) arrays of every wall node and wall of the grid ``cells``: the walls
-    normal to axis 0 first, then axis 1, ...; the lower wall (sign -1) before the upper."""
+    normal to axis 0 first, then axis 1, ...; the lower wall (sign -1) before the upper. A
+    periodic axis (``periodic[k]``) has no walls."""
     cells = [int(c) for c in cells]
-    n = _core.wall_pair_count(cells)
+    periodic = [bool(p) for p in periodic]
+    n = _core.wall_pair_count(cells, periodic)
     node = np.empty(n, dtype=np.int64)
     axis = np.empty(n, dtype=np.int64)
     sign = np.empty(n)
-    _core.wall_pairs(cells, node, axis, sign)
+    _core.wall_pairs(cells, periodic, node, axis, sign)
     return node, axis, sign
 
 
@@ -234,7 +236,7 @@ def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscou
                _ints(o.node), _floats(np.reshape(o.normal, (-1, D))),
                np.ascontiguousarray(o.no_slip, dtype=np.bool_),
                _floats(viscous_T),
-               bool(volume_correction), bool(viscous))
+               bool(volume_correction), bool(viscous), [bool(p) for p in grid.periodic])
 
 
 def step_options(dim, **settings):

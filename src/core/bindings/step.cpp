@@ -157,7 +157,7 @@ void bind_dim(nb::module_& m) {
              nb::object wall_sign, nb::object phi, nb::object open, nb::object static_slot,
              nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
              nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
-             bool volume_correction, bool viscous) {
+             bool volume_correction, bool viscous, std::vector<bool> periodic) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -176,10 +176,11 @@ void bind_dim(nb::module_& m) {
             T.onormal = table<double, 2>(onormal, "onormal", keep);
             T.ono_slip = table<bool, 1>(ono_slip, "ono_slip", keep);
             T.viscous_T = table<double, 4>(viscous_T, "viscous_T", keep);
-            self->state = std::make_unique<State<D>>(make_grid<D>(h, cells), cell_volume, upper,
-                                                     margin, T, volume_correction, viscous);
+            self->state = std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume,
+                                                     upper, margin, T, volume_correction, viscous);
           },
-          "Build the step's state for a grid (spacing h, cell counts) and its tables.")
+          "Build the step's state for a grid (spacing h, cell counts, periodic axes) and its "
+          "tables.")
       .def(
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,

@@ -8,19 +8,20 @@ namespace mpmflow::bind {
 void bind_walls(nb::module_& m) {
   m.def(
       "wall_pair_count",
-      [](std::vector<index_t> cells) {
+      [](std::vector<index_t> cells, std::vector<bool> periodic) {
         return with_dim(cells.size(), [&](auto d) {
           constexpr int D = decltype(d)::value;
-          return wall_pair_count<D>(make_grid<D>(1.0, cells));
+          return wall_pair_count<D>(make_grid<D>(1.0, cells, periodic));
         });
       },
-      "The number of (node, wall) pairs of the grid.");
+      "The number of (node, wall) pairs of the grid (none across a periodic axis).");
   m.def(
       "wall_pairs",
-      [](std::vector<index_t> cells, Array<index_t> node, Array<index_t> axis, Array<double> sign) {
+      [](std::vector<index_t> cells, std::vector<bool> periodic, Array<index_t> node,
+         Array<index_t> axis, Array<double> sign) {
         return with_dim(cells.size(), [&](auto d) {
           constexpr int D = decltype(d)::value;
-          const Grid<D> g = make_grid<D>(1.0, cells);
+          const Grid<D> g = make_grid<D>(1.0, cells, periodic);
           if (static_cast<index_t>(node.shape(0)) < wall_pair_count<D>(g) ||
               axis.shape(0) != node.shape(0) || sign.shape(0) != node.shape(0))
             throw std::invalid_argument("wall_pairs: arrays shorter than wall_pair_count");

@@ -17,6 +17,19 @@ from .shapes import Body, Obstacle
 
 
 
+# A periodic axis is halved by the multigrid while its period stays a multiple of 4
+# (src/core/multigrid.cpp); the points left on the coarsest level enter a dense solve at
+# every step (with the other axes' 2 or 3 points: at most a few hundred unknowns).
+MAX_COARSEST_PERIOD = 64
+
+
+def _coarsest_period(cells):
+    """The points a periodic axis of ``cells`` cells keeps on the coarsest level."""
+    while cells % 4 == 0 and cells >= 8:
+        cells //= 2
+    return cells
+
+
 class Case(_Section):
     title: str = Field("", description="Free text shown in outputs.")
     domain: Domain
@@ -65,6 +78,49 @@ class Case(_Section):
             self._shapes[key] = shapes.from_spec(spec, len(self.domain.size), self.base_dir,
                                                  key=f"{kind}.{k}")
         return self._shapes[key]
+
+    def _periodic_problem(self, size, obstacle_shapes):  # noqa: C901 - one rule per line
+        """What is wrong with domain.periodic for this case (None: nothing)."""
+        periodic = self.domain.periodic or []
+        if not any(periodic):
+            return None
+        axes = "xyz"
+        if self.solver.scheme != "projection":
+            return ("domain.periodic is supported by the projection scheme only; set "
+                    "solver.scheme = \"projection\" or remove domain.periodic")
+        h = self.grid.spacing
+        coarsest = 1
+        for k, flag in enumerate(periodic):
+            if not flag:
+                continue
+            n = size[k] / h
+            whole = round(n)
+            if abs(n - whole) > 1e-6 * n or whole % 2 or whole < 4:
+                even = max(4, 2 * round(n / 2))
+                return (f"domain.periodic: along {axes[k]} domain.size = {size[k]:g} m is "
+                        f"{n:.6g} cells of grid.spacing = {h:g} m; a periodic axis needs a "
+                        f"whole, even number of cells, at least 4: make domain.size[{k}] = "
+                        f"{even * h:.6g} m ({even} cells) or change grid.spacing")
+            unit = np.zeros(len(size))
+            unit[k] = 1.0
+            left = _coarsest_period(whole)
+            coarsest *= left
+            if coarsest > MAX_COARSEST_PERIOD:
+                better = max(8, round(whole / 8) * 8)
+                return (f"domain.periodic: along {axes[k]} the {whole} cells halve down to "
+                        f"no fewer than {left} points on the pressure solver's coarsest level "
+                        "(a periodic axis halves while its period stays a multiple of 4), "
+                        f"{coarsest} with the other periodic axes, too many for its dense "
+                        f"solve at every step; make domain.size[{k}] a multiple of 8 cells, "
+                        f"e.g. {better * h:.6g} m ({better} cells)")
+            for j, shape in enumerate(obstacle_shapes):
+                lo, hi = -shape.support(-unit), shape.support(unit)
+                if lo < h or hi > size[k] - h:
+                    return (f"obstacles.{j} spans {lo:.6g} to {hi:.6g} m along the periodic "
+                            f"axis {axes[k]} of [0, {size[k]:g}] m; an obstacle must stay a "
+                            f"grid cell ({h:g} m) inside a periodic axis's ends: move or "
+                            "shrink it, or make the axis a wall (domain.periodic)")
+        return None
 
     def body_shape(self, k):
         """The ``mpmflow.shapes`` shape of bodies.k."""
@@ -208,6 +264,9 @@ class Case(_Section):
                     "no pressure level (the pressure system is singular). Leave empty space "
                     "above the material, at least one grid cell: lower the top of the bodies "
                     "(bodies.N.max) or enlarge domain.size")
+        message = self._periodic_problem(size, obstacle_shapes)
+        if message:
+            raise ValueError(message)
         names = set()
         for k, probe in enumerate(self.probes):
             if probe.name in names:

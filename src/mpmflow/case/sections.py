@@ -37,11 +37,22 @@ class Domain(_Section):
         "holding it would need suction while it moves away, so water falls from a ceiling "
         "and leaves a wall freely. no_slip also stops tangential motion where the wall "
         "holds.")
+    periodic: Optional[list[bool]] = Field(
+        None, description="Periodic axes, one flag per axis (e.g. [true, false]: x wraps "
+        "round): material leaving through one end of a periodic axis comes back through the "
+        "other, and that axis has no walls. For channel and layer flows that are uniform "
+        "along the axis. Along a periodic axis domain.size must be a whole, even number of "
+        "grid cells, at least 4 (a power of two times a small number solves fastest); the "
+        "projection scheme only.", examples=[[True, False]])
 
     @model_validator(mode="after")
     def _positive(self):
         if any(s <= 0 for s in self.size):
             raise ValueError("every entry of domain.size must be positive (metres)")
+        if self.periodic is not None and len(self.periodic) != len(self.size):
+            raise ValueError(f"domain.periodic has {len(self.periodic)} entries and "
+                             f"domain.size {len(self.size)}; give one flag per axis, e.g. "
+                             f"periodic = {[True] + [False] * (len(self.size) - 1)}")
         return self
 
 

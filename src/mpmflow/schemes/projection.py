@@ -75,7 +75,7 @@ class ProjectionScheme:
         cells = tuple(int(c) for c in grid.cells)
         T = (state.gauss_gradients(cells, float(grid.spacing)) if self.viscous
              else np.zeros((0, 0, 0, 0)))
-        self.core = state.step_state(grid, state.wall_pairs(cells), self.solids, T,
+        self.core = state.step_state(grid, state.wall_pairs(cells, grid.periodic), self.solids, T,
                                      MARGIN * grid.spacing, s.volume_correction > 0,
                                      self.viscous)
         self.python_pressure = (None if s.linear_solver == "multigrid"
