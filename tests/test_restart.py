@@ -20,6 +20,7 @@ COMMON = ["grid.spacing=0.01", "time.end=0.1", "checkpoint.interval=0.03",
           "output.snapshot_interval=0.02"]
 SCHEMES = {
     "projection": [],
+    "apic": ["solver.transfer=apic"],  # the particles' affine matrices are in the checkpoint
     "explicit": ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
                  "bodies.0.initial_pressure=hydrostatic"],
 }
@@ -48,6 +49,9 @@ def _stop_at(sim, t):
 def _assert_same_run(a, b, out_a, out_b):
     for name in Particles.FIELDS:
         assert np.array_equal(getattr(a.particles, name), getattr(b.particles, name)), name
+    affine = getattr(a.scheme, "affine", None)  # APIC's matrices
+    if affine is not None:
+        assert affine.any() and np.array_equal(affine, b.scheme.affine)
     assert a.steps == b.steps and a.time == b.time
     for name in ("timeseries.csv", "particles.pvd"):
         assert (out_a / name).read_text() == (out_b / name).read_text(), name
@@ -192,6 +196,20 @@ def test_a_checkpoint_without_an_entry_is_a_case_error(uninterrupted, tmp_path):
     path = checkpoint_write(tmp_path, 1, arrays, meta)
     with pytest.raises(CheckpointError, match="it lacks meta k_out, array v"):
         Simulation.resume(_case(scheme, "time.end=0.2"), tmp_path, path)
+
+
+def test_an_apic_checkpoint_without_the_affine_matrices_is_refused(tmp_path):
+    """An APIC run cannot continue from a checkpoint without its particles' affine matrices
+    (one written by a FLIP run, or damaged): that would restart the transfers from C = 0."""
+    out = tmp_path / "flip"
+    Simulation(_case("projection", "time.end=0.04"), out).run()
+    assert "scheme.affine" not in read(checkpoints(out)[-1])[0]
+    arrays, meta = read(checkpoints(out)[-1])
+    meta["case"]["solver"]["transfer"] = "apic"  # as if an APIC run had written it
+    (tmp_path / "apic").mkdir()
+    path = checkpoint_write(tmp_path / "apic", 1, arrays, meta)
+    with pytest.raises(CheckpointError, match="scheme state .* KeyError: 'affine'"):
+        Simulation.resume(_case("apic", "time.end=0.2"), tmp_path / "apic", path)
 
 
 def test_extending_a_run_whose_end_is_not_an_output_time(tmp_path):

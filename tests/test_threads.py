@@ -29,6 +29,8 @@ def run(threads, settings):
     # 7k pressure unknowns: above multigrid.PARALLEL_ROWS, so the solve's parallel loops
     # and the parallel Galerkin products run too
     ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005"],
+    # APIC's transfers (100k particles: parallel strips and chunks)
+    ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005", "solver.transfer=apic"],
     # x periodic (the tank is 0.576 m = 144 cells of 0.004 m: the folds, the wrapped
     # stencils and the multigrid's periodic levels on both thread counts)
     ["domain.size=[0.576, 0.44]", "domain.periodic=[true, false]", "time.end=0.05"],

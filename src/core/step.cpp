@@ -256,7 +256,7 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
   particles_to_grid<D>(grid_, P.x, P.v, P.mass, P.volume, order_.view(P.count()),
                        start_.view(nc + 1), View<const double>(O.gravity.data(), {D}), O.dt,
                        node_mass_.view(nn), node_mom_.template view<2>({nn, D}), node_vol_.view(nn),
-                       v_old, v_star, correct ? cell_vol_.view(nc) : View<double>());
+                       v_old, v_star, correct ? cell_vol_.view(nc) : View<double>(), P.affine);
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
   node_fractions(O);
@@ -574,7 +574,7 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
   }
   report.moved += grid_to_particles<D>(
       grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new, p_node_.view(nn), O.dt,
-      O.flip, View<const double>(upper_.data(), {D}), margin_, faces);
+      O.flip, View<const double>(upper_.data(), {D}), margin_, faces, P.affine);
   if (obstacles_) report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
   clock.lap(PHASE_G2P);
   return OK;

@@ -120,6 +120,9 @@ struct Particles {
   View<const double> mass;
   View<const double> volume;
   View<double> pressure;
+  // n x D x D (1/s): each particle's affine velocity matrix C_p with APIC transfers (empty:
+  // FLIP/PIC, Options::flip)
+  View<double, 3> affine{};
   index_t count() const { return x.extent(0); }
 };
 

@@ -107,13 +107,16 @@ template <int D>
 void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 2> x,
                    View<const double, 2> v, View<const double> mass, View<const double> volume,
                    View<const index_t> order, View<const index_t> start, View<double> node_mass,
-                   View<double, 2> node_mom, View<double> node_vol, View<double> cell_vol) {
+                   View<double, 2> node_mom, View<double> node_vol, View<double> cell_vol,
+                   View<const double, 3> affine) {
   constexpr int NC = Grid<D>::NC;
   constexpr int NS = Grid<D>::NS;
   std::array<double, NC> w;
   const index_t slab = g.cs[D - 1];
   const bool cells_too = cell_vol.size() > 0;
+  const bool apic = affine.size() > 0;
   std::array<index_t, D> cx;
+  std::array<index_t, D> nx;     // APIC: the coordinates of the cell's first node
   std::array<double, NS> acell;  // the cell centres around cell c: stencil slots
   for (index_t c = r0 * slab; c < r1 * slab; ++c) {
     const index_t s0 = start(c), s1 = start(c + 1);
@@ -121,6 +124,7 @@ void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 
     // every particle of cell c has the cell's first node as its base (cell_index and
     // weights_at clamp alike)
     const index_t base = g.cell_first_node(c);
+    if (apic) g.cell_coords(c, nx.data());
     if (cells_too) load_cell_volume<D>(g, c, cx, acell, cell_vol);
     std::array<double, NC> am, av;
     std::array<std::array<double, D>, NC> amom;
@@ -137,11 +141,28 @@ void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 
       const double vol = volume(p);
       std::array<double, D> vp;
       for (int k = 0; k < D; ++k) vp[k] = v(p, k);
-      for (int a = 0; a < NC; ++a) {
-        const double wm = w[a] * m;
-        am[a] += wm;
-        av[a] += w[a] * vol;
-        for (int k = 0; k < D; ++k) amom[a][k] += wm * vp[k];
+      if (apic) {
+        // the particle's affine field at each corner node: v_p + C_p (x_i - x_p)
+        for (int a = 0; a < NC; ++a) {
+          const double wm = w[a] * m;
+          am[a] += wm;
+          av[a] += w[a] * vol;
+          std::array<double, D> dx;
+          for (int j = 0; j < D; ++j)
+            dx[j] = static_cast<double>(nx[j] + ((a >> j) & 1)) * g.h - x(p, j);
+          for (int k = 0; k < D; ++k) {
+            double vi = vp[k];
+            for (int j = 0; j < D; ++j) vi += affine(p, k, j) * dx[j];
+            amom[a][k] += wm * vi;
+          }
+        }
+      } else {
+        for (int a = 0; a < NC; ++a) {
+          const double wm = w[a] * m;
+          am[a] += wm;
+          av[a] += w[a] * vol;
+          for (int k = 0; k < D; ++k) amom[a][k] += wm * vp[k];
+        }
       }
       if (cells_too) add_cell_volume<D>(g, &x(p, 0), vol, cx, acell);
     }
@@ -163,7 +184,8 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
                        View<const index_t> order, View<const index_t> start,
                        View<const double> gravity, double dt, View<double> node_mass,
                        View<double, 2> node_mom, View<double> node_vol, View<double, 2> v_old,
-                       View<double, 2> v_star, View<double> cell_vol) {
+                       View<double, 2> v_star, View<double> cell_vol,
+                       View<const double, 3> affine) {
   const index_t nn = g.nnodes;
   parallel_for(nn, [&](index_t i) {
     node_mass[i] = 0.0;
@@ -180,7 +202,7 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
       g.periodic[D - 1] ? 1 : 2 * STRIPS, 2, bounds.data());
   for_strips(bounds.data(), nstrips, x.extent(0), [&](index_t r0, index_t r1) {
     scatter_slabs(r0, r1, g, x, v, mass, volume, order, start, node_mass, node_mom, node_vol,
-                  cell_vol);
+                  cell_vol, affine);
   });
   if (g.any_periodic) {  // an image's particles belong to its master
     fold_images<D>(g, node_mass);
@@ -209,24 +231,46 @@ template <int D>
 index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                View<double> pressure, View<const double, 2> v_old, View<const double, 2> v_new,
                View<const double> p_node, double dt, double flip, View<const double> upper,
-               double margin, const std::array<View<const double>, D>& faces) {
+               double margin, const std::array<View<const double>, D>& faces,
+               View<double, 3> affine) {
   constexpr int NC = Grid<D>::NC;
   std::array<double, NC> w;
   std::array<double, D> normal, tangent;
   std::array<index_t, D> nlo, tlo, thi;
   const bool correct = faces[0].size() > 0;
+  const bool apic = affine.size() > 0;
   index_t moved = 0;
   for (index_t p = lo; p < hi; ++p) {
     const index_t base = g.weights_at(&x(p, 0), w.data());
     std::array<double, D> pic{}, dv{}, disp{};
     double pp = 0.0;
-    for (int a = 0; a < NC; ++a) {
-      const index_t i = base + g.corner[a];
-      for (int k = 0; k < D; ++k) {
-        pic[k] = pic[k] + w[a] * v_new(i, k);
-        dv[k] = dv[k] + w[a] * (v_new(i, k) - v_old(i, k));
+    if (apic) {
+      // PIC velocity and C_p = sum_i v_i (grad N_i)^T of the corrected grid velocity
+      std::array<double, D> frac;
+      g.locate(&x(p, 0), frac.data());
+      std::array<std::array<double, D>, D> C{};
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        std::array<double, D> grad;
+        for (int j = 0; j < D; ++j) grad[j] = g.corner_gradient(a, j, frac.data());
+        for (int k = 0; k < D; ++k) {
+          const double vi = v_new(i, k);
+          pic[k] += w[a] * vi;
+          for (int j = 0; j < D; ++j) C[k][j] += vi * grad[j];
+        }
+        pp += w[a] * p_node(i);
       }
-      pp += w[a] * p_node(i);
+      for (int k = 0; k < D; ++k)
+        for (int j = 0; j < D; ++j) affine(p, k, j) = C[k][j];
+    } else {
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        for (int k = 0; k < D; ++k) {
+          pic[k] = pic[k] + w[a] * v_new(i, k);
+          dv[k] = dv[k] + w[a] * (v_new(i, k) - v_old(i, k));
+        }
+        pp += w[a] * p_node(i);
+      }
     }
     if (correct) {
       face_samples<D>(g, View<const double, 2>(x), p, normal, nlo, tangent, tlo, thi);
@@ -234,7 +278,7 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
         disp[k] = face_displacement<D>(g, k, faces[k], normal, nlo, tangent, tlo, thi);
     }
     for (int k = 0; k < D; ++k) {
-      v(p, k) = flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
+      v(p, k) = apic ? pic[k] : flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
       x(p, k) += dt * pic[k];
       if (correct) x(p, k) += disp[k];
     }
@@ -252,10 +296,10 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
                           View<double> pressure, View<const double, 2> v_old,
                           View<const double, 2> v_new, View<const double> p_node, double dt,
                           double flip, View<const double> upper, double margin,
-                          const std::array<View<const double>, D>& faces) {
+                          const std::array<View<const double>, D>& faces, View<double, 3> affine) {
   return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
     return gather<D>(lo, hi, g, x, v, pressure, v_old, v_new, p_node, dt, flip, upper, margin,
-                     faces);
+                     faces, affine);
   });
 }
 
@@ -266,11 +310,11 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
                                      View<const double>, View<const double>, View<const index_t>,  \
                                      View<const index_t>, View<const double>, double,              \
                                      View<double>, View<double, 2>, View<double>, View<double, 2>, \
-                                     View<double, 2>, View<double>);                               \
+                                     View<double, 2>, View<double>, View<const double, 3>);        \
   template index_t grid_to_particles<D>(                                                           \
       const Grid<D>&, View<double, 2>, View<double, 2>, View<double>, View<const double, 2>,       \
       View<const double, 2>, View<const double>, double, double, View<const double>, double,       \
-      const std::array<View<const double>, D>&);
+      const std::array<View<const double>, D>&, View<double, 3>);
 MPMFLOW_TRANSFER(2)
 MPMFLOW_TRANSFER(3)
 #undef MPMFLOW_TRANSFER

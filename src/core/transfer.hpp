@@ -187,6 +187,10 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
 // volume sum_p N_i V_p (m^3), velocity v_old_i = momentum / M_i and the predictor without
 // pressure v_star_i = v_old_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere); with
 // cell_vol non-empty also the particles' volume on the cell centres (scatter_cell_volume).
+// With affine non-empty (n x D x D, 1/s: APIC, Jiang et al. 2015) the momentum is
+// sum_p N_i m_p (v_p + C_p (x_i - x_p)): the particle's affine velocity field at the node,
+// so an affine velocity field carried by the particles reaches every node with mass exactly;
+// empty: the FLIP/PIC momentum, unchanged.
 // The particles come binned by cell (order, start: see binning.hpp). The slabs of cells
 // along the last axis are cut into 2 STRIPS strips of at least 2 slabs holding equal
 // numbers of particles (strips.hpp); the even strips are scattered in parallel, then the
@@ -197,18 +201,24 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
                        View<const index_t> order, View<const index_t> start,
                        View<const double> gravity, double dt, View<double> node_mass,
                        View<double, 2> node_mom, View<double> node_vol, View<double, 2> v_old,
-                       View<double, 2> v_star, View<double> cell_vol);
+                       View<double, 2> v_star, View<double> cell_vol,
+                       View<const double, 3> affine = {});
 
 // Eqs. (19)-(21): FLIP/PIC velocity update (flip: the FLIP fraction of this step), position
 // update with v^{t+1} evaluated at x_p^t plus the volume correction's displacement (faces:
 // one array per axis, see face_displacement; empty arrays: none), pressure; then particles
 // that crossed a periodic axis's end are wrapped round it (wrap_periodic) and those that
 // left the box [0, upper] are put back inside (put_inside). Returns how many were put back.
+// With affine non-empty (n x D x D: APIC) the velocity is instead the PIC velocity
+// sum_i N_i(x_p) v_i^{t+1} and C_p = sum_i v_i^{t+1} (grad N_i(x_p))^T, the gradient of the
+// same interpolated field (for multilinear N_i this is B_p D_p^-1 of Jiang et al. 2015, exact
+// for an affine field); flip and v_old are not used.
 template <int D>
 index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                           View<double> pressure, View<const double, 2> v_old,
                           View<const double, 2> v_new, View<const double> p_node, double dt,
                           double flip, View<const double> upper, double margin,
-                          const std::array<View<const double>, D>& faces);
+                          const std::array<View<const double>, D>& faces,
+                          View<double, 3> affine = {});
 
 }  // namespace mpmflow

@@ -31,6 +31,7 @@ MB = 2**20
 # measured (benchmarks/memory.py): see the module docstring
 PROGRAM = 70 * MB  # Python, NumPy, SciPy and the compiled core
 PER_PARTICLE = 84  # B: x, v (2 each), pressure, mass, volume, the cell index and order
+AFFINE = 8  # B per entry of a particle's D x D affine matrix (solver.transfer = "apic")
 PER_NODE = 195  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
 PER_UNKNOWN = 590  # B: matrix (9 entries), multigrid levels, CG vectors
 SPREAD = 1.25  # unknowns over the run / unknowns at the start (the material spreads)
@@ -118,11 +119,13 @@ def estimate(case):
     program = PROGRAM
     snaps = (case.time.end / (case.output.snapshot_interval or case.output.interval) + 2
              if case.output.snapshots else 0)
+    # APIC's affine matrices: in memory and in each checkpoint
+    affine = AFFINE * len(case.domain.size) ** 2 if case.solver.transfer == "apic" else 0
     disk = (rows * (170 + 12 * len(case.probes)) + snaps * (120 * particles + 200)
-            + 2 * (56 * particles + 16 * nodes))
+            + 2 * ((56 + affine) * particles + 16 * nodes))
     return Estimate(particles=count if count < 10**15 else particles, nodes=int(nodes) if math.isfinite(nodes) else nodes,
                     unknowns=unknowns, rows=rows, program=program,
-                    particle_bytes=PER_PARTICLE * particles, grid_bytes=PER_NODE * nodes,
+                    particle_bytes=(PER_PARTICLE + affine) * particles, grid_bytes=PER_NODE * nodes,
                     solver_bytes=PER_UNKNOWN * unknowns, rows_bytes=PER_ROW * values * rows,
                     passing_bytes=passing, passing_what=what, disk_bytes=disk)
 

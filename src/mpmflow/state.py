@@ -127,27 +127,31 @@ def _cells(grid):
 
 
 def particles_to_grid(grid, x, v, mass, volume, order, start, gravity, dt, node_mass, node_mom,
-                      node_vol, v_old, v_star, cell_vol):
+                      node_vol, v_old, v_star, cell_vol, affine=None):
     """Particle-to-grid (eqs. 10-12): nodal mass, momentum, material volume, velocity v_old
     and predictor v_star = v_old + dt g where there is mass (0 elsewhere); with ``cell_vol``
     non-empty also the particles' volume on the cell centres. Particles binned by cell
-    (``order``, ``start``)."""
+    (``order``, ``start``). ``affine`` (n x D x D, APIC): the momentum carries each
+    particle's affine field, m_p (v_p + C_p (x_i - x_p)); None: FLIP/PIC."""
     _core.particles_to_grid(x, v, mass, volume, order, start, float(grid.spacing), _cells(grid),
                             np.ascontiguousarray(gravity, dtype=float), float(dt), node_mass,
-                            node_mom, node_vol, v_old, v_star, cell_vol)
+                            node_mom, node_vol, v_old, v_star, cell_vol,
+                            None if affine is None else np.ascontiguousarray(affine, dtype=float))
 
 
 def grid_to_particles(grid, x, v, pressure, v_old, v_new, p_node, dt, flip, upper, margin,
-                      faces=()):
+                      faces=(), affine=None):
     """Grid-to-particle (eqs. 19-21): FLIP/PIC velocity, positions moved with v_new plus the
     volume correction's displacement (``faces``: one array per axis; empty: none), pressure;
-    particles that left the box [0, upper] put back inside. Returns how many were put back."""
+    particles that left the box [0, upper] put back inside. Returns how many were put back.
+    ``affine`` (n x D x D, float64, written in place): APIC instead of FLIP/PIC, the particle
+    velocity the PIC one and C_p the gradient of the interpolated v_new (``flip`` unused)."""
     if len(faces) == 0:
         faces = [np.zeros(0)] * grid.dim
     return int(_core.grid_to_particles(x, v, pressure, float(grid.spacing), _cells(grid), v_old,
                                        v_new, p_node, float(dt), float(flip),
                                        np.ascontiguousarray(upper, dtype=float), float(margin),
-                                       list(faces)))
+                                       list(faces), affine))
 
 
 def pressure_noise(grid, x, mass, pressure, work_m=None, work_mp=None):

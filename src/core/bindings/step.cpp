@@ -4,11 +4,13 @@
 #include "../step.hpp"
 
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/unique_ptr.h>
 #include <nanobind/stl/vector.h>
 
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <typeinfo>
@@ -83,15 +85,24 @@ nb::ndarray<nb::numpy, T> out(View<T, R> v, nb::handle owner) {
   return nb::ndarray<nb::numpy, T>(v.data(), R, shape.data(), owner);
 }
 
+using Affine = std::optional<Array<double>>;
+
+// The particles; affine (n x D x D): APIC's matrices, None: FLIP/PIC transfers.
 template <int D>
 Particles<D> particles(Array<double> x, Array<double> v, Array<const double> mass,
-                       Array<const double> volume, Array<double> pressure) {
+                       Array<const double> volume, Array<double> pressure,
+                       const Affine& affine = std::nullopt) {
   Particles<D> P{view<double, 2>(x, "x"), view<double, 2>(v, "v"), view<const double>(mass),
                  view<const double>(volume), view<double>(pressure)};
   const index_t n = P.x.extent(0);
   if (P.x.extent(1) != D || P.v.extent(0) != n || P.v.extent(1) != D || P.mass.size() != n ||
       P.volume.size() != n || P.pressure.size() != n)
     throw std::invalid_argument("particle arrays of inconsistent shapes");
+  if (affine) {
+    P.affine = view<double, 3>(*affine, "affine");
+    if (P.affine.extent(0) != n || P.affine.extent(1) != D || P.affine.extent(2) != D)
+      throw std::invalid_argument("affine: one D x D matrix per particle");
+  }
   return P;
 }
 
@@ -99,6 +110,8 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<const double> mas
 #define MPMFLOW_PARTICLE_ARGS                                                             \
   nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("mass"), nb::arg("volume"), \
       nb::arg("pressure").noconvert()
+// the affine matrices (APIC), last, optional: None runs FLIP/PIC
+#define MPMFLOW_AFFINE_ARG nb::arg("affine").noconvert().none() = nb::none()
 
 template <int D>
 void bind_dim(nb::module_& m) {
@@ -172,38 +185,40 @@ void bind_dim(nb::module_& m) {
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
              Array<const double> volume, Array<double> pressure, const O& opt, index_t first,
-             index_t nsteps, Report& report) {
-            auto P = particles<D>(x, v, mass, volume, pressure);
+             index_t nsteps, Report& report, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return run_chunk([&](const auto& between) {
               return self.state->advance(P, opt, first, nsteps, report, between);
             });
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("first"), nb::arg("nsteps"),
-          nb::arg("report"),
+          nb::arg("report"), MPMFLOW_AFFINE_ARG,
           "nsteps steps; returns the steps done (fewer: report.status says why).")
       .def(
           "advance_span",
           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
              Array<const double> volume, Array<double> pressure, const O& opt, double span,
-             index_t max_steps, Report& report) {
-            auto P = particles<D>(x, v, mass, volume, pressure);
+             index_t max_steps, Report& report, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return run_chunk([&](const auto& between) {
               return self.state->advance_span(P, opt, span, max_steps, report, between);
             });
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("span"), nb::arg("max_steps"),
-          nb::arg("report"), "Adaptive steps over the span (s); returns the time covered.")
+          nb::arg("report"), MPMFLOW_AFFINE_ARG,
+          "Adaptive steps over the span (s); returns the time covered.")
       .def_prop_rw(
           "since_volume", [](S& self) { return self.state->since_volume(); },
           [](S& self, double t) { self.state->set_since_volume(t); })
       .def(
           "predict",
           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-             Array<const double> volume, Array<double> pressure, const O& opt, bool correct) {
-            auto P = particles<D>(x, v, mass, volume, pressure);
+             Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
+             const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return self.state->predict(P, opt, correct);
           },
-          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"))
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG)
       .def("warm_start", [](S& self) { self.state->warm_start(); })
       .def("pressure_matrix",
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
@@ -222,11 +237,12 @@ void bind_dim(nb::module_& m) {
           "finish",
           [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
              Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
-             Report& report) {
-            auto P = particles<D>(x, v, mass, volume, pressure);
+             Report& report, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return self.state->finish(P, opt, correct, report);
           },
-          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), nb::arg("report"))
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), nb::arg("report"),
+          MPMFLOW_AFFINE_ARG)
       .def_prop_ro("phase_seconds",
                    [](S& self) {
                      const auto& t = self.state->phase_seconds();

@@ -1,6 +1,9 @@
 #include "../transfer.hpp"
 
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
+
+#include <optional>
 
 #include "../strips.hpp"
 #include "arrays.hpp"
@@ -15,9 +18,17 @@ void bind_transfer(nb::module_& m) {
          Array<const double> volume, Array<const index_t> order, Array<const index_t> start,
          double h, std::vector<index_t> cells, Array<const double> gravity, double dt,
          Array<double> node_mass, Array<double> node_mom, Array<double> node_vol,
-         Array<double> v_old, Array<double> v_star, Array<double> cell_vol) {
+         Array<double> v_old, Array<double> v_star, Array<double> cell_vol,
+         std::optional<Array<const double>> affine) {
         with_dim(cells.size(), [&](auto d) {
           constexpr int D = decltype(d)::value;
+          View<const double, 3> C;
+          if (affine) {
+            C = view<const double, 3>(*affine, "affine");
+            if (C.extent(0) != static_cast<index_t>(x.shape(0)) || C.extent(1) != D ||
+                C.extent(2) != D)
+              throw std::invalid_argument("affine: one D x D matrix per particle");
+          }
           particles_to_grid<D>(
               make_grid<D>(h, cells), view<const double, 2>(x, "x"), view<const double, 2>(v, "v"),
               view<const double>(mass, "mass"), view<const double>(volume, "volume"),
@@ -25,24 +36,33 @@ void bind_transfer(nb::module_& m) {
               view<const double>(gravity, "gravity"), dt, view<double>(node_mass, "node_mass"),
               view<double, 2>(node_mom, "node_mom"), view<double>(node_vol, "node_vol"),
               view<double, 2>(v_old, "v_old"), view<double, 2>(v_star, "v_star"),
-              view<double>(cell_vol, "cell_vol"));
+              view<double>(cell_vol, "cell_vol"), C);
         });
       },
       nb::arg("x"), nb::arg("v"), nb::arg("mass"), nb::arg("volume"), nb::arg("order"),
       nb::arg("start"), nb::arg("h"), nb::arg("cells"), nb::arg("gravity"), nb::arg("dt"),
       nb::arg("node_mass").noconvert(), nb::arg("node_mom").noconvert(),
       nb::arg("node_vol").noconvert(), nb::arg("v_old").noconvert(), nb::arg("v_star").noconvert(),
-      nb::arg("cell_vol").noconvert(),
+      nb::arg("cell_vol").noconvert(), nb::arg("affine").none() = nb::none(),
       "Particle-to-grid: nodal mass, momentum, volume, velocity and predictor (and the "
-      "volume on the cell centres if cell_vol is not empty).");
+      "volume on the cell centres if cell_vol is not empty); affine (n x D x D): APIC's "
+      "matrices, None: FLIP/PIC.");
   m.def(
       "grid_to_particles",
       [](Array<double> x, Array<double> v, Array<double> pressure, double h,
          std::vector<index_t> cells, Array<const double> v_old, Array<const double> v_new,
          Array<const double> p_node, double dt, double flip, Array<const double> upper,
-         double margin, std::vector<Array<const double>> faces) {
+         double margin, std::vector<Array<const double>> faces,
+         std::optional<Array<double>> affine) {
         return with_dim(cells.size(), [&](auto d) {
           constexpr int D = decltype(d)::value;
+          View<double, 3> C;
+          if (affine) {
+            C = view<double, 3>(*affine, "affine");
+            if (C.extent(0) != static_cast<index_t>(x.shape(0)) || C.extent(1) != D ||
+                C.extent(2) != D)
+              throw std::invalid_argument("affine: one D x D matrix per particle");
+          }
           if (faces.size() != static_cast<std::size_t>(D))
             throw std::invalid_argument("faces: one array per axis");
           std::array<View<const double>, D> f;
@@ -57,14 +77,15 @@ void bind_transfer(nb::module_& m) {
               make_grid<D>(h, cells), view<double, 2>(x, "x"), view<double, 2>(v, "v"),
               view<double>(pressure, "pressure"), view<const double, 2>(v_old, "v_old"),
               view<const double, 2>(v_new, "v_new"), view<const double>(p_node, "p_node"), dt, flip,
-              view<const double>(upper, "upper"), margin, f);
+              view<const double>(upper, "upper"), margin, f, C);
         });
       },
       nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("pressure").noconvert(),
       nb::arg("h"), nb::arg("cells"), nb::arg("v_old"), nb::arg("v_new"), nb::arg("p_node"),
       nb::arg("dt"), nb::arg("flip"), nb::arg("upper"), nb::arg("margin"), nb::arg("faces"),
-      "Grid-to-particle (FLIP/PIC, positions, pressure, wall put-back); returns how many "
-      "particles were put back inside.");
+      nb::arg("affine").noconvert().none() = nb::none(),
+      "Grid-to-particle (FLIP/PIC, or APIC with affine (n x D x D) given; positions, "
+      "pressure, wall put-back); returns how many particles were put back inside.");
   m.def(
       "pressure_noise",
       [](Array<const double> x, Array<const double> mass, Array<const double> pressure, double h,

@@ -296,6 +296,12 @@ class Case(_Section):
                     f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
                     f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
                     f"stop at once; give a slower velocity or raise solver.max_speed")
+        if self.solver.transfer != "flip" and self.solver.scheme != "projection":
+            raise ValueError(
+                f"solver.transfer = {self.solver.transfer!r} is a transfer of the projection "
+                f"scheme; the {self.solver.scheme} scheme transfers by FLIP/PIC only "
+                "(solver.flip): set solver.transfer = \"flip\", or solver.scheme = "
+                "\"projection\"")
         if (self.time.dt == "auto" and self.solver.scheme == "projection"
                 and self.solver.linear_solver != "multigrid"):
             raise ValueError(

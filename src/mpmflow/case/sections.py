@@ -284,7 +284,18 @@ class Solver(_Section):
                         "PIC with the fraction flip^(dt / 1 ms), so the PIC damping per second "
                         "is the same whatever the time step and the scheme. 1 = pure FLIP "
                         "(the paper), 0 = pure PIC. The default keeps 1% PIC per millisecond, "
-                        "which stops the thin surge tip from running ahead on FLIP noise.")
+                        "which stops the thin surge tip from running ahead on FLIP noise. "
+                        "Not used with solver.transfer = \"apic\".")
+    transfer: Literal["flip", "apic"] = Field(
+        "flip", description="Particle-grid velocity transfer of the projection scheme: "
+        "\"flip\" = the FLIP/PIC blend set by solver.flip (the paper's FLIP with the "
+        "default's 1% PIC per millisecond); \"apic\" = the affine particle-in-cell method "
+        "(Jiang et al. 2015): each particle carries the velocity gradient of the corrected "
+        "grid velocity at its position (a D x D matrix, kept in checkpoints) besides the PIC "
+        "velocity, and gives the grid its affine velocity field, so the transfers keep "
+        "rotation and shear that PIC damps (angular momentum is conserved by the transfers) "
+        "without FLIP's particle noise; solver.flip is not used. The explicit scheme takes "
+        "\"flip\" only. See docs/method.md, \"Transfers\".")
     full_cell_threshold: float = Field(
         0.9, gt=0, le=1, description="Cells with volume fraction theta at or above this are full "
         "and integrated with 2x2 Gauss points (paper: 0.9).")

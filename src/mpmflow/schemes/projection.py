@@ -70,7 +70,8 @@ class ProjectionScheme:
         s = case.solver
         self.case = case
         self.grid = grid
-        self.particles = particles
+        self.apic = s.transfer == "apic"
+        self.particles = particles  # with APIC also their affine matrices (zero)
         self.solids = obstacles.of_case(case, grid)
         self.viscous = materials.is_viscous(case.material)
         cells = tuple(int(c) for c in grid.cells)
@@ -85,6 +86,20 @@ class ProjectionScheme:
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (advance_span)
         self.dt_range = [np.inf, 0.0]  # the shortest and longest step taken (auto)
+
+    @property
+    def particles(self):
+        return self._P
+
+    @particles.setter
+    def particles(self, P):
+        """The particles the scheme moves. With solver.transfer = "apic" each also carries its
+        affine velocity matrix C_p (``affine``, count x D x D, 1/s), here set to 0: bodies
+        start at rest or in uniform motion, whose velocity gradient is 0. None with FLIP/PIC
+        (the core then runs the FLIP/PIC transfers)."""
+        self._P = P
+        D = self.grid.dim
+        self.affine = np.zeros((P.count, D, D)) if self.apic else None
 
     @property
     def p_node(self):
@@ -123,7 +138,8 @@ class ProjectionScheme:
     def state(self):
         """What the scheme carries from one step to the next beyond the particles: the nodal
         pressure and the volume correction's last solution (the warm starts of the next
-        solves). Everything else is rebuilt each step."""
+        solves), and with APIC the particles' affine matrices. Everything else is rebuilt
+        each step."""
         saved = {"p_node": self.core.p_node.copy(),
                  "last_unknowns": np.array(self.last_unknowns), "steps": np.array(self.steps),
                  "since_volume": np.array(self.core.since_volume),
@@ -131,6 +147,8 @@ class ProjectionScheme:
         q = self.core.volume_q
         if q.size:
             saved["volume_q"] = q.copy()
+        if self.affine is not None:
+            saved["affine"] = self.affine.copy()
         return saved
 
     def restore(self, saved):
@@ -144,6 +162,12 @@ class ProjectionScheme:
         q = self.core.volume_q
         if q.size:
             np.copyto(q, saved["volume_q"])
+        if self.affine is not None:
+            affine = saved["affine"]  # KeyError, or ValueError if its shape differs
+            if affine.shape != self.affine.shape:
+                raise ValueError(f"affine matrices of shape {affine.shape}, the particles "
+                                 f"need {self.affine.shape}")
+            np.copyto(self.affine, affine)
 
     def _particles(self):
         P = self.particles
@@ -155,7 +179,7 @@ class ProjectionScheme:
         buffers are overwritten by the step). Lets a run refuse such a case before it
         starts instead of failing at step 1."""
         O = self.options(1.0)  # the step size does not change which nodes are unknowns
-        n = self.core.predict(*self._particles(), O, False)
+        n = self.core.predict(*self._particles(), O, False, affine=self.affine)
         if n and not self.core.pressure_matrix(O):
             raise pressure.singular(" at the start")
 
@@ -168,7 +192,8 @@ class ProjectionScheme:
             return self._adaptive(O, dt * nsteps, report, where)
         try:
             if self.python_pressure is None:
-                done = self.core.advance(*self._particles(), O, self.steps + 1, nsteps, report)
+                done = self.core.advance(*self._particles(), O, self.steps + 1, nsteps, report,
+                                         affine=self.affine)
             else:
                 done = self._python_steps(O, nsteps, report, where)
         except pressure.SETUP_ERRORS as err:
@@ -187,7 +212,8 @@ class ProjectionScheme:
         # the most steps the span can need: every particle at solver.max_speed (the run
         # stops beyond it), at the Courant number
         most = int(np.ceil(span * s.max_speed / (O.courant * self.grid.spacing))) + 3
-        covered = self.core.advance_span(*self._particles(), O, span, most, report)
+        covered = self.core.advance_span(*self._particles(), O, span, most, report,
+                                         affine=self.affine)
         done = int(report.steps)
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
@@ -211,7 +237,7 @@ class ProjectionScheme:
         for k in range(nsteps):
             report.step = k
             correct = O.volume_every > 0 and (self.steps + k + 1) % O.volume_every == 0
-            n = self.core.predict(*self._particles(), O, correct)
+            n = self.core.predict(*self._particles(), O, correct, affine=self.affine)
             report.unknowns = max(report.unknowns, n)
             report.last_unknowns = n
             status = self.core.viscous_predictor(O, report)
@@ -220,7 +246,8 @@ class ProjectionScheme:
                 return k
             self.python_pressure.solve(self.core, O, report, where(k))
             report.pockets += self.core.pockets
-            status = self.core.finish(*self._particles(), O, correct, report)
+            status = self.core.finish(*self._particles(), O, correct, report,
+                                      affine=self.affine)
             if status != state.OK:
                 report.status = status
                 return k
