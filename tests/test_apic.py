@@ -176,7 +176,9 @@ def test_transfer_setting_is_checked():
             "time": {"end": 0.01, "dt": 1e-3}}
     with pytest.raises(CaseError, match="solver.transfer"):
         validate({**base, "solver": {"transfer": "mls"}}, source="t")
-    with pytest.raises(CaseError, match="explicit scheme transfers by FLIP/PIC only"):
+    with pytest.raises(CaseError, match=r'solver.scheme = "explicit" does not support APIC '
+                       r'transfers \(solver.transfer = "apic"; it transfers by FLIP/PIC only\); '
+                       r'set solver.scheme = "projection", or set solver.transfer = "flip"'):
         validate({**base, "solver": {"transfer": "apic", "scheme": "explicit"},
                   "material": {"bulk_modulus": 4e5}, "time": {"end": 0.01, "dt": "auto"}},
                  source="t")

@@ -85,7 +85,8 @@ class Case(_Section):
         used = {"obstacles": (bool(self.obstacles), "remove the [[obstacles]]"),
                 "materials": (self.material.model != "water",
                               "set material.model = \"water\""),
-                "periodic": (any(self.domain.periodic or []), "remove domain.periodic")}
+                "periodic": (any(self.domain.periodic or []), "remove domain.periodic"),
+                "apic": (self.solver.transfer == "apic", "set solver.transfer = \"flip\"")}
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():
             if uses and not schemes.supports(name, feature):
@@ -296,12 +297,6 @@ class Case(_Section):
                     f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
                     f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
                     f"stop at once; give a slower velocity or raise solver.max_speed")
-        if self.solver.transfer != "flip" and self.solver.scheme != "projection":
-            raise ValueError(
-                f"solver.transfer = {self.solver.transfer!r} is a transfer of the projection "
-                f"scheme; the {self.solver.scheme} scheme transfers by FLIP/PIC only "
-                "(solver.flip): set solver.transfer = \"flip\", or solver.scheme = "
-                "\"projection\"")
         if (self.time.dt == "auto" and self.solver.scheme == "projection"
                 and self.solver.linear_solver != "multigrid"):
             raise ValueError(

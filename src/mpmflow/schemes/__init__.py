@@ -9,6 +9,7 @@ FEATURES = {
     "obstacles": "fixed obstacles ([[obstacles]])",
     "materials": "materials other than inviscid water (material.model)",
     "periodic": "periodic axes (domain.periodic)",
+    "apic": "APIC transfers (solver.transfer = \"apic\"; it transfers by FLIP/PIC only)",
 }
 
 

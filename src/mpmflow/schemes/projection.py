@@ -64,7 +64,7 @@ class AdaptiveReport(StepReport):
 
 @register("projection")
 class ProjectionScheme:
-    SUPPORTS = frozenset({"obstacles", "materials", "periodic"})
+    SUPPORTS = frozenset({"obstacles", "materials", "periodic", "apic"})
 
     def __init__(self, case, grid, particles):
         s = case.solver
