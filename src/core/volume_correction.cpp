@@ -150,7 +150,8 @@ void face_displacements(const Grid<D>& g, View<const index_t> cell_row,
             } else {
               // b above the face, a below it (across a periodic axis's end: the last cell)
               index_t b = 0;
-              for (int j = 0; j < D; ++j) b += (j == k ? ik % g.cells[k] : ix[j]) * g.cs[j];
+              for (int j = 0; j < D; ++j) b += ix[j] * g.cs[j];
+              if (ik == g.cells[k]) b -= g.cells[k] * g.cs[k];  // the face at a periodic end
               const index_t a =
                   ik == 0 || ik == g.cells[k] ? b + (g.cells[k] - 1) * g.cs[k] : b - g.cs[k];
               if (static_slot(b) < 0 || static_slot(a) < 0)
