@@ -204,12 +204,11 @@ void copy(View<const double> from, View<double> to) {
 //
 // On periodic coarse axes (cperiod[k] > 0) the coordinates' differences wrap round, so the
 // slot comes from the coordinates themselves (ccoord).
-template <int D>
+template <int D, bool PERIODIC>
 inline index_t coarse_slot(index_t I, index_t J, View<const index_t> chash,
-                           View<const index_t, 2> ccoord, const std::array<index_t, D>& cperiod,
-                           bool periodic) {
+                           View<const index_t, 2> ccoord, const std::array<index_t, D>& cperiod) {
   constexpr int NS = stencil_size(D);
-  if (!periodic) return NS / 2 - chash(I) + chash(J);
+  if constexpr (!PERIODIC) return NS / 2 - chash(I) + chash(J);
   index_t slot = 0, p3 = 1;
   for (int k = 0; k < D; ++k) {
     index_t d = ccoord(J, k) - ccoord(I, k);
@@ -225,11 +224,11 @@ inline index_t coarse_slot(index_t I, index_t J, View<const index_t> chash,
   return slot;
 }
 
-template <int D>
+template <int D, bool PERIODIC>
 void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<const double, 2> vals,
                    View<const index_t, 2> pcols, View<const double, 2> pw,
                    View<const index_t> chash, View<const index_t, 2> ccoord,
-                   const std::array<index_t, D>& cperiod, bool periodic, View<index_t, 2> ccols,
+                   const std::array<index_t, D>& cperiod, View<index_t, 2> ccols,
                    View<double, 2> cvals) {
   constexpr int NP = 1 << D;
   constexpr int NS = stencil_size(D);
@@ -245,7 +244,7 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
         for (int b = 0; b < NP; ++b) {
           const index_t J = pcols(j, b);
           if (J < 0) break;
-          const index_t slot = coarse_slot<D>(I, J, chash, ccoord, cperiod, periodic);
+          const index_t slot = coarse_slot<D, PERIODIC>(I, J, chash, ccoord, cperiod);
           ccols(I, slot) = J;
           cvals(I, slot) += v * pw(j, b);
         }
@@ -475,8 +474,12 @@ void Multigrid<D>::galerkin(index_t l) {
   for (int k = 0; k < D; ++k) periodic = periodic || c.period[k] > 0;
   // serial when small, or when the last axis is periodic (its first and last slabs meet)
   if (n < PARALLEL_ROWS || c.period[D - 1] > 0) {
-    galerkin_rows<D>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccoord, c.period, periodic, ccols,
-                     cvals);
+    if (periodic)
+      galerkin_rows<D, true>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccoord, c.period, ccols,
+                             cvals);
+    else
+      galerkin_rows<D, false>(0, n, f.cols, f.vals, f.pcols, f.pw, chash, ccoord, c.period, ccols,
+                              cvals);
     return;
   }
   // strips of whole slabs (nodes of equal last coordinate), at least 2 each: fine row r adds
@@ -500,8 +503,12 @@ void Multigrid<D>::galerkin(index_t l) {
                    [&](index_t, index_t lo, index_t hi) {
                      for (index_t t = lo; t < hi; ++t) {
                        const index_t u = 2 * t + parity;
-                       galerkin_rows<D>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols, f.pw,
-                                        chash, ccoord, c.period, periodic, ccols, cvals);
+                       if (periodic)
+                         galerkin_rows<D, true>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols,
+                                                f.pw, chash, ccoord, c.period, ccols, cvals);
+                       else
+                         galerkin_rows<D, false>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols,
+                                                 f.pw, chash, ccoord, c.period, ccols, cvals);
                      }
                    },
                    n);

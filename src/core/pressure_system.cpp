@@ -15,35 +15,38 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
   constexpr int NS = stencil_size(D);
   constexpr int centre = NS / 2;
   const StencilTables<D> t = tables<D>(g);
-  for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
-    const index_t r = node_row(i);
-    if (r < 0 || g.is_image(ix.data())) return;  // an image's row is its master's
-    std::array<double, NS> S;
-    std::array<index_t, NC> slots, base;
-    std::array<int, NC> local;
-    node_stencil<D>(g, ix, cell_slot, K, t, S, slots, local, base);
-    bool anch = false;
-    for (int s = 0; s < NS; ++s) {
-      const double sv = S[s];
-      if (s == centre || sv == 0.0) continue;
-      const index_t j = neighbour_node<D>(g, i, ix, s, t);
-      if (node_row(j) < 0) {
-        anch = true;
-        if (subcell && sv < 0.0) S[centre] += sv * ghost_factor(node_f(i), node_f(j), theta_min);
-        S[s] = 0.0;
+  with_periodic(g, [&](auto periodic) {
+    constexpr bool P = decltype(periodic)::value;
+    for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
+      const index_t r = node_row(i);
+      if (r < 0 || g.is_image(ix.data())) return;  // an image's row is its master's
+      std::array<double, NS> S;
+      std::array<index_t, NC> slots, base;
+      std::array<int, NC> local;
+      node_stencil<D, P>(g, ix, cell_slot, K, t, S, slots, local, base);
+      bool anch = false;
+      for (int s = 0; s < NS; ++s) {
+        const double sv = S[s];
+        if (s == centre || sv == 0.0) continue;
+        const index_t j = neighbour_node<D, P>(g, i, ix, s, t);
+        if (node_row(j) < 0) {
+          anch = true;
+          if (subcell && sv < 0.0) S[centre] += sv * ghost_factor(node_f(i), node_f(j), theta_min);
+          S[s] = 0.0;
+        }
       }
-    }
-    anchored(r) = anch;
-    for (int s = 0; s < NS; ++s) {
-      const double sv = S[s];
-      if (sv == 0.0) {
-        cols(r, s) = -1;
-        vals(r, s) = 0.0;
-      } else {
-        cols(r, s) = node_row(neighbour_node<D>(g, i, ix, s, t));
-        vals(r, s) = sv;
+      anchored(r) = anch;
+      for (int s = 0; s < NS; ++s) {
+        const double sv = S[s];
+        if (sv == 0.0) {
+          cols(r, s) = -1;
+          vals(r, s) = 0.0;
+        } else {
+          cols(r, s) = node_row(neighbour_node<D, P>(g, i, ix, s, t));
+          vals(r, s) = sv;
+        }
       }
-    }
+    });
   });
 }
 
@@ -125,31 +128,34 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
   std::array<index_t, D> ix;
   std::array<index_t, NC> slots, base;
   std::array<int, NC> local;
-  for (index_t r = r0; r < r1; ++r) {
-    const index_t i = row_nodes(r);
-    coords<D>(g, i, ix);
-    double b = 0.0, vol = 0.0;
-    const int n = node_cells<D>(g, ix, cell_slot, slots, local, base);
-    for (int m = 0; m < n; ++m) {
-      const index_t s = slots[m];
-      const int a = local[m];
-      vol += V(s, a);
-      for (int bb = 0; bb < NC; ++bb) {
-        const index_t j = base[m] + g.corner[bb];
-        double acc = 0.0;
-        for (int k = 0; k < D; ++k) acc += C(s, a, bb, k) * vstar(j, k);
-        b -= acc;
+  with_periodic(g, [&](auto periodic) {
+    constexpr bool P = decltype(periodic)::value;
+    for (index_t r = r0; r < r1; ++r) {
+      const index_t i = row_nodes(r);
+      coords<D>(g, i, ix);
+      double b = 0.0, vol = 0.0;
+      const int n = node_cells<D, P>(g, ix, cell_slot, slots, local, base);
+      for (int m = 0; m < n; ++m) {
+        const index_t s = slots[m];
+        const int a = local[m];
+        vol += V(s, a);
+        for (int bb = 0; bb < NC; ++bb) {
+          const index_t j = base[m] + g.corner[bb];
+          double acc = 0.0;
+          for (int k = 0; k < D; ++k) acc += C(s, a, bb, k) * vstar(j, k);
+          b -= acc;
+        }
       }
+      const double excess = node_vol(i) - vol;
+      if (expansion > 0.0 && excess > 0.0) b += expansion * excess;
+      if (wall_flux) {
+        b += wall_integral<D>(g, ix, i, cell_slot, static_slot, Wf, vstar, contact);
+        if (F.extent(0) > 1)
+          b += obstacle_integral<D>(g, ix, cell_slot, static_slot, F, vstar, ocontact);
+      }
+      rhs(r) = rho_over_dt * b;
     }
-    const double excess = node_vol(i) - vol;
-    if (expansion > 0.0 && excess > 0.0) b += expansion * excess;
-    if (wall_flux) {
-      b += wall_integral<D>(g, ix, i, cell_slot, static_slot, Wf, vstar, contact);
-      if (F.extent(0) > 1)
-        b += obstacle_integral<D>(g, ix, cell_slot, static_slot, F, vstar, ocontact);
-    }
-    rhs(r) = rho_over_dt * b;
-  }
+  });
 }
 
 template <int D>

@@ -65,15 +65,21 @@ struct NodeCell {
   int a;
 };
 
-// Cell b of the node with coordinates ix.
-template <int D>
+// Cell b of the node with coordinates ix. P = false: the grid has no periodic axis (the
+// wrap is compiled out; with_periodic in grid.hpp picks).
+template <int D, bool P = true>
 inline NodeCell node_cell(const Grid<D>& g, const std::array<index_t, D>& ix, int b) {
   index_t c = 0, first = 0;
   int a = 0;
   for (int k = 0; k < D; ++k) {
     const int bit = (b >> k) & 1;
-    const index_t j = g.wrap_cell(k, ix[k] - 1 + bit);
-    if (j < 0) return {-1, 0, 0};
+    index_t j = ix[k] - 1 + bit;
+    if constexpr (P) {
+      j = g.wrap_cell(k, j);
+      if (j < 0) return {-1, 0, 0};
+    } else if (j < 0 || j >= g.cells[k]) {
+      return {-1, 0, 0};
+    }
     c += j * g.cs[k];
     first += j * g.ns[k];
     if (bit == 0) a += 1 << k;
@@ -83,10 +89,10 @@ inline NodeCell node_cell(const Grid<D>& g, const std::array<index_t, D>& ix, in
 
 // The neighbour of node i (coordinates ix) at stencil slot s (t.offset[s] away), wrapped
 // round periodic axes; -1 beyond a wall.
-template <int D>
+template <int D, bool P = true>
 inline index_t neighbour_node(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix, int s,
                               const StencilTables<D>& t) {
-  if (!g.any_periodic) return i + t.offset[s];
+  if (!P || !g.any_periodic) return i + t.offset[s];
   index_t j = 0;
   for (int k = 0; k < D; ++k) {
     const index_t c = g.wrap_node(k, ix[k] + s % 3 - 1);
@@ -100,13 +106,13 @@ inline index_t neighbour_node(const Grid<D>& g, index_t i, const std::array<inde
 // The cells around the node with coordinates ix that take part in the system
 // (cell_slot[c] >= 0): their slot in the element integrals, the node's corner in each and
 // each cell's first node. Returns how many (at most 2^D).
-template <int D>
+template <int D, bool P = true>
 inline int node_cells(const Grid<D>& g, const std::array<index_t, D>& ix,
                       View<const index_t> cell_slot, std::array<index_t, (1 << D)>& slots,
                       std::array<int, (1 << D)>& local, std::array<index_t, (1 << D)>& base) {
   int n = 0;
   for (int b = 0; b < (1 << D); ++b) {
-    const NodeCell nc = node_cell<D>(g, ix, b);
+    const NodeCell nc = node_cell<D, P>(g, ix, b);
     if (nc.c < 0) continue;
     const index_t s = cell_slot(nc.c);
     if (s < 0) continue;
@@ -120,7 +126,7 @@ inline int node_cells(const Grid<D>& g, const std::array<index_t, D>& ix,
 
 // Couplings sum_e K_e[a_i, b] of the node with coordinates ix to its 3^D neighbours, into
 // S (by slot). Returns the number of its cells in the system.
-template <int D>
+template <int D, bool P = true>
 inline int node_stencil(const Grid<D>& g, const std::array<index_t, D>& ix,
                         View<const index_t> cell_slot, View<const double, 3> K,
                         const StencilTables<D>& t, std::array<double, stencil_size(D)>& S,
@@ -128,7 +134,7 @@ inline int node_stencil(const Grid<D>& g, const std::array<index_t, D>& ix,
                         std::array<index_t, (1 << D)>& base) {
   constexpr int NC = 1 << D;
   S.fill(0.0);
-  const int n = node_cells<D>(g, ix, cell_slot, slots, local, base);
+  const int n = node_cells<D, P>(g, ix, cell_slot, slots, local, base);
   for (int m = 0; m < n; ++m) {
     const int a = local[m];
     for (int b = 0; b < NC; ++b) S[t.slot[a][b]] += K(slots[m], a, b);

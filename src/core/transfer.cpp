@@ -43,15 +43,20 @@ namespace {
 
 // Cell j at stencil slot b (0 <= b < 3^D) around cell c with coordinates cx (wrapped round
 // periodic axes); false when it lies beyond the grid.
-template <int D>
+template <int D, bool P>
 inline bool neighbour_cell(const Grid<D>& g, index_t c, const std::array<index_t, D>& cx, int b,
                            index_t& j) {
   j = c;
   bool inside = true;
   for (int k = 0; k < D; ++k) {
-    const index_t jk = g.wrap_cell(k, cx[k] + b % 3 - 1);
+    index_t jk = cx[k] + b % 3 - 1;
     b /= 3;
-    inside = inside && jk >= 0;
+    if constexpr (P) {
+      jk = g.wrap_cell(k, jk);
+      inside = inside && jk >= 0;
+    } else {
+      inside = inside && jk >= 0 && jk < g.cells[k];
+    }
     j += (jk - cx[k]) * g.cs[k];
   }
   return inside;
@@ -61,37 +66,39 @@ inline bool neighbour_cell(const Grid<D>& g, index_t c, const std::array<index_t
 // centres around c held in acell (stencil slots; beyond the grid: unused): a particle of
 // cell c reaches only these (its lower centre along each axis is c - 1 or c, clamped). The
 // same additions in the same order as scatter_cell_volume, particle after particle.
-template <int D>
+template <int D, bool P>
 inline void load_cell_volume(const Grid<D>& g, index_t c, std::array<index_t, D>& cx,
                              std::array<double, Grid<D>::NS>& acell, View<const double> cell_vol) {
   g.cell_coords(c, cx.data());
   for (int b = 0; b < Grid<D>::NS; ++b) {
     index_t j;
-    acell[b] = neighbour_cell<D>(g, c, cx, b, j) ? cell_vol[j] : 0.0;
+    acell[b] = neighbour_cell<D, P>(g, c, cx, b, j) ? cell_vol[j] : 0.0;
   }
 }
 
-template <int D>
+template <int D, bool P>
 inline void store_cell_volume(const Grid<D>& g, index_t c, const std::array<index_t, D>& cx,
                               const std::array<double, Grid<D>::NS>& acell, View<double> cell_vol) {
   for (int b = 0; b < Grid<D>::NS; ++b) {
     index_t j;
-    if (neighbour_cell<D>(g, c, cx, b, j)) cell_vol[j] = acell[b];
+    if (neighbour_cell<D, P>(g, c, cx, b, j)) cell_vol[j] = acell[b];
   }
 }
 
-template <int D>
+template <int D, bool P>
 inline void add_cell_volume(const Grid<D>& g, const double* x, double volume,
                             const std::array<index_t, D>& cx,
                             std::array<double, Grid<D>::NS>& acell) {
-  cell_centre_hat<D>(g, x, volume, [&](const std::array<index_t, D>& i, double w) {
+  cell_centre_hat<D, P>(g, x, volume, [&](const std::array<index_t, D>& i, double w) {
     int b = 0, p3 = 1;
     for (int k = 0; k < D; ++k) {
       index_t d = i[k] - cx[k];  // -1, 0 or 1, or a whole period less or more
-      if (d > 1)
-        d -= g.cells[k];
-      else if (d < -1)
-        d += g.cells[k];
+      if constexpr (P) {
+        if (d > 1)
+          d -= g.cells[k];
+        else if (d < -1)
+          d += g.cells[k];
+      }
       b += static_cast<int>(d + 1) * p3;
       p3 *= 3;
     }
@@ -103,7 +110,7 @@ inline void add_cell_volume(const Grid<D>& g, const double* x, double volume,
 // of one cell share their 2^D nodes: the nodes' sums are held in registers while the cell's
 // particles are added (from the nodes' values, in particle order, so the same additions in
 // the same order as one node update per particle), then stored once.
-template <int D>
+template <int D, bool P>
 void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 2> x,
                    View<const double, 2> v, View<const double> mass, View<const double> volume,
                    View<const index_t> order, View<const index_t> start, View<double> node_mass,
@@ -125,7 +132,7 @@ void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 
     // weights_at clamp alike)
     const index_t base = g.cell_first_node(c);
     if (apic) g.cell_coords(c, nx.data());
-    if (cells_too) load_cell_volume<D>(g, c, cx, acell, cell_vol);
+    if (cells_too) load_cell_volume<D, P>(g, c, cx, acell, cell_vol);
     std::array<double, NC> am, av;
     std::array<std::array<double, D>, NC> amom;
     for (int a = 0; a < NC; ++a) {
@@ -164,9 +171,9 @@ void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 
           for (int k = 0; k < D; ++k) amom[a][k] += wm * vp[k];
         }
       }
-      if (cells_too) add_cell_volume<D>(g, &x(p, 0), vol, cx, acell);
+      if (cells_too) add_cell_volume<D, P>(g, &x(p, 0), vol, cx, acell);
     }
-    if (cells_too) store_cell_volume<D>(g, c, cx, acell, cell_vol);
+    if (cells_too) store_cell_volume<D, P>(g, c, cx, acell, cell_vol);
     for (int a = 0; a < NC; ++a) {
       const index_t i = base + g.corner[a];
       node_mass[i] = am[a];
@@ -200,9 +207,12 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
   const index_t nstrips = strips(
       g.cells[D - 1], [&](index_t r) { return start(r * slab); },
       g.periodic[D - 1] ? 1 : 2 * STRIPS, 2, bounds.data());
-  for_strips(bounds.data(), nstrips, x.extent(0), [&](index_t r0, index_t r1) {
-    scatter_slabs(r0, r1, g, x, v, mass, volume, order, start, node_mass, node_mom, node_vol,
-                  cell_vol, affine);
+  with_periodic(g, [&](auto periodic) {
+    constexpr bool P = decltype(periodic)::value;
+    for_strips(bounds.data(), nstrips, x.extent(0), [&](index_t r0, index_t r1) {
+      scatter_slabs<D, P>(r0, r1, g, x, v, mass, volume, order, start, node_mass, node_mom,
+                          node_vol, cell_vol, affine);
+    });
   });
   if (g.any_periodic) {  // an image's particles belong to its master
     fold_images<D>(g, node_mass);

@@ -23,7 +23,7 @@ namespace mpmflow {
 // weight. A wall mirrors the points next to it: a ghost cell's weight goes to its mirror,
 // the cell against the wall, so a uniform material reads full up to the walls; a periodic
 // axis wraps round. Points beyond the grid (and NaN) count at its edge.
-template <int D, class F>
+template <int D, bool P = true, class F>
 inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&& body) {
   std::array<double, D> frac;
   std::array<index_t, D> first;
@@ -45,7 +45,7 @@ inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&
       const int up = (a >> k) & 1;
       i[k] = first[k] + up;
       w *= up ? frac[k] : 1.0 - frac[k];
-      if (g.periodic[k])
+      if (P && g.periodic[k])
         i[k] = g.wrap_cell(k, i[k]);
       else if (i[k] < 0)
         i[k] = 0;
