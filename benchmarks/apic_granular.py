@@ -24,6 +24,9 @@ ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 ap.add_argument("--aspect", type=float, action="append", default=[])
 ap.add_argument("--quick", action="store_true", help="6.25 cells across L0 (the quick set)")
 ap.add_argument("--transfer", action="append", choices=list(TRANSFERS), default=[])
+ap.add_argument("--width", type=float, default=1.6,
+                help="tank half-width L0 + WIDTH x Lube's run-out + 0.02 m (the validation's: "
+                "1.6; APIC and FLIP reach its side walls at a >= 2: use 3)")
 cli = ap.parse_args()
 
 _load, _run = common.load_case, materials.run_example
@@ -46,7 +49,7 @@ def collapse(a, extra):
 
     common.load_case, materials.run_example = load, run_example
     try:
-        r = materials._collapse(a, cli.quick)
+        r = materials._collapse(a, cli.quick, cli.width)
     finally:
         common.load_case, materials.run_example = _load, _run
     return r, holder["sim"], np.array(fronts)
@@ -62,13 +65,14 @@ for a in cli.aspect or [2.0]:
                      "off": (r["runout"] - r["law"]) / r["law"], "height": r["height"],
                      "speed_max": float(speed.max()), "moving": float(np.mean(speed > 1e-3)),
                      "creep_mm": float(0.5 * (late[-1, 1] - late[0, 1]) * 1e3),
-                     "end": float(f[-1, 0]), "wall": r["wall"], "particles": r["particles"]})
+                     "end": float(f[-1, 0]), "wall": r["wall"], "particles": r["particles"],
+                     "walled": r["walled"]})
         print(json.dumps(rows[-1]), flush=True)
 
 print("| a | transfer | run-out | Lube | off the law | H_inf/H0 | max speed at end (m/s) | "
-      "share > 1 mm/s | toe creep, last 0.5 s (mm) |")
-print("|---|---|---|---|---|---|---|---|---|")
+      "share > 1 mm/s | toe creep, last 0.5 s (mm) | reached a side wall |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 for r in rows:
     print(f"| {r['a']:g} | {r['transfer']} | {r['runout']:.3f} | {r['law']:.3f} | "
           f"{100 * r['off']:+.0f}% | {r['height']:.3f} | {r['speed_max']:.3g} | "
-          f"{100 * r['moving']:.0f}% | {r['creep_mm']:.1f} |")
+          f"{100 * r['moving']:.0f}% | {r['creep_mm']:.1f} | {'yes' if r['walled'] else 'no'} |")
