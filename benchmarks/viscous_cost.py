@@ -1,7 +1,8 @@
 """The cost of the viscous step: the paper's dam break inviscid and with a viscous material,
 per step, at two meshes (issue 26 item 6).
 
-Each case runs in-process (one short warm-up first), --repeat times; the table gives the
+Each case runs in-process (one short warm-up first), --repeat times, the materials taking
+turns; the table gives the
 median milliseconds per step of the whole step and of its viscous phase (the core's own
 phase clock, ``State.phase_seconds``), and the viscous step's share. Materials: water
 (inviscid), Newtonian water (1e-3 Pa s: the viscous solve with a viscosity too small to
@@ -53,14 +54,17 @@ def main():
           "viscous share | step vs inviscid |")
     print("|---|---|---|---|---|---|---|")
     for h in MESHES:
+        runs = {name: [] for name in MATERIALS}
+        for name, more in MATERIALS.items():  # warm-up
+            run([f"grid.spacing={h}", "time.end=0.003", *more])
+        for _ in range(args.repeat):  # the materials alternate: the machine's drift hits all
+            for name, more in MATERIALS.items():
+                runs[name].append(run([f"grid.spacing={h}", f"time.end={args.end}", *more]))
         base = None
-        for name, more in MATERIALS.items():
-            overrides = [f"grid.spacing={h}", f"time.end={args.end}", *more]
-            run([f"grid.spacing={h}", "time.end=0.003", *more])  # warm-up
-            runs = [run(overrides) for _ in range(args.repeat)]
-            steps, count = runs[0][0], runs[0][1]
-            step = statistics.median(r[2] for r in runs) / steps * 1e3
-            visc = statistics.median(r[3] for r in runs) / steps * 1e3
+        for name, got in runs.items():
+            steps, count = got[0][0], got[0][1]
+            step = statistics.median(r[2] for r in got) / steps * 1e3
+            visc = statistics.median(r[3] for r in got) / steps * 1e3
             base = base or step
             print(f"| {h} | {count} | {name} | {step:.2f} | {visc:.2f} | "
                   f"{100 * visc / step:.0f}% | {step / base:.2f}x |", flush=True)
