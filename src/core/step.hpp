@@ -191,6 +191,8 @@ class State {
   // the arrays Python reads (views of the state's own storage)
   View<double> p_node() { return p_node_.view(grid_.nnodes); }
   View<double, 2> v_new() { return v_new_.template view<2>({grid_.nnodes, D}); }
+  View<bool, 2> contact() { return contact_.template view<2>({grid_.nnodes, D}); }
+  View<double> eta() { return eta_.view(viscous_on_ ? grid_.ncells : 0); }
   View<bool> ocontact() { return ocontact_.view(grid_.nnodes); }
   View<double> volume_q() { return q_.view(volume_on_ ? grid_.ncells : 0); }
   View<const index_t> rows() { return rows_.view(nrows_); }
@@ -249,6 +251,8 @@ class State {
   // viscous predictor
   Buffer<double> eta_, eta_weight_, vu_, v_rate_, vvals_, vrhs_, vx_, vwork_;
   Buffer<index_t> vrow_, voff_, vcols_, vnode_;
+  Buffer<double> v_save_;  // scratch (MPMFLOW_PICARD): v* before the viscous step
+  bool rate_from_new_ = false;
   std::array<Multigrid<D>, D> viscous_mg_;
   // integrals of this step, as views into the buffers above
   struct Integrals {

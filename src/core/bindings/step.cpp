@@ -250,6 +250,9 @@ void bind_dim(nb::module_& m) {
                    })
       .def_prop_ro("p_node", [](nb::handle h) { return out(nb::cast<S&>(h).state->p_node(), h); })
       .def_prop_ro("v_new", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_new(), h); })
+      .def_prop_ro("contact",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->contact(), h); })
+      .def_prop_ro("eta", [](nb::handle h) { return out(nb::cast<S&>(h).state->eta(), h); })
       .def_prop_ro("ocontact",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->ocontact(), h); })
       .def_prop_ro("volume_q",
