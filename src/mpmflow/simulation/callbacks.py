@@ -10,13 +10,15 @@ built-in ones, in the order they act:
   when set;
 - ``govern_threads``: every chunk, the thread governor's look at the machine
   (``threads.ThreadGovernor.update``, at most once a second of wall time);
+- the callbacks added with ``Simulation.add_callback``, in the order they were added;
 - (the checkpointer), then ``stop_on_signal``: every chunk, a second SIGINT/SIGTERM
   (``sim.stop_now``) stops at once, a first one (``sim.stop_signal``) with a checkpoint;
-- ``wall_budget``: ``run(wall_budget=s)``'s limit, on a ``WallTimeInterval(s)``;
-- then the callbacks added with ``Simulation.add_callback``, in the order they were added.
+- ``wall_budget``: ``run(wall_budget=s)``'s limit, on a ``WallTimeInterval(s)``.
 
-A callback ends the run with ``sim.stop(message)``: the loop stops after it, and the
-summary's status is "stopped" (or the status given) with the message.
+A callback ends the run with ``sim.stop(message)``: the writers and callbacks due at that
+moment still act (so that the checkpoint written then holds every schedule's phase), then
+the run ends, and the summary's status is "stopped" (or the status given) with the
+message.
 """
 
 import signal
@@ -92,7 +94,7 @@ def stop_on_signal(sim):
     (and ``stop_now``); the run stops here, between chunks."""
     if sim.stop_now is not None:  # its StopNow may have been lost in a __del__
         raise StopNow(sim.stop_now)
-    if sim.stop_signal is None or sim.time >= sim.case.time.end:
+    if sim.stop_signal is None or sim.time >= sim.case.time.end or sim.stopping is not None:
         return
     message = (f"interrupted by {signal.Signals(sim.stop_signal).name} at "
                f"t = {sim.time:.6g} s (step {sim.steps}); ")

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .. import memory
+from .. import checkpoint, memory
 from ..case import revalidate
 from ..cells import bin_particles
 from ..diagnostics import (front_and_height, kinetic_energy, potential_energy, pressure_noise,
@@ -155,11 +155,13 @@ class Simulation:
 
     def add_callback(self, func, schedule=None, name=None):
         """Add ``func``, a callable(sim), to act on ``schedule`` (default: after every
-        chunk, ``IterationInterval(1)``), after the built-in callbacks. It may end the run
-        with ``sim.stop(message)``. ``name``: as for ``add_writer``."""
+        chunk, ``IterationInterval(1)``): after the writers and the built-in callbacks,
+        before the checkpointer (so that a checkpoint follows every action of its moment).
+        It may end the run with ``sim.stop(message)``. ``name``: as for ``add_writer``."""
         schedule = IterationInterval(1) if schedule is None else schedule
         action = self._action(func, schedule, name)
-        self.actions.append(action)
+        self.actions.insert(
+            next(k for k, a in enumerate(self.actions) if a.name == "checkpointer"), action)
         return action
 
     def _action(self, func, schedule, name, **kw):
@@ -176,11 +178,17 @@ class Simulation:
         return Action(name, func, schedule, **kw)
 
     def stop(self, message, status="stopped", checkpoint=True):
-        """End the run after the current writer or callback (call it from one): the
-        summary's ``status`` and ``message`` say why; with ``checkpoint`` (and an output
-        folder) a checkpoint of the state is written, from which a later time.end could
-        continue it."""
-        self._stop = Stop(message, status, checkpoint)
+        """End the run once the writers and callbacks of the current moment have acted
+        (call it from a callback): the summary's ``status`` and ``message`` say why; with
+        ``checkpoint`` (and an output folder) a checkpoint of that state is written. The
+        first stop asked for at a moment is the one that counts."""
+        if self._stop is None:
+            self._stop = Stop(message, status, checkpoint)
+
+    @property
+    def stopping(self):
+        """The stop asked for (``stop``), None while the run goes on."""
+        return self._stop
 
     def checkpoint(self):
         """Write a checkpoint of the current state now; returns its path."""
@@ -409,7 +417,8 @@ class Simulation:
             self.time = t_next
             self._act()
         stop = self._stop or Stop("", "completed", True)  # the end: to extend it later
-        if stop.checkpoint and self.out_dir is not None:
+        if (stop.checkpoint and self.out_dir is not None
+                and self.last_checkpoint != checkpoint.path_for(self.out_dir, self.steps)):
             self.checkpoint()
         return stop.status, stop.message
 
@@ -424,8 +433,6 @@ class Simulation:
                 elif action.due(self, end):
                     action.schedule.fired(self)
                     action.func(self)
-                    if self._stop is not None:
-                        break
         finally:
             self.forget_bins()
 
