@@ -11,7 +11,8 @@ resuming), ``callbacks`` (blow-up guard, progress, thread governor, signals, wal
 ``setup`` (building and checking what a run is made of), ``summary`` (summary.json).
 """
 
-from .loop import Counters, Simulation
+from .counters import Counters
+from .loop import Simulation
 from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterval
 
 __all__ = ["Simulation", "Counters", "Schedule", "TimeInterval", "IterationInterval",

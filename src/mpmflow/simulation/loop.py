@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .. import checkpoint, memory
+from .. import checkpoint
 from ..case import revalidate
 from ..cells import bin_particles
 from ..diagnostics import (front_and_height, kinetic_energy, potential_energy, pressure_noise,
@@ -38,21 +38,9 @@ from ..output.timeseries import COLUMNS
 from ..threads import ThreadGovernor
 from . import callbacks, checkpointer, setup, writers
 from .callbacks import Action
+from .counters import Counters, add_report
 from .schedules import IterationInterval, TimeInterval, WallTimeInterval
 from .summary import summary as _summary
-
-
-@dataclass
-class Counters:
-    moved_inside: int = 0
-    solves: int = 0
-    iterations: int = 0
-    iterations_since_output: int = 0
-    max_iterations: int = 0
-    max_unknowns: int = 0
-    released: int = 0
-    worst_residual: float = 0.0
-    viscous_iterations: int = 0
 
 
 @dataclass
@@ -224,21 +212,7 @@ class Simulation:
     def describe(self):
         """The case summary the command line prints before a run (lines of text): what
         runs, how many steps and outputs, and the memory estimate."""
-        case, g, est = self.case, self.grid, self.memory
-        steps = max(1, round((case.time.end - self.time) / self.dt))
-        cells = " x ".join(str(n) for n in g.cells)
-        snaps = (f", a snapshot every {case.output.snapshot_interval or case.output.interval:g}"
-                 " s" if case.output.snapshots else ", no snapshots")
-        title = f"{case.title}: " if case.title else ""
-        budget, source = memory.available()
-        return [
-            f"{title}{case.solver.scheme} scheme, {self.particles.count:,} particles, {cells} "
-            f"cells of {g.spacing:g} m; about {steps:,} steps of {self.dt:.3g} s to t = "
-            f"{case.time.end:g} s; a row every {case.output.interval:g} s{snaps}"
-            + (f", {len(case.probes)} probes" if case.probes else "")
-            + f" (about {memory.size(est.disk_bytes)} on disk)",
-            f"memory: {est.text()}; the machine can give {memory.size(budget)} ({source})",
-        ]
+        return setup.describe(self)
 
     # ------------------------------------------------------------------ the output folder
     def claim(self, hints=API_HINTS):
@@ -447,23 +421,4 @@ class Simulation:
         self.last_chunk = (first, n, t0, dt)
         self.steps += getattr(report, "steps", n)  # time.dt = "auto": the steps it took
         self.time = t0 + n * dt
-        c = self.counters
-        c.moved_inside += report.moved_inside
-        self.fallbacks.count("particles put back inside the domain or out of an obstacle",
-                             "domain walls and obstacles", report.moved_inside, self.time)
-        self.fallbacks.count("viscosity held at material.max_viscosity",
-                             f"material ({self.case.material.model})",
-                             getattr(report, "capped", 0), self.time)
-        self.fallbacks.count("volume correction displacement clamped at half a cell per step",
-                             "solver.volume_correction", getattr(report, "clamped", 0),
-                             self.time)
-        self.fallbacks.count("water sealed from the free surface held at p = 0 at its top",
-                             "pressure system", getattr(report, "pockets", 0), self.time)
-        c.solves += report.solves
-        c.iterations += report.iterations
-        c.iterations_since_output += report.iterations
-        c.max_iterations = max(c.max_iterations, report.max_iterations)
-        c.max_unknowns = max(c.max_unknowns, report.unknowns)
-        c.released += report.released
-        c.worst_residual = max(c.worst_residual, report.residual)
-        c.viscous_iterations += getattr(report, "viscous_iterations", 0)
+        add_report(self.counters, self.fallbacks, report, self.case, self.time)

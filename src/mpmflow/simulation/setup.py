@@ -83,3 +83,22 @@ def build(case):
             f"domain {asked} m is not a whole number of {case.grid.spacing:g} m cells; the "
             f"walls are placed on the grid at {used} m")
     return Setup(estimate, files, grid, particles, scheme, dt, notices)
+
+
+def describe(sim):
+    """What runs, how many steps and outputs, and the memory estimate (lines of text)."""
+    case, g, est = sim.case, sim.grid, sim.memory
+    steps = max(1, round((case.time.end - sim.time) / sim.dt))
+    cells = " x ".join(str(n) for n in g.cells)
+    snaps = (f", a snapshot every {case.output.snapshot_interval or case.output.interval:g}"
+             " s" if case.output.snapshots else ", no snapshots")
+    title = f"{case.title}: " if case.title else ""
+    budget, source = memory.available()
+    return [
+        f"{title}{case.solver.scheme} scheme, {sim.particles.count:,} particles, {cells} "
+        f"cells of {g.spacing:g} m; about {steps:,} steps of {sim.dt:.3g} s to t = "
+        f"{case.time.end:g} s; a row every {case.output.interval:g} s{snaps}"
+        + (f", {len(case.probes)} probes" if case.probes else "")
+        + f" (about {memory.size(est.disk_bytes)} on disk)",
+        f"memory: {est.text()}; the machine can give {memory.size(budget)} ({source})",
+    ]
