@@ -33,6 +33,7 @@ from mpmflow import case as case_module
 from mpmflow import memory
 from mpmflow.cli import main
 from mpmflow.simulation import Simulation
+from mpmflow.simulation.callbacks import blow_up_guard
 
 STEPS = 5  # steps each accepted case runs before the test stops it
 
@@ -191,12 +192,13 @@ class Enough(BaseException):
     """The accepted case ran its first steps; the test stops it there."""
 
 
-_ADVANCE = Simulation._advance
+_ADVANCE = Simulation._advance  # the steps of a chunk
 
 
 def _capped(self, dt, n):
     _ADVANCE(self, dt, min(n, STEPS - self.steps))
     if self.steps >= STEPS:
+        blow_up_guard(self)  # it acts after each chunk; this one is cut short here
         raise Enough
 
 

@@ -13,7 +13,8 @@ The README's "Python API" section says more.
 from ._version import __version__
 
 __all__ = ["load_case", "validate_case", "Simulation", "open_run", "CaseError",
-           "SimulationError", "__version__"]
+           "SimulationError", "TimeInterval", "IterationInterval", "WallTimeInterval",
+           "__version__"]
 
 
 def __getattr__(name):
@@ -26,10 +27,10 @@ def __getattr__(name):
         from .case import validate_case
 
         return validate_case
-    if name == "Simulation":
-        from .simulation import Simulation
+    if name in ("Simulation", "TimeInterval", "IterationInterval", "WallTimeInterval"):
+        from . import simulation
 
-        return Simulation
+        return getattr(simulation, name)
     if name == "open_run":
         from .results import open_run
 

@@ -1,7 +1,7 @@
 """Reading a run's results: ``mpmflow.open_run(DIR)``.
 
     run = mpmflow.open_run("runs/db")
-    run.status                      # "completed", "failed", "interrupted", ... or "running"
+    run.status                      # "completed", "failed", "interrupted", "stopped", ... or "running"
     run.timeseries["front"]         # numpy arrays by column (COLUMNS; "time" in s)
     run.probes["sensor_1"]          # probes.csv columns ("time" too); {} without probes
     snap = run.snapshots[-1]        # Snapshot(time, path)

@@ -1,0 +1,115 @@
+"""Callbacks: what the loop does after a chunk of steps besides writing outputs.
+
+A callback is a function of the running Simulation on a schedule (``schedules``). The
+built-in ones, in the order they act:
+
+- ``blow_up_guard``: every chunk, the particles must be finite and no faster than
+  ``solver.max_speed``; SimulationError otherwise (the outputs so far are kept);
+- ``progress``: every chunk, ``sim.progress(t, step, end)`` when set (the CLI's bar);
+- (the writers, ``writers``), then ``on_output``: at the output times, ``sim.on_output(sim)``
+  when set;
+- ``govern_threads``: every chunk, the thread governor's look at the machine
+  (``threads.ThreadGovernor.update``, at most once a second of wall time);
+- the callbacks added with ``Simulation.add_callback``, in the order they were added;
+- (the checkpointer), then ``stop_on_signal``: every chunk, a second SIGINT/SIGTERM
+  (``sim.stop_now``) stops at once, a first one (``sim.stop_signal``) with a checkpoint;
+- ``wall_budget``: ``run(wall_budget=s)``'s limit, on a ``WallTimeInterval(s)``.
+
+A callback ends the run with ``sim.stop(message)``: the writers and callbacks due at that
+moment still act (so that the checkpoint written then holds every schedule's phase), then
+the run ends, and the summary's status is "stopped" (or the status given) with the
+message.
+"""
+
+import signal
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import SimulationError
+from ..interrupts import StopNow
+from .schedules import Schedule
+
+
+@dataclass
+class Action:
+    """A writer or callback on its schedule. ``at_start``: also at t = 0 of a new run
+    (writers: the initial state); ``at_end``: also at time.end whatever the schedule."""
+
+    name: str
+    func: object  # callable(sim)
+    schedule: Schedule
+    at_start: bool = False
+    at_end: bool = False
+    writer: bool = False
+    builtin: bool = field(default=False, repr=False)
+
+    def due(self, sim, end):
+        return self.schedule.due(sim) or (self.at_end and sim.time >= end)
+
+
+def blow_up_guard(sim):
+    """SimulationError when a particle's velocity or position is not finite, or a particle
+    is faster than solver.max_speed, after the last chunk (``sim.last_chunk``)."""
+    first, n, t0, dt = sim.last_chunk
+    span = (f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
+            if n > 1 else f" at step {first} (t = {t0 + dt:.6g} s)")
+    P = sim.particles
+    if not (np.isfinite(P.v).all() and np.isfinite(P.x).all()):
+        bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
+        raise SimulationError(
+            f"The run blew up{span}: {bad.size} particles have non-finite velocity or "
+            f"position (first: particle {bad[0]}). The outputs up to t = {t0:.6g} s are "
+            "kept. Try a smaller time.dt.")
+    with np.errstate(over="ignore"):  # a speed beyond 1e154 m/s is inf: still caught
+        speed = np.sqrt(np.sum(P.v**2, axis=1))
+    fastest = int(np.argmax(speed))
+    limit = sim.case.solver.max_speed
+    if not speed[fastest] <= limit:
+        xy = ", ".join(f"{c:.4g}" for c in P.x[fastest])
+        raise SimulationError(
+            f"The run blew up{span}: particle {fastest} at ({xy}) m moves at "
+            f"{speed[fastest]:.4g} m/s, above solver.max_speed = {limit:g} m/s. The outputs "
+            f"up to t = {t0:.6g} s are kept. Try a smaller time.dt, or raise "
+            "solver.max_speed if such speeds are real.")
+
+
+def progress(sim):
+    if sim.progress is not None:
+        sim.progress(sim.time, sim.steps, sim.case.time.end)
+
+
+def on_output(sim):
+    if sim.on_output is not None:
+        sim.on_output(sim)
+
+
+def govern_threads(sim):
+    if sim.threads is not None:
+        sim.threads.update(sim.time)
+
+
+def stop_on_signal(sim):
+    """The CLI's signal handlers (``interrupts.stop_on_signals``) only set ``stop_signal``
+    (and ``stop_now``); the run stops here, between chunks."""
+    if sim.stop_now is not None:  # its StopNow may have been lost in a __del__
+        raise StopNow(sim.stop_now)
+    if sim.stop_signal is None or sim.time >= sim.case.time.end or sim.stopping is not None:
+        return
+    message = (f"interrupted by {signal.Signals(sim.stop_signal).name} at "
+               f"t = {sim.time:.6g} s (step {sim.steps}); ")
+    if sim.out_dir is not None:
+        sim.checkpoint()
+        message += f"checkpoint {sim.last_checkpoint.name} written"
+    else:
+        message += "no checkpoint: no output folder"
+    sim.stop(message, status="interrupted", checkpoint=False)
+
+
+def wall_budget(budget):
+    """``run(wall_budget=budget)``: stop at the first chunk end after it is spent."""
+    def stop_when_spent(sim):
+        if sim.time < sim.case.time.end:
+            sim.stop(f"stopped at t = {sim.time:.6g} s when the wall budget of {budget:g} s "
+                     "was spent", status="budget", checkpoint=False)
+    return stop_when_spent

@@ -1,0 +1,126 @@
+"""The checkpointer, one more writer: a checkpoint (``mpmflow.checkpoint``) at the first
+output time at or after each multiple of ``checkpoint.interval`` (the end of the run and a
+stop have their own), and resuming a run from one.
+
+A checkpoint holds the state, not the history: of the outputs written so far only where
+each file ends (those files are fsynced first, so that what it counts is on the disk), and
+the phase of every schedule: the built-in ones as ``k_out``, ``k_snap`` and
+``k_checkpoint``, those of writers and callbacks added to the run under ``schedules`` by
+their names.
+"""
+
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from .. import checkpoint
+from .._version import __version__
+from ..case import resolved, revalidate
+from ..errors import CaseError
+from ..fallbacks import Fallbacks
+from ..particles import Particles
+
+# what a checkpoint's meta must hold
+META = ("case", "time", "steps", "dt", "k_out", "k_snap", "k_checkpoint", "counters",
+        "outputs", "mass0", "volume0", "count0", "wall_seconds")
+
+
+class Checkpointer:
+    """The periodic checkpoints (not at time.end: the end of the run writes its own)."""
+
+    def __call__(self, sim):
+        if sim.out_dir is not None and sim.time < sim.case.time.end:
+            write(sim)
+
+
+def write(sim):
+    """Write a checkpoint of the current state of ``sim`` (after its outputs)."""
+    arrays = {name: getattr(sim.particles, name) for name in Particles.FIELDS}
+    arrays.update({f"scheme.{k}": v for k, v in sim.scheme.state().items()})
+    for action in sim.actions:
+        if action.writer and hasattr(action.func, "sync"):
+            action.func.sync()
+    w = sim.builtin_writers
+    outputs = {"timeseries": w["timeseries"].position(),
+               "probes": w["probes"].position() if "probes" in w else None,
+               "snapshots": w["snapshots"].position()}
+    meta = {"mpmflow_version": __version__, "case": resolved(sim.case),
+            "time": sim.time, "steps": sim.steps, "dt": sim.dt,
+            "k_out": sim.output_times.k, "k_snap": sim.snapshot_times.k,
+            "k_checkpoint": sim.checkpoint_times.k, "counters": asdict(sim.counters),
+            "fallbacks": sim.fallbacks.rows(),
+            "outputs": outputs, "mass0": sim.mass0,
+            "volume0": sim.volume0, "count0": sim.count0,
+            "wall_seconds": sim.wall_seconds(), "files": sim.files}
+    added = {a.name: a.schedule.state() for a in sim.actions if not a.builtin}
+    if added:  # only then: the meta of a run without them is as before
+        meta["schedules"] = added
+    sim.last_checkpoint = checkpoint.write(sim.out_dir, sim.steps, arrays, meta)
+    return sim.last_checkpoint
+
+
+def resume_latest(cls, case, out_dir, progress):
+    """The run of ``out_dir`` continued from its latest readable checkpoint."""
+    checkpoint.latest(out_dir)  # CaseError when there is none
+    damaged = []
+    for path in reversed(checkpoint.checkpoints(out_dir)):
+        try:
+            sim = resume_from(cls, case, out_dir, path, progress)
+        except checkpoint.CheckpointError as err:
+            damaged.append(err)
+            continue
+        sim.notices[:0] = [
+            f"checkpoint {err.path} cannot be read ({err.why}); it is damaged, e.g. cut "
+            f"short by a crash. Continuing from the one before it, {path.name}."
+            for err in damaged]
+        return sim
+    if len(damaged) == 1:
+        raise damaged[0]
+    raise CaseError(f"--restart: no checkpoint in {out_dir} can be read: "
+                    + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
+                    + ". They are damaged, e.g. cut short by a crash. Start the run again "
+                    "with --overwrite instead of --restart.")
+
+
+def resume_from(cls, case, out_dir, path, progress):
+    """The run of ``out_dir`` continued from the checkpoint ``path``: a new ``cls`` (a
+    Simulation) with the checkpoint's particles, scheme state, counters and schedules."""
+    arrays, meta = checkpoint.read(path)
+    missing = [f"meta {k}" for k in META if k not in meta]
+    missing += [f"array {k}" for k in Particles.FIELDS if k not in arrays]
+    if missing:
+        raise checkpoint.CheckpointError(path, "it lacks " + ", ".join(missing))
+    case = revalidate(case)
+    checkpoint.check_same_case(meta["case"], resolved(case), path)
+    checkpoint.check_same_files(meta.get("files"), checkpoint.file_hashes(case), path)
+    if meta["time"] >= case.time.end:
+        raise CaseError(
+            f"--restart: checkpoint {path} is at t = {meta['time']:.6g} s, which already "
+            f"reaches time.end = {case.time.end:g} s. To extend the run give a later end, "
+            f"e.g. --set time.end={2 * case.time.end:g}.")
+    sim = cls(case, out_dir, progress)
+    P = sim.particles
+    for name in Particles.FIELDS:
+        saved = arrays[name]
+        if saved.shape != getattr(P, name).shape:
+            raise CaseError(f"--restart: checkpoint {path} holds {saved.shape[0]} "
+                            f"particles, the case {P.count}; it belongs to another case.")
+        np.copyto(getattr(P, name), saved)
+    try:
+        sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
+                            if k.startswith("scheme.")})
+        sim.counters = type(sim.counters)(**meta["counters"])
+        sim.fallbacks = Fallbacks(meta.get("fallbacks", ()))
+    except (KeyError, TypeError, ValueError) as err:
+        raise checkpoint.CheckpointError(path, f"its scheme state or counters do not fit: "
+                                         f"{type(err).__name__}: {err}") from None
+    sim.time, sim.steps, sim.dt = meta["time"], meta["steps"], meta["dt"]
+    sim.output_times.restore({"k": meta["k_out"]})
+    sim.snapshot_times.restore({"k": meta["k_snap"]})
+    sim.checkpoint_times.restore({"k": meta["k_checkpoint"]})
+    sim.resume_state = {"outputs": meta["outputs"], "schedules": meta.get("schedules", {})}
+    sim.mass0, sim.volume0, sim.count0 = meta["mass0"], meta["volume0"], meta["count0"]
+    sim.wall_before = meta["wall_seconds"]
+    sim.resumed_from = Path(path)
+    return sim

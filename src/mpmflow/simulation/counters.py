@@ -1,0 +1,39 @@
+"""What the steps did, summed over the run (summary.json's solver statistics, the caps and
+fallbacks that acted); checkpoints carry them."""
+
+from dataclasses import dataclass
+
+
+@dataclass
+class Counters:
+    moved_inside: int = 0
+    solves: int = 0
+    iterations: int = 0
+    iterations_since_output: int = 0
+    max_iterations: int = 0
+    max_unknowns: int = 0
+    released: int = 0
+    worst_residual: float = 0.0
+    viscous_iterations: int = 0
+
+
+def add_report(c, fallbacks, report, case, time):
+    """Add the scheme's ``report`` of a chunk ending at ``time`` to the counters ``c`` and
+    to ``fallbacks`` (``mpmflow.fallbacks.Fallbacks``)."""
+    c.moved_inside += report.moved_inside
+    fallbacks.count("particles put back inside the domain or out of an obstacle",
+                    "domain walls and obstacles", report.moved_inside, time)
+    fallbacks.count("viscosity held at material.max_viscosity",
+                    f"material ({case.material.model})", getattr(report, "capped", 0), time)
+    fallbacks.count("volume correction displacement clamped at half a cell per step",
+                    "solver.volume_correction", getattr(report, "clamped", 0), time)
+    fallbacks.count("water sealed from the free surface held at p = 0 at its top",
+                    "pressure system", getattr(report, "pockets", 0), time)
+    c.solves += report.solves
+    c.iterations += report.iterations
+    c.iterations_since_output += report.iterations
+    c.max_iterations = max(c.max_iterations, report.max_iterations)
+    c.max_unknowns = max(c.max_unknowns, report.unknowns)
+    c.released += report.released
+    c.worst_residual = max(c.worst_residual, report.residual)
+    c.viscous_iterations += getattr(report, "viscous_iterations", 0)

@@ -1,0 +1,104 @@
+"""What a run is made of, and the checks a case must pass to run here: the grid, the
+particles and the scheme built from the case, its memory estimate, the time step, and the
+notices the run's summary will carry."""
+
+from dataclasses import dataclass
+
+from .. import checkpoint, memory, obstacles
+from ..errors import CaseError, SolverError
+from ..materials import stiffness
+from ..particles import subset
+from ..schemes import make_scheme
+from ..setup_case import build_grid, build_particles
+from ..stability import time_step
+from ..threads import setting_from
+
+
+@dataclass
+class Setup:
+    memory: object  # memory.Estimate
+    files: dict  # the content hashes of the files the case reads
+    grid: object
+    particles: object
+    scheme: object
+    dt: float
+    notices: list
+
+
+def build(case):
+    """The Setup of a validated ``case``; CaseError when it cannot run here."""
+    setting_from(case.execution.threads)  # a bad MPMFLOW_THREADS is refused here
+    estimate = memory.check(case)
+    # the content of the files the case reads, as this run reads them (checkpoints keep
+    # it, and a restart with other files is refused)
+    files = checkpoint.file_hashes(case)
+    grid = build_grid(case)
+    particles = build_particles(case, grid)
+    if particles.count == 0:
+        raise CaseError("The bodies hold no particles: every body is thinner than one "
+                        "particle spacing (grid.spacing / bodies.N.particles_per_cell). "
+                        "Enlarge the bodies or raise particles_per_cell.")
+    scheme = make_scheme(case, grid, particles)
+    notices = []
+    solids = getattr(scheme, "solids", None)
+    if solids is not None:
+        inside = obstacles.in_solid_cells(solids, grid, particles.x)
+        if inside.all():
+            raise CaseError(
+                "Every particle lies in cells the grid takes as solid: the bodies fill "
+                "only the space that obstacles touching the walls close off on this grid. "
+                f"Refine grid.spacing (now {case.grid.spacing:g} m) or move the bodies.")
+        if inside.any():
+            particles = subset(particles, ~inside)
+            scheme.particles = particles
+            notices.append(
+                f"{int(inside.sum())} particle{'s' if inside.sum() > 1 else ''} seeded "
+                "round an obstacle lie in cells the grid takes as solid (where an obstacle touches two or three walls, the "
+                "corner between it and the walls is closed within the first cell) and "
+                "are left out; a finer grid.spacing resolves that corner")
+    if hasattr(scheme, "check_free_surface"):
+        try:
+            scheme.check_free_surface()
+        except SolverError:
+            raise CaseError(
+                "The material touches no free surface at the start: the bodies leave too "
+                "little empty space in the domain (under about one grid cell next to the "
+                "material), so the projection scheme's pressure has no level to refer to "
+                "and its system is singular. Leave at least one grid cell of empty space "
+                f"(grid.spacing = {case.grid.spacing:g} m) above the material: lower the "
+                "top of the bodies (bodies.N.max) or enlarge domain.size.") from None
+    dt = time_step(case)
+    try:  # a viscous material too stiff for the time step: refused, or told
+        notices += stiffness.check(case, particles, dt)
+    except ValueError as err:
+        raise CaseError(str(err)) from None
+    # what reading the mesh files had to decide (a binary STL's wrong triangle count)
+    for shape in ([case.body_shape(k) for k in range(len(case.bodies))]
+                  + [case.obstacle_shape(k) for k in range(len(case.obstacles))]):
+        notices += getattr(shape, "notes", [])
+    if grid.adjusted(case.domain.size):
+        used = " x ".join(f"{s:.6g}" for s in grid.size)
+        asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
+        notices.append(
+            f"domain {asked} m is not a whole number of {case.grid.spacing:g} m cells; the "
+            f"walls are placed on the grid at {used} m")
+    return Setup(estimate, files, grid, particles, scheme, dt, notices)
+
+
+def describe(sim):
+    """What runs, how many steps and outputs, and the memory estimate (lines of text)."""
+    case, g, est = sim.case, sim.grid, sim.memory
+    steps = max(1, round((case.time.end - sim.time) / sim.dt))
+    cells = " x ".join(str(n) for n in g.cells)
+    snaps = (f", a snapshot every {case.output.snapshot_interval or case.output.interval:g}"
+             " s" if case.output.snapshots else ", no snapshots")
+    title = f"{case.title}: " if case.title else ""
+    budget, source = memory.available()
+    return [
+        f"{title}{case.solver.scheme} scheme, {sim.particles.count:,} particles, {cells} "
+        f"cells of {g.spacing:g} m; about {steps:,} steps of {sim.dt:.3g} s to t = "
+        f"{case.time.end:g} s; a row every {case.output.interval:g} s{snaps}"
+        + (f", {len(case.probes)} probes" if case.probes else "")
+        + f" (about {memory.size(est.disk_bytes)} on disk)",
+        f"memory: {est.text()}; the machine can give {memory.size(budget)} ({source})",
+    ]

@@ -1,0 +1,82 @@
+"""The run's summary (summary.json): status, counts, timings and the resolved case."""
+
+import numpy as np
+
+from .. import probes
+from .._version import __version__
+from ..case import resolved
+from ..output.timeseries import units as timeseries_units
+from ..stability import case_stable_time_step, sound_speed
+
+
+def _explicit(sim):
+    if sim.case.solver.scheme != "explicit":
+        return {}
+    m = sim.case.material
+    return {"sound_speed": sound_speed(m.bulk_modulus, m.density),
+            "stable_time_step": case_stable_time_step(sim.case)}
+
+
+def _adaptive(sim):
+    """time.dt = "auto" with the projection scheme: the steps' range."""
+    scheme = sim.scheme
+    if not getattr(scheme, "auto", False) or not hasattr(scheme, "dt_range"):
+        return {}
+    shortest, longest = scheme.dt_range
+    return {"adaptive_steps": {"courant": sim.case.time.courant,
+                               "max_dt": sim.case.time.max_dt,
+                               "shortest": shortest if np.isfinite(shortest) else None,
+                               "longest": longest or None}}
+
+
+def summary(sim, status, message):
+    """The summary dict of ``sim`` as it stands, with its ``status`` and ``message``."""
+    P, c, case, grid = sim.particles, sim.counters, sim.case, sim.grid
+    bins = sim._bins()
+    mass = float(P.mass.sum())
+    return {
+        "status": status,
+        "message": message,
+        "mpmflow_version": __version__,
+        "time": sim.time,
+        "steps": sim.steps,
+        "particles": P.count,
+        "particles_lost": sim.count0 - P.count,
+        "particles_moved_inside": c.moved_inside,
+        "mass_initial": sim.mass0,
+        "mass_final": mass,
+        "mass_relative_change": (mass - sim.mass0) / sim.mass0,
+        "max_particles_per_cell": int(np.diff(bins.start).max()),
+        "wall_seconds": sim.wall_seconds(),
+        "restarted_from": sim.resumed_from.name if sim.resumed_from else None,
+        "last_checkpoint": sim.last_checkpoint.name if sim.last_checkpoint else None,
+        "scheme": case.solver.scheme,
+        "dt": sim.dt,
+        **_explicit(sim),
+        **_adaptive(sim),
+        "grid": {"spacing": grid.spacing, "cells": list(grid.cells),
+                 "domain_used": [float(s) for s in grid.size]},
+        "pressure_solver": {"solves": c.solves, "iterations": c.iterations,
+                            "max_iterations_per_step": c.max_iterations,
+                            "max_unknowns": c.max_unknowns,
+                            "worst_relative_residual": c.worst_residual,
+                            "wall_nodes_released": c.released},
+        "viscous_solver": ({"iterations": c.viscous_iterations,
+                            "model": case.material.model}
+                           if case.material.model != "water" else None),
+        "notices": sim.notices,
+        "caps_and_fallbacks": sim.fallbacks.rows(),
+        "threads": sim.threads.record() if sim.threads is not None else None,
+        "memory_estimate_bytes": sim.memory.as_dict(),
+        "probes": {p.name: {"quantity": p.quantity, "position": p.position,
+                            "unit": probes.UNITS[p.quantity],
+                            **({"window": probes.window(p, grid, case),
+                                "estimate": p.estimate}
+                               if p.quantity == "pressure" else {})}
+                   for p in case.probes},
+        "units": dict(timeseries_units(grid.dim),
+                      mass="kg/m" if grid.dim == 2 else "kg", wall_seconds="s",
+                      domain_used="m", spacing="m", dt="s", sound_speed="m/s",
+                      stable_time_step="s", memory_estimate_bytes="B"),
+        "case": resolved(case),
+    }

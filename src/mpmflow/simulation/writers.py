@@ -1,0 +1,113 @@
+"""Writers: what the loop writes at its output times, each on a schedule.
+
+- ``TimeSeries``: a row of ``Simulation.measure()`` into timeseries.csv and into memory
+  (``sim.series``), at the output times (``output.interval``) and at ``time.end``;
+- ``Probes``: the case's probes into probes.csv and memory (``sim.probe_series``), at the
+  same times;
+- ``Snapshots``: the particles into particles_NNNNNN.vtu and particles.pvd, at the first
+  output time at or after each multiple of ``output.snapshot_interval`` and at the end;
+- the checkpointer (``checkpointer.Checkpointer``), at the first output time at or after
+  each multiple of ``checkpoint.interval``.
+
+A writer is a callable(sim) with, optionally, ``open(sim, resume)`` (when the run starts;
+``resume``: what a checkpoint recorded of it, None for a new run), ``position()`` (what a
+checkpoint records of it), ``sync()`` (flush to the disk before a checkpoint) and
+``close()``. The formats themselves are in ``mpmflow.output``.
+"""
+
+from .. import probes
+from ..output.snapshots import SnapshotWriter
+from ..output.timeseries import (COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter,
+                                 read_table)
+
+
+class _Rows:
+    """Rows kept in memory and, with an output folder, appended to a CSV file."""
+
+    file_name = None
+
+    def __init__(self, columns):
+        self.buffer = SeriesBuffer(columns)
+        self.file = None
+
+    def _open_file(self, sim, resume):
+        raise NotImplementedError
+
+    def open(self, sim, resume):
+        if sim.out_dir is None:
+            return
+        self.file = self._open_file(sim, resume)
+        if resume is not None:  # the earlier rows, for series()
+            self.buffer.extend(read_table(sim.out_dir / self.file_name)[0])
+
+    def append(self, row):
+        self.buffer.append(row)
+        if self.file is not None:
+            self.file.append(row)
+
+    def position(self):
+        return self.file.position() if self.file is not None else None
+
+    def sync(self):
+        if self.file is not None:
+            self.file.sync()
+
+    def close(self):
+        if self.file is not None:
+            self.file.close()
+
+
+class TimeSeries(_Rows):
+    file_name = "timeseries.csv"
+
+    def __init__(self):
+        super().__init__(COLUMNS)
+
+    def _open_file(self, sim, resume):
+        return TimeSeriesWriter(sim.out_dir / self.file_name, resume)
+
+    def __call__(self, sim):
+        row = sim.measure(sim.binned())
+        self.append(row)
+        sim.counters.iterations_since_output = 0
+
+
+class Probes(_Rows):
+    file_name = "probes.csv"
+
+    def __init__(self, case):
+        super().__init__(probes.columns(case))
+
+    def _open_file(self, sim, resume):
+        return CsvAppender(sim.out_dir / self.file_name, probes.columns(sim.case), resume,
+                           probes.header(sim.case))
+
+    def __call__(self, sim):
+        solids = getattr(sim.scheme, "solids", None)  # the explicit scheme has none
+        self.append(probes.measure(sim.case, sim.grid, sim.particles, sim.binned(), sim.time,
+                                   solids.distance if solids is not None and solids.solids
+                                   else None, sim.fallbacks))
+
+
+class Snapshots:
+    """Snapshots when the case asks for them (``output.snapshots``) and there is a folder;
+    otherwise the schedule still runs (its phase is in the checkpoints)."""
+
+    def __init__(self):
+        self.file = None
+
+    def open(self, sim, resume):
+        if sim.out_dir is not None and sim.case.output.snapshots:
+            self.file = SnapshotWriter(sim.out_dir, resume=resume)
+
+    def __call__(self, sim):
+        sim.forget_bins()  # the cells' bins are no longer needed: freed before the copies
+        if self.file is not None:
+            self.file.write(sim.time, sim.particles)
+
+    def position(self):
+        return len(self.file.entries) if self.file is not None else None
+
+    def sync(self):
+        if self.file is not None:
+            self.file.sync()
