@@ -575,7 +575,12 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
   report.moved += grid_to_particles<D>(
       grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new, p_node_.view(nn), O.dt,
       O.flip, View<const double>(upper_.data(), {D}), margin_, faces, P.affine);
-  if (obstacles_) report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+  if (obstacles_) {
+    report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+    // a particle pushed out of an obstacle near a periodic end may cross it
+    if (grid_.any_periodic)
+      parallel_for(P.count(), [&](index_t p) { wrap_periodic<D>(grid_, P.x, p); });
+  }
   clock.lap(PHASE_G2P);
   return OK;
 }
