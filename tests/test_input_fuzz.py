@@ -122,7 +122,7 @@ scalars = st.one_of(
     st.lists(st.floats(-1e3, 1e3), min_size=0, max_size=3),
 )
 VALID = {  # other allowed values, so that many mutated cases are accepted and run
-    "walls": ["no_slip"], "particles_per_cell": [1, 3], "initial_pressure": ["hydrostatic"],
+    "walls": ["no_slip", {"y_min": "no_slip", "x": "slip"}], "particles_per_cell": [1, 3], "initial_pressure": ["hydrostatic"],
     "formulation": ["paper"], "free_surface": ["node"], "wall_flux": [False],
     "partial_cell_quadrature": ["particles"], "linear_solver": ["direct", "amg"],
     "flip": [0.0, 1.0], "density_correction": [0.0, 1.0], "velocity": [[0.5, -0.5]],

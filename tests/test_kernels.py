@@ -143,7 +143,7 @@ def test_walls_are_one_sided_unless_in_contact():
     v = np.tile([[-1.0, 1.0]], (n, 1))  # moving into the left and top walls
     released = np.zeros((n, 2), dtype=np.bool_)
     pairs = state.wall_pairs((ncx, ncy))
-    state.apply_walls(*pairs, v, released, False)
+    state.apply_walls(*pairs, False, v, released)
     left = [0, 3, 6]
     top = [6, 7, 8]
     assert np.all(v[left, 0] == 0.0) and np.all(v[top, 1] == 0.0)
@@ -156,9 +156,23 @@ def test_walls_are_one_sided_unless_in_contact():
     np.testing.assert_array_equal(contact, np.stack([(ix == 0) | (ix == ncx),
                                                      (iy == 0) | (iy == ncy)], axis=1))
     v = np.tile([[1.0, 1.0]], (n, 1))
-    state.apply_walls(*pairs, v, contact, True)  # in contact, no-slip: all zero
+    state.apply_walls(*pairs, True, v, contact)  # in contact, no-slip: all zero
     assert np.all(v[bottom_mid] == 0.0)
     assert np.all(v[4] == 1.0)  # interior node untouched
+
+
+def test_each_wall_pair_keeps_its_own_condition():
+    """A no-slip floor (y_min) under slip walls, every wall node in contact, moving (1, 1):
+    the floor's nodes, its corners included, stop; the other walls hold only their normal."""
+    n = 9  # 2 x 2 cells
+    node, axis, sign = state.wall_pairs((2, 2))
+    contact = np.zeros((n, 2), dtype=np.bool_)
+    state.start_contact(node, axis, sign, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
+    v = np.ones((n, 2))
+    state.apply_walls(node, axis, sign, (axis == 1) & (sign < 0), v, contact)
+    np.testing.assert_array_equal(v, [[0, 0], [0, 0], [0, 0],    # the floor
+                                      [0, 1], [1, 1], [0, 1],    # the side walls' normal
+                                      [0, 0], [1, 0], [0, 0]])   # the top's normal, corners
 
 
 def test_contact_starts_where_material_presses_and_releases_under_tension():

@@ -57,7 +57,7 @@ def _system(cells, h, weight, mass, dt, u):
     uu = np.empty_like(u)
     off = np.zeros(D + 1, dtype=np.int64)
     empty_i = np.zeros(0, dtype=np.int64)
-    n = state.number_unknowns(mass, empty_i, empty_i, np.zeros((nn, D), dtype=np.bool_), False,
+    n = state.number_unknowns(mass, empty_i, empty_i, False, np.zeros((nn, D), dtype=np.bool_),
                               empty_i, np.zeros(nn, dtype=np.bool_), np.zeros(0, dtype=np.bool_),
                               u, uu, row, off)
     NS = 3**D

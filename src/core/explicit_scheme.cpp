@@ -107,17 +107,19 @@ void for_each_wall(const Grid<D>& g, F&& f) {
 }
 
 // Wall nodes where the velocity points into the wall are in contact: normal velocity 0 (and
-// tangential too for no-slip); elsewhere the material leaves the wall freely. (The rule of
+// tangential too at a no-slip wall: no_slip(2 k + (sign > 0)), one flag per side, x_min,
+// x_max, y_min, ...); elsewhere the material leaves the wall freely. (The rule of
 // kernels/walls.py, apply_walls, with the wall pairs enumerated in wall_pairs' order; the
 // core's walls can take its place when they land.)
 template <int D>
-void wall_contact(const Grid<D>& g, View<double, 2> u, View<bool, 2> contact, bool no_slip) {
+void wall_contact(const Grid<D>& g, View<double, 2> u, View<bool, 2> contact,
+                  View<const bool> no_slip) {
   for (index_t e = 0; e < contact.size(); ++e) contact[e] = false;
   for_each_wall(g, [&](index_t i, int k, double sign) { contact(i, k) = sign * u(i, k) > 0.0; });
   for_each_wall(g, [&](index_t i, int k, double sign) {
     if (contact(i, k) || sign * u(i, k) > 0.0) {
       u(i, k) = 0.0;
-      if (no_slip && contact(i, k))
+      if (no_slip(2 * k + (sign > 0.0 ? 1 : 0)) && contact(i, k))
         for (int m = 0; m < D; ++m)
           if (m != k) u(i, m) = 0.0;
     }
@@ -219,14 +221,15 @@ template <int D>
 ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, double safety,
                              View<double, 2> x, View<double, 2> v, View<double> pressure,
                              View<const double> mass, View<double> volume, double density,
-                             double bulk, View<const double> gravity, double flip_ms, bool no_slip,
-                             bool smoothing, double full, double sparse, double mass_cut,
-                             double q_lin, double q_quad, double tension, double max_speed,
-                             View<const double> upper, double margin, View<double> node_mass,
-                             View<double, 2> node_mom, View<double, 2> v_old, View<double, 2> v_new,
-                             View<bool, 2> contact, View<double> cell_j, View<double> cell_vol,
-                             View<double> cell_v0, View<double, 2> cell_xi, View<double> cell_p,
-                             View<double> cell_q, View<double> node_w, View<double> node_p) {
+                             double bulk, View<const double> gravity, double flip_ms,
+                             View<const bool> no_slip, bool smoothing, double full, double sparse,
+                             double mass_cut, double q_lin, double q_quad, double tension,
+                             double max_speed, View<const double> upper, double margin,
+                             View<double> node_mass, View<double, 2> node_mom,
+                             View<double, 2> v_old, View<double, 2> v_new, View<bool, 2> contact,
+                             View<double> cell_j, View<double> cell_vol, View<double> cell_v0,
+                             View<double, 2> cell_xi, View<double> cell_p, View<double> cell_q,
+                             View<double> node_w, View<double> node_p) {
   constexpr int NC = Grid<D>::NC;
   const double h = g.h;
   const double full_volume = times_cell_volume<D>(full, h);
@@ -399,22 +402,22 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
   return st;
 }
 
-#define MPMFLOW_EXPLICIT(D)                                                                     \
-  template void cell_state<D>(const Grid<D>&, View<const double, 2>, View<const double>,        \
-                              View<const double>, double, double, double, double, double,       \
-                              View<double>, View<double>, View<double>, View<double, 2>,        \
-                              View<double>);                                                    \
-  template void particle_state<D>(const Grid<D>&, View<const double, 2>, View<const double>,    \
-                                  View<double>, View<double>, double, bool, View<const double>, \
-                                  View<const double>, View<const double>, View<double>,         \
-                                  View<double>);                                                \
-  template ExplicitStats explicit_steps<D>(                                                     \
-      const Grid<D>&, double, index_t, double, View<double, 2>, View<double, 2>, View<double>,  \
-      View<const double>, View<double>, double, double, View<const double>, double, bool, bool, \
-      double, double, double, double, double, double, double, View<const double>, double,       \
-      View<double>, View<double, 2>, View<double, 2>, View<double, 2>, View<bool, 2>,           \
-      View<double>, View<double>, View<double>, View<double, 2>, View<double>, View<double>,    \
-      View<double>, View<double>);
+#define MPMFLOW_EXPLICIT(D)                                                                        \
+  template void cell_state<D>(const Grid<D>&, View<const double, 2>, View<const double>,           \
+                              View<const double>, double, double, double, double, double,          \
+                              View<double>, View<double>, View<double>, View<double, 2>,           \
+                              View<double>);                                                       \
+  template void particle_state<D>(const Grid<D>&, View<const double, 2>, View<const double>,       \
+                                  View<double>, View<double>, double, bool, View<const double>,    \
+                                  View<const double>, View<const double>, View<double>,            \
+                                  View<double>);                                                   \
+  template ExplicitStats explicit_steps<D>(                                                        \
+      const Grid<D>&, double, index_t, double, View<double, 2>, View<double, 2>, View<double>,     \
+      View<const double>, View<double>, double, double, View<const double>, double,                \
+      View<const bool>, bool, double, double, double, double, double, double, double,              \
+      View<const double>, double, View<double>, View<double, 2>, View<double, 2>, View<double, 2>, \
+      View<bool, 2>, View<double>, View<double>, View<double>, View<double, 2>, View<double>,      \
+      View<double>, View<double>, View<double>);
 
 MPMFLOW_EXPLICIT(2)
 MPMFLOW_EXPLICIT(3)

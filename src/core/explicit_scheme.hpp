@@ -63,23 +63,25 @@ double max_speed(View<const double, 2> v);
 // compressing cell; (2) nodal force f_i = sum_c V_c (p_c + q_c) grad N_i(xi_c) (N), plus
 // gravity (m/s^2, D entries); nodes lighter than mass_cut density h^D take gravity only;
 // v_new after the step, wall contact (normal velocity zero where the velocity points into a
-// wall, tangential too with no_slip; ``contact``: nnodes x D scratch); the new J of each cell
-// from div v_new; (3) grid to particles: FLIP/PIC velocity (FLIP fraction flip_ms per
-// millisecond), x += dt sum N v_new, put back inside [margin, upper - margin] if it crossed
-// a wall; (4) the cells' J and pressure from the moved particles. full, sparse: fractions
-// of a cell's volume (see ``cell_state``). Work arrays: node_mass (nnodes), node_mom, v_old,
-// v_new (nnodes x D), cell_q (ncells), node_w, node_p (nnodes).
+// wall, tangential too at a no-slip side, no_slip(2 k + (sign > 0)), 2 D flags x_min, x_max, ...;
+// ``contact``: nnodes x D scratch); the new J of each cell from div v_new; (3) grid to particles:
+// FLIP/PIC velocity (FLIP fraction flip_ms per millisecond), x += dt sum N v_new, put back inside
+// [margin, upper - margin] if it crossed a wall; (4) the cells' J and pressure from the moved
+// particles. full, sparse: fractions of a cell's volume (see ``cell_state``). Work arrays:
+// node_mass (nnodes), node_mom, v_old, v_new (nnodes x D), cell_q (ncells), node_w, node_p
+// (nnodes).
 template <int D>
 ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, double safety,
                              View<double, 2> x, View<double, 2> v, View<double> pressure,
                              View<const double> mass, View<double> volume, double density,
-                             double bulk, View<const double> gravity, double flip_ms, bool no_slip,
-                             bool smoothing, double full, double sparse, double mass_cut,
-                             double q_lin, double q_quad, double tension, double max_speed,
-                             View<const double> upper, double margin, View<double> node_mass,
-                             View<double, 2> node_mom, View<double, 2> v_old, View<double, 2> v_new,
-                             View<bool, 2> contact, View<double> cell_j, View<double> cell_vol,
-                             View<double> cell_v0, View<double, 2> cell_xi, View<double> cell_p,
-                             View<double> cell_q, View<double> node_w, View<double> node_p);
+                             double bulk, View<const double> gravity, double flip_ms,
+                             View<const bool> no_slip, bool smoothing, double full, double sparse,
+                             double mass_cut, double q_lin, double q_quad, double tension,
+                             double max_speed, View<const double> upper, double margin,
+                             View<double> node_mass, View<double, 2> node_mom,
+                             View<double, 2> v_old, View<double, 2> v_new, View<bool, 2> contact,
+                             View<double> cell_j, View<double> cell_vol, View<double> cell_v0,
+                             View<double, 2> cell_xi, View<double> cell_p, View<double> cell_q,
+                             View<double> node_w, View<double> node_p);
 
 }  // namespace mpmflow

@@ -335,7 +335,7 @@ void State<D>::pressure_rhs(const Options<D>& O) {
   if (!O.wall_flux) {  // the paper: the divergence of the wall-constrained v*
     v_c = v_c_.template view<2>({nn, D});
     std::copy(v_star_.view(nn * D).data(), v_star_.view(nn * D).data() + nn * D, v_c.data());
-    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, v_c, contact, O.no_slip);
+    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_c, contact);
     apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_c, ocontact);
   }
   assemble_rhs<D>(grid_, I_.rhs_slot, I_.rhs_C, I_.rhs_V, node_vol_.view(nn), rows_.view(nrows_),
@@ -429,7 +429,7 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
   // the strain rate of the particles' velocity with the held nodes at rest
   auto v_rate = v_rate_.template view<2>({nn, D});
-  rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, contact, O.no_slip, T_.onode, ocontact,
+  rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, T_.onode, ocontact,
                    T_.ono_slip, v_rate);
   cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_rate, p, O.model,
                     View<const double>(O.model_params.data(), {8}), eta_.view(nc),
@@ -447,7 +447,7 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
   const index_t n =
-      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, contact, O.no_slip,
+      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact,
                          T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff, &grid_);
   if (n == 0) return OK;
   auto cols = vcols_.template sized<3>({D, n, NS});
@@ -562,7 +562,7 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
   auto ocontact = ocontact_.view(nn);
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p_node_.view(nn),
                       v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
-  apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, v_new, contact, O.no_slip);
+  apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_new, contact);
   apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact);
   clock.lap(PHASE_CORRECTOR);
   std::array<View<const double>, D> faces{};  // empty: no displacement

@@ -88,7 +88,6 @@ struct Options {
   int surface = GAUSS;
   bool subcell = true;
   bool wall_flux = true;
-  bool no_slip = false;
   double theta_min = 0.0;
   double expansion = 0.0;
   double tol = 1e-8;
@@ -127,7 +126,8 @@ struct Particles {
 };
 
 // The grid's fixed tables (views of arrays the caller keeps alive for the State's life).
-// Walls: the wall nodes with the axis and side of their wall. Obstacles (empty phi: none):
+// Walls: the wall nodes with the axis and side of their wall and its condition (no-slip
+// flag per pair). Obstacles (empty phi: none):
 // phi at the nodes, each cell's fluid fraction and static slot (0: whole cell, s >= 1: a
 // cut cell's, -1: solid), the static element integrals by slot, the cut cells' face terms,
 // the obstacle nodes with their normals and no-slip flags. viscous_T: the full cell's
@@ -136,6 +136,7 @@ template <int D>
 struct GridTables {
   View<const index_t> wall_node, wall_axis;
   View<const double> wall_sign;
+  View<const bool> wall_no_slip;
   View<const double> phi, open;
   View<const index_t> static_slot;
   View<const double, 3> K_static;   // (nstatic, 2^D, 2^D)

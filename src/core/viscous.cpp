@@ -139,16 +139,15 @@ void cell_viscosity(const Grid<D>& g, View<const double> theta, View<const doubl
 
 template <int D>
 void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
-                   View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
-                   View<const index_t> onode, View<const bool> ocontact, View<const bool> ono_slip,
-                   View<double, 2> out) {
+                   View<const index_t> wall_axis, View<const bool> wall_no_slip,
+                   View<const bool, 2> contact, View<const index_t> onode,
+                   View<const bool> ocontact, View<const bool> ono_slip, View<double, 2> out) {
   for (index_t i = 0; i < v.size(); ++i) out[i] = v[i];
-  if (no_slip)
-    for (index_t e = 0; e < wall_node.size(); ++e) {
-      const index_t i = wall_node(e), k = wall_axis(e);
-      if (contact(i, k))
-        for (int m = 0; m < D; ++m) out(i, m) = 0.0;
-    }
+  for (index_t e = 0; e < wall_node.size(); ++e) {
+    const index_t i = wall_node(e), k = wall_axis(e);
+    if (wall_no_slip(e) && contact(i, k))
+      for (int m = 0; m < D; ++m) out(i, m) = 0.0;
+  }
   for (index_t e = 0; e < onode.size(); ++e) {
     const index_t i = onode(e);
     if (ono_slip(e) && ocontact(i))
@@ -158,10 +157,11 @@ void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
 
 template <int D>
 index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_node,
-                        View<const index_t> wall_axis, View<const bool, 2> contact, bool no_slip,
-                        View<const index_t> onode, View<const bool> ocontact,
-                        View<const bool> ono_slip, View<const double, 2> vstar, View<double, 2> u,
-                        View<index_t, 2> row, View<index_t> off, const Grid<D>* grid) {
+                        View<const index_t> wall_axis, View<const bool> wall_no_slip,
+                        View<const bool, 2> contact, View<const index_t> onode,
+                        View<const bool> ocontact, View<const bool> ono_slip,
+                        View<const double, 2> vstar, View<double, 2> u, View<index_t, 2> row,
+                        View<index_t> off, const Grid<D>* grid) {
   const index_t nn = u.extent(0);
   for (index_t i = 0; i < u.size(); ++i) u[i] = vstar[i];
   for (index_t i = 0; i < nn; ++i)
@@ -180,7 +180,7 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
     const index_t i = wall_node(e), k = wall_axis(e);
     if (node_mass(i) <= 0.0) continue;
     row(i, k) = HELD;
-    if (no_slip && contact(i, k))
+    if (wall_no_slip(e) && contact(i, k))
       for (int m = 0; m < D; ++m) {
         row(i, m) = HELD;
         u(i, m) = 0.0;
@@ -319,26 +319,26 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
   return {it, std::sqrt(dot(q, q)) / bnorm};
 }
 
-#define MPMFLOW_VISCOUS(D)                                                                         \
-  template void gauss_gradients<D>(const Grid<D>&, View<double, 4>);                               \
-  template void cell_viscosity<D>(const Grid<D>&, View<const double>, View<const double>,          \
-                                  View<const bool>, double, View<const double, 2>,                 \
-                                  View<const double>, int, View<const double>, View<double>,       \
-                                  View<double>);                                                   \
-  template void rate_velocity<D>(View<const double, 2>, View<const index_t>, View<const index_t>,  \
-                                 View<const bool, 2>, bool, View<const index_t>, View<const bool>, \
-                                 View<const bool>, View<double, 2>);                               \
-  template index_t number_unknowns<D>(                                                             \
-      View<const double>, View<const index_t>, View<const index_t>, View<const bool, 2>, bool,     \
-      View<const index_t>, View<const bool>, View<const bool>, View<const double, 2>,              \
-      View<double, 2>, View<index_t, 2>, View<index_t>, const Grid<D>*);                           \
-  template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,             \
-                            View<const double>, double, View<const double, 2>,                     \
-                            View<const index_t, 2>, View<const index_t>, View<index_t, 3>,         \
-                            View<double, 3>, View<double>, View<index_t>);                         \
-  template SolveResult solve<D>(const Grid<D>&, View<const index_t, 3>, View<const double, 3>,     \
-                                View<const index_t>, View<const index_t>, View<const double>,      \
-                                View<double>, double, index_t, int, std::array<Multigrid<D>, D>&,  \
+#define MPMFLOW_VISCOUS(D)                                                                        \
+  template void gauss_gradients<D>(const Grid<D>&, View<double, 4>);                              \
+  template void cell_viscosity<D>(const Grid<D>&, View<const double>, View<const double>,         \
+                                  View<const bool>, double, View<const double, 2>,                \
+                                  View<const double>, int, View<const double>, View<double>,      \
+                                  View<double>);                                                  \
+  template void rate_velocity<D>(View<const double, 2>, View<const index_t>, View<const index_t>, \
+                                 View<const bool>, View<const bool, 2>, View<const index_t>,      \
+                                 View<const bool>, View<const bool>, View<double, 2>);            \
+  template index_t number_unknowns<D>(                                                            \
+      View<const double>, View<const index_t>, View<const index_t>, View<const bool>,             \
+      View<const bool, 2>, View<const index_t>, View<const bool>, View<const bool>,               \
+      View<const double, 2>, View<double, 2>, View<index_t, 2>, View<index_t>, const Grid<D>*);   \
+  template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,            \
+                            View<const double>, double, View<const double, 2>,                    \
+                            View<const index_t, 2>, View<const index_t>, View<index_t, 3>,        \
+                            View<double, 3>, View<double>, View<index_t>);                        \
+  template SolveResult solve<D>(const Grid<D>&, View<const index_t, 3>, View<const double, 3>,    \
+                                View<const index_t>, View<const index_t>, View<const double>,     \
+                                View<double>, double, index_t, int, std::array<Multigrid<D>, D>&, \
                                 View<double, 2>);
 
 MPMFLOW_VISCOUS(2)

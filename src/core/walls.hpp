@@ -2,8 +2,9 @@
 // wall stops penetration only. The wall nodes come as (node, axis of the wall's normal,
 // outward sign) triples from wall_pairs: the walls normal to axis 0 first, then axis 1, ...;
 // along each, the nodes in node order with the lower wall before the upper; a node on an
-// edge or a corner appears once for each of its walls. Obstacle nodes come as (node, unit
-// normal into the solid, no-slip flag) entries (onode, onormal, no_slip), with one contact
+// edge or a corner appears once for each of its walls. Each pair carries its wall's
+// condition (no_slip: one flag per pair, domain.walls side by side). Obstacle nodes come as (node,
+// unit normal into the solid, no-slip flag) entries (onode, onormal, no_slip), with one contact
 // flag per node (ocontact). Velocities in m/s; the loops are serial (wall nodes are few,
 // and a corner node appears under several walls).
 #pragma once
@@ -24,10 +25,11 @@ index_t wall_pairs(const Grid<D>& g, View<index_t> node, View<index_t> axis, Vie
 
 // Velocity conditions at wall nodes (in place in v, nnodes x D). Where the wall holds the
 // material (contact[i, k]) the normal velocity is zero; elsewhere on the wall only a
-// velocity into the wall is removed. No-slip also zeroes the tangential velocity at nodes in
-// contact.
+// velocity into the wall is removed. A no-slip pair (no_slip(e)) also zeroes the tangential
+// velocity where its node is in contact (at an edge node of a no-slip and a slip wall the
+// no-slip wall's hold wins: the node is at rest where that wall holds it).
 void apply_walls(View<const index_t> node, View<const index_t> axis, View<const double> sign,
-                 View<double, 2> v, View<const bool, 2> contact, bool no_slip);
+                 View<const bool> no_slip, View<double, 2> v, View<const bool, 2> contact);
 
 // The wall nodes that hold the material as the pressure step starts (in place):
 // contact[i, k] is set where node i carries a pressure unknown (node_row >= 0) or v* presses

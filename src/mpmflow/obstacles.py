@@ -202,8 +202,8 @@ def of_case(case, grid):
     dist = np.array([node_distance(grid, s, x) for s in solids])  # (nobstacles, nnodes)
     phi = dist.min(axis=0)
     nearest = dist.argmin(axis=0)
-    walls = [case.domain.walls if getattr(o, "walls", "domain") == "domain" else o.walls
-             for o in specs]
+    walls = [case.domain.uniform_walls() if getattr(o, "walls", "domain") == "domain"
+             else o.walls for o in specs]
     no_slip = np.array([w == "no_slip" for w in walls], dtype=bool)
     tables = build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
     tables.solids = solids

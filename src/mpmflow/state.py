@@ -61,11 +61,18 @@ def wall_pairs(cells, periodic=()):
     return node, axis, sign
 
 
-def apply_walls(node, axis, sign, v, contact, no_slip):
+def apply_walls(node, axis, sign, no_slip, v, contact):
     """Velocity conditions at the wall nodes, in place in v (nnodes x D): the normal velocity
     zeroed where the wall holds the material (``contact[i, k]``), elsewhere only a velocity
-    into the wall; no-slip zeroes the tangential velocity at the nodes in contact too."""
-    _core.apply_walls(node, axis, sign, v, contact, bool(no_slip))
+    into the wall; a no-slip pair (``no_slip``: a flag per pair, or one bool for all) zeroes
+    the tangential velocity at its node in contact too."""
+    _core.apply_walls(node, axis, sign, _pair_flags(no_slip, node), v, contact)
+
+
+def _pair_flags(flags, node):
+    """A bool per wall pair: ``flags`` as given, or one bool repeated."""
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(flags, dtype=np.bool_),
+                                                np.shape(node)))
 
 
 def start_contact(node, axis, sign, vstar, node_row, contact):
@@ -221,17 +228,17 @@ def _floats(a):
 
 def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscous):
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
-    axis, sign) of the domain walls, ``solids`` the obstacles' tables
+    axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
     (``mpmflow.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
     for inviscid material), ``margin`` (m) how far inside the walls particles are put back.
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls = _core.State2 if D == 2 else _core.State3
-    node, axis, sign = walls
+    node, axis, sign, no_slip = walls
     o = solids
     return cls(float(grid.spacing), [int(c) for c in grid.cells], float(grid.cell_volume),
                [float(u) for u in grid.size], float(margin), _ints(node), _ints(axis),
-               _floats(sign), _floats(o.phi), _floats(o.open), _ints(o.static_slot),
+               _floats(sign), _pair_flags(no_slip, node), _floats(o.phi), _floats(o.open), _ints(o.static_slot),
                _floats(o.K), _floats(o.C), _floats(o.V), _floats(o.F), _floats(o.Wf),
                _ints(o.node), _floats(np.reshape(o.normal, (-1, D))),
                np.ascontiguousarray(o.no_slip, dtype=np.bool_),
@@ -340,14 +347,16 @@ def cell_viscosity(cells, h, theta, open_, enclosed, full, v, p_node, model, par
     _viscous_back(weight, weightc)
 
 
-def number_unknowns(node_mass, wall_node, wall_axis, contact, no_slip, onode, ocontact,
+def number_unknowns(node_mass, wall_node, wall_axis, wall_no_slip, contact, onode, ocontact,
                     ono_slip, vstar, u, row, off):
     """Number the viscous system's unknowns (``u``, ``row``, ``off`` in place); returns
-    their count. ``contact`` (nodes x D) and ``ocontact`` (nodes) say where the walls and
-    obstacles hold the material (the pressure step's starting contact)."""
+    their count. ``wall_no_slip``: a flag per wall pair (or one bool for all); ``contact``
+    (nodes x D) and ``ocontact`` (nodes) say where the walls and obstacles hold the material
+    (the pressure step's starting contact)."""
     uc, rowc = _viscous_out(u), _viscous_out(row)
-    n = _core.number_unknowns(node_mass, wall_node, wall_axis, contact, bool(no_slip), onode,
-                              ocontact, ono_slip, vstar, uc, rowc, off)
+    n = _core.number_unknowns(node_mass, wall_node, wall_axis,
+                              _pair_flags(wall_no_slip, wall_node), contact, onode, ocontact,
+                              ono_slip, vstar, uc, rowc, off)
     _viscous_back(u, uc)
     _viscous_back(row, rowc)
     return n
@@ -408,13 +417,14 @@ def explicit_steps(grid, span, nsteps, safety, x, v, pressure, mass, volume, den
                    tension, max_speed, upper, margin, node_mass, node_mom, v_old, v_new,
                    contact, cell_j, cell_vol, cell_v0, cell_xi, cell_p, cell_q, node_w, node_p,
                    stats):
-    """Explicit steps over ``span`` seconds (in place); ``stats`` gets [steps taken, time
+    """Explicit steps over ``span`` seconds (in place); ``no_slip``: a flag per side (x_min,
+    x_max, y_min, ...) or one bool for all; ``stats`` gets [steps taken, time
     advanced (s), smallest step (s), particles put back inside, 1 if stopped on
     ``max_speed`` else 0, largest particle speed (m/s) at the end]."""
     _core.explicit_steps(
         span, int(nsteps), safety, x, v, pressure, mass, volume, density, bulk,
         np.ascontiguousarray(gravity, dtype=float), grid.spacing, list(grid.cells), flip_ms,
-        bool(no_slip), bool(smoothing), full, sparse, mass_cut, q_lin, q_quad, tension,
+        _pair_flags(no_slip, np.empty(2 * len(grid.cells))), bool(smoothing), full, sparse, mass_cut, q_lin, q_quad, tension,
         max_speed, np.ascontiguousarray(upper, dtype=float), margin, node_mass, node_mom,
         v_old, v_new, contact, cell_j, cell_vol, cell_v0, cell_xi, cell_p, cell_q, node_w,
         node_p, stats)

@@ -130,7 +130,6 @@ void bind_dim(nb::module_& m) {
       .def_rw("surface", &O::surface)
       .def_rw("subcell", &O::subcell)
       .def_rw("wall_flux", &O::wall_flux)
-      .def_rw("no_slip", &O::no_slip)
       .def_rw("theta_min", &O::theta_min)
       .def_rw("expansion", &O::expansion)
       .def_rw("tol", &O::tol)
@@ -154,16 +153,20 @@ void bind_dim(nb::module_& m) {
           "__init__",
           [](S* self, double h, std::vector<index_t> cells, double cell_volume,
              std::array<double, D> upper, double margin, nb::object wall_node, nb::object wall_axis,
-             nb::object wall_sign, nb::object phi, nb::object open, nb::object static_slot,
-             nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
-             nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
-             bool volume_correction, bool viscous, std::vector<bool> periodic) {
+             nb::object wall_sign, nb::object wall_no_slip, nb::object phi, nb::object open,
+             nb::object static_slot, nb::object K, nb::object C, nb::object V, nb::object F,
+             nb::object Wf, nb::object onode, nb::object onormal, nb::object ono_slip,
+             nb::object viscous_T, bool volume_correction, bool viscous,
+             std::vector<bool> periodic) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
             T.wall_node = table<index_t, 1>(wall_node, "wall_node", keep);
             T.wall_axis = table<index_t, 1>(wall_axis, "wall_axis", keep);
             T.wall_sign = table<double, 1>(wall_sign, "wall_sign", keep);
+            T.wall_no_slip = table<bool, 1>(wall_no_slip, "wall_no_slip", keep);
+            if (T.wall_no_slip.size() != T.wall_node.size())
+              throw std::invalid_argument("State: wall_no_slip needs one flag per wall pair");
             T.phi = table<double, 1>(phi, "phi", keep);
             T.open = table<double, 1>(open, "open", keep);
             T.static_slot = table<index_t, 1>(static_slot, "static_slot", keep);

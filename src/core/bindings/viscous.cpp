@@ -49,17 +49,18 @@ void bind_viscous(nb::module_& m) {
   m.def(
       "number_unknowns",
       [](Array<const double> node_mass, Array<const index_t> wall_node,
-         Array<const index_t> wall_axis, Array<const bool> contact, bool no_slip,
+         Array<const index_t> wall_axis, Array<const bool> wall_no_slip, Array<const bool> contact,
          Array<const index_t> onode, Array<const bool> ocontact, Array<const bool> ono_slip,
          Array<const double> vstar, Array<double> u, Array<index_t> row, Array<index_t> off) {
         return with_dim(u.ndim() == 2 ? u.shape(1) : 0, [&](auto d) {
           constexpr int D = decltype(d)::value;
           return number_unknowns<D>(
               view<const double>(node_mass, "node_mass"), view<const index_t>(wall_node),
-              view<const index_t>(wall_axis), view<const bool, 2>(contact, "contact"), no_slip,
-              view<const index_t>(onode), view<const bool>(ocontact, "ocontact"),
-              view<const bool>(ono_slip, "ono_slip"), view<const double, 2>(vstar, "vstar"),
-              view<double, 2>(u, "u"), view<index_t, 2>(row, "row"), view<index_t>(off, "off"));
+              view<const index_t>(wall_axis), view<const bool>(wall_no_slip, "wall_no_slip"),
+              view<const bool, 2>(contact, "contact"), view<const index_t>(onode),
+              view<const bool>(ocontact, "ocontact"), view<const bool>(ono_slip, "ono_slip"),
+              view<const double, 2>(vstar, "vstar"), view<double, 2>(u, "u"),
+              view<index_t, 2>(row, "row"), view<index_t>(off, "off"));
         });
       },
       "Number the viscous system's unknowns; returns their count.");

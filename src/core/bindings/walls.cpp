@@ -33,10 +33,12 @@ void bind_walls(nb::module_& m) {
   m.def(
       "apply_walls",
       [](Array<const index_t> node, Array<const index_t> axis, Array<const double> sign,
-         Array<double> v, Array<const bool> contact, bool no_slip) {
+         Array<const bool> no_slip, Array<double> v, Array<const bool> contact) {
+        if (no_slip.shape(0) != node.shape(0))
+          throw std::invalid_argument("apply_walls: no_slip needs one flag per wall pair");
         apply_walls(view<const index_t>(node, "node"), view<const index_t>(axis, "axis"),
-                    view<const double>(sign, "sign"), view<double, 2>(v, "v"),
-                    view<const bool, 2>(contact, "contact"), no_slip);
+                    view<const double>(sign, "sign"), view<const bool>(no_slip, "no_slip"),
+                    view<double, 2>(v, "v"), view<const bool, 2>(contact, "contact"));
       },
       "Velocity conditions at the wall nodes (in place).");
   m.def(

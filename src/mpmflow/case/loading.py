@@ -10,7 +10,7 @@ from pydantic import ValidationError
 from ..errors import CaseError
 from .model import Case
 from .reference import KNOWN_KEYS, _REFERENCE, _item, _models_of
-from .sections import MAX_CASE_BYTES
+from .sections import AXES, MAX_CASE_BYTES
 from .shapes import SHAPE_TYPES, Body, Obstacle
 
 if sys.version_info >= (3, 11):
@@ -122,6 +122,8 @@ def apply_overrides(data, overrides):
                 _check_index(label, key, parts, depth, node, value)
                 node = node[int(part)]
             else:  # a list of tables the case file leaves out starts empty
+                if parts[:depth + 1] == ["domain", "walls"] and isinstance(node.get(part), str):
+                    node[part] = _walls_by_axis(node)  # one side set, the others kept
                 node = node.setdefault(part, [] if depth == 0 and part in LIST_KEYS else {})
             if not isinstance(node, (dict, list)):
                 raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth + 1])}` is a value, not a "
@@ -135,6 +137,16 @@ def apply_overrides(data, overrides):
             raise CaseError(f"{label} {key}: unknown case key `{key}`.{_suggest(key)} "
                             "Run `mpmflow keys` for the list of keys.")
         node[parts[-1]] = _parse_value(value.strip()) if parse else value
+
+
+def _walls_by_axis(domain):
+    """A single domain.walls condition as the table of its wall axes (a periodic axis has
+    none), so that an override of one side keeps the condition of the others."""
+    size, periodic = domain.get("size"), domain.get("periodic")
+    dim = len(size) if isinstance(size, list) and len(size) in (2, 3) else 3
+    periodic = periodic if isinstance(periodic, list) else []
+    return {AXES[k]: domain["walls"] for k in range(dim)
+            if not (k < len(periodic) and periodic[k] is True)}
 
 
 def _check_index(label, key, parts, depth, entries, value, append=False):

@@ -202,6 +202,14 @@ class Case(_Section):
         message = self._unsupported()
         if message:
             raise ValueError(message)
+        if self.domain.uniform_walls() is None:
+            for k, obstacle in enumerate(self.obstacles):
+                if obstacle.walls == "domain":
+                    raise ValueError(
+                        f"obstacles.{k}.walls = \"domain\" (the default) takes the condition "
+                        "of domain.walls, but domain.walls gives its walls different ones "
+                        f"({self.domain.walls_text()}); set obstacles.{k}.walls = \"slip\" or "
+                        "\"no_slip\"")
         folder = (info.context or {}).get("folder") if info is not None else None
         for k, probe in enumerate(self.probes):
             if probe.data is not None:

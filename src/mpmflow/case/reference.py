@@ -7,7 +7,7 @@ from typing import Annotated, Union
 from pydantic import BaseModel
 
 from .model import Case
-from .sections import FORMULATIONS, Solver
+from .sections import FORMULATIONS, Solver, wall_keys
 
 
 
@@ -65,7 +65,8 @@ def key_reference():
 
 
 _REFERENCE = {row["key"]: row for row in key_reference()}
-KNOWN_KEYS = list(_REFERENCE)
+# and the sides of a per-side domain.walls (--set domain.walls.z_min=no_slip)
+KNOWN_KEYS = list(_REFERENCE) + [f"domain.walls.{k}" for k in wall_keys(3)]
 
 def reference_markdown():
     """The case-file reference as a Markdown table (generated into the README)."""

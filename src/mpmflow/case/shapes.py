@@ -183,7 +183,8 @@ class _ObstacleFields(_Section):
         "_ . + -); optional.", pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["pier"])
     walls: Literal["slip", "no_slip", "domain"] = Field(
         "domain", description="Wall condition on the obstacle's surface: \"slip\", "
-        "\"no_slip\", or \"domain\" = the same as domain.walls.")
+        "\"no_slip\", or \"domain\" = the same as domain.walls (which must then be one "
+        "condition for every wall).")
 
 
 class BoxObstacle(_ObstacleFields, _BoxShape):

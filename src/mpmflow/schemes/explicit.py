@@ -43,7 +43,7 @@ class ExplicitScheme:
         self.bulk = m.bulk_modulus
         self.sound_speed = sound_speed(m.bulk_modulus, m.density)
         self.gravity = np.asarray(case.physics.gravity, dtype=float)
-        self.no_slip = case.domain.walls == "no_slip"
+        self.no_slip = np.array(case.domain.no_slip_sides(), dtype=np.bool_)  # x_min, ...
         self.flip = sv.flip
         self.smoothing = sv.pressure_smoothing == "nodal"
         self.full = sv.full_cell_threshold

@@ -77,7 +77,10 @@ class ProjectionScheme:
         cells = tuple(int(c) for c in grid.cells)
         T = (state.gauss_gradients(cells, float(grid.spacing)) if self.viscous
              else np.zeros((0, 0, 0, 0)))
-        self.core = state.step_state(grid, state.wall_pairs(cells, grid.periodic), self.solids, T,
+        node, axis, sign = state.wall_pairs(cells, grid.periodic)
+        sides = np.array(case.domain.no_slip_sides(), dtype=np.bool_)  # x_min, x_max, ...
+        walls = (node, axis, sign, sides[2 * axis + (sign > 0)])
+        self.core = state.step_state(grid, walls, self.solids, T,
                                      MARGIN * grid.spacing, s.volume_correction > 0,
                                      self.viscous)
         self.python_pressure = (None if s.linear_solver == "multigrid"
@@ -124,7 +127,7 @@ class ProjectionScheme:
             surface=(state.SURFACE_QUADRATURE["gauss"] if particles
                      else state.SURFACE_QUADRATURE[s.surface_quadrature]),
             subcell=s.free_surface == "subcell", wall_flux=bool(s.wall_flux),
-            no_slip=self.case.domain.walls == "no_slip", theta_min=float(s.ghost_theta_min),
+            theta_min=float(s.ghost_theta_min),
             expansion=float(s.density_correction), tol=float(s.tolerance),
             max_iterations=int(s.max_iterations), sweeps=SMOOTHING_SWEEPS,
             volume_rate=float(s.volume_correction), volume_every=int(every),
