@@ -1,55 +1,126 @@
 """A 3D granular column (mu(I), as examples/granular_collapse.toml) on a rough floor: run-out
 radius against Lube et al. (2004), (r_inf - r0) / r0 = 1.24 a (a < 1.7), 1.6 a^(1/2) above.
 
-    python benchmarks/collapse_3d.py A CELLS [key=value ...]
+    python benchmarks/collapse_3d.py A CELLS [--whole] [key=value ...]
 
-A = H0 / r0 (r0 = 0.05 m), CELLS across r0. The whole column stands in the middle of the
-tank: domain.walls is one kind for every wall, so the quarter column between two slip
-symmetry planes on a no-slip floor cannot be set up. Prints the furthest particle's radius
-as (r_inf - r0) / r0, the law, H_inf / H0, the largest speed at the end, and the run-out
-against time (t: run-out: largest speed).
+A = H0 / r0 (r0 = 0.05 m), CELLS across r0; key=value are case overrides (e.g.
+solver.flip=0.99, solver.transfer=apic; the example's transfer is PIC, flip = 0).
+
+By default the quarter column: the column's axis is the domain's edge x = y = 0, whose two
+walls are slip symmetry planes (domain.walls = {x = "slip", y = "slip", z_min = "no_slip"}):
+the floor is rough, the far walls at x = L and y = L are slip and far enough (L = r0 (1 +
+2.5 law) + 0.02 m) that the law's run-out stays 1.5 law r0 off them. --whole: the whole
+column in the middle of a tank of side 2 L with every wall no-slip, as before.
+
+Prints one JSON line: the furthest particle's radius as (r_inf - r0) / r0 (runout_max), the
+deposit's toe, the outermost radius where the deposit is one particle layer thick (the
+particles' volume over a ring one cell wide, h / 2 = one layer at 2 particles per cell
+along an axis) (runout_toe), the law, each off the law, H_inf / H0 (the highest particle),
+the largest particle speed at the end, whether a particle came within a cell of a far wall,
+the particles and the wall time; then the run-out against time (t: runout_max: largest
+speed).
 """
 import json
 import math
 import sys
 import tempfile
 from pathlib import Path
+
 import numpy as np
+
 from mpmflow.validation import common
-a, cells = float(sys.argv[1]), float(sys.argv[2]); extra = sys.argv[3:]
-r0 = 0.05; H0 = a * r0; h = r0 / cells
+
+args = [a for a in sys.argv[1:] if a != "--whole"]
+whole = "--whole" in sys.argv[1:]
+a, cells = float(args[0]), float(args[1])
+extra = args[2:]
+r0 = 0.05
+H0 = a * r0
+h = r0 / cells
 law = 1.24 * a if a < 1.7 else 1.6 * a ** 0.5
-half = r0 * (1 + 2.5 * law) + 0.02  # wide: APIC over-runs the law
-half = h * math.ceil(half / h)
-dt = min(5e-4, 0.35 * h / math.sqrt(2 * 9.81 * H0)); end = 0.6 + 6 * math.sqrt(H0 / 9.81)
+L = r0 * (1 + 2.5 * law) + 0.02  # wide: APIC over-runs the law
+L = h * math.ceil(L / h)
+dt = min(5e-4, 0.35 * h / math.sqrt(2 * 9.81 * H0))
+end = 0.6 + 6 * math.sqrt(H0 / 9.81)
+folder = Path(tempfile.mkdtemp())
+
+
+def quarter_cylinder_obj(path, n=128):
+    """The quarter of the column in x, y >= 0 as a closed OBJ mesh (n facets on the arc: the
+    facets lie within r0 (1 - cos(pi / 4 n)) = 4 um of the circle)."""
+    arc = [(r0 * math.cos(0.5 * math.pi * i / n), r0 * math.sin(0.5 * math.pi * i / n))
+           for i in range(n + 1)]
+    v = [(0.0, 0.0, 0.0), (0.0, 0.0, H0)] + [(x, y, z) for z in (0.0, H0) for x, y in arc]
+    bot = lambda i: 3 + i  # noqa: E731  (OBJ numbers vertices from 1)
+    top = lambda i: 3 + n + 1 + i  # noqa: E731
+    f = []
+    for i in range(n):
+        f += [(1, bot(i + 1), bot(i)), (2, top(i), top(i + 1)),  # bottom and top, outward
+              (bot(i), bot(i + 1), top(i + 1)), (bot(i), top(i + 1), top(i))]  # the arc
+    f += [(1, bot(0), top(0)), (1, top(0), 2),  # the face on y = 0
+          (1, 2, top(n)), (1, top(n), bot(n))]  # the face on x = 0
+    path.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v)
+                    + "".join(f"f {i} {j} {k}\n" for i, j, k in f))
+
+
+if whole:
+    size, walls, centre = [2 * L, 2 * L], '"no_slip"', [L, L]
+    body = f"""type = "cylinder"
+centre = [{L}, {L}, 0.0]   # the base's centre
+axis = [0.0, 0.0, 1.0]
+radius = {r0}
+length = {H0}"""
+else:
+    size, centre = [L, L], [0.0, 0.0]
+    walls = '{x = "slip", y = "slip", z_min = "no_slip", z_max = "slip"}'
+    quarter_cylinder_obj(folder / "quarter.obj")
+    body = 'type = "mesh"\npath = "quarter.obj"'
 src = (Path(__file__).resolve().parent.parent / "examples" / "granular_collapse.toml").read_text()
-src = src.split("[[bodies]]")[0].split("[domain]")[0] + f"""
+src = src.split("[domain]")[0] + f"""
 [domain]
-size = [{2*half}, {2*half}, {H0*1.15 + 2*h}]
-walls = "no_slip"
+size = [{size[0]}, {size[1]}, {H0 * 1.15 + 2 * h}]
+walls = {walls}
 [grid]
 spacing = {h}
 [[bodies]]
-type = "cylinder"
-centre = [{half}, {half}, 0.0]   # the base's centre
-axis = [0.0, 0.0, 1.0]
-radius = {r0}
-length = {H0}
+{body}
 particles_per_cell = 2
 """ + "[material]" + src.split("[material]")[1]
 src = src.replace("gravity = [0.0, -9.81]", "gravity = [0.0, 0.0, -9.81]")
-p = Path(tempfile.mkdtemp()) / f"col3d_{a}.toml"; p.write_text(src)
-case = common.load_case(p, ["output.snapshots=false", f"time.dt={dt:.4g}", f"time.end={end:.3f}", "output.interval=0.05", *extra])
+p = folder / f"col3d_{a}.toml"
+p.write_text(src)
+case = common.load_case(p, ["output.snapshots=false", f"time.dt={dt:.4g}", f"time.end={end:.3f}",
+                            "output.interval=0.05", *extra])
 sim = common.Simulation(case)
 fr = []
+
+
+def radius(x):
+    return np.hypot(x[:, 0] - centre[0], x[:, 1] - centre[1])
+
+
 def rec(s):
-    x = s.particles.x; r = np.hypot(x[:, 0] - half, x[:, 1] - half)
-    fr.append((s.time, r.max() / r0 - 1, float(np.linalg.norm(s.particles.v, axis=1).max())))
+    fr.append((s.time, radius(s.particles.x).max() / r0 - 1,
+               float(np.linalg.norm(s.particles.v, axis=1).max())))
+
+
 sim.on_output = rec
 sim.run()
-x = sim.particles.x; r = np.hypot(x[:, 0] - half, x[:, 1] - half)
-print(json.dumps({"a": a, "cells": cells, "extra": extra, "particles": sim.particles.count,
-    "runout_max": r.max() / r0 - 1, "runout_p99": float(np.percentile(r, 99.9)) / r0 - 1, "law": law,
-    "off": (r.max() / r0 - 1 - law) / law, "H_inf/H0": float(x[:, 2].max()) / H0,
-    "vmax_end": fr[-1][2], "wall": sim.summary["wall_seconds"]}))
+x = sim.particles.x
+r = radius(x)
+# the deposit's thickness on rings one cell wide: the particles' volume over the ring's area
+edges = np.arange(0.0, r.max() + 2 * h, h)
+vol, _ = np.histogram(r, bins=edges, weights=sim.particles.volume)
+area = (1.0 if whole else 0.25) * math.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+thick = np.nonzero(vol / area >= h / 2)[0]
+toe = edges[thick[-1] + 1] if len(thick) else 0.0
+far = (x[:, :2].max() > 2 * L - h or x[:, :2].min() < h) if whole else x[:, :2].max() > L - h
+law_off = lambda q: (q - law) / law  # noqa: E731
+print(json.dumps({
+    "a": a, "cells": cells, "whole": whole, "extra": extra, "particles": sim.particles.count,
+    "runout_max": r.max() / r0 - 1, "runout_toe": toe / r0 - 1, "law": law,
+    "off_max": law_off(r.max() / r0 - 1), "off_toe": law_off(toe / r0 - 1),
+    "H_inf/H0": float(x[:, 2].max()) / H0, "vmax_end": fr[-1][2], "far_wall_reached": bool(far),
+    "closest_to_far_wall": float(L - x[:, :2].max()) if not whole else None,
+    "wall": sim.summary["wall_seconds"]}))
 print(" ".join(f"{t:.2f}:{q:.2f}:{v:.3f}" for t, q, v in fr[::2]))
