@@ -62,7 +62,7 @@ def rows(transfer):
 
 
 a, b = rows("flip"), rows("apic")
-print(f"| row | measure | default (FLIP 0.99) | APIC | APIC - default |")
+print("| row | measure | default (FLIP 0.99) | APIC | APIC - default |")
 print("|---|---|---|---|---|")
 for key, r in a.items():
     s = b.get(key)

@@ -1,7 +1,6 @@
 """time.dt = "auto" with the projection scheme: each step set by the particles' speeds
 (State.advance_span), within time.max_dt, landing on every output time exactly."""
 
-import json
 
 import numpy as np
 import pytest

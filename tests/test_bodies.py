@@ -3,7 +3,6 @@ filled once, a start never packs more particles in a cell than asked, and a doma
 bodies fill is refused before the run."""
 
 import hypothesis.strategies as st
-import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 

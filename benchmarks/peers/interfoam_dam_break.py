@@ -23,7 +23,6 @@ on its cell volume fractions). The reference was computed with this set-up (Open
 """
 
 import argparse
-import json
 import os
 import re
 import shutil

@@ -279,7 +279,7 @@ class ProjectionScheme:
                 "largest residual at node ("
                 + ", ".join(f"{c:.4g}" for c in self.grid.node_coordinates()[worst])
                 + ") m. "
-                f"Try a smaller time.dt, a larger solver.max_iterations"
+                "Try a smaller time.dt, a larger solver.max_iterations"
                 + (", or a smaller material.max_viscosity" if m.model in
                    ("herschel_bulkley", "mu_i") else "") + ".")
         raise SolverError(f"The step failed{where} with status {status}.")

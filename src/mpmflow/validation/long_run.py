@@ -24,7 +24,6 @@ fractions f (particle volume in the cell over the cell's volume):
   (volume / tank width).
 """
 
-import math
 
 import numpy as np
 

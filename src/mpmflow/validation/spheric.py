@@ -26,7 +26,6 @@ output times (no snapshot files).
 """
 
 import math
-from pathlib import Path
 
 import numpy as np
 
