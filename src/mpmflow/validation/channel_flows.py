@@ -277,6 +277,15 @@ def _plot(ax, runs, key, curve, yfine, label_theory, title):
     ax.legend(fontsize=8)
 
 
+def _order_row(case, quantity, error, runs, errors,
+               miss="the error does not fall with the mesh"):
+    """The row of the observed order of ``errors`` (one per run) over the runs' meshes."""
+    return Row(case, f"{quantity}, observed order",
+               f"least-squares slope of log({error}) against log(h), 2 meshes",
+               observed_order([r["h"] for r in runs], errors), TOL_ORDER, WHY_ORDER,
+               sense=">=", miss=miss)
+
+
 def _section(n):
     return __doc__.split("\n\n")[n]
 
@@ -296,13 +305,10 @@ def run_poiseuille(out, quick=False, context=None):
         res.rows.append(Row("poiseuille", f"steady profile, h = {r['h']:g} m",
                             "L2 of the bin means against the parabola, relative", r["steady"],
                             TOL_STEADY, WHY_STEADY, miss=miss_mesh))
-    hs = [r["h"] for r in runs]
     for key, name, miss in (("startup", "start-up", MISS_STARTUP_ORDER),
                             ("steady", "steady", "the error does not fall with the mesh")):
-        res.rows.append(Row("poiseuille", f"{name} profile, observed order",
-                            "least-squares slope of log(L2) against log(h), 2 meshes",
-                            observed_order(hs, [r[key] for r in runs]), TOL_ORDER, WHY_ORDER,
-                            sense=">=", miss=miss))
+        res.rows.append(_order_row("poiseuille", f"{name} profile", "L2", runs,
+                                   [r[key] for r in runs], miss))
     r0 = runs[0]
     H, nu, gs = r0["H"], r0["nu"], r0["gs"]
     yf = np.linspace(0.0, H, 200)
@@ -338,11 +344,8 @@ def run_plug(out, quick=False, context=None):
         res.rows.append(Row("bingham_plug", f"plug speed, h = {r['h']:g} m",
                             "|top bin - theory| / theory", abs(r["speed_error"]),
                             TOL_PLUG_SPEED, WHY_PLUG_SPEED, miss=miss_mesh))
-    res.rows.append(Row("bingham_plug", "profile, observed order",
-                        "least-squares slope of log(L2 of the profile) against log(h), 2 meshes",
-                        observed_order([r["h"] for r in runs], [r["profile"] for r in runs]),
-                        TOL_ORDER, WHY_ORDER, sense=">=",
-                        miss="the error does not fall with the mesh"))
+    res.rows.append(_order_row("bingham_plug", "profile", "L2 of the profile", runs,
+                               [r["profile"] for r in runs]))
     r0 = runs[0]
     H = r0["H"]
     yf = np.linspace(0.0, H, 200)
@@ -376,12 +379,8 @@ def run_layer(out, quick=False, context=None):
                             miss=("too few cells across the layer: the first cell above the "
                                   "no-slip bed, where the shear is largest, lags (see the "
                                   "table)")))
-    res.rows.append(Row("mu_i_layer", "surface velocity, observed order",
-                        "least-squares slope of log(error) against log(h), 2 meshes",
-                        observed_order([r["h"] for r in runs],
-                                       [abs(r["surface_error"]) for r in runs]),
-                        TOL_ORDER, WHY_ORDER, sense=">=",
-                        miss="the error does not fall with the mesh"))
+    res.rows.append(_order_row("mu_i_layer", "surface velocity", "error", runs,
+                               [abs(r["surface_error"]) for r in runs]))
     r0 = runs[0]
     H = r0["H"]
     yf = np.linspace(0.0, H, 200)
