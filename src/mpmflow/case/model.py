@@ -16,7 +16,6 @@ from .sections import (MAX_STEPS, Checkpoint, Domain, Execution, GridSettings, M
 from .shapes import Body, Obstacle
 
 
-
 # A periodic axis is halved by the multigrid while its period stays a multiple of 4
 # (src/core/multigrid.cpp); the points left on the coarsest level enter a dense solve at
 # every step (with the other axes' 2 or 3 points: at most a few hundred unknowns).
