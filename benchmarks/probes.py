@@ -18,7 +18,8 @@ import numpy as np
 
 from mpmflow import load_case, probes
 from mpmflow.cells import bin_particles
-from mpmflow.setup_case import build_grid, build_particles
+from mpmflow.geometry.seeding import build_particles
+from mpmflow.grid import Grid
 from pathlib import Path
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -35,7 +36,7 @@ def main():
         "probes": [{"name": f"p{k}", "quantity": "pressure", "position": p}
                    for k, p in enumerate(wall + inside)]
         + [{"name": f"h{k}", "quantity": "level", "position": p} for k, p in enumerate(gauges)]})
-    grid = build_grid(case)
+    grid = Grid.of_case(case)
     particles = build_particles(case, grid)
     particles.pressure[:] = RHO * G * (DEPTH - particles.x[:, 2])
     bins = bin_particles(grid, particles)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mpmflow import Simulation, load_case
-from mpmflow.bodies import fills_grid, overlap_message
+from mpmflow.geometry.bodies import fills_grid, overlap_message
 from mpmflow.diagnostics import front_and_height
 from mpmflow.errors import CaseError
 from mpmflow.grid import Grid

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from mpmflow import Simulation, load_case
-from mpmflow.setup_case import build_grid, build_particles
+from mpmflow.geometry.seeding import build_particles
+from mpmflow.grid import Grid
 from mpmflow.schemes import make_scheme
 
 from conftest import EXAMPLES, make_case
@@ -41,7 +42,7 @@ def test_subcell_surface_makes_one_step_exactly_hydrostatic(depth):
     dp = spacing / ppc
     top = np.floor(depth / dp) * dp
     case = make_case(body=((0, 0), (0.1, top)), spacing=spacing, ppc=ppc)
-    grid = build_grid(case)
+    grid = Grid.of_case(case)
     P = build_particles(case, grid)
     scheme = make_scheme(case, grid, P)
     scheme.advance(1e-3, 1)

@@ -6,7 +6,9 @@ import pytest
 from mpmflow import state
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.particles import Particles, lattice_in_box, seed_box
+from mpmflow.geometry.lattice import lattice_in_box
+from mpmflow.geometry.seeding import seed_box
+from mpmflow.particles import Particles
 
 
 def test_gauss_cell_integrals_are_the_bilinear_element_matrices():

@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from mpmflow import shapes
+from mpmflow.geometry import meshes, shapes
 from mpmflow.case import validate
 from mpmflow.errors import CaseError
 from mpmflow.grid import Grid
-from mpmflow.setup_case import build_particles
+from mpmflow.geometry.seeding import build_particles
 
 RNG = np.random.default_rng(15)
 
@@ -120,7 +120,7 @@ def _write(mesh, path):
 
 def test_mesh_box_and_sphere_match_the_analytic_shapes(tmp_path):
     path = _write(trimesh.creation.box(extents=[0.2, 0.1, 0.3]), tmp_path / "box.stl")
-    mesh = shapes.load_mesh(path, translate=[0.5, 0.5, 0.5])
+    mesh = meshes.load_mesh(path, translate=[0.5, 0.5, 0.5])
     box = shapes.Box([0.4, 0.45, 0.35], [0.6, 0.55, 0.65])
     x = RNG.uniform(0.3, 0.7, (20000, 3))
     assert (mesh.contains(x) == box.contains(x)).all()
@@ -131,7 +131,7 @@ def test_mesh_box_and_sphere_match_the_analytic_shapes(tmp_path):
 
     ico = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
     path = _write(ico, tmp_path / "ball.obj")
-    mesh = shapes.load_mesh(path, scale=0.1)  # file in decimetres
+    mesh = meshes.load_mesh(path, scale=0.1)  # file in decimetres
     x = RNG.uniform(-0.12, 0.12, (20000, 3))
     r = np.linalg.norm(x, axis=1)
     facet = 0.1 * (1 - np.min(np.linalg.norm(ico.triangles_center, axis=1)))  # facet error
@@ -141,14 +141,14 @@ def test_mesh_box_and_sphere_match_the_analytic_shapes(tmp_path):
 
 
 def test_mesh_points_on_the_surface_count_as_inside(tmp_path):
-    mesh = shapes.load_mesh(_write(trimesh.creation.box(extents=[1, 1, 1]), tmp_path / "b.stl"))
+    mesh = meshes.load_mesh(_write(trimesh.creation.box(extents=[1, 1, 1]), tmp_path / "b.stl"))
     faces = np.array([[0.5, 0.1, -0.2], [0.5, 0.5, 0.5], [0.0, 0.0, -0.5], [0.5 + 1e-9, 0, 0]])
     assert mesh.contains(faces).tolist() == [True, True, True, False]
 
 
 def test_winding_number_tolerates_a_missing_triangle():
     ico = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
-    holed = shapes.Mesh(ico.vertices, ico.faces[1:])
+    holed = meshes.Mesh(ico.vertices, ico.faces[1:])
     hole = ico.triangles_center[0]
     x = RNG.uniform(-1.2, 1.2, (20000, 3))
     r = np.linalg.norm(x, axis=1)
@@ -162,15 +162,15 @@ def test_meshes_that_are_open_empty_missing_or_unreadable_are_refused(tmp_path):
     _write(open_mesh, tmp_path / "open.stl")
     with pytest.raises(ValueError, match=r"bodies.1.path = 'open.stl' is not a closed surface: "
                                          r"3 boundary edges.*trimesh.repair.fill_holes"):
-        shapes.load_mesh(tmp_path / "open.stl", key="bodies.1", shown="open.stl")
+        meshes.load_mesh(tmp_path / "open.stl", key="bodies.1", shown="open.stl")
     (tmp_path / "empty.stl").write_bytes(b"")
     with pytest.raises(ValueError, match="empty.stl.*(holds no triangles|cannot be read)"):
-        shapes.load_mesh(tmp_path / "empty.stl", key="obstacles.0")
+        meshes.load_mesh(tmp_path / "empty.stl", key="obstacles.0")
     with pytest.raises(ValueError, match="obstacles.0.path = .*none.stl.* does not exist"):
-        shapes.load_mesh(tmp_path / "none.stl", key="obstacles.0")
+        meshes.load_mesh(tmp_path / "none.stl", key="obstacles.0")
     (tmp_path / "junk.obj").write_text("this is not an obj file\n")
     with pytest.raises(ValueError, match="junk.obj"):
-        shapes.load_mesh(tmp_path / "junk.obj", key="obstacles.0")
+        meshes.load_mesh(tmp_path / "junk.obj", key="obstacles.0")
 
 
 def _cube_triangles():
@@ -217,7 +217,7 @@ def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
     }
     for name, data in files.items():
         (tmp_path / name).write_bytes(data)
-        mesh = shapes.load_mesh(tmp_path / name, key="bodies.1", shown=name)
+        mesh = meshes.load_mesh(tmp_path / name, key="bodies.1", shown=name)
         assert mesh.volume() == pytest.approx(1.0) and len(mesh.faces) == 12, name
         assert mesh.contains([[0.5, 0.5, 0.5], [1.5, 0.5, 0.5]]).tolist() == [True, False]
         counted = {"too_many.stl": 15, "too_few.stl": 3, "zero.stl": 0}.get(name)
@@ -226,7 +226,7 @@ def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
             "but its 684 bytes hold 12; the 12 triangles of the file were read"])
     (tmp_path / "cut.stl").write_bytes(binary_stl(tri)[:-7])
     with pytest.raises(ValueError) as err:
-        shapes.load_mesh(tmp_path / "cut.stl", key="obstacles.0", shown="cut.stl")
+        meshes.load_mesh(tmp_path / "cut.stl", key="obstacles.0", shown="cut.stl")
     assert str(err.value) == (
         "obstacles.0.path = 'cut.stl' is a binary STL whose header counts 12 triangles (684 "
         "bytes), but the file has 677 bytes: 11 whole triangles and 43 bytes more, so it is "
@@ -238,7 +238,7 @@ def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
     with pytest.raises(ValueError, match=r"'short.stl' is not a closed surface \(the binary "
                        r"STL's header counts 12 triangles but its 634 bytes hold 11; the 11 "
                        r"triangles of the file were read\): 3 boundary edges"):
-        shapes.load_mesh(tmp_path / "short.stl", key="obstacles.0", shown="short.stl")
+        meshes.load_mesh(tmp_path / "short.stl", key="obstacles.0", shown="short.stl")
 
 
 def test_a_wrong_count_is_a_notice_of_the_run(tmp_path):
@@ -257,7 +257,7 @@ def test_a_folder_as_the_mesh_path_is_named_a_folder(tmp_path):
     """It was reported as missing."""
     (tmp_path / "parts.stl").mkdir()
     with pytest.raises(ValueError) as err:
-        shapes.load_mesh(tmp_path / "parts.stl", key="obstacles.0", shown="parts.stl")
+        meshes.load_mesh(tmp_path / "parts.stl", key="obstacles.0", shown="parts.stl")
     assert str(err.value) == (
         "obstacles.0.path = 'parts.stl' is a folder, not a file; give the path of an STL or "
         "OBJ file (relative paths are taken from the case file's folder).")
@@ -283,13 +283,13 @@ def test_a_mesh_enclosing_no_volume_is_refused_without_a_library_warning(tmp_pat
         assert "at most 0 m" not in str(err.value)
         with pytest.raises(ValueError, match="'point.stl' holds no triangles .*only triangles "
                            "with no area"):
-            shapes.load_mesh(tmp_path / "point.stl", key="obstacles.0", shown="point.stl")
+            meshes.load_mesh(tmp_path / "point.stl", key="obstacles.0", shown="point.stl")
 
 
 def test_an_inside_out_mesh_is_turned_outwards(tmp_path):
     ico = trimesh.creation.icosphere(subdivisions=1)
     inverted = trimesh.Trimesh(ico.vertices, ico.faces[:, ::-1], process=False)
-    mesh = shapes.load_mesh(_write(inverted, tmp_path / "inv.stl"))
+    mesh = meshes.load_mesh(_write(inverted, tmp_path / "inv.stl"))
     assert mesh.contains([[0, 0, 0], [2, 0, 0]]).tolist() == [True, False]
 
 
@@ -414,7 +414,7 @@ def test_the_cli_refuses_an_open_mesh_in_one_paragraph(tmp_path):
         '[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n'
         'end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n'
         '[[obstacles]]\ntype = "mesh"\npath = "open.stl"\ntranslate = [0.1, 0.1, 0.2]\n')
-    env = {**os.environ, "PYTHONPATH": str(Path(shapes.__file__).parents[1])}
+    env = {**os.environ, "PYTHONPATH": str(Path(shapes.__file__).parents[2])}
     res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run", "case.toml", "--out",
                           "o"], capture_output=True, text=True, cwd=tmp_path, timeout=300,
                          env=env)

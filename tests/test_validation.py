@@ -12,7 +12,8 @@ from mpmflow import validation
 from mpmflow.case import validate
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
-from mpmflow.setup_case import build_grid, build_particles
+from mpmflow.geometry.seeding import build_particles
+from mpmflow.grid import Grid
 from mpmflow.validation import run_validation
 from mpmflow.validation.report import TITLE, check_report_folder
 
@@ -192,7 +193,7 @@ def _case(amplitude, top=0.2, height=0.3):
 
 def test_cosine_surface_body_holds_the_mean_depth_and_its_shape():
     case = _case(0.008)
-    P = build_particles(case, build_grid(case))
+    P = build_particles(case, Grid.of_case(case))
     dp = 0.0025
     assert P.count * dp * dp == pytest.approx(0.4 * 0.2, rel=0.01)
     left, right = P.x[P.x[:, 0] < dp], P.x[P.x[:, 0] > 0.4 - dp]

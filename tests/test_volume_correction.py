@@ -8,7 +8,7 @@ from mpmflow import Simulation, load_case, state
 from mpmflow.case import validate
 from mpmflow.cells import bin_particles
 from mpmflow.grid import Grid
-from mpmflow.particles import seed_box
+from mpmflow.geometry.seeding import seed_box
 
 from conftest import EXAMPLES, make_case
 

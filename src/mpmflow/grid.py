@@ -17,6 +17,11 @@ class Grid:
     periodic: tuple[bool, ...] = ()
 
     @classmethod
+    def of_case(cls, case):
+        """The grid of a validated case: its domain, spacing and periodic axes."""
+        return cls.covering(case.domain.size, case.grid.spacing, periodic=case.domain.periodic)
+
+    @classmethod
     def covering(cls, size, spacing, rtol=1e-6, periodic=None):
         """The grid of the given spacing that covers the box [0, size], periodic along the
         axes where ``periodic[k]`` (None: none).

@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import bodies as geometry
+from .geometry import bodies
 from .errors import CaseError
 from .grid import Grid
 
@@ -107,7 +107,7 @@ def estimate(case):
     # pressure unknowns: the nodes of the cells the material covers, with room to spread
     unknowns = 0.0
     for k, body in enumerate(case.bodies):
-        lo, hi = geometry.seed_region(body, case.body_shape(k), h)  # a cosine top included
+        lo, hi = bodies.seed_region(body, case.body_shape(k), h)  # a cosine top included
         unknowns += math.prod((float(b) - float(a)) / h + 1 for a, b in zip(lo, hi))
     unknowns = min(nodes, SPREAD * unknowns)
     rows = case.time.end / case.output.interval + 2

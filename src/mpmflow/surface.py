@@ -104,7 +104,8 @@ def obstacle_triangles(summary, notes, samples=32):
     note (as for the slice's obstacles)."""
     from .case import validate_case
     from .errors import CaseError
-    from .shapes import Box, Mesh
+    from .geometry.meshes import Mesh
+    from .geometry.shapes import Box
 
     spec = summary.get("case", {})
     if not spec.get("obstacles"):

@@ -7,8 +7,10 @@ from typing import Optional
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
-from .. import bodies as geometry
-from .. import placement, schemes, shapes
+from .. import schemes
+from ..geometry import bodies, placement
+from ..geometry.specs import from_spec
+from ..geometry.shapes import DIM_OF
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
 from .sections import (MAX_STEPS, Checkpoint, Domain, Execution, GridSettings, Material,
@@ -74,7 +76,7 @@ class Case(_Section):
         spec = getattr(self, kind)[k]
         key = (kind, k, spec.model_dump_json(), str(self.base_dir))
         if key not in self._shapes:
-            self._shapes[key] = shapes.from_spec(spec, len(self.domain.size), self.base_dir,
+            self._shapes[key] = from_spec(spec, len(self.domain.size), self.base_dir,
                                                  key=f"{kind}.{k}")
         return self._shapes[key]
 
@@ -136,11 +138,11 @@ class Case(_Section):
         return None
 
     def body_shape(self, k):
-        """The ``mpmflow.shapes`` shape of bodies.k."""
+        """The ``geometry.shapes`` shape of bodies.k."""
         return self._shape("bodies", k)
 
     def obstacle_shape(self, k):
-        """The ``mpmflow.shapes`` shape of obstacles.k."""
+        """The ``geometry.shapes`` shape of obstacles.k."""
         return self._shape("obstacles", k)
 
     def particle_counts(self):
@@ -150,7 +152,7 @@ class Case(_Section):
         if key not in self._counts:
             obstacles = [self.obstacle_shape(j) for j in range(len(self.obstacles))]
             self._counts[key] = [
-                geometry.particle_count(b, self.grid.spacing, self.body_shape(k), obstacles)
+                bodies.particle_count(b, self.grid.spacing, self.body_shape(k), obstacles)
                 for k, b in enumerate(self.bodies)]
         return self._counts[key]
 
@@ -166,11 +168,11 @@ class Case(_Section):
         vectors = [("physics.gravity", self.physics.gravity)]
         for kind, specs in (("bodies", self.bodies), ("obstacles", self.obstacles)):
             for k, spec in enumerate(specs):
-                if D not in shapes.DIM_OF[spec.type]:
-                    other = [t for t, d in shapes.DIM_OF.items() if D in d]
+                if D not in DIM_OF[spec.type]:
+                    other = [t for t, d in DIM_OF.items() if D in d]
                     raise ValueError(
                         f"{kind}.{k}.type = {spec.type!r} is a shape of "
-                        f"{shapes.DIM_OF[spec.type][0]}D cases, but domain.size = "
+                        f"{DIM_OF[spec.type][0]}D cases, but domain.size = "
                         f"{self.domain.size} makes this case {D}D; give {kind}.{k} one of the "
                         f"{D}D shapes ({', '.join(repr(t) for t in other)})")
                 vectors += [(f"{kind}.{k}.{name}", getattr(spec, name)) for name in spec.VECTORS
@@ -235,7 +237,7 @@ class Case(_Section):
                     "number to hold (masses and energies would be zero); give the density "
                     "in kg/m^3 (water: 1000)")
         for k, body in enumerate(self.bodies):
-            if not geometry.is_box(body):
+            if not bodies.is_box(body):
                 continue  # placement.check
             crest = body.max[1] + abs(body.surface_amplitude)
             if body.surface_amplitude and crest > size[1] * (1 + 1e-12):
@@ -249,7 +251,7 @@ class Case(_Section):
                     raise ValueError(
                         f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
                         f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
-        overlap = geometry.overlap_message(self.bodies, self.grid.spacing)
+        overlap = bodies.overlap_message(self.bodies, self.grid.spacing)
         if overlap:
             raise ValueError(overlap)
         body_shapes = [self.body_shape(k) for k in range(len(self.bodies))]
@@ -269,7 +271,7 @@ class Case(_Section):
                         raise ValueError(message)
         if self.solver.scheme == "projection":
             grid = Grid.covering(size, self.grid.spacing)
-            if geometry.fills_grid(self.bodies, self.grid.spacing, grid.size):
+            if bodies.fills_grid(self.bodies, self.grid.spacing, grid.size):
                 used = " x ".join(f"{s:.6g}" for s in grid.size)
                 raise ValueError(
                     f"the bodies fill the whole domain ({used} m on the grid), leaving no "

@@ -1,12 +1,12 @@
 """The shapes of bodies and obstacles in the case file: one model per shape type holding
 only the shape's fields; bodies and obstacles add their own fields to the same shape
-classes (``mpmflow.shapes`` builds the geometry from them)."""
+classes (``mpmflow.geometry`` builds the geometry from them)."""
 
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
-from .. import shapes
+from ..geometry import shapes
 from .sections import _Section
 
 
@@ -14,7 +14,7 @@ from .sections import _Section
 # --------------------------------------------------------------------------- shapes
 # The shape of a body or an obstacle: one class per shape type, holding only the shape's
 # fields; bodies and obstacles add their own fields to the same shape classes
-# (mpmflow.shapes builds the geometry from them).
+# (mpmflow.geometry builds the geometry from them).
 
 SHAPE_TYPES = ("box", "cylinder", "sphere", "disc", "polygon", "mesh")
 _TYPE_DOC = (

@@ -6,10 +6,11 @@ from dataclasses import dataclass
 
 from .. import checkpoint, memory, obstacles
 from ..errors import CaseError, SolverError
+from ..geometry.seeding import build_particles
+from ..grid import Grid
 from ..materials import stiffness
 from ..particles import subset
 from ..schemes import make_scheme
-from ..setup_case import build_grid, build_particles
 from ..stability import time_step
 from ..threads import setting_from
 
@@ -32,7 +33,7 @@ def build(case):
     # the content of the files the case reads, as this run reads them (checkpoints keep
     # it, and a restart with other files is refused)
     files = checkpoint.file_hashes(case)
-    grid = build_grid(case)
+    grid = Grid.of_case(case)
     particles = build_particles(case, grid)
     if particles.count == 0:
         raise CaseError("The bodies hold no particles: every body is thinner than one "

@@ -1,213 +1,14 @@
-"""Solid shapes in 2D and 3D for bodies and obstacles: containment, signed distance, bounds.
-
-Every shape answers, for points given as an (n, D) array in metres:
-
-* ``contains(points)``: (n,) bool, inside or on the boundary (within ``ON_SURFACE`` m);
-* ``signed_distance(points)``: (n,) float (m), negative inside, positive outside: the exact
-  Euclidean distance to the surface for the primitives; for a mesh the unsigned distance to
-  the nearest triangle with the sign of the containment test;
-* ``bounds()``: the corners (lo, hi) of its axis-aligned bounding box (m);
-* ``volume()``: m^3 in 3D, the area (m^2) in 2D;
-* ``support(direction)``: the largest x . direction over the shape (m for a unit direction),
-  e.g. the height of its highest point against gravity.
-
-Shapes: ``Box`` (2D, 3D), ``Disc`` and ``Polygon`` (2D), ``Sphere``, ``Cylinder`` and
-``Mesh`` (3D). ``from_spec`` builds one from a case's ``[[bodies]]`` or ``[[obstacles]]``
-table. Everything is vectorised NumPy except the mesh's sums over triangles, which come
-from libigl (``igl``: fast winding number, point-to-mesh distance).
-"""
+"""Closed triangle meshes (3D): the ``Mesh`` shape and the reading of STL and OBJ files
+(trimesh), with the user's message for every way a file can be damaged."""
 
 import functools
 import io
-import math
 from pathlib import Path
 
 import igl
 import numpy as np
 
-ON_SURFACE = 1e-12  # m: a point this close to the surface counts as inside
-
-DIM_OF = {"box": (2, 3), "disc": (2,), "polygon": (2,), "sphere": (3,), "cylinder": (3,),
-          "mesh": (3,)}
-
-
-def _points(points, dim):
-    x = np.asarray(points, dtype=float)
-    if x.ndim == 1 and x.shape[0] == dim:
-        x = x[None, :]
-    if x.ndim != 2 or x.shape[1] != dim:
-        raise ValueError(f"points must be an (n, {dim}) array of coordinates (m), got shape "
-                         f"{x.shape}")
-    return x
-
-
-class Shape:
-    """A closed solid region; subclasses define ``dim`` and the methods below."""
-
-    dim: int
-
-    def contains(self, points):
-        """(n,) bool: inside or on the boundary within ON_SURFACE (m)."""
-        return self.signed_distance(points) <= ON_SURFACE
-
-    def signed_distance(self, points):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def bounds(self):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def volume(self):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def support(self, direction):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-
-class Box(Shape):
-    """Axis-aligned box [lo, hi] (m), 2D or 3D."""
-
-    def __init__(self, lo, hi):
-        self.lo = np.asarray(lo, dtype=float)
-        self.hi = np.asarray(hi, dtype=float)
-        self.dim = len(self.lo)
-
-    def contains(self, points):
-        x = _points(points, self.dim)
-        return np.all((x >= self.lo - ON_SURFACE) & (x <= self.hi + ON_SURFACE), axis=1)
-
-    def signed_distance(self, points):
-        x = _points(points, self.dim)
-        q = np.abs(x - 0.5 * (self.lo + self.hi)) - 0.5 * (self.hi - self.lo)
-        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
-        return outside + np.minimum(q.max(axis=1), 0.0)
-
-    def bounds(self):
-        return self.lo.copy(), self.hi.copy()
-
-    def volume(self):
-        return float(np.prod(self.hi - self.lo))
-
-    def support(self, direction):
-        d = np.asarray(direction, dtype=float)
-        return float(np.sum(np.where(d > 0, self.hi, self.lo) * d))
-
-
-class Ball(Shape):
-    """Points within ``radius`` (m) of ``centre``: a disc in 2D, a sphere in 3D."""
-
-    def __init__(self, centre, radius):
-        self.centre = np.asarray(centre, dtype=float)
-        self.radius = float(radius)
-        self.dim = len(self.centre)
-
-    def signed_distance(self, points):
-        x = _points(points, self.dim)
-        return np.linalg.norm(x - self.centre, axis=1) - self.radius
-
-    def bounds(self):
-        return self.centre - self.radius, self.centre + self.radius
-
-    def volume(self):
-        r = self.radius
-        return math.pi * r * r if self.dim == 2 else 4.0 / 3.0 * math.pi * r ** 3
-
-    def support(self, direction):
-        d = np.asarray(direction, dtype=float)
-        return float(self.centre @ d + self.radius * np.linalg.norm(d))
-
-
-Disc = Sphere = Ball
-
-
-class Cylinder(Shape):
-    """A solid circular cylinder (3D) with flat ends: the base's centre ``base`` (m), the
-    ``axis`` direction (any length), ``radius`` and ``length`` (m) along the axis."""
-
-    dim = 3
-
-    def __init__(self, base, axis, radius, length):
-        self.base = np.asarray(base, dtype=float)
-        axis = np.asarray(axis, dtype=float)
-        norm = np.linalg.norm(axis)
-        if not norm > 0:
-            raise ValueError("the cylinder's axis must not be the zero vector")
-        self.axis = axis / norm
-        self.radius = float(radius)
-        self.length = float(length)
-
-    def signed_distance(self, points):
-        x = _points(points, 3) - self.base
-        t = x @ self.axis
-        rho = np.linalg.norm(x - t[:, None] * self.axis, axis=1)
-        dr = rho - self.radius
-        da = np.abs(t - 0.5 * self.length) - 0.5 * self.length
-        return (np.minimum(np.maximum(dr, da), 0.0)
-                + np.hypot(np.maximum(dr, 0.0), np.maximum(da, 0.0)))
-
-    def bounds(self):
-        top = self.base + self.length * self.axis
-        reach = self.radius * np.sqrt(np.clip(1.0 - self.axis ** 2, 0.0, 1.0))
-        return np.minimum(self.base, top) - reach, np.maximum(self.base, top) + reach
-
-    def volume(self):
-        return math.pi * self.radius ** 2 * self.length
-
-    def support(self, direction):
-        d = np.asarray(direction, dtype=float)
-        along = self.axis @ d
-        across = math.sqrt(max(float(d @ d) - along * along, 0.0))
-        return float(self.base @ d + max(0.0, self.length * along) + self.radius * across)
-
-
-class Polygon(Shape):
-    """A simple polygon (2D, convex or not) through ``vertices`` (m), closed implicitly."""
-
-    dim = 2
-
-    def __init__(self, vertices):
-        v = np.asarray(vertices, dtype=float)
-        self.vertices = v
-        self.a = v
-        self.b = np.roll(v, -1, axis=0)
-
-    def _edge_distance(self, x):
-        best = np.full(len(x), np.inf)
-        for a, b in zip(self.a, self.b):
-            e = b - a
-            t = np.clip(((x - a) @ e) / (e @ e), 0.0, 1.0)
-            best = np.minimum(best, np.linalg.norm(x - a - t[:, None] * e, axis=1))
-        return best
-
-    def _crossings(self, x):
-        """Inside by the crossing number: a ray to +x crosses an odd number of edges (the
-        half-open rule counts a vertex on the ray once)."""
-        inside = np.zeros(len(x), dtype=bool)
-        px, py = x[:, 0], x[:, 1]
-        for (ax, ay), (bx, by) in zip(self.a, self.b):
-            if ay == by:
-                continue  # a horizontal edge never crosses the ray by the half-open rule
-            straddles = (ay > py) != (by > py)
-            cross_x = ax + (py - ay) * (bx - ax) / (by - ay)
-            inside ^= straddles & (px < cross_x)
-        return inside
-
-    def contains(self, points):
-        x = _points(points, 2)
-        return self._crossings(x) | (self._edge_distance(x) <= ON_SURFACE)
-
-    def signed_distance(self, points):
-        x = _points(points, 2)
-        d = self._edge_distance(x)
-        return np.where(self._crossings(x) | (d == 0.0), -d, d)
-
-    def bounds(self):
-        return self.vertices.min(axis=0), self.vertices.max(axis=0)
-
-    def volume(self):
-        return float(0.5 * abs(np.sum(self.a[:, 0] * self.b[:, 1] - self.b[:, 0] * self.a[:, 1])))
-
-    def support(self, direction):
-        return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
+from .shapes import ON_SURFACE, Shape, as_points
 
 
 class Mesh(Shape):
@@ -260,7 +61,7 @@ class Mesh(Shape):
 
     def winding_number(self, points):
         """(n,) generalised winding number at the points, and (n,) bool: on the surface."""
-        x = np.ascontiguousarray(_points(points, 3))
+        x = np.ascontiguousarray(as_points(points, 3))
         if not (len(x) and len(self.faces)):
             return np.zeros(len(x)), np.zeros(len(x), dtype=bool)
         d = self.unsigned_distance(x)
@@ -279,7 +80,7 @@ class Mesh(Shape):
         return out
 
     def contains(self, points):
-        x = _points(points, 3)
+        x = as_points(points, 3)
         near = self._near_box(x)
         d = np.full(len(x), np.inf)
         d[near] = self.unsigned_distance(x[near])
@@ -287,14 +88,14 @@ class Mesh(Shape):
 
     def unsigned_distance(self, points):
         """(n,) distance (m) to the nearest triangle."""
-        x = np.ascontiguousarray(_points(points, 3))
+        x = np.ascontiguousarray(as_points(points, 3))
         if not (len(x) and len(self.faces)):
             return np.full(len(x), np.inf)
         d2, _, _ = igl.point_mesh_squared_distance(x, self.vertices, self.faces)
         return np.sqrt(d2)
 
     def signed_distance(self, points):
-        x = _points(points, 3)
+        x = as_points(points, 3)
         d = self.unsigned_distance(x)
         return np.where(self._inside(x, d) & (d > 0), -d, d)
 
@@ -307,53 +108,6 @@ class Mesh(Shape):
 
     def support(self, direction):
         return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
-
-
-def polygon_problem(vertices):
-    """Why these corners (m) are not a simple polygon (all on one line, edges that cross or
-    touch), or None. O(n^2) in the corners: a case's polygon has tens, not thousands. The
-    crossing edges are looked for before the area: a bow tie's two loops can enclose areas
-    that cancel, and "no area" would hide that its edges cross."""
-    v = np.asarray(vertices, dtype=float)
-    d = v - v[0]
-    far = d[np.argmax(np.abs(d).sum(axis=1))]
-    if not np.any(far[0] * d[:, 1] - far[1] * d[:, 0]):
-        return ("vertices: the polygon's corners lie on one line, so they enclose no area; "
-                "give its corners in order around its boundary")
-    crossing = _crossing_edges(v)
-    if crossing:
-        return crossing
-    area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
-    if not abs(area) > 0:
-        return ("vertices: the polygon's corners enclose no area; give its corners in order "
-                "around its boundary")
-    return None
-
-
-def _crossing_edges(v):
-    """The message for the first two edges of the polygon v that cross (each passes
-    through the other's inside) or touch, or None."""
-    n = len(v)
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    def spans_meet(a, b, c, d, k):
-        return max(min(a[k], b[k]), min(c[k], d[k])) <= min(max(a[k], b[k]), max(c[k], d[k]))
-
-    for i in range(n):
-        a, b = v[i], v[(i + 1) % n]
-        for j in range(i + 2, n):
-            if (j + 1) % n == i:
-                continue  # the last edge and the first share a corner
-            c, d = v[j], v[(j + 1) % n]
-            sides = (cross(c, d, a) * cross(c, d, b), cross(a, b, c) * cross(a, b, d))
-            if (max(sides) <= 0 and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
-                how = "cross" if max(sides) < 0 else "touch"
-                return (f"vertices: the polygon's edges {i} (corners {i} to {(i + 1) % n}) and "
-                        f"{j} (corners {j} to {(j + 1) % n}) {how}, so it is not a simple "
-                        "polygon; list its corners in order around the boundary")
-    return None
 
 
 # --------------------------------------------------------------------------- mesh files
@@ -585,31 +339,3 @@ def _check_extent(key, shown, scale, vertices, v, faces):
             f"{key}.translate moves {shown} (up to {np.abs(scaled).max():.4g} m across) so "
             "far that its coordinates lose its shape; give the shift (m) that places it in "
             "the domain.")
-
-
-# --------------------------------------------------------------------------- case tables
-
-def from_spec(spec, dim, base_dir, key=None):
-    """The Shape of a case's ``[[bodies]]`` or ``[[obstacles]]`` table ``spec`` (its ``type``
-    and shape fields) in a ``dim``-dimensional case. ``base_dir``: the folder relative mesh
-    paths start from (the case file's). ``key``: the table's name for messages, e.g.
-    "obstacles.1". ValueError for a shape the dimension does not offer or a bad mesh."""
-    kind = getattr(spec, "type", "box")
-    key = key or kind
-    if dim not in DIM_OF[kind]:
-        others = ", ".join(k for k, d in DIM_OF.items() if dim in d)
-        raise ValueError(f"{key}.type = {kind!r} is a {DIM_OF[kind][0]}D shape but the case "
-                         f"is {dim}D; use one of {others} (or give domain.size "
-                         f"{DIM_OF[kind][0]} entries)")
-    if kind == "box":
-        return Box(spec.min, spec.max)
-    if kind in ("disc", "sphere"):
-        return Ball(spec.centre, spec.radius)
-    if kind == "cylinder":
-        return Cylinder(spec.centre, spec.axis, spec.radius, spec.length)
-    if kind == "polygon":
-        return Polygon(spec.vertices)
-    path = Path(spec.path).expanduser()
-    if not path.is_absolute():
-        path = Path(base_dir) / path
-    return load_mesh(path, spec.scale, spec.translate, key=key, shown=spec.path)

@@ -21,7 +21,8 @@ that involve the other shapes and the obstacles:
 
 import numpy as np
 
-from . import bodies as geometry
+from . import bodies
+from .lattice import lattice_chunks
 
 THIN = 2  # grid cells: the thinnest obstacle the grid resolves
 
@@ -66,7 +67,7 @@ def check(case, body_shapes, obstacle_shapes):
     h = case.grid.spacing
     tol = 1e-12 * max(1.0, float(size.max()))
     for k, (body, shape) in enumerate(zip(case.bodies, body_shapes)):
-        if geometry.is_box(body):
+        if bodies.is_box(body):
             continue  # case: the box's own message
         lo, hi = shape.bounds()
         if np.any(lo < -tol) or np.any(hi > size + tol):
@@ -120,11 +121,11 @@ def check(case, body_shapes, obstacle_shapes):
 def _bodies_apart(case, body_shapes):
     """Bodies of which one is not a box must not share a seeded lattice point."""
     h = case.grid.spacing
-    bodies = case.bodies
-    for i in range(len(bodies)):
-        for j in range(i + 1, len(bodies)):
-            a, b = bodies[i], bodies[j]
-            if geometry.is_box(a) and geometry.is_box(b):
+    listed = case.bodies
+    for i in range(len(listed)):
+        for j in range(i + 1, len(listed)):
+            a, b = listed[i], listed[j]
+            if bodies.is_box(a) and bodies.is_box(b):
                 continue  # bodies.overlap_message
             for (p, P), (q, Q) in (((i, a), (j, b)), ((j, b), (i, a))):
                 n, lo, hi = _shared(P, body_shapes[p], Q, body_shapes[q],
@@ -146,7 +147,7 @@ def _bodies_seeded(case, body_shapes):
     out of the run without a word. (A body that obstacles take whole: empty_body_message.)"""
     h = case.grid.spacing
     for k, (body, shape) in enumerate(zip(case.bodies, body_shapes)):
-        if not geometry.seeds_any(body, h, shape):
+        if not bodies.seeds_any(body, h, shape):
             raise ValueError(_too_small_message(case, k, body, shape))
 
 
@@ -175,15 +176,15 @@ def _too_small_message(case, k, body, shape):
 
 def _shared(P, shape_p, Q, shape_q, s):
     """Lattice points (spacing s) that both bodies keep: count and their bounding box."""
-    lo_p, hi_p = geometry.seed_region(P, shape_p, s)
-    lo_q, hi_q = geometry.seed_region(Q, shape_q, s)
+    lo_p, hi_p = bodies.seed_region(P, shape_p, s)
+    lo_q, hi_q = bodies.seed_region(Q, shape_q, s)
     lo, hi = np.maximum(lo_p, lo_q), np.minimum(hi_p, hi_q)
     if np.any(hi <= lo):
         return 0, None, None
     n, first, last = 0, None, None
-    for points in geometry.lattice_chunks(lo, hi, s):
-        both = geometry.in_body(P, shape_p, points, s)
-        both[both] = geometry.in_body(Q, shape_q, points[both], s)
+    for points in lattice_chunks(lo, hi, s):
+        both = bodies.in_body(P, shape_p, points, s)
+        both[both] = bodies.in_body(Q, shape_q, points[both], s)
         if both.any():
             x = points[both]
             n += len(x)
@@ -196,7 +197,7 @@ def empty_body_message(case, k, body_shape, obstacle_shapes):
     """The message for bodies.k when obstacles take every one of its lattice points, or
     None (a count pass without obstacles; called only when its count is 0)."""
     body = case.bodies[k]
-    alone = geometry.particle_count(body, case.grid.spacing, body_shape)
+    alone = bodies.particle_count(body, case.grid.spacing, body_shape)
     if not alone:
         return None
     return (f"{_what('bodies', k, body)} lies wholly inside obstacles: all {alone} of its "
@@ -210,11 +211,11 @@ def overlap_message(case, k, count, body_shape, obstacle_shapes):
     obstacles left out), or None when no obstacle takes any of its lattice points."""
     body = case.bodies[k]
     h = case.grid.spacing
-    alone = geometry.particle_count(body, h, body_shape)
+    alone = bodies.particle_count(body, h, body_shape)
     if alone == count:
         return None
     for j, shape in enumerate(obstacle_shapes):
-        taken = alone - geometry.particle_count(body, h, body_shape, [shape])
+        taken = alone - bodies.particle_count(body, h, body_shape, [shape])
         if taken:
             obstacle = case.obstacles[j]
             return (f"{_what('bodies', k, body)} overlaps {_what('obstacles', j, obstacle)}: "

@@ -1,19 +1,18 @@
-"""Build the grid and the particles of a validated case."""
+"""The particles of a validated case: each body filled from the global lattice
+(``geometry.lattice``), clear of the obstacles, with its velocity and, where asked, its
+hydrostatic pressure; and the check that no cell starts over-packed."""
 
 import numpy as np
 
-from .cells import bin_particles
-from .errors import CaseError
-from .grid import Grid
-from .bodies import is_box, seed_region, seeded
-from .particles import Particles, lattice_in_box, seed_box, subset
-
-
-def build_grid(case):
-    return Grid.covering(case.domain.size, case.grid.spacing, periodic=case.domain.periodic)
+from ..cells import bin_particles
+from ..errors import CaseError
+from ..particles import Particles, subset
+from .bodies import cosine_top, is_box, seed_region, seeded
+from .lattice import lattice_in_box
 
 
 def build_particles(case, grid):
+    """The particles of every body of the case on this grid (``Particles``)."""
     parts = []
     rho = case.material.density
     down = np.asarray(case.physics.gravity, dtype=float)
@@ -33,7 +32,7 @@ def build_particles(case, grid):
         if amplitude == 0.0:
             part = seed_box(body.min, body.max, spacing, rho, body.velocity)
         else:
-            part = seed_cosine_box(body.min, body.max, amplitude, spacing, rho, body.velocity)
+            part = seed_cosine_box(body, spacing, rho)
         if obstacles:
             part = subset(part, seeded(body, None, part.x, spacing, obstacles))
         if body.initial_pressure == "hydrostatic":
@@ -42,7 +41,7 @@ def build_particles(case, grid):
                 top = corners[np.argmax(corners @ -down)]
                 part.pressure[:] = rho * ((top - part.x) @ -down)
             else:
-                depth = cosine_surface(body.min, body.max, amplitude, part.x[:, 0]) - part.x[:, 1]
+                depth = cosine_top(body, part.x[:, 0]) - part.x[:, 1]
                 part.pressure[:] = rho * np.linalg.norm(down) * depth
         parts.append(part)
     particles = Particles.concatenate(parts)
@@ -98,14 +97,23 @@ def check_packing(case, grid, particles, counts):
         f"{grid.spacing:g} m).")
 
 
-def cosine_surface(lo, hi, amplitude, x):
-    """Height of the cosine top of a body: hi[1] + A cos(pi (x - lo[0]) / (hi[0] - lo[0])) (m)."""
-    return hi[1] + amplitude * np.cos(np.pi * (x - lo[0]) / (hi[0] - lo[0]))
+def seed_box(lo, hi, spacing, density, velocity):
+    """Particles filling a box; each carries the volume spacing**dim and mass density*volume."""
+    x = lattice_in_box(lo, hi, spacing)
+    n, dim = x.shape
+    vol = np.full(n, spacing**dim)
+    return Particles(
+        x=x,
+        v=np.tile(np.asarray(velocity, dtype=float), (n, 1)),
+        pressure=np.zeros(n),
+        mass=vol * density,
+        volume=vol,
+    )
 
 
-def seed_cosine_box(lo, hi, amplitude, spacing, density, velocity):
-    """A box seeded up to hi[1] + |A|, keeping the particles below the cosine surface."""
-    top = [hi[0], hi[1] + abs(amplitude)]
-    part = seed_box(lo, top, spacing, density, velocity)
-    keep = part.x[:, 1] < cosine_surface(lo, hi, amplitude, part.x[:, 0])
-    return subset(part, keep)
+def seed_cosine_box(body, spacing, density):
+    """A box body with a cosine top: seeded up to max[1] + |A|, keeping the particles below
+    the cosine surface (``bodies.cosine_top``)."""
+    top = [body.max[0], body.max[1] + abs(body.surface_amplitude)]
+    part = seed_box(body.min, top, spacing, density, body.velocity)
+    return subset(part, part.x[:, 1] < cosine_top(body, part.x[:, 0]))

@@ -2,9 +2,9 @@
 and whether the material would fill the whole grid.
 
 Each body is filled with particles on the global lattice (k + 1/2) * s, s = grid.spacing /
-particles_per_cell (``particles.lattice_in_box``): a particle stands for the square of side
+particles_per_cell (``lattice.lattice_in_box``): a particle stands for the square of side
 s around it. A box keeps the lattice points in [min, max) along each axis; any other shape
-the points of its bounding box that it ``contains`` (``mpmflow.shapes``); either way the
+the points of its bounding box that it ``contains`` (``geometry.shapes``); either way the
 points inside an obstacle are left out (``seeded``). Bodies must not overlap (they may
 touch): overlapping bodies would place their particles on top of each other and create
 mass. The counts here are exact. For a box clear of obstacles they cost one pass over the
@@ -19,14 +19,9 @@ import math
 
 import numpy as np
 
+from .lattice import lattice_chunks, lattice_count, lattice_indices
+
 TOUCH = 1e-9  # overlaps thinner than this fraction of a grid cell are touching faces
-
-
-def lattice_indices(a, b, spacing):
-    """(k0, k1): the lattice points (k + 1/2) * spacing with k0 <= k <= k1 lie in [a, b)."""
-    k0 = math.ceil(a / spacing - 0.5 - 1e-9)
-    k1 = math.floor(b / spacing - 0.5 - 1e-9)
-    return k0, k1
 
 
 def cosine_top(body, x):
@@ -41,7 +36,6 @@ def cosine_top(body, x):
 # a containment pass over more lattice points than this is not made to count a body: such a
 # body is far beyond any machine's memory, and its count is estimated from its volume
 MAX_PASS = 2 * 10**8
-CHUNK = 2**20  # lattice points per chunk of a containment pass
 
 
 def is_box(body):
@@ -50,7 +44,7 @@ def is_box(body):
 
 def seed_region(body, shape, spacing):
     """(lo, hi): the part of the lattice of ``spacing`` that holds the body's particles,
-    for ``particles.lattice_in_box`` (half open, [lo, hi)): a box's [min, max) (up to the
+    for ``lattice.lattice_in_box`` (half open, [lo, hi)): a box's [min, max) (up to the
     crest of a cosine top); for other shapes the bounding box, widened a little so that
     lattice points on its upper faces are kept where the shape contains them."""
     if is_box(body):
@@ -59,31 +53,6 @@ def seed_region(body, shape, spacing):
         return np.asarray(body.min, dtype=float), np.asarray(hi, dtype=float)
     lo, hi = shape.bounds()
     return lo, hi + 2e-9 * spacing
-
-
-def lattice_count(lo, hi, spacing):
-    """Number of lattice points in [lo, hi) (exact integer)."""
-    n = 1
-    for a, b in zip(lo, hi):
-        k0, k1 = lattice_indices(a, b, spacing)
-        n *= max(0, k1 - k0 + 1)
-    return n
-
-
-def lattice_chunks(lo, hi, spacing, chunk=CHUNK):
-    """The lattice points in [lo, hi) as (n, D) arrays of about ``chunk`` points, slabs along
-    the last axis (so that a pass over many points holds few at once)."""
-    axes = []
-    for a, b in zip(lo, hi):
-        k0, k1 = lattice_indices(a, b, spacing)
-        axes.append((np.arange(k0, k1 + 1) + 0.5) * spacing)
-    if any(len(a) == 0 for a in axes):
-        return
-    per_slab = math.prod(len(a) for a in axes[:-1])
-    step = max(1, chunk // per_slab)
-    for j in range(0, len(axes[-1]), step):
-        mesh = np.meshgrid(*axes[:-1], axes[-1][j:j + step], indexing="ij")
-        yield np.stack([m.ravel(order="F") for m in mesh], axis=1)
 
 
 def in_body(body, shape, points, spacing):

@@ -1,0 +1,63 @@
+"""Are the results of a move bit for bit the same? Runs the dam break, obstacle_2d, the
+granular collapse and the 3D column at rest over 50 steps each and writes, or compares
+with, their particle states (every array of every particle, exactly).
+
+    python scripts/compare_states.py --write before.npz      # on the code before a move
+    python scripts/compare_states.py --compare before.npz    # after it: exit 1 if any differ
+
+Runs in memory (no output folder), on the threads MPMFLOW_THREADS gives (the step is
+bit-identical on any thread count, tests/test_threads.py). A few seconds.
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = ("dam_break", "obstacle_2d", "granular_collapse", "hydrostatic_3d")
+STEPS = 50
+
+
+def states():
+    """{f"{case}.{field}": array} after STEPS steps of each case."""
+    import mpmflow
+
+    out = {}
+    for name in CASES:
+        case = mpmflow.load_case(ROOT / "examples" / f"{name}.toml")
+        dt = case.time.dt
+        case = mpmflow.load_case(ROOT / "examples" / f"{name}.toml", {"time.end": STEPS * dt})
+        sim = mpmflow.Simulation(case)
+        sim.run()
+        if sim.steps != STEPS:
+            raise SystemExit(f"{name}: ran {sim.steps} steps, not {STEPS}")
+        for field in sim.particles.FIELDS:
+            out[f"{name}.{field}"] = np.array(getattr(sim.particles, field))
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    mode = parser.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--write", type=Path, help="write the states to this .npz file")
+    mode.add_argument("--compare", type=Path, help="compare the states with this .npz file")
+    args = parser.parse_args(argv)
+    now = states()
+    if args.write:
+        np.savez(args.write, **now)
+        print(f"wrote {len(now)} arrays of {len(CASES)} cases to {args.write}")
+        return 0
+    with np.load(args.compare) as before:
+        keys = sorted(set(before.files) | set(now))
+        differ = [k for k in keys if k not in before.files or k not in now
+                  or not np.array_equal(before[k], now[k])]
+    for k in differ:
+        print(f"differs: {k}")
+    print(f"{len(keys) - len(differ)} of {len(keys)} arrays identical")
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
