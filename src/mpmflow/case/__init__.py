@@ -5,6 +5,7 @@ the documentation and the error messages show. One module per concern:
 
 - ``sections``: one pydantic model per [table] (domain, grid, material, time, output,
   solver, probes, ...);
+- ``domain``: the [domain] table (size, walls, periodic axes);
 - ``shapes``: the shapes of bodies and obstacles ([[bodies]], [[obstacles]]);
 - ``model``: the whole case (``Case``) and the rules between its sections;
 - ``loading``: reading the TOML file, ``--set`` overrides, messages that name the key;

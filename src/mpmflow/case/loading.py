@@ -10,7 +10,8 @@ from pydantic import ValidationError
 from ..errors import CaseError
 from .model import Case
 from .reference import KNOWN_KEYS, _REFERENCE, _item, _models_of
-from .sections import AXES, MAX_CASE_BYTES
+from .domain import AXES
+from .sections import MAX_CASE_BYTES
 from .shapes import SHAPE_TYPES, Body, Obstacle
 
 if sys.version_info >= (3, 11):

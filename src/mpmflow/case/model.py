@@ -13,8 +13,9 @@ from ..geometry.specs import from_spec
 from ..geometry.shapes import DIM_OF
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
-from .sections import (MAX_STEPS, Checkpoint, Domain, Execution, GridSettings, Material,
-                       Output, Physics, Probe, Solver, Time, _Section)
+from .domain import Domain
+from .sections import (MAX_STEPS, Checkpoint, Execution, GridSettings, Material, Output,
+                       Physics, Probe, Section, Solver, Time)
 from .shapes import Body, Obstacle
 
 
@@ -31,7 +32,7 @@ def _coarsest_period(cells):
     return cells
 
 
-class Case(_Section):
+class Case(Section):
     title: str = Field("", description="Free text shown in outputs.")
     domain: Domain
     grid: GridSettings

@@ -7,7 +7,8 @@ from typing import Annotated, Union
 from pydantic import BaseModel
 
 from .model import Case
-from .sections import FORMULATIONS, Solver, wall_keys
+from .domain import wall_keys
+from .sections import FORMULATIONS, Solver
 
 
 

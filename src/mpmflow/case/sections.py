@@ -1,17 +1,14 @@
 """The case file's sections (SI units throughout): one pydantic model per [table], each
 field's description the single source of the case-file reference (docs/reference.md).
-The shapes of bodies and obstacles are in ``case.shapes``; the whole case and its
+The domain (its size, walls and periodic axes) is in ``case.domain``, the shapes of
+bodies and obstacles in ``case.shapes``; the whole case and its
 cross-field rules in ``case.model``."""
 
-import difflib
 from typing import Literal, Optional, Union
 
-from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo,
-                      field_validator, model_validator)
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, model_validator
 
 from .. import materials
-
-
 
 # checkpoint files are numbered by step with 9 digits (checkpoint_NNNNNNNNN.npz): the most
 # steps a run can take. (At 2 ms per step, the cost of a small case, that is 23 days.)
@@ -19,143 +16,22 @@ MAX_STEPS = 999_999_999
 COURANT = 1.0  # time.courant's default (docs/method.md, "Adaptive steps")
 MAX_DT = 1e-2  # s: time.max_dt's default, the paper's step for its dam break
 MAX_CASE_BYTES = 16 * 2**20  # a case file is a page of TOML; anything larger is not one
-WALL_CONDITIONS = ("slip", "no_slip")
-AXES = "xyz"
-SIDES = ("min", "max")  # the lower wall (at 0) and the upper (at domain.size)
 
 
-def wall_keys(dim):
-    """The keys of a per-side domain.walls: the axes, then each axis's two sides."""
-    return [AXES[k] for k in range(dim)] + [f"{AXES[k]}_{s}" for k in range(dim) for s in SIDES]
+class Section(BaseModel):
+    """A table of the case file: unknown keys refused, values checked on assignment too."""
 
-
-
-class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
 
 
-class Domain(_Section):
-    size: list[float] = Field(
-        description="Extent of the rectangular domain (m), one value per axis: 2 entries for "
-        "a 2D case (x, y; y up), 3 for a 3D case (x, y, z; z up). The domain is [0, size]; "
-        "its boundaries are walls. Every other vector of the case (bodies' min, max and "
-        "velocity, gravity, probe positions) has as many entries.",
-        examples=[[0.42, 0.44]], min_length=2, max_length=3)
-    walls: Union[Literal["slip", "no_slip"], dict[str, Literal["slip", "no_slip"]]] = Field(
-        "slip", description="Wall condition of the domain boundaries, \"slip\" or "
-        "\"no_slip\": one for every wall (walls = \"no_slip\"), or a table by axis and "
-        "side: keys x, y (and z in 3D) set both walls across that axis, x_min, x_max, y_min, "
-        "... one wall (min: at 0, max: at domain.size); a side's key overrides its axis's, "
-        "and a wall left out is slip. E.g. a rough floor between smooth side walls in 3D: "
-        "walls = {z_min = \"no_slip\"}; a flume with glass sides and a rough bed: "
-        "walls = {y = \"slip\", z_min = \"no_slip\", x = \"no_slip\"}; one key on the "
-        "command line: --set domain.walls.z_min=no_slip (over a single condition, it "
-        "keeps that condition for the other walls). A periodic axis has no walls and "
-        "takes no key. Walls are contact conditions: a wall holds the material where it "
-        "presses against it and lets go where holding it would need suction while it "
-        "moves away, so water falls from a ceiling and leaves a wall freely. no_slip also "
-        "stops tangential motion where the wall holds (at an edge between a no-slip and a "
-        "slip wall, the no-slip wall's hold).")
-    periodic: Optional[list[bool]] = Field(
-        None, description="Periodic axes, one flag per axis (e.g. [true, false]: x wraps "
-        "round): material leaving through one end of a periodic axis comes back through the "
-        "other, and that axis has no walls. For channel and layer flows that are uniform "
-        "along the axis. Along a periodic axis domain.size must be a whole, even number of "
-        "grid cells, at least 4 (a power of two times a small number solves fastest); the "
-        "projection scheme only.", examples=[[True, False]])
-
-    @field_validator("walls", mode="before")
-    @classmethod
-    def _wall_keys(cls, walls, info: ValidationInfo):
-        dim = len(info.data.get("size") or ()) or 3
-        keys = wall_keys(dim)
-        example = '{z_min = "no_slip"}' if dim == 3 else '{y_min = "no_slip"}'
-        if isinstance(walls, str):
-            if walls not in WALL_CONDITIONS:
-                raise ValueError(f"{walls!r} is not a wall condition: give \"slip\" or "
-                                 "\"no_slip\" for every wall, or a table of sides, e.g. "
-                                 f"walls = {example}")
-            return walls
-        if not isinstance(walls, dict):
-            raise ValueError("give \"slip\" or \"no_slip\" for every wall, or a table of "
-                             f"sides, e.g. walls = {example}")
-        if not walls:
-            raise ValueError("the table of sides is empty; give at least one side, e.g. "
-                             f"walls = {example}, or \"slip\" for every wall")
-        for key, value in walls.items():
-            if key not in keys:
-                near = difflib.get_close_matches(str(key), keys, n=1, cutoff=0.5)
-                hint = f" (did you mean {near[0]}?)" if near else ""
-                raise ValueError(f"{key!r} is not a side of a {dim}D domain{hint}; the keys are "
-                                 "the axes " + ", ".join(keys[:dim]) + " (both walls) and the "
-                                 "sides " + ", ".join(keys[dim:]))
-            if value not in WALL_CONDITIONS:
-                raise ValueError(f"{key} = {value!r} is not a wall condition: give \"slip\" "
-                                 "or \"no_slip\"")
-        return walls
-
-    @model_validator(mode="after")
-    def _positive(self):
-        if any(s <= 0 for s in self.size):
-            raise ValueError("every entry of domain.size must be positive (metres)")
-        if self.periodic is not None and len(self.periodic) != len(self.size):
-            raise ValueError(f"domain.periodic has {len(self.periodic)} entries and "
-                             f"domain.size {len(self.size)}; give one flag per axis, e.g. "
-                             f"periodic = {[True] + [False] * (len(self.size) - 1)}")
-        if isinstance(self.walls, dict):
-            for k, flag in enumerate(self.periodic or []):
-                named = [key for key in self.walls if key.split("_")[0] == AXES[k]]
-                if flag and named:
-                    raise ValueError(
-                        f"domain.walls names {', '.join(named)}, but {AXES[k]} is periodic "
-                        f"(domain.periodic), so it has no walls; remove "
-                        f"{' and '.join(named)} from domain.walls, or make {AXES[k]} a wall "
-                        "axis (domain.periodic)")
-        return self
-
-    def wall_conditions(self):
-        """The condition of each wall, \"slip\" or \"no_slip\": a (lower, upper) pair per
-        axis, the lower wall at 0 and the upper at domain.size (a periodic axis's pair too,
-        though it has no walls)."""
-        dim = len(self.size)
-        if isinstance(self.walls, str):
-            return [(self.walls, self.walls)] * dim
-        out = []
-        for k in range(dim):
-            axis = self.walls.get(AXES[k], "slip")
-            out.append(tuple(self.walls.get(f"{AXES[k]}_{side}", axis) for side in SIDES))
-        return out
-
-    def walls_text(self):
-        """domain.walls as a case file writes it: "no_slip", {x = "slip", z_min = ...}."""
-        if isinstance(self.walls, str):
-            return f'"{self.walls}"'
-        return "{" + ", ".join(f'{k} = "{v}"' for k, v in self.walls.items()) + "}"
-
-    def no_slip_sides(self):
-        """One flag per wall in the order x_min, x_max, y_min, ... (the core's side order):
-        whether it is no-slip."""
-        return [c == "no_slip" for pair in self.wall_conditions() for c in pair]
-
-    def uniform_walls(self):
-        """The one condition of every wall (periodic axes aside), or None where walls
-        differ."""
-        periodic = self.periodic or [False] * len(self.size)
-        found = {c for k, pair in enumerate(self.wall_conditions()) if not periodic[k]
-                 for c in pair}
-        if not found:  # every axis periodic: no walls at all
-            return self.walls if isinstance(self.walls, str) else "slip"
-        return found.pop() if len(found) == 1 else None
-
-
-class GridSettings(_Section):
+class GridSettings(Section):
     spacing: float = Field(
         description="Cell size of the background grid (m). Walls lie on grid lines: a side of "
         "the domain that is not a whole number of cells is extended to the next whole cell "
         "(reported at start and in summary.json).", gt=0, examples=[0.004])
 
 
-class Material(_Section):
+class Material(Section):
     model: Literal[tuple(materials.MATERIALS)] = Field(
         "water", description="Constitutive model: \"water\" (inviscid, the default), "
         "\"newtonian\" (viscosity), \"herschel_bulkley\" (yield-stress material; Bingham "
@@ -204,13 +80,13 @@ class Material(_Section):
         return self
 
 
-class Physics(_Section):
+class Physics(Section):
     gravity: list[float] = Field([0.0, -9.81], description="Gravitational acceleration (m/s^2); "
                                  "the default points down the last axis, [0, 0, -9.81] in 3D.",
                                  min_length=2, max_length=3)
 
 
-class Time(_Section):
+class Time(Section):
     dt: Union[Literal["auto"], float] = Field(
         description="Time step (s), or \"auto\". With \"auto\" the projection scheme sets "
         "every step from the particles' speeds: dt = time.courant grid.spacing / max |v_p|, "
@@ -237,7 +113,7 @@ class Time(_Section):
         return self
 
 
-class Output(_Section):
+class Output(Section):
     interval: float = Field(
         0.01, gt=0, description="Simulated time between rows of timeseries.csv (s). The steps "
         "between two output times are all equal and at most time.dt, so every output time is "
@@ -250,7 +126,7 @@ class Output(_Section):
                             "particles.pvd time series for ParaView).")
 
 
-class Checkpoint(_Section):
+class Checkpoint(Section):
     interval: float = Field(
         0.1, gt=0, description="Simulated time between checkpoints (s), written at the first "
         "output time at or after each multiple (every output for an interval shorter than "
@@ -261,7 +137,7 @@ class Checkpoint(_Section):
         "bit for bit.")
 
 
-class ProbeData(_Section):
+class ProbeData(Section):
     path: str = Field(
         description="The measured series' CSV file (a header line naming the columns, then "
         "rows of numbers separated by commas), relative to the case file's folder (to the "
@@ -274,7 +150,7 @@ class ProbeData(_Section):
         "time [s]", description="The header of the file's column of times (s).")
 
 
-class Probe(_Section):
+class Probe(Section):
     name: str = Field(
         description="Name of the probe: its column in probes.csv (letters, digits, _ . + -).",
         pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["sensor_1"])
@@ -325,7 +201,7 @@ class Probe(_Section):
         "column, time_column): `mpmflow plot` draws it beside the probe's.")
 
 
-class Execution(_Section):
+class Execution(Section):
     threads: Union[Literal["auto"], int] = Field(
         "auto", description="Threads of the compiled kernels: \"auto\" uses the cores that "
         "other programs leave idle, measured when the run starts and again about every "
@@ -356,7 +232,7 @@ FORMULATIONS = {
 }
 
 
-class Solver(_Section):
+class Solver(Section):
     scheme: Literal["projection", "explicit"] = Field(
         "projection", description="Time integration scheme: \"projection\" is the implicit "
         "Chorin projection of Kularathna & Soga (2017); \"explicit\" is the explicit weakly "

@@ -7,7 +7,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import Discriminator, Field, Tag, model_validator
 
 from ..geometry import shapes
-from .sections import _Section
+from .sections import Section
 
 
 
@@ -39,7 +39,7 @@ def _radius():
                  examples=[0.05])
 
 
-class _BoxShape(_Section):
+class _BoxShape(Section):
     VECTORS: ClassVar = ("min", "max")
     type: Literal["box"] = _type_field("box")
     min: list[float] = Field(description="Lower corner of a box (m).", examples=[[0.0, 0.0]],
@@ -54,7 +54,7 @@ class _BoxShape(_Section):
         return self
 
 
-class _CylinderShape(_Section):
+class _CylinderShape(Section):
     VECTORS: ClassVar = ("centre", "axis")
     type: Literal["cylinder"] = _type_field("cylinder")
     centre: list[float] = _centre()
@@ -73,21 +73,21 @@ class _CylinderShape(_Section):
         return self
 
 
-class _SphereShape(_Section):
+class _SphereShape(Section):
     VECTORS: ClassVar = ("centre",)
     type: Literal["sphere"] = _type_field("sphere")
     centre: list[float] = _centre()
     radius: float = _radius()
 
 
-class _DiscShape(_Section):
+class _DiscShape(Section):
     VECTORS: ClassVar = ("centre",)
     type: Literal["disc"] = _type_field("disc")
     centre: list[float] = _centre()
     radius: float = _radius()
 
 
-class _PolygonShape(_Section):
+class _PolygonShape(Section):
     VECTORS: ClassVar = ()
     type: Literal["polygon"] = _type_field("polygon")
     vertices: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
@@ -103,7 +103,7 @@ class _PolygonShape(_Section):
         return self
 
 
-class _MeshShape(_Section):
+class _MeshShape(Section):
     VECTORS: ClassVar = ("translate",)
     type: Literal["mesh"] = _type_field("mesh")
     path: str = Field(
@@ -116,7 +116,7 @@ class _MeshShape(_Section):
                                    "after scaling.", min_length=3, max_length=3)
 
 
-class _BodyFields(_Section):
+class _BodyFields(Section):
     particles_per_cell: int = Field(
         2, ge=1, le=16, description="Material points per cell along each axis (4 gives 16 per "
         "cell in 2D, 64 in 3D). Points sit on a lattice aligned with the grid; a body of any "
@@ -177,7 +177,7 @@ class MeshBody(_BodyFields, _MeshShape):
     pass
 
 
-class _ObstacleFields(_Section):
+class _ObstacleFields(Section):
     name: Optional[str] = Field(
         None, description="Name of the obstacle, for messages and outputs (letters, digits, "
         "_ . + -); optional.", pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["pier"])
