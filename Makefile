@@ -1,11 +1,12 @@
 # The two commands of a fresh machine (needs python3 >= 3.10 and make):
 #   make dam-break   set up, then run the paper's dam break (examples/dam_break.toml)
 #   make test        set up, then run the test suite
+# Developers: make test-fast (the unit tier, under a minute), make lint (ruff, mypy)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: setup test dam-break validate bench figures clean
+.PHONY: setup test test-fast lint dam-break validate bench figures clean
 
 CORE := CMakeLists.txt $(wildcard src/core/*.hpp src/core/*.cpp src/core/bindings/*)
 # the editable install maps the package's modules when it is made: a module added, removed
@@ -19,13 +20,22 @@ $(VENV)/.installed: pyproject.toml $(CORE) $(PACKAGE)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet "scikit-build-core>=0.10" "nanobind>=2.4" "cmake>=3.18" ninja
 	@echo "building the core (C++, about a minute on 2 cores the first time)"
-	$(BIN)/python -m pip install --quiet --no-build-isolation -e ".[test,plot]"
+	$(BIN)/python -m pip install --quiet --no-build-isolation -e ".[test,plot,lint]"
 	touch $@
 
 setup: $(VENV)/.installed
 
 test: setup
 	$(BIN)/python -m pytest
+
+# ruff (lint rules and, soon, the format) and mypy, as configured in pyproject.toml
+lint: setup
+	$(BIN)/ruff check src tests benchmarks scripts
+	$(BIN)/mypy
+
+# the unit tier: every test but the physics runs marked slow (under a minute)
+test-fast: setup
+	$(BIN)/python -m pytest -m "not slow" -q
 
 dam-break: setup
 	$(BIN)/mpmflow run examples/dam_break.toml --out runs/dam_break --overwrite

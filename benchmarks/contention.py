@@ -109,7 +109,7 @@ def main():
                                                          args.overrides))
             print(f"round {k + 1} of {args.repeat} done", file=sys.stderr, flush=True)
     rows = []
-    for (where, cpu, threads), runs in results.items():
+    for (where, _cpu, threads), runs in results.items():
         rows.append({"where": where, "threads": threads,
                      "loop_s": statistics.median(r[0] for r in runs),
                      "wall_s": statistics.median(r[1] for r in runs),

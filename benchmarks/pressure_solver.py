@@ -73,9 +73,9 @@ def main():
         solutions = {}
         for method in ("multigrid", "amg", "direct"):
             solver = LinearSolver(method, 1e-8, 500)
-            setup = median_time(lambda: solver.prepare(matrix), args.repeat)
+            setup = median_time(lambda s=solver, m=matrix: s.prepare(m), args.repeat)
             result = solver.solve(rhs)
-            solve = median_time(lambda: solver.solve(rhs), args.repeat)
+            solve = median_time(lambda s=solver, b=rhs: s.solve(b), args.repeat)
             solutions[method] = result.x
             rows_out.append({"t": t, "unknowns": int(rows.size), "solver": method,
                              "setup_ms": 1e3 * setup, "solve_ms": 1e3 * solve,

@@ -13,6 +13,7 @@ largest pressure error against rho g (H - z) (Pa).
 
 import statistics
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -20,7 +21,6 @@ from mpmflow import load_case, probes
 from mpmflow.cells import bin_particles
 from mpmflow.geometry.seeding import build_particles
 from mpmflow.grid import Grid
-from pathlib import Path
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 RHO, G, DEPTH = 1000.0, 9.81, 0.55

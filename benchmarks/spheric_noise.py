@@ -14,10 +14,9 @@ face), and the nodal pressure at points away from the box (x_*). Prints one JSON
 import argparse
 import json
 import time as _time
+from pathlib import Path
 
 import numpy as np
-
-from pathlib import Path
 
 from mpmflow import Simulation, load_case
 from mpmflow import probes as P

@@ -2,19 +2,19 @@
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case
-from mpmflow.geometry.bodies import fills_grid, overlap_message
 from mpmflow.diagnostics import front_and_height
 from mpmflow.errors import CaseError
+from mpmflow.geometry.bodies import fills_grid, overlap_message
 from mpmflow.grid import Grid
-
-from conftest import EXAMPLES, make_case
 
 RHO, G = 1000.0, 9.81
 
 
 @pytest.mark.parametrize("depth, end", [(0.195, 1.0), (0.2, 0.2)])
+@pytest.mark.slow
 def test_column_at_rest_in_3d_is_exact(depth, end):
     """The 3D column at rest with the defaults, surface half a cell off the grid (over 1 s)
     and on a grid line: the particle pressure is rho g (H - z) to 1e-6 relative and no
@@ -76,6 +76,7 @@ def test_front_and_height_of_an_extruded_field_are_the_2d_ones():
     assert f3 == pytest.approx(f2, abs=1e-15) and h3 == pytest.approx(h2, abs=1e-15)
 
 
+@pytest.mark.slow
 def test_3d_outputs_read_back_and_plot(tmp_path):
     """Snapshots keep z, energies are in J (not J/m), and `mpmflow plot` draws the x-z slice
     through the middle of the width and, beside it, the water's surface in 3D."""

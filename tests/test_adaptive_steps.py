@@ -4,10 +4,9 @@
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
-
-from conftest import EXAMPLES
 
 RHO, G = 1000.0, 9.81
 
@@ -29,6 +28,7 @@ def test_a_column_at_rest_takes_the_longest_step_and_stays_exact():
     assert np.nanmax(sim.series("max_speed")) < 1e-8
 
 
+@pytest.mark.slow
 def test_the_steps_follow_the_courant_number_and_land_on_every_output(tmp_path):
     """A dam break: no step is longer than time.courant h / max |v| (checked through the
     summary's shortest step against the fastest particle of the run), the output rows fall

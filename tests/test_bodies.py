@@ -4,6 +4,7 @@ bodies fill is refused before the run."""
 
 import hypothesis.strategies as st
 import pytest
+from conftest import EXAMPLES
 from hypothesis import HealthCheck, given, settings
 
 from mpmflow import Simulation
@@ -11,8 +12,6 @@ from mpmflow.case import validate
 from mpmflow.cells import bin_particles
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
-
-from conftest import EXAMPLES
 
 COLUMN = {"min": [0.0, 0.0], "max": [0.114, 0.228], "particles_per_cell": 4}
 FLOOR = {"min": [0.0, 0.0], "max": [0.42, 0.02], "particles_per_cell": 4}
@@ -59,6 +58,7 @@ def test_other_overlaps_name_their_fix(first, second, words):
     assert words in str(err.value)
 
 
+@pytest.mark.slow
 def test_the_cli_refuses_overlapping_bodies_in_one_paragraph(tmp_path, capsys):
     code = main(["run", str(EXAMPLES / "dam_break.toml"), "--out", str(tmp_path / "o"),
                  "--set", "bodies.0.min=[0.05, 0.0]"])  # still one body: fine

@@ -86,6 +86,7 @@ def test_plug_fit_recovers_a_bingham_profile_from_scattered_points():
                                                         rel=1e-4)
 
 
+@pytest.mark.slow
 def test_poiseuille_film_startup_and_steady_profile_within_tolerance():
     """The issue's criteria at 20 cells across the film (the report's coarser mesh)."""
     r = cf.measure_poiseuille(0.0025, 1.0)
@@ -101,6 +102,7 @@ def test_bingham_plug_width_and_speed_within_tolerance():
     assert abs(r["speed_error"]) < cf.TOL_PLUG_SPEED  # measured 0.55%
 
 
+@pytest.mark.slow
 def test_mu_i_layer_surface_velocity_within_tolerance_of_bagnold():
     r = cf.measure_layer(0.002, 3.0)
     assert abs(r["surface_error"]) < cf.TOL_SURFACE  # measured -2.4%

@@ -12,7 +12,6 @@ import xml.etree.ElementTree as ET
 import meshio
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
 
 QUICK = ["--set", "time.end=0.05", "--set", "output.snapshot_interval=0.02"]
@@ -32,6 +31,7 @@ def quick_run(tmp_path_factory):
     return out, res
 
 
+@pytest.mark.slow
 def test_run_writes_timeseries_summary_and_snapshots(quick_run):
     out, _ = quick_run
     with open(out / "timeseries.csv") as f:
@@ -49,6 +49,7 @@ def test_run_writes_timeseries_summary_and_snapshots(quick_run):
     assert summary["notices"]  # 0.42 m is not a whole number of 0.008 m cells
 
 
+@pytest.mark.slow
 def test_snapshots_form_a_paraview_time_series(quick_run):
     out, _ = quick_run
     datasets = ET.parse(out / "particles.pvd").getroot().find("Collection").findall("DataSet")
@@ -62,6 +63,7 @@ def test_snapshots_form_a_paraview_time_series(quick_run):
     assert not list(out.glob(".*.tmp"))  # atomic writes leave nothing behind
 
 
+@pytest.mark.slow
 def test_refuses_to_overwrite_a_previous_run(quick_run):
     out, _ = quick_run
     res = mpmflow("run", EXAMPLES / "dam_break.toml", "--out", out, *QUICK)
@@ -69,6 +71,7 @@ def test_refuses_to_overwrite_a_previous_run(quick_run):
     assert "--overwrite" in res.stderr and "Traceback" not in res.stderr
 
 
+@pytest.mark.slow
 def test_help_explains_commands_keys_and_exit_codes():
     top = mpmflow("--help").stdout
     for word in ("run", "keys", "exit codes", "invalid input"):
@@ -94,6 +97,7 @@ BAD = [
 
 
 @pytest.mark.parametrize("args, key, hint", BAD)
+@pytest.mark.slow
 def test_bad_settings_give_one_clear_error(tmp_path, args, key, hint):
     res = mpmflow("run", EXAMPLES / "hydrostatic.toml", "--out", tmp_path / "o", *args)
     assert res.returncode == 2
@@ -108,6 +112,7 @@ def test_bad_settings_give_one_clear_error(tmp_path, args, key, hint):
     ("[domain]\nsize = [1.0, 1.0]\nsise = 2\n", "`domain.sise`"),
     ("[grid]\nspacing = 0.1\n", "missing key `domain`"),
 ])
+@pytest.mark.slow
 def test_bad_case_files(tmp_path, text, hint):
     case = tmp_path / "case.toml"
     case.write_text(text)
@@ -116,11 +121,13 @@ def test_bad_case_files(tmp_path, text, hint):
     assert hint in res.stderr
 
 
+@pytest.mark.slow
 def test_missing_case_file(tmp_path):
     res = mpmflow("run", tmp_path / "none.toml", "--out", tmp_path / "o")
     assert res.returncode == 2 and "does not exist" in res.stderr
 
 
+@pytest.mark.slow
 def test_pressure_solve_failure_stops_the_run_and_says_where(tmp_path):
     out = tmp_path / "o"
     res = mpmflow("run", EXAMPLES / "hydrostatic.toml", "--out", out, "--set",
@@ -132,6 +139,7 @@ def test_pressure_solve_failure_stops_the_run_and_says_where(tmp_path):
     assert (out / "timeseries.csv").read_text().startswith("time,front,height")
 
 
+@pytest.mark.slow
 def test_keys_into_a_pipe_closed_early_exits_quietly():
     """`mpmflow keys | head -1` raised BrokenPipeError with a traceback: the reader going
     away now stops the command quietly with 141 (128 + SIGPIPE), as other tools do."""
@@ -150,6 +158,7 @@ def test_keys_into_a_pipe_closed_early_exits_quietly():
 
 @pytest.mark.parametrize("signum, delay", [(signal.SIGTERM, 0.25), (signal.SIGINT, 0.5),
                                            (signal.SIGTERM, 1.0)])
+@pytest.mark.slow
 def test_a_signal_in_the_first_second_stops_with_a_message(tmp_path, signum, delay):
     """SIGTERM during the first ~0.6 s (imports, loading, placing particles) killed the
     command without a word: whenever it comes, the command now says what it did and exits
@@ -194,6 +203,7 @@ def _progress_frames(out, end, *extra):
             re.findall(r"t = ([0-9.]+)/[0-9.]+ s \[[^\]]*\], step (\d+)", res.stderr)]
 
 
+@pytest.mark.slow
 def test_progress_bar_shows_the_steps_taken_by_the_time_it_shows(tmp_path):
     """The step count lagged the time by one output interval (t = 0.02 s beside step 10 at
     1 ms steps): each frame now shows the steps the run had taken at the time beside it,

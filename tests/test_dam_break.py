@@ -2,11 +2,10 @@
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
 from mpmflow.reference import errors_against_vof, height_error_against_martin_moyce
-
-from conftest import EXAMPLES
 
 A = 0.114
 
@@ -20,6 +19,7 @@ def run_0008(shared_data):
     return sim
 
 
+@pytest.mark.slow
 def test_front_and_height_against_vof_at_0008(run_0008):
     sim = run_0008
     e = errors_against_vof(sim.series("time"), sim.series("front"), sim.series("height"), A,
@@ -28,12 +28,14 @@ def test_front_and_height_against_vof_at_0008(run_0008):
     assert e["height"] <= 0.07  # (measured: ~0.03)
 
 
+@pytest.mark.slow
 def test_height_against_martin_moyce_table6(run_0008):
     sim = run_0008
     err = height_error_against_martin_moyce(sim.series("time"), sim.series("height"), A, 3.5)
     assert err <= 0.08
 
 
+@pytest.mark.slow
 def test_dam_break_keeps_its_volume_and_its_particles_inside(run_0008):
     """The wetted region (cells at least half full) stays within 3% of the water's volume
     through the collapse and the impact (the validation's dam-break tolerance: 0.06 a of
@@ -47,6 +49,7 @@ def test_dam_break_keeps_its_volume_and_its_particles_inside(run_0008):
     assert np.all(P.x >= 0) and np.all(P.x <= sim.grid.size)
 
 
+@pytest.mark.slow
 def test_front_moves_and_height_falls_monotonically_early(run_0008):
     t, front, height = (run_0008.series(k) for k in ("time", "front", "height"))
     early = t <= 0.2

@@ -1,9 +1,10 @@
 """The case-file reference is the one the schema generates (one place), and the docs link
 each other."""
 
-from mpmflow.case import reference_page
-
+import pytest
 from conftest import ROOT
+
+from mpmflow.case import reference_page
 
 
 def test_case_reference_page_is_generated_from_the_schema():
@@ -34,6 +35,7 @@ def test_every_example_says_what_it_shows_and_how_long_it_takes():
         assert "Shows:" in head and "Takes:" in head, case.name
 
 
+@pytest.mark.slow
 def test_the_readme_python_example_runs_as_written(tmp_path, monkeypatch):
     """The Python API section's code, run as it stands (in a folder with the examples)."""
     import re

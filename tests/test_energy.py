@@ -3,10 +3,9 @@
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
-
-from conftest import EXAMPLES
 
 EARLIER = ["solver.volume_correction=0", "solver.density_correction=0.2",
            "solver.sparse_cell_threshold=0.2", "solver.surface_quadrature=gauss"]
@@ -34,6 +33,7 @@ def _sloshing_energy(settings, end=3.0):
     return e, wave
 
 
+@pytest.mark.slow
 def test_standing_wave_does_not_gain_energy():
     """Sloshing at 0.01 m for 3 s (4 periods): the energy stays within a tenth of the wave's
     own energy of its initial value (the issue's bound, 0.5% of the initial energy, is 6
@@ -47,6 +47,7 @@ def test_standing_wave_does_not_gain_energy():
     assert np.max(e_old - e_old[0]) > 1.0 * wave
 
 
+@pytest.mark.slow
 def test_consistent_surface_quadrature_only_takes_energy_out():
     """With divergence and gradient integrated alike over the material in surface cells the
     projection step is energy-stable: what remains is the time integration's own oscillation
@@ -89,6 +90,7 @@ def test_total_energy_change_starts_at_zero_for_a_body_thrown_in(tmp_path, monke
     assert ax.get_ylabel() == "energy [J/m]"
 
 
+@pytest.mark.slow
 def test_energy_axis_states_its_unit_in_3d_and_while_the_run_goes(tmp_path, monkeypatch):
     """3D energies are in J (the summary's units); a run still going has no summary, and the
     label says both units rather than guess J/m."""

@@ -7,14 +7,13 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
 from mpmflow.errors import CaseError
 from mpmflow.reference import errors_against_vof
 from mpmflow.stability import stable_time_step
 from mpmflow.study import reduced_bulk_modulus
-
-from conftest import EXAMPLES
 
 RHO, G = 1000.0, 9.81
 EXPLICIT = ["solver.scheme=explicit", "output.snapshots=false"]
@@ -35,6 +34,7 @@ def test_dt_above_the_stable_step_is_refused_with_the_limit():
     load_case(EXAMPLES / "dam_break.toml", EXPLICIT + [f"time.dt={0.999 * limit}"])
 
 
+@pytest.mark.slow
 def test_cli_refuses_an_unstable_step(tmp_path):
     res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
                           str(EXAMPLES / "dam_break.toml"), "--out", str(tmp_path / "o"),
@@ -55,6 +55,7 @@ def test_auto_step_is_safety_times_the_limit():
     assert Simulation(projection).dt == projection.time.max_dt
 
 
+@pytest.mark.slow
 def test_column_at_rest_settles_to_hydrostatic():
     """Acceptance: released without pressure, the column rings (sound speed 20 m/s); its
     pressure averaged over 0.5-1.0 s is within 2% (relative L2) of rho g (H - y)."""
@@ -96,6 +97,7 @@ def test_hydrostatic_start_stays_at_rest():
     assert np.sqrt(np.sum((P.pressure - exact) ** 2) / np.sum(exact**2)) < 0.02
 
 
+@pytest.mark.slow
 def test_3d_column_at_rest_settles_to_hydrostatic():
     """The explicit scheme in 3D (issue 23): the 3D column released without pressure rings
     and settles, as the 2D one, to rho g (H - z) within the 2D test's 2% (averaged over
@@ -123,6 +125,7 @@ def test_3d_column_at_rest_settles_to_hydrostatic():
         < 0.05 * compression
 
 
+@pytest.mark.slow
 def test_3d_dam_break_across_a_narrow_slip_tank_is_the_2d_one():
     """The explicit scheme in 3D (issue 23): the dam break in a tank five cells wide with
     slip walls, at the reduced K, keeps its mass, and its front and height follow the 2D
@@ -168,6 +171,7 @@ def reduced_k_runs():
     return projection, explicit
 
 
+@pytest.mark.slow
 def test_reduced_k_dam_break_is_within_the_vof_tolerance_at_every_output(reduced_k_runs):
     """Acceptance (issue 13): front (t <= 0.2 s) and height (t <= 0.4 s) of the explicit run
     within 0.08 a of the VOF reference at every output (measured 0.065 a and 0.068 a)."""
@@ -183,6 +187,7 @@ def test_reduced_k_dam_break_is_within_the_vof_tolerance_at_every_output(reduced
     "pressure cannot go below zero, stays blunt. The gap shrinks with the mesh (0.094, 0.087, "
     "0.050 a at 0.0114, 0.008, 0.004 m) and no explicit cure measured closes it "
     "(docs/method.md, 'The explicit comparator')."))
+@pytest.mark.slow
 def test_reduced_k_dam_break_matches_the_projection_at_every_output(reduced_k_runs):
     """Acceptance (issue 13): front (t <= 0.2 s) and height (t <= 0.4 s) within 0.06 a of the
     projection scheme on the same mesh at every output."""
@@ -193,6 +198,7 @@ def test_reduced_k_dam_break_matches_the_projection_at_every_output(reduced_k_ru
     assert np.max(np.abs(h_e - h_p)) / a <= 0.06
 
 
+@pytest.mark.slow
 def test_real_k_dam_break_survives_the_wall_impact():
     """Issue 13: at K = 2.2 GPa (0.0114 m, time.dt = "auto") lone particles splashing off the
     right wall at ~0.3 s drove the run to 500 m/s and stopped it at 0.31 s; with cells too
@@ -213,6 +219,7 @@ def test_real_k_dam_break_survives_the_wall_impact():
     assert fewest <= sim.steps < 2 * fewest
 
 
+@pytest.mark.slow
 def test_study_quick(tmp_path):
     """The study command end to end on its smoke-test size: tables and figures written."""
     res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "study", "paper", "--out",

@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case
 from mpmflow.checkpoint import checkpoints, read
@@ -18,8 +19,6 @@ from mpmflow.cli import main
 from mpmflow.output.timeseries import COLUMNS
 from mpmflow.particles import Particles
 from mpmflow.schemes.projection import ProjectionScheme
-
-from conftest import EXAMPLES, make_case
 
 LONG = ["--set", "grid.spacing=0.008", "--set", "time.end=1.0", "--set",
         "output.snapshot_interval=0.1", "--set", "checkpoint.interval=0.25"]
@@ -50,6 +49,7 @@ def _complete_rows(out):
     return [float(r[0]) for r in rows[1:]]
 
 
+@pytest.mark.slow
 def test_sigint_checkpoints_and_the_restart_matches_an_uninterrupted_run(tmp_path):
     out = tmp_path / "o"
     proc = _start(out)

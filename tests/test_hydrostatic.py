@@ -2,13 +2,12 @@
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case
 from mpmflow.geometry.seeding import build_particles
 from mpmflow.grid import Grid
 from mpmflow.schemes import make_scheme
-
-from conftest import EXAMPLES, make_case
 
 RHO, G = 1000.0, 9.81
 

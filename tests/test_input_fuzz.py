@@ -202,6 +202,7 @@ def _capped(self, dt, n):
         raise Enough
 
 
+@pytest.mark.slow
 def test_any_case_file_runs_or_fails_cleanly(monkeypatch):
     """The property over 500 case files, then a check that both accepted and refused cases
     were among them (the property was not vacuous). One test, so that the check does not
@@ -436,6 +437,7 @@ class _Records(logging.Handler):
         self.records.append(record)
 
 
+@pytest.mark.slow
 def test_any_mesh_case_runs_or_fails_cleanly(monkeypatch):
     """600 3D cases with a generated mesh file as a body or an obstacle: each runs its first
     steps or stops with a clean error (exit 2, naming the key of the mesh when the file is

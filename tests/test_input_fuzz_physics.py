@@ -6,16 +6,15 @@ test_input_fuzz.py."""
 
 import copy
 import json
-import tomllib
 
 import hypothesis.strategies as st
 import pytest
+import tomllib
 from hypothesis import HealthCheck, given, settings
+from test_input_fuzz import BASE, _capped, _run_case, to_toml
 
 from mpmflow import memory
 from mpmflow.simulation import Simulation
-
-from test_input_fuzz import BASE, _capped, _run_case, to_toml
 
 CASES = 400
 
@@ -79,6 +78,7 @@ def physics_case(draw):
 
 
 @pytest.mark.filterwarnings("error")  # a numerical warning is a defect as a traceback is
+@pytest.mark.slow
 def test_materials_and_probes_run_or_fail_cleanly(monkeypatch):
     """The property over CASES cases, and a check that it was not vacuous: cases of every
     model ran and cases were refused."""

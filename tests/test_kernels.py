@@ -5,9 +5,9 @@ import pytest
 
 from mpmflow import state
 from mpmflow.cells import bin_particles
-from mpmflow.grid import Grid
 from mpmflow.geometry.lattice import lattice_in_box
 from mpmflow.geometry.seeding import seed_box
+from mpmflow.grid import Grid
 from mpmflow.particles import Particles
 
 

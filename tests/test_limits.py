@@ -9,12 +9,11 @@ import sys
 import time
 
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case, memory
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
-
-from conftest import EXAMPLES
 
 DAM = EXAMPLES / "dam_break.toml"
 
@@ -41,6 +40,7 @@ def test_a_case_too_large_for_the_machine_is_refused_at_once(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_the_limit_comes_from_the_estimate_not_a_fixed_count(tmp_path):
     """1.7e6 particles passed the old fixed limits (5e7) whatever the memory; with 300 MB
     to give, the estimate (about 800 MB: 801 MB measured by benchmarks/memory.py) refuses them, and 2 GB holds them."""
@@ -73,6 +73,7 @@ def test_counts_too_large_for_a_float_are_refused_too():
         memory.check(case)
 
 
+@pytest.mark.slow
 def test_the_estimate_is_near_the_measured_peak(tmp_path):
     """The dam break at 0.001 m (416k particles), three steps with a snapshot and a
     checkpoint: the estimate printed before the run is within 30% of the process's peak

@@ -12,8 +12,8 @@ import re
 
 import numpy as np
 import pytest
-
 from conftest import ROOT
+
 from mpmflow import Simulation, load_case, state
 from mpmflow.errors import CaseError, SolverError
 
@@ -115,6 +115,7 @@ def test_the_viscous_operator_is_the_full_stress(cells):
     assert np.linalg.eigvalsh(A).min() > 0.99 * M.min()
 
 
+@pytest.mark.slow
 def test_the_viscous_step_is_implicit():
     # honey-like: viscosity 1000 Pa s at h = 0.01 m, dt = 1e-3 s is 100 times the explicit
     # limit rho h^2 / (2 D eta); the column (0.1 m wide, 0.195 m high) sags slowly instead
@@ -147,6 +148,7 @@ def _layer_slope(model, degrees, end):
     return math.degrees(math.atan((top(0.18) - top(0.02)) / 0.16))
 
 
+@pytest.mark.slow
 def test_a_granular_layer_stands_below_its_angle_of_repose():
     # gravity tilted by 15 degrees (tan 15 = 0.27 < mu_s = 0.38): the layer's surface,
     # inclined by 15 degrees to the level, stays; water levels (its surface turns by the
@@ -180,6 +182,7 @@ def _bingham_incline(ratio, end=0.4):
     return float(v[top, 0].mean()), float(np.abs(v[middle]).max())
 
 
+@pytest.mark.slow
 def test_a_bingham_layer_on_an_incline_flows_above_its_critical_thickness():
     """The basal shear stress of a layer of thickness H on a plane inclined by theta is
     rho g sin(theta) H: it stands below H_c = tau_y / (rho g sin theta) and flows above.
@@ -336,6 +339,7 @@ def _claim(pattern, text):
     return [float(v) for v in found.groups()]
 
 
+@pytest.mark.slow
 def test_granular_example_states_the_speed_its_deposit_creeps_at(tmp_path):
     """examples/granular_collapse.toml said its deposit is at rest by 1 s while particles
     moved at 2.6-3.8 cm/s at 1.2 s. The example is run as it is (about 8 s) and its header's

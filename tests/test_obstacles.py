@@ -3,13 +3,10 @@ the column at rest around them, flow round them, and the face terms' geometry.""
 
 import numpy as np
 import pytest
-
-from mpmflow import Simulation, load_case
-from mpmflow.grid import Grid
-
-from mpmflow import obstacles, state
-
 from conftest import EXAMPLES
+
+from mpmflow import Simulation, load_case, obstacles, state
+from mpmflow.grid import Grid
 
 RHO, G = 1000.0, 9.81
 
@@ -25,6 +22,7 @@ AT_REST = {
 
 
 @pytest.mark.parametrize("name", list(AT_REST))
+@pytest.mark.slow
 def test_column_at_rest_around_an_obstacle_is_exact(name):
     """The column at rest around an obstacle whose faces lie off the grid lines: the particle
     pressure is rho g (H - z) and nothing moves, to the pressure solve's tolerance (1e-8;
@@ -113,6 +111,7 @@ def test_an_obstacle_with_no_slip_holds_the_water_on_its_face():
 
 @pytest.mark.parametrize("example", ["obstacle_2d.toml", "stl_drop_3d.toml",
                                      "spheric_test2.toml"])
+@pytest.mark.slow
 def test_the_geometry_examples_load_and_start(example, tmp_path):
     """The examples with obstacles, a polygon body, a body from the STL file shipped in
     examples/geometry and SPHERIC Test 2 (coarsened) load and take their first steps, with

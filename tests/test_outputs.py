@@ -5,14 +5,13 @@ import signal
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case, open_run
 from mpmflow.checkpoint import checkpoints
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.output.snapshots import read_index
-
-from conftest import EXAMPLES, make_case
 
 
 def _tiny(end, snapshots=False, **more):
@@ -37,6 +36,7 @@ def _run_and_count(case, out):
     return _bytes_written() - before
 
 
+@pytest.mark.slow
 def test_thousands_of_rows_cost_linear_bytes_and_fixed_size_checkpoints(tmp_path):
     """2,000 and 4,000 rows, a row every step: the bytes written double (they grew 4-fold
     when the whole file was rewritten after every row), and the last checkpoint does not
@@ -52,6 +52,7 @@ def test_thousands_of_rows_cost_linear_bytes_and_fixed_size_checkpoints(tmp_path
     assert abs(size_b - size_a) < 64, (size_a, size_b)  # a digit or two of the meta
 
 
+@pytest.mark.slow
 def test_the_snapshot_index_grows_in_place(tmp_path):
     """A snapshot every step: each one adds the same bytes to particles.pvd, which stays a
     whole XML file (ParaView can open it at any time)."""

@@ -9,12 +9,11 @@ import shutil
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case, probes
 from mpmflow.cells import bin_particles
 from mpmflow.errors import CaseError
-
-from conftest import EXAMPLES, make_case
 
 RHO, G = 1000.0, 9.81
 

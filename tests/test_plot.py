@@ -3,13 +3,13 @@
 import shutil
 
 import pytest
+from conftest import EXAMPLES
 from PIL import Image
 
 from mpmflow.cli import main
 
-from conftest import EXAMPLES
 
-
+@pytest.mark.slow
 def test_plot_makes_the_figures_and_the_animation(tmp_path, capsys):
     run = tmp_path / "run"
     assert main(["run", str(EXAMPLES / "dam_break.toml"), "--out", str(run), "-q",
@@ -71,6 +71,7 @@ def test_plot_of_a_damaged_time_series_is_one_clear_error(small_run, tmp_path, c
     ("truncated", "cannot be read"),
     ("garbage", "cannot be read"),
 ])
+@pytest.mark.slow
 def test_plot_leaves_out_a_missing_or_damaged_snapshot_with_a_note(small_run, tmp_path,
                                                                    capsys, damage, words):
     """A missing VTU raised a traceback, a truncated one exit 1: the others are plotted
@@ -122,6 +123,7 @@ def _panels(fig):
     return [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
 
 
+@pytest.mark.slow
 def test_snapshot_overview_names_its_axes_with_units(small_run, tmp_path, monkeypatch):
     """snapshots.png had no axis labels: each panel names x in m, the first y in m (the
     panels share the plane), and the colour bar is the pressure in Pa."""
@@ -187,6 +189,7 @@ def _with_probes(run, pressure, level, positions=True):
     return list(probes)
 
 
+@pytest.mark.slow
 def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path,
                                                             monkeypatch):
     """2,000 probes took 18 s to plot (a Line2D and a legend entry each) and the legend
@@ -202,7 +205,7 @@ def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path,
     fig = saved["probes.png"]
     panels, bars = _panels(fig), [ax for ax in fig.axes if ax not in _panels(fig)]
     assert [ax.get_ylabel() for ax in panels] == ["pressure [Pa]", "water level [m]"]
-    for ax, n, along in zip(panels, (1500, 500), ("x", "x")):
+    for ax, n in zip(panels, (1500, 500)):
         collections = [c for c in ax.collections if isinstance(c, LineCollection)]
         assert [len(c.get_segments()) for c in collections] == [n]
         assert ax.get_lines() == [] and ax.get_legend() is None
@@ -250,6 +253,7 @@ def test_plot_of_a_few_probes_names_each_in_the_legend(small_run, tmp_path, monk
     assert [t.get_text() for t in level.get_legend().get_texts()] == names[LEGEND_MAX:]
 
 
+@pytest.mark.slow
 def test_3d_run_draws_the_water_surface_beside_the_slice(tmp_path, monkeypatch):
     """In 3D `mpmflow plot` draws, beside each snapshot's slice (particles_NNNNNN.png), the
     water's surface (snapshots/surface_NNNNNN.png) and an overview of the same snapshots

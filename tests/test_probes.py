@@ -1,10 +1,10 @@
 """Probes (probes.py): pressure sensors and level gauges in 2D and 3D, probes.csv, the measured
 series a case names (probes.N.data) and their figure (mpmflow plot)."""
 
-import tomllib
-
 import numpy as np
 import pytest
+import tomllib
+from conftest import EXAMPLES
 from PIL import Image
 
 from mpmflow import load_case, open_run, probes
@@ -14,8 +14,6 @@ from mpmflow.errors import CaseError
 from mpmflow.grid import Grid
 from mpmflow.probes import level_at, window_box
 from mpmflow.simulation import Simulation
-
-from conftest import EXAMPLES
 
 RHO, G = 1000.0, 9.81
 H = 0.195  # m, depth of examples/hydrostatic*.toml
@@ -272,6 +270,7 @@ def test_the_spheric_test2_file_names_its_columns_for_probes(tmp_path):
     assert [p.data.column for p in case.probes] == ["P1 [Pa]", "H3 as labelled in source [m]"]
 
 
+@pytest.mark.slow
 def test_plot_draws_the_probes_over_their_measured_series(tmp_path, capsys):
     path = _case_with_data(tmp_path, '{path = "measured.csv", column = "P1 [Pa]"}')
     run = tmp_path / "run"

@@ -1,11 +1,12 @@
 """Checkpoints and restart: a continued run is the uninterrupted run, bit for bit."""
 
 import json
-import signal
 import shutil
+import signal
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
 from mpmflow.checkpoint import CheckpointError, checkpoints, read
@@ -13,8 +14,6 @@ from mpmflow.checkpoint import write as checkpoint_write
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.particles import Particles
-
-from conftest import EXAMPLES
 
 COMMON = ["grid.spacing=0.01", "time.end=0.1", "checkpoint.interval=0.03",
           "output.snapshot_interval=0.02"]
@@ -61,6 +60,7 @@ def _assert_same_run(a, b, out_a, out_b):
         assert (out_a / name).read_bytes() == (out_b / name).read_bytes(), name
 
 
+@pytest.mark.slow
 def test_interrupted_then_restarted_run_is_bit_identical(uninterrupted, tmp_path):
     scheme, whole, whole_out = uninterrupted
     out = tmp_path / "parts"
@@ -80,6 +80,7 @@ def test_interrupted_then_restarted_run_is_bit_identical(uninterrupted, tmp_path
     assert summary["steps"] == whole.steps
 
 
+@pytest.mark.slow
 def test_restart_from_an_older_checkpoint_truncates_the_later_outputs(uninterrupted, tmp_path):
     scheme, whole, whole_out = uninterrupted
     out = tmp_path / "copy"
@@ -97,6 +98,7 @@ def test_restart_from_an_older_checkpoint_truncates_the_later_outputs(uninterrup
     _assert_same_run(whole, rest, whole_out, out)
 
 
+@pytest.mark.slow
 def test_a_later_end_extends_a_finished_run(uninterrupted, tmp_path):
     scheme, whole, whole_out = uninterrupted
     out = tmp_path / "copy"
@@ -110,6 +112,7 @@ def test_a_later_end_extends_a_finished_run(uninterrupted, tmp_path):
     assert rest.steps > whole.steps
 
 
+@pytest.mark.slow
 def test_restart_refuses_other_settings_naming_the_key(uninterrupted):
     scheme, _, whole_out = uninterrupted
     with pytest.raises(CaseError) as err:
@@ -132,6 +135,7 @@ def test_cli_restart_without_checkpoint_and_with_overwrite(tmp_path, capsys):
     assert "give one of them" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_checkpoints_keep_the_latest_two(uninterrupted):
     _, whole, whole_out = uninterrupted
     names = [p.name for p in checkpoints(whole_out)]
@@ -147,6 +151,7 @@ def _cli_args(scheme, out):
 
 
 @pytest.mark.parametrize("damage", [b"", b"not a zip file", "truncated"])
+@pytest.mark.slow
 def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(uninterrupted, tmp_path,
                                                                   capsys, damage):
     """An empty or cut-short checkpoint (a crash before its data reached the disk) is passed
@@ -170,6 +175,7 @@ def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(uninterrupted,
         assert (out / name).read_text() == (whole_out / name).read_text(), name
 
 
+@pytest.mark.slow
 def test_no_readable_checkpoint_is_a_clear_error(uninterrupted, tmp_path, capsys):
     scheme, _, whole_out = uninterrupted
     out = tmp_path / "copy"
@@ -188,6 +194,7 @@ def test_no_readable_checkpoint_is_a_clear_error(uninterrupted, tmp_path, capsys
     assert f"Checkpoint {older} cannot be read (EOFError" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_a_checkpoint_without_an_entry_is_a_case_error(uninterrupted, tmp_path):
     scheme, _, whole_out = uninterrupted
     arrays, meta = read(checkpoints(whole_out)[0])
@@ -212,6 +219,7 @@ def test_an_apic_checkpoint_without_the_affine_matrices_is_refused(tmp_path):
         Simulation.resume(_case("apic", "time.end=0.2"), tmp_path / "apic", path)
 
 
+@pytest.mark.slow
 def test_extending_a_run_whose_end_is_not_an_output_time(tmp_path):
     """A run to 0.105 s (not a multiple of output.interval = 0.01 s) extended to 0.12 s
     writes rows at 0.11 and 0.12 s, one per interval after the old end.
@@ -247,6 +255,7 @@ def _probe_case(data, *more):
         f"data={{path='{data}', column='p [Pa]'}}}}]", *more])
 
 
+@pytest.mark.slow
 def test_restart_refuses_a_case_file_whose_content_changed(tmp_path):
     """A checkpoint records the content of every file the case reads (here a probe's
     measured series); a restart after that file changed is refused, naming the file, while
@@ -267,6 +276,7 @@ def test_restart_refuses_a_case_file_whose_content_changed(tmp_path):
     assert "`probes.0.data.path`" in msg and str(data) in msg and "changed" in msg
 
 
+@pytest.mark.slow
 def test_restart_refuses_a_moved_mesh(tmp_path):
     """The issue's case: an obstacle's STL moved by 0.05 m between the run and its restart."""
     import trimesh

@@ -11,6 +11,7 @@ import time
 import meshio
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
 from mpmflow.checkpoint import checkpoints
@@ -18,8 +19,6 @@ from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.output.folder import FolderBusy
 from mpmflow.output.snapshots import read_index
-
-from conftest import EXAMPLES
 
 CASE = EXAMPLES / "dam_break.toml"
 # two distinguishable runs: other meshes (particle counts), snapshot times and titles
@@ -56,6 +55,7 @@ def _assert_outputs_of_one_run(out, title):
     assert checkpoints(out)[-1].name == summary["last_checkpoint"]
 
 
+@pytest.mark.slow
 def test_two_runs_started_together_into_one_folder(tmp_path):
     """Started at the same moment: one runs, the other is refused with exit 2 naming the
     first's PID; the folder holds the first's outputs only, complete."""
@@ -73,6 +73,7 @@ def test_two_runs_started_together_into_one_folder(tmp_path):
     _assert_outputs_of_one_run(out, "AB"[winner])
 
 
+@pytest.mark.slow
 def test_a_run_or_restart_into_a_busy_folder_is_refused(tmp_path):
     """While a run goes, a second run (even with --overwrite), a restart and a Python-API
     run into its folder are refused; the first run finishes with complete outputs."""

@@ -10,12 +10,11 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, ROOT
 
 import mpmflow
 from mpmflow import IterationInterval, Simulation, TimeInterval, WallTimeInterval, load_case
 from mpmflow.checkpoint import checkpoints, read
-
-from conftest import EXAMPLES, ROOT
 
 
 def _moments(schedule, times, dt=1e-3):
@@ -103,6 +102,7 @@ def _add(sim, seen):
     return writer
 
 
+@pytest.mark.slow
 def test_added_writers_and_callbacks_act_on_their_schedules(tmp_path):
     seen = {}
     sim = Simulation(_case(), tmp_path / "o")
@@ -132,6 +132,7 @@ def test_a_run_without_added_schedules_keeps_the_checkpoint_meta_as_before(tmp_p
     assert "schedules" not in meta and (meta["k_out"], meta["k_snap"]) == (4, 2)
 
 
+@pytest.mark.slow
 def test_restart_keeps_every_schedules_phase(tmp_path):
     """Interrupted at 0.05 s and resumed, the added writer and callbacks act at the same
     times and steps as in the uninterrupted run (without the phases, the writer on 0.04 s

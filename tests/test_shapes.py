@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from mpmflow.geometry import meshes, shapes
 from mpmflow.case import validate
 from mpmflow.errors import CaseError
-from mpmflow.grid import Grid
+from mpmflow.geometry import meshes, shapes
 from mpmflow.geometry.seeding import build_particles
+from mpmflow.grid import Grid
 
 RNG = np.random.default_rng(15)
 
@@ -407,6 +407,7 @@ def test_bad_geometry_is_refused_with_the_key_and_the_fix(base, bodies, obstacle
         _case(base, bodies, obstacles, probes)
 
 
+@pytest.mark.slow
 def test_the_cli_refuses_an_open_mesh_in_one_paragraph(tmp_path):
     ico = trimesh.creation.icosphere(subdivisions=1, radius=0.03)
     _write(trimesh.Trimesh(ico.vertices, ico.faces[2:]), tmp_path / "open.stl")

@@ -35,6 +35,7 @@ def run(threads, settings):
     # stencils and the multigrid's periodic levels on both thread counts)
     ["domain.size=[0.576, 0.44]", "domain.periodic=[true, false]", "time.end=0.05"],
 ])
+@pytest.mark.slow
 def test_dam_break_is_bit_identical_on_one_and_two_threads(settings):
     if state.POOL < 2:
         pytest.skip("one thread only")
@@ -76,6 +77,7 @@ def test_auto_counts_the_cores_others_keep_busy(monkeypatch):
 
 @pytest.mark.skipif(not os.path.exists("/proc/stat") or len(os.sched_getaffinity(0)) < 2
                     or state.POOL < 2, reason="needs Linux and 2 cores")
+@pytest.mark.slow
 def test_auto_runs_on_fewer_threads_beside_busy_programs():
     """With a busy process on every core but one, "auto" starts on one thread, whatever
     else the machine is doing (the other engineer's tests may add load: fewer free cores

@@ -32,6 +32,7 @@ def row(rows, case, start):
     return hits[0]
 
 
+@pytest.mark.slow
 def test_report_has_the_summary_table_first_and_a_csv_row_per_row(quick):
     out, rows, counts = quick
     text = (out / "README.md").read_text()
@@ -53,6 +54,7 @@ def test_report_has_the_summary_table_first_and_a_csv_row_per_row(quick):
     assert not list(out.glob(".*.tmp"))
 
 
+@pytest.mark.slow
 def test_hydrostatic_column_is_exact_and_still(quick):
     _, rows, _ = quick
     for h in ("0.02", "0.01", "0.005"):
@@ -64,6 +66,7 @@ def test_hydrostatic_column_is_exact_and_still(quick):
     assert not [q for c, q in rows if c == "hydrostatic" and q.startswith("default: pressure, c")]
 
 
+@pytest.mark.slow
 def test_hydrostatic_paper_formulation_converges_at_first_order(quick):
     """The paper's node-based surface puts p = 0 half a cell above the surface (H = 0.2 - h/2):
     an error of sqrt(3) h / (2 H) in L2, first order (measured: order 1.03, errors 3-4% above
@@ -78,6 +81,7 @@ def test_hydrostatic_paper_formulation_converges_at_first_order(quick):
         assert offset <= l2 <= 1.1 * offset, (h, l2, offset)
 
 
+@pytest.mark.slow
 def test_sloshing_period_within_two_percent_at_20_cells_over_the_depth(quick):
     _, rows, _ = quick
     r = row(rows, "sloshing", "period, h = 0.01 m")
@@ -86,6 +90,7 @@ def test_sloshing_period_within_two_percent_at_20_cells_over_the_depth(quick):
     assert abs(row(rows, "sloshing", "amplitude change").value) < 0.05
 
 
+@pytest.mark.slow
 def test_dam_break_against_martin_moyce_and_vof_at_0008(quick):
     _, rows, _ = quick
     for q in ("height, h = 0.008 m", "front vs M&M", "front vs K&O", "front vs VOF",
@@ -96,6 +101,7 @@ def test_dam_break_against_martin_moyce_and_vof_at_0008(quick):
     assert row(rows, "dam break AR1", "front vs M&M").status == "pass"
 
 
+@pytest.mark.slow
 def test_time_step_differences_stay_below_the_data_tolerance(quick):
     """Known miss of the quarter-tolerance rows (see the report); the differences must stay
     below the 0.08 a used against the experiments."""
@@ -105,6 +111,7 @@ def test_time_step_differences_stay_below_the_data_tolerance(quick):
         assert row(rows, "time step", q).value < 0.08
 
 
+@pytest.mark.slow
 def test_lobovsky_levels_and_impact_peaks(quick):
     _, rows, _ = quick
     for gauge in ("H1", "H2", "H3"):
@@ -114,6 +121,7 @@ def test_lobovsky_levels_and_impact_peaks(quick):
         assert row(rows, "Lobovsky", f"peak pressure, {s}").status == "pass"
 
 
+@pytest.mark.slow
 def test_volume_measures_stay_within_a_surface_row(quick):
     """On the quick meshes (0.01 m sloshing for 3 s, 0.008 m dam break for 0.45 s) the
     wetted region stays within half a cell row of surface of the water's volume (h L / 2 V:
@@ -127,6 +135,7 @@ def test_volume_measures_stay_within_a_surface_row(quick):
     assert row(rows, "volume", "dam break: packed cells").value < 0.13
 
 
+@pytest.mark.slow
 def test_long_runs_keep_volume_energy_and_period(quick):
     """The long-run case's quick version (sloshing 0.01 m for 10 s, dam break 0.008 m for
     6 s) with the issue's tolerances: wetted region and settled level of the dam break, the
@@ -139,6 +148,7 @@ def test_long_runs_keep_volume_energy_and_period(quick):
         assert row(rows, "long_run", q).status == "pass", q
 
 
+@pytest.mark.slow
 def test_3d_rows_the_quick_meshes_decide(quick):
     """The 3D column at rest is exact; the 3D dam break carries the 2D run's energy per
     metre of width (its front and height rows are in the report, pass or miss)."""
@@ -150,6 +160,7 @@ def test_3d_rows_the_quick_meshes_decide(quick):
         assert row(rows, "3D", q).status == "pass", q
 
 
+@pytest.mark.slow
 def test_channel_flow_rows_the_quick_meshes_decide(quick):
     """The finer of each flow's two quick meshes meets the issue's criteria (the coarser
     ones are in the report, pass or miss); each error falls at least at first order."""
@@ -174,6 +185,7 @@ def test_the_cli_names_every_validation_case():
     assert VALIDATION_CASES == tuple(validation.CASES)
 
 
+@pytest.mark.slow
 def test_validate_command_rejects_bad_input(tmp_path):
     afile = tmp_path / "file"
     afile.write_text("x")
@@ -255,6 +267,7 @@ def test_validate_checks_scikit_image_before_running_spheric(tmp_path, capsys, m
     assert "scikit-image" not in capsys.readouterr().err  # stopped by the examples instead
 
 
+@pytest.mark.slow
 def test_spheric_test2_first_impact_on_the_box_at_the_coarse_mesh(quick):
     """SPHERIC Test 2 at 0.05 m (quick): the wave reaches the box's front face (P1) within
     the tolerance of the measured 0.393 s, and the impulse of that impact is within 30%

@@ -3,14 +3,13 @@ nothing else moved (velocities, walls, the column at rest)."""
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case, state
 from mpmflow.case import validate
 from mpmflow.cells import bin_particles
-from mpmflow.grid import Grid
 from mpmflow.geometry.seeding import seed_box
-
-from conftest import EXAMPLES, make_case
+from mpmflow.grid import Grid
 
 
 @pytest.mark.parametrize("shift", [0.0, 0.13, 0.5, 0.77])

@@ -4,12 +4,11 @@ import math
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation
 from mpmflow.case import load_case
 from mpmflow.errors import CaseError
-
-from conftest import EXAMPLES, make_case
 
 
 def test_water_does_not_hang_from_the_ceiling():
@@ -67,6 +66,7 @@ def _film_3d(walls, end=0.75):
             G * math.sin(theta))
 
 
+@pytest.mark.slow
 def test_a_layer_on_a_no_slip_floor_between_slip_side_walls_is_uniform_across():
     """walls = {y = "slip", z_min = "no_slip"}: the slip side walls hold no shear, so the
     film is the Nusselt film of an infinitely wide incline, the same in every y band (3
@@ -82,6 +82,7 @@ def test_a_layer_on_a_no_slip_floor_between_slip_side_walls_is_uniform_across():
     np.testing.assert_allclose(U[0, 1:3], nusselt[1:3], rtol=0.06)
 
 
+@pytest.mark.slow
 def test_a_slip_floor_between_no_slip_side_walls_gives_the_channel_profile():
     """The reverse, walls = {y = "no_slip"} (the floor and top slip): the walls at y = 0
     and W hold the flow, so each z band is plane Poiseuille across y, g sin(theta) y (W -

@@ -23,8 +23,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .geometry import bodies
 from .errors import CaseError
+from .geometry import bodies
 from .grid import Grid
 
 MB = 2**20

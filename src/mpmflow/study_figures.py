@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 
 from .mpl import pyplot
-from .reference import G, MM_HEIGHT_AR2, VOF_AR2, load
+from .reference import MM_HEIGHT_AR2, VOF_AR2, G, load
 
 A = 0.114  # m, width of both columns
 MM_FRONT = "validation/martin_moyce_1952_n2eq2_a2.25in_front_table2.csv"

@@ -13,8 +13,15 @@ the documentation and the error messages show. One module per concern:
   ``mpmflow keys``).
 """
 
-from .loading import (LIST_KEYS, apply_overrides, load_case, resolved, revalidate, validate,
-                      validate_case)
+from .loading import (
+                      LIST_KEYS,
+                      apply_overrides,
+                      load_case,
+                      resolved,
+                      revalidate,
+                      validate,
+                      validate_case,
+)
 from .model import Case
 from .reference import KNOWN_KEYS, key_reference, reference_markdown, reference_page
 from .sections import COURANT, MAX_DT, MAX_STEPS

@@ -2,7 +2,7 @@
 side) and its periodic axes (SI units: m)."""
 
 import difflib
-from typing import Literal, Optional, Union
+from typing import Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
@@ -25,7 +25,7 @@ class Domain(Section):
         "its boundaries are walls. Every other vector of the case (bodies' min, max and "
         "velocity, gravity, probe positions) has as many entries.",
         examples=[[0.42, 0.44]], min_length=2, max_length=3)
-    walls: Union[Literal["slip", "no_slip"], dict[str, Literal["slip", "no_slip"]]] = Field(
+    walls: Literal["slip", "no_slip"] | dict[str, Literal["slip", "no_slip"]] = Field(
         "slip", description="Wall condition of the domain boundaries, \"slip\" or "
         "\"no_slip\": one for every wall (walls = \"no_slip\"), or a table by axis and "
         "side: keys x, y (and z in 3D) set both walls across that axis, x_min, x_max, y_min, "
@@ -40,7 +40,7 @@ class Domain(Section):
         "moves away, so water falls from a ceiling and leaves a wall freely. no_slip also "
         "stops tangential motion where the wall holds (at an edge between a no-slip and a "
         "slip wall, the no-slip wall's hold).")
-    periodic: Optional[list[bool]] = Field(
+    periodic: list[bool] | None = Field(
         None, description="Periodic axes, one flag per axis (e.g. [true, false]: x wraps "
         "round): material leaving through one end of a periodic axis comes back through the "
         "other, and that axis has no walls. For channel and layer flows that are uniform "

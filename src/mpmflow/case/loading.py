@@ -8,9 +8,9 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from ..errors import CaseError
-from .model import Case
-from .reference import KNOWN_KEYS, _REFERENCE, _item, _models_of
 from .domain import AXES
+from .model import Case
+from .reference import _REFERENCE, KNOWN_KEYS, _item, _models_of
 from .sections import MAX_CASE_BYTES
 from .shapes import SHAPE_TYPES, Body, Obstacle
 

@@ -2,22 +2,32 @@
 domain and apart, time step against end, probes inside, ...), checked as one."""
 
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from .. import schemes
 from ..geometry import bodies, placement
-from ..geometry.specs import from_spec
 from ..geometry.shapes import DIM_OF
+from ..geometry.specs import from_spec
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
 from .domain import Domain
-from .sections import (MAX_STEPS, Checkpoint, Execution, GridSettings, Material, Output,
-                       Physics, Probe, Section, Solver, Time)
+from .sections import (
+    MAX_STEPS,
+    Checkpoint,
+    Execution,
+    GridSettings,
+    Material,
+    Output,
+    Physics,
+    Probe,
+    Section,
+    Solver,
+    Time,
+)
 from .shapes import Body, Obstacle
-
+from .shapes import Box as BoxBody
 
 # A periodic axis is halved by the multigrid while its period stays a multiple of 4
 # (src/core/multigrid.cpp); the points left on the coarsest level enter a dense solve at
@@ -56,7 +66,7 @@ class Case(Section):
         "probes.N.name; time in s).")
     execution: Execution = Execution()
 
-    _base_dir: Optional[Path] = PrivateAttr(None)  # the case file's folder
+    _base_dir: Path | None = PrivateAttr(None)  # the case file's folder
     _shapes: dict = PrivateAttr(default_factory=dict)  # built shapes, by their tables
     _counts: dict = PrivateAttr(default_factory=dict)  # particle counts, by the geometry
 
@@ -238,7 +248,7 @@ class Case(Section):
                     "number to hold (masses and energies would be zero); give the density "
                     "in kg/m^3 (water: 1000)")
         for k, body in enumerate(self.bodies):
-            if not bodies.is_box(body):
+            if not isinstance(body, BoxBody):
                 continue  # placement.check
             crest = body.max[1] + abs(body.surface_amplitude)
             if body.surface_amplitude and crest > size[1] * (1 + 1e-12):
@@ -367,10 +377,10 @@ def _check_probe_data(k, probe, folder):
     except OSError as err:
         raise ValueError(
             f"{key}.path = {data.path!r}: the file {path} cannot be read ({err.strerror}); give "
-            "the path of the measured series' CSV file, relative to the case file's folder")
+            "the path of the measured series' CSV file, relative to the case file's folder") from None
     except UnicodeDecodeError:
         raise ValueError(f"{key}.path = {data.path!r}: {path} is not a text file; give the "
-                         "path of the measured series' CSV file (a header line, then numbers)")
+                         "path of the measured series' CSV file (a header line, then numbers)") from None
     names = [c.strip().strip('"') for c in first.rstrip("\r\n").split(",")]
     for field in ("time_column", "column"):
         name = getattr(data, field)

@@ -1,15 +1,15 @@
 """The case-file reference, generated from the schema: every key with its default, unit and
 description (docs/reference.md, `mpmflow keys`), and the lookups messages use."""
 
+import types
 import typing
 from typing import Annotated, Union
 
 from pydantic import BaseModel
 
-from .model import Case
 from .domain import wall_keys
+from .model import Case
 from .sections import FORMULATIONS, Solver
-
 
 
 def _model_for(section):
@@ -23,7 +23,7 @@ def _models_of(annotation):
     origin = typing.get_origin(annotation)
     if origin is Annotated:
         return _models_of(typing.get_args(annotation)[0])
-    if origin is Union:
+    if origin is Union or origin is types.UnionType:  # Union[X, Y] or X | Y
         return [m for a in typing.get_args(annotation) for m in _models_of(a)]
     model = _model_for(annotation)
     return [model] if model is not None else []

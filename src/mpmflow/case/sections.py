@@ -4,7 +4,7 @@ The domain (its size, walls and periodic axes) is in ``case.domain``, the shapes
 bodies and obstacles in ``case.shapes``; the whole case and its
 cross-field rules in ``case.model``."""
 
-from typing import Literal, Optional, Union
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, model_validator
 
@@ -32,7 +32,7 @@ class GridSettings(Section):
 
 
 class Material(Section):
-    model: Literal[tuple(materials.MATERIALS)] = Field(
+    model: Literal[tuple(materials.MATERIALS)] = Field(  # type: ignore[valid-type]
         "water", description="Constitutive model: \"water\" (inviscid, the default), "
         "\"newtonian\" (viscosity), \"herschel_bulkley\" (yield-stress material; Bingham "
         "with flow_index = 1: consistency, yield_stress, flow_index, max_viscosity) or "
@@ -87,7 +87,7 @@ class Physics(Section):
 
 
 class Time(Section):
-    dt: Union[Literal["auto"], float] = Field(
+    dt: Literal["auto"] | float = Field(
         description="Time step (s), or \"auto\". With \"auto\" the projection scheme sets "
         "every step from the particles' speeds: dt = time.courant grid.spacing / max |v_p|, "
         "at most time.max_dt, the last steps before an output time shortened to land on it; "
@@ -118,7 +118,7 @@ class Output(Section):
         0.01, gt=0, description="Simulated time between rows of timeseries.csv (s). The steps "
         "between two output times are all equal and at most time.dt, so every output time is "
         "landed on exactly.")
-    snapshot_interval: Optional[float] = Field(
+    snapshot_interval: float | None = Field(
         None, gt=0, description="Simulated time between particle snapshots (s); defaults to "
         "output.interval. Snapshots are written at the first output time at or after each "
         "multiple (so an interval shorter than output.interval means every output).")
@@ -171,7 +171,7 @@ class Probe(Section):
         "the gauge for \"level\" (e.g. [x, 0] on the floor in 2D, [x, y, 0] in 3D). Inside "
         "the domain.",
         min_length=2, max_length=3, examples=[[0.42, 0.01]])
-    window: Optional[float] = Field(
+    window: float | None = Field(
         None, gt=0, description="Side of a pressure probe's window (m); none = the fewest "
         "whole grid cells that hold the 2 (D + 1) particles of a fit at the sparsest body's "
         "particles_per_cell (one cell at 3 or more per axis in 2D, 2 or more in 3D; two "
@@ -196,13 +196,13 @@ class Probe(Section):
         "where f first drops below 1/2 going up (the top of the first layer: 0 when the "
         "foot's cell is less than half full, splashes above the layer not counted). Level "
         "probes only.")
-    data: Optional[ProbeData] = Field(
+    data: ProbeData | None = Field(
         None, description="The measured series to compare with ([probes.data] table: path, "
         "column, time_column): `mpmflow plot` draws it beside the probe's.")
 
 
 class Execution(Section):
-    threads: Union[Literal["auto"], int] = Field(
+    threads: Literal["auto"] | int = Field(
         "auto", description="Threads of the compiled kernels: \"auto\" uses the cores that "
         "other programs leave idle, measured when the run starts and again about every "
         "second at output times (a run beside another busy program drops to fewer threads "
@@ -247,7 +247,7 @@ class Solver(Section):
         "theta = 0.2 left out, no correction of the particles' volume, pure FLIP); "
         "\"mpmflow\" is the default, which keeps a column at rest exactly at rest and the "
         "material at its volume. Keys set explicitly override the preset.")
-    flip: float = Field(None, ge=0, le=1, description="FLIP fraction of the particle velocity "
+    flip: float | None = Field(None, ge=0, le=1, description="FLIP fraction of the particle velocity "
                         "update per millisecond of simulated time: a step of dt blends FLIP and "
                         "PIC with the fraction flip^(dt / 1 ms), so the PIC damping per second "
                         "is the same whatever the time step and the scheme. 1 = pure FLIP "
@@ -267,17 +267,17 @@ class Solver(Section):
     full_cell_threshold: float = Field(
         0.9, gt=0, le=1, description="Cells with volume fraction theta at or above this are full "
         "and integrated with 2x2 Gauss points (paper: 0.9).")
-    sparse_cell_threshold: float = Field(
+    sparse_cell_threshold: float | None = Field(
         None, gt=0, lt=1, description="Cells with theta below this are left out of the "
         "pressure system (paper: 0.2). With free_surface = \"subcell\" the surface is placed "
         "by the nodal volume fraction, not by this threshold, and a low threshold keeps the "
         "few particles above a surface that lies on a grid line inside the system (left out, "
         "they fall freely until they rejoin it, which stirs the surface).")
-    partial_cell_quadrature: Literal["gauss", "particles"] = Field(
+    partial_cell_quadrature: Literal["gauss", "particles"] | None = Field(
         None, description="Quadrature of partial cells (sparse <= theta < full): "
         "\"particles\" integrates with the material points (the paper); \"gauss\" with Gauss "
         "points over the whole cell, consistent with free_surface = \"subcell\".")
-    surface_quadrature: Literal["divergence", "consistent", "gauss"] = Field(
+    surface_quadrature: Literal["divergence", "consistent", "gauss"] | None = Field(
         None, description="With partial_cell_quadrature = \"gauss\": how the cells the free "
         "surface passes through are integrated besides the Laplacian (Gauss points). "
         "\"divergence\": the divergence of the predicted velocity (eq. 15) over the cell's "
@@ -288,11 +288,11 @@ class Solver(Section):
         "only takes energy out (at 0.01 m a standing wave then loses 1.8% per period and "
         "the coarse surge front is 0.007 a slower); \"gauss\": Gauss points over the whole "
         "cell for all (the earlier default). See docs/method.md, \"Energy\".")
-    free_surface: Literal["subcell", "node"] = Field(
+    free_surface: Literal["subcell", "node"] | None = Field(
         None, description="Free-surface condition: \"node\" sets p = 0 at nodes bordering "
         "left-out cells (the paper); \"subcell\" places p = 0 at the f = 1/2 level of the nodal "
         "volume fraction with ghost-fluid extrapolation.")
-    wall_flux: bool = Field(
+    wall_flux: bool | None = Field(
         None, description="Use the wall term of the weak form (grad p . n = rho/dt v*.n on "
         "wetted walls) with the divergence of the unconstrained v*. false = the paper's "
         "homogeneous Neumann condition with the wall-constrained v*.")
@@ -300,7 +300,7 @@ class Solver(Section):
         0.01, gt=0, le=1, description="Smallest fractional distance from an unknown node to the "
         "free surface used in the ghost extrapolation (subcell only); keeps the system well "
         "conditioned when the surface passes very close to a node.")
-    volume_correction: float = Field(
+    volume_correction: float | None = Field(
         None, ge=0, le=1, description="Volume correction rate beta (dimensionless, per step): "
         "the particles' volume fraction on the cell grid is brought back towards 1 by moving "
         "the particles (never their velocity) along -grad q, -lap q = volume fraction - 1 on "
@@ -314,7 +314,7 @@ class Solver(Section):
         "each time. A correction costs about a fifth of a step; at time.dt = 1 ms, every "
         "second step halves that with the same volume, dam-break accuracy and sloshing "
         "energy (docs/method.md).")
-    density_correction: float = Field(
+    density_correction: float | None = Field(
         None, ge=0, le=1, description="The earlier, velocity-based density correction beta "
         "(dimensionless): where the particles give a node more material volume than the node "
         "holds (vol_i > V_i), the projection asks for div v = beta (vol_i/V_i - 1)/dt. It only "

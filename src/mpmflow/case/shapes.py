@@ -2,14 +2,12 @@
 only the shape's fields; bodies and obstacles add their own fields to the same shape
 classes (``mpmflow.geometry`` builds the geometry from them)."""
 
-from typing import Annotated, ClassVar, Literal, Optional, Union
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
 from ..geometry import shapes
 from .sections import Section
-
-
 
 # --------------------------------------------------------------------------- shapes
 # The shape of a body or an obstacle: one class per shape type, holding only the shape's
@@ -178,7 +176,7 @@ class MeshBody(_BodyFields, _MeshShape):
 
 
 class _ObstacleFields(Section):
-    name: Optional[str] = Field(
+    name: str | None = Field(
         None, description="Name of the obstacle, for messages and outputs (letters, digits, "
         "_ . + -); optional.", pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["pier"])
     walls: Literal["slip", "no_slip", "domain"] = Field(
@@ -217,11 +215,22 @@ def _shape_tag(value):
     return kind if isinstance(kind, str) else repr(kind)
 
 
-def _shape_union(*models):
-    return Annotated[Union[tuple(Annotated[m, Tag(t)] for m, t in zip(models, SHAPE_TYPES))],
-                     Discriminator(_shape_tag)]
-
-
-Body = _shape_union(Box, CylinderBody, SphereBody, DiscBody, PolygonBody, MeshBody)
-Obstacle = _shape_union(BoxObstacle, CylinderObstacle, SphereObstacle, DiscObstacle,
-                        PolygonObstacle, MeshObstacle)
+# a body or an obstacle: one of the shape classes, chosen by its ``type`` (SHAPE_TYPES)
+Body = Annotated[
+    Annotated[Box, Tag("box")]
+    | Annotated[CylinderBody, Tag("cylinder")]
+    | Annotated[SphereBody, Tag("sphere")]
+    | Annotated[DiscBody, Tag("disc")]
+    | Annotated[PolygonBody, Tag("polygon")]
+    | Annotated[MeshBody, Tag("mesh")],
+    Discriminator(_shape_tag),
+]
+Obstacle = Annotated[
+    Annotated[BoxObstacle, Tag("box")]
+    | Annotated[CylinderObstacle, Tag("cylinder")]
+    | Annotated[SphereObstacle, Tag("sphere")]
+    | Annotated[DiscObstacle, Tag("disc")]
+    | Annotated[PolygonObstacle, Tag("polygon")]
+    | Annotated[MeshObstacle, Tag("mesh")],
+    Discriminator(_shape_tag),
+]

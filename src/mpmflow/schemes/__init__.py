@@ -2,7 +2,7 @@
 declaring what it supports (``SUPPORTS``): the case's rules ask here instead of naming
 schemes."""
 
-SCHEMES = {}
+SCHEMES: dict[str, type] = {}
 
 # The features a scheme may support, as the case's rules name them to the user.
 FEATURES = {

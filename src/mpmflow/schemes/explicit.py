@@ -33,7 +33,7 @@ class ExplicitReport(StepReport):
 
 @register("explicit")
 class ExplicitScheme:
-    SUPPORTS = frozenset()  # water only, walls only (the weakly compressible comparator)
+    SUPPORTS: frozenset[str] = frozenset()  # water only, walls only (the weakly compressible comparator)
 
     def __init__(self, case, grid, particles):
         self.grid = grid

@@ -202,7 +202,7 @@ class ProjectionScheme:
         except pressure.SETUP_ERRORS as err:
             k = int(report.step)
             self.steps += k
-            raise pressure.setup_failed(where(k), err, int(report.last_unknowns))
+            raise pressure.setup_failed(where(k), err, int(report.last_unknowns)) from err
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
         if done < nsteps:

@@ -27,8 +27,13 @@ from threadpoolctl import threadpool_limits
 from .. import checkpoint
 from ..case import revalidate
 from ..cells import bin_particles
-from ..diagnostics import (front_and_height, kinetic_energy, potential_energy, pressure_noise,
-                           volume_measures)
+from ..diagnostics import (
+    front_and_height,
+    kinetic_energy,
+    potential_energy,
+    pressure_noise,
+    volume_measures,
+)
 from ..errors import SimulationError
 from ..fallbacks import Fallbacks
 from ..interrupts import StopNow

@@ -17,14 +17,13 @@ checkpoint records of it), ``sync()`` (flush to the disk before a checkpoint) an
 
 from .. import probes
 from ..output.snapshots import SnapshotWriter
-from ..output.timeseries import (COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter,
-                                 read_table)
+from ..output.timeseries import COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter, read_table
 
 
 class _Rows:
     """Rows kept in memory and, with an output folder, appended to a CSV file."""
 
-    file_name = None
+    file_name: str = ""  # set by each writer
 
     def __init__(self, columns):
         self.buffer = SeriesBuffer(columns)

@@ -16,8 +16,18 @@ import time as _time
 from pathlib import Path
 
 from ..errors import CaseError, SimulationError
-from . import (channel_flows, dam_break, hydrostatic, lobovsky, long_run, materials, sloshing,
-               spheric, three_d, volume)
+from . import (
+    channel_flows,
+    dam_break,
+    hydrostatic,
+    lobovsky,
+    long_run,
+    materials,
+    sloshing,
+    spheric,
+    three_d,
+    volume,
+)
 from .common import EXAMPLES, CaseResult, Row
 
 CASES = {
@@ -75,9 +85,7 @@ def _missing_text(missing):
 
 def run_validation(out, quick=False, cases=None, progress=None):
     """Run the cases (all by default) into ``out``; returns (results, counts)."""
-    from .report import write_report
-
-    from .report import check_report_folder
+    from .report import check_report_folder, write_report
 
     out = Path(out)
     check_report_folder(out)

@@ -41,8 +41,7 @@ import math
 
 import numpy as np
 
-from .common import (CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example,
-                     save)
+from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
 
 # tolerances, fixed in this module before the validation runs (those of the issue, 26 item 2)
 TOL_STEADY = 0.01

@@ -22,7 +22,6 @@ in the first PAPER_WINDOW seconds, while the column is still on its plateau.
 import numpy as np
 
 from ..cells import bin_particles
-
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
 
 RHO, G = 1000.0, 9.81

@@ -78,7 +78,7 @@ def run(out, quick=False, context=None):
     for h in spacings:
         xc = []
 
-        def centre(sim):
+        def centre(sim, xc=xc):
             P = sim.particles
             xc.append((sim.time, float(np.sum(P.mass * P.x[:, 0]) / np.sum(P.mass))))
 
