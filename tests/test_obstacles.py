@@ -1,11 +1,12 @@
-"""Fixed obstacles (``mpmflow.obstacles``, ``src/core/cut_cells``): faces off the grid lines,
+"""Fixed obstacles (``mpmflow.boundaries.obstacles``, ``src/core/cut_cells``): faces off the grid lines,
 the column at rest around them, flow round them, and the face terms' geometry."""
 
 import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from mpmflow import Simulation, load_case, obstacles, state
+from mpmflow import Simulation, load_case, state
+from mpmflow.boundaries import obstacles
 from mpmflow.grid import Grid
 
 RHO, G = 1000.0, 9.81

@@ -22,7 +22,7 @@ class CellBins:
 
 def bin_particles(grid, particles, bins=None, open_=None):
     """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell
-    (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.obstacles``)."""
+    (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.boundaries.obstacles``)."""
     n = particles.count
     if bins is None or bins.cell.shape[0] != n:
         bins = CellBins(

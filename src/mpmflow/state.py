@@ -229,7 +229,7 @@ def _floats(a):
 def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscous):
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
-    (``mpmflow.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
+    (``mpmflow.boundaries.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
     for inviscid material), ``margin`` (m) how far inside the walls particles are put back.
     The state keeps its own work arrays from step to step."""
     D = grid.dim
@@ -270,7 +270,7 @@ def cell_volume_fraction(order, start, volume, cell_volume, open_, theta):
 
 
 # --- cut_cells ---
-# Cells cut by fixed obstacles (src/core/cut_cells.hpp; ``mpmflow.obstacles``).
+# Cells cut by fixed obstacles (src/core/cut_cells.hpp; ``mpmflow.boundaries.obstacles``).
 
 SLIVER = _core.SLIVER  # a cut cell with less fluid takes its volume fraction from beside
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import state
+from ..boundaries import walls
 from ..errors import SimulationError
 from ..stability import sound_speed, stable_time_step
 from . import register
@@ -43,7 +44,7 @@ class ExplicitScheme:
         self.bulk = m.bulk_modulus
         self.sound_speed = sound_speed(m.bulk_modulus, m.density)
         self.gravity = np.asarray(case.physics.gravity, dtype=float)
-        self.no_slip = np.array(case.domain.no_slip_sides(), dtype=np.bool_)  # x_min, ...
+        self.no_slip = walls.side_conditions(case)  # x_min, x_max, y_min, ...
         self.flip = sv.flip
         self.smoothing = sv.pressure_smoothing == "nodal"
         self.full = sv.full_cell_threshold

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials, obstacles, pressure, state, volume_correction
+from .. import materials, pressure, state, volume_correction
+from ..boundaries import obstacles, walls
 from ..errors import SolverError
 from ..linsolve import SMOOTHING_SWEEPS
 from ..transfers import flip_per_step
@@ -77,10 +78,7 @@ class ProjectionScheme:
         cells = tuple(int(c) for c in grid.cells)
         T = (state.gauss_gradients(cells, float(grid.spacing)) if self.viscous
              else np.zeros((0, 0, 0, 0)))
-        node, axis, sign = state.wall_pairs(cells, grid.periodic)
-        sides = np.array(case.domain.no_slip_sides(), dtype=np.bool_)  # x_min, x_max, ...
-        walls = (node, axis, sign, sides[2 * axis + (sign > 0)])
-        self.core = state.step_state(grid, walls, self.solids, T,
+        self.core = state.step_state(grid, walls.of_case(case, grid).as_tuple(), self.solids, T,
                                      MARGIN * grid.spacing, s.volume_correction > 0,
                                      self.viscous)
         self.python_pressure = (None if s.linear_solver == "multigrid"

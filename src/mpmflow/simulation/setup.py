@@ -4,7 +4,8 @@ notices the run's summary will carry."""
 
 from dataclasses import dataclass
 
-from .. import checkpoint, memory, obstacles
+from .. import checkpoint, memory
+from ..boundaries import obstacles
 from ..errors import CaseError, SolverError
 from ..geometry.seeding import build_particles
 from ..grid import Grid

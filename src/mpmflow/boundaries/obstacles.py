@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import state
+from .. import state
 
 SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
 

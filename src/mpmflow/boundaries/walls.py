@@ -1,0 +1,39 @@
+"""The domain's walls: every wall node of the grid with the wall it lies on (its axis and
+outward sign: the wall's normal) and the wall's condition (slip or no-slip) from the case's
+``domain.walls``. A periodic axis has no walls. The core applies them as contact conditions
+(src/core/walls.hpp): a wall node holds the material where it presses into the wall and
+lets it go where holding it would need suction."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import state
+
+
+@dataclass(frozen=True)
+class Walls:
+    """One entry per (wall node, wall) pair: the walls normal to axis 0 first, then axis 1,
+    ...; the lower wall (sign -1) before the upper. A node on an edge or corner has a pair
+    per wall it lies on."""
+
+    node: np.ndarray  # (n,) int64: the node's index
+    axis: np.ndarray  # (n,) int64: the axis the wall is normal to
+    sign: np.ndarray  # (n,) float: -1 at the lower wall (at 0), +1 at the upper
+    no_slip: np.ndarray  # (n,) bool: the wall's condition is no-slip
+
+    def as_tuple(self):
+        """(node, axis, sign, no_slip), as the core's state takes them."""
+        return self.node, self.axis, self.sign, self.no_slip
+
+
+def side_conditions(case):
+    """No-slip flags of the domain's sides in the order x_min, x_max, y_min, ... (bool)."""
+    return np.array(case.domain.no_slip_sides(), dtype=np.bool_)
+
+
+def of_case(case, grid):
+    """The walls of the case's domain on its grid."""
+    node, axis, sign = state.wall_pairs(tuple(int(c) for c in grid.cells), grid.periodic)
+    sides = side_conditions(case)
+    return Walls(node, axis, sign, sides[2 * axis + (sign > 0)])
