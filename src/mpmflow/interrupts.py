@@ -16,9 +16,9 @@ from contextlib import contextmanager
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
-class StopNow(BaseException):
-    """A second SIGINT/SIGTERM: stop at once. A BaseException (like KeyboardInterrupt) so
-    that no ``except Exception`` on the way takes it for an error."""
+class _Signalled(BaseException):
+    """A signal that stops the command, with its number. A BaseException (like
+    KeyboardInterrupt) so that no ``except Exception`` on the way takes it for an error."""
 
     def __init__(self, signum):
         super().__init__(signum)
@@ -27,6 +27,10 @@ class StopNow(BaseException):
     @property
     def name(self):
         return signal.Signals(self.signum).name
+
+
+class StopNow(_Signalled):
+    """A second SIGINT/SIGTERM: stop at once."""
 
 
 def exit_code(signum):
@@ -71,16 +75,8 @@ def stop_on_signals(sim):
             signal.signal(s, old)
 
 
-class EarlyStop(BaseException):
+class EarlyStop(_Signalled):
     """SIGINT/SIGTERM outside the time loop (while the command starts or finishes)."""
-
-    def __init__(self, signum):
-        super().__init__(signum)
-        self.signum = int(signum)
-
-    @property
-    def name(self):
-        return signal.Signals(self.signum).name
 
 
 class EarlySignals:
