@@ -209,10 +209,13 @@ class Simulation:
         sim.notices[:0] = folder.notes
         return sim
 
+    def run_seconds(self):
+        """Wall time (s) since this run() started (0 before it starts)."""
+        return _time.perf_counter() - self._wall0 if self._wall0 else 0.0
+
     def wall_seconds(self):
         """Wall time of the run so far, with that of the runs it continues."""
-        now = _time.perf_counter() - self._wall0 if self._wall0 else 0.0
-        return self.wall_before + now
+        return self.wall_before + self.run_seconds()
 
     def describe(self):
         """The case summary the command line prints before a run (lines of text): what
