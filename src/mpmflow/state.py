@@ -6,6 +6,8 @@ source pair per concept). The core is built once, at install (scikit-build-core,
 nothing compiles at run time.
 """
 
+import enum
+
 import numpy as np
 
 try:
@@ -209,10 +211,20 @@ def strips(row_cum, nstrips, min_rows, bounds):
 
 
 # --- step ---
-OK, SINGULAR = _core.OK, _core.SINGULAR
-PRESSURE_NOT_CONVERGED = _core.PRESSURE_NOT_CONVERGED
-VOLUME_NOT_CONVERGED = _core.VOLUME_NOT_CONVERGED
-VISCOUS_NOT_CONVERGED = _core.VISCOUS_NOT_CONVERGED
+
+
+class Status(enum.IntEnum):
+    """How a step ended (``Report.status``; the core's ``Status``, src/core/step.hpp)."""
+
+    OK = _core.OK
+    SINGULAR = _core.SINGULAR
+    PRESSURE_NOT_CONVERGED = _core.PRESSURE_NOT_CONVERGED
+    VOLUME_NOT_CONVERGED = _core.VOLUME_NOT_CONVERGED
+    VISCOUS_NOT_CONVERGED = _core.VISCOUS_NOT_CONVERGED
+    INTERRUPTED = _core.INTERRUPTED  # a signal asked the chunk to stop between steps
+
+
+OK = Status.OK
 SURFACE_QUADRATURE = {"gauss": _core.GAUSS, "divergence": _core.DIVERGENCE,
                       "consistent": _core.CONSISTENT}
 Report = _core.Report

@@ -255,19 +255,19 @@ class ProjectionScheme:
         return nsteps
 
     def _fail(self, report, where):
-        status = int(report.status)
+        status = state.Status(int(report.status))
         n = int(report.fail_size)
         iterations = int(report.fail_iterations)
         residual = float(report.fail_residual)
         worst = int(report.fail_node)
-        if status == state.SINGULAR:
+        if status is state.Status.SINGULAR:
             raise pressure.singular(where)
-        if status == state.PRESSURE_NOT_CONVERGED:
+        if status is state.Status.PRESSURE_NOT_CONVERGED:
             raise pressure.not_converged(where, residual, iterations, self.case.solver, n,
                                          self.grid.node_coordinates()[worst])
-        if status == state.VOLUME_NOT_CONVERGED:
+        if status is state.Status.VOLUME_NOT_CONVERGED:
             raise volume_correction.not_converged(where, residual, iterations, n)
-        if status == state.VISCOUS_NOT_CONVERGED:
+        if status is state.Status.VISCOUS_NOT_CONVERGED:
             m = self.case.material
             raise SolverError(
                 f"The viscous solve did not converge{where}: relative residual "
@@ -280,4 +280,4 @@ class ProjectionScheme:
                 "Try a smaller time.dt, a larger solver.max_iterations"
                 + (", or a smaller material.max_viscosity" if m.model in
                    ("herschel_bulkley", "mu_i") else "") + ".")
-        raise SolverError(f"The step failed{where} with status {status}.")
+        raise SolverError(f"The step failed{where} with status {status.name}.")
