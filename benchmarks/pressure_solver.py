@@ -63,7 +63,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=50)
     args = ap.parse_args()
-    from mpmflow.linsolve import LinearSolver, PressureMatrix
+    from mpmflow.linalg.solvers import LinearSolver, PressureMatrix
 
     rows_out = []
     print("| t [s] | unknowns | solver | set-up [ms] | solve [ms] | iterations |")

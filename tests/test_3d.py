@@ -82,7 +82,7 @@ def test_3d_outputs_read_back_and_plot(tmp_path):
     through the middle of the width and, beside it, the water's surface in 3D."""
     pytest.importorskip("matplotlib")
     from mpmflow import open_run
-    from mpmflow.plots import plot_run, side_view
+    from mpmflow.plotting.figures import plot_run, side_view
 
     case = load_case(EXAMPLES / "hydrostatic_3d.toml", ["time.end=0.02"])
     sim = Simulation(case, tmp_path / "o")
@@ -111,7 +111,7 @@ def test_water_surface_of_a_column_at_rest_is_the_column(depth):
     half a cell off the grid (the top cells half full) and on a grid line: every vertex
     lies on the column's faces (the surface is closed on the walls and the floor), and
     its top is the water's depth (float32 vertices: to 1e-6 m)."""
-    from mpmflow.surface import volume_fraction, water_surface
+    from mpmflow.plotting.surface import volume_fraction, water_surface
 
     case = load_case(EXAMPLES / "hydrostatic_3d.toml", [f"bodies.0.max=[0.1, 0.05, {depth}]",
                                                          "output.snapshots=false"])
@@ -135,7 +135,7 @@ def test_water_surface_area_of_whole_cells_is_the_box_with_chamfered_edges():
     every edge cut by a chamfer of legs h/2: the area is the box's less (1 - 1/sqrt 2) h
     per metre of edge, to within the eight corners' (h/2)^2 each (0.3% of the area; the
     chamfers alone are 6%)."""
-    from mpmflow.surface import surface_area, volume_fraction, water_surface
+    from mpmflow.plotting.surface import surface_area, volume_fraction, water_surface
 
     case = load_case(EXAMPLES / "hydrostatic_3d.toml", ["bodies.0.max=[0.1, 0.05, 0.2]",
                                                          "output.snapshots=false"])
@@ -155,7 +155,7 @@ def test_a_dry_field_has_no_surface_and_obstacles_are_drawn_as_their_surfaces():
     faces exactly, a cylinder (marching cubes on its signed distance) within 3% of its
     area, every vertex within a sample of its surface."""
     from mpmflow.case import resolved
-    from mpmflow.surface import obstacle_triangles, surface_area, water_surface
+    from mpmflow.plotting.surface import obstacle_triangles, surface_area, water_surface
 
     verts, faces = water_surface(np.full((4, 3, 5), 0.49), 0.01)
     assert verts.shape == (0, 3) and faces.shape == (0, 3)

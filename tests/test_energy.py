@@ -60,8 +60,8 @@ def test_consistent_surface_quadrature_only_takes_energy_out():
 
 def _energy_panel(series, summary, monkeypatch, tmp_path):
     """The energy panel of timeseries.png, as plot_timeseries drew it (save intercepted)."""
-    from mpmflow import plots
-    from mpmflow.mpl import pyplot
+    from mpmflow.plotting import figures as plots
+    from mpmflow.plotting.mpl import pyplot
 
     figures = []
     monkeypatch.setattr(plots, "save", lambda fig, path, dpi: figures.append(fig))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from mpmflow.linsolve import LinearSolver, PressureMatrix
+from mpmflow.linalg.solvers import LinearSolver, PressureMatrix
 
 
 def poisson_ell(nnx, nny, mask):

@@ -107,7 +107,7 @@ def test_plot_of_a_run_whose_snapshots_are_all_gone(small_run, tmp_path, capsys)
 
 def _figures(monkeypatch):
     """{file name: figure} of what the plots save (the files are written as usual)."""
-    from mpmflow import plots
+    from mpmflow.plotting import figures as plots
 
     saved, save = {}, plots.save
 
@@ -146,8 +146,8 @@ def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
 
     import numpy as np
 
-    from mpmflow.mpl import pyplot
-    from mpmflow.plots import plot_snapshots
+    from mpmflow.plotting.figures import plot_snapshots
+    from mpmflow.plotting.mpl import pyplot
 
     x = np.column_stack([np.linspace(0.0, 0.3, 50), np.full(50, 0.15), np.linspace(0, 0.1, 50)])
     snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
@@ -218,8 +218,8 @@ def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path,
 def _probes_figure(run, monkeypatch):
     """probes.png's figure alone (what `mpmflow plot` draws, without the snapshots)."""
     from mpmflow import open_run
-    from mpmflow.mpl import pyplot
-    from mpmflow.plots import plot_probes
+    from mpmflow.plotting.figures import plot_probes
+    from mpmflow.plotting.mpl import pyplot
 
     results, saved = open_run(run), _figures(monkeypatch)
     plot_probes(results.probes, results.summary, results.units, run / "probes.png", pyplot(),
@@ -242,7 +242,7 @@ def test_plot_of_many_probes_without_positions_says_what_the_colour_is(small_run
 def test_plot_of_a_few_probes_names_each_in_the_legend(small_run, tmp_path, monkeypatch):
     """Up to LEGEND_MAX probes per panel: a line and a legend entry each, each its own
     colour."""
-    from mpmflow.plots import LEGEND_MAX
+    from mpmflow.plotting.figures import LEGEND_MAX
 
     run = _copy(small_run, tmp_path)
     names = _with_probes(run, LEGEND_MAX, 2)
@@ -265,8 +265,8 @@ def test_3d_run_draws_the_water_surface_beside_the_slice(tmp_path, monkeypatch):
     import numpy as np
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    from mpmflow.mpl import pyplot
-    from mpmflow.plots import plot_snapshots
+    from mpmflow.plotting.figures import plot_snapshots
+    from mpmflow.plotting.mpl import pyplot
 
     axes = [np.arange(0.0025, a, 0.005) for a in (0.1, 0.3, 0.1)]  # 8 particles per cell
     x = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -307,8 +307,8 @@ def test_3d_pictures_without_scikit_image_are_left_out_with_a_note(tmp_path, mon
 
     import numpy as np
 
-    from mpmflow.mpl import pyplot
-    from mpmflow.plots import plot_snapshots
+    from mpmflow.plotting.figures import plot_snapshots
+    from mpmflow.plotting.mpl import pyplot
 
     monkeypatch.setitem(sys.modules, "skimage", None)
     x = np.random.default_rng(1).uniform(0.0, 0.1, (200, 3))

@@ -15,7 +15,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from mpmflow import load_case
-from mpmflow.linsolve import LinearSolver, PressureMatrix
+from mpmflow.linalg.solvers import LinearSolver, PressureMatrix
 from mpmflow.simulation import Simulation
 
 comm = MPI.COMM_WORLD

@@ -248,7 +248,7 @@ def _study(args):
 
 
 def _plot(args):
-    from .plots import plot_run
+    from .plotting.figures import plot_run
 
     notes = []
     written = plot_run(args.run_dir, args.out, notes)
@@ -259,7 +259,7 @@ def _plot(args):
 
 
 def _validate(args):
-    from .mpl import have_matplotlib
+    from .plotting.mpl import have_matplotlib
     from .reference import data_dir
 
     unknown = [c for c in args.cases if c not in VALIDATION_CASES]
@@ -272,7 +272,7 @@ def _validate(args):
     # the reference data, the example case files, and a folder whose README.md is ours
     have_matplotlib("mpmflow validate")
     if not args.cases or "spheric" in args.cases:
-        from .surface import need_skimage
+        from .plotting.surface import need_skimage
 
         need_skimage("mpmflow validate (the SPHERIC case's 3D pictures)")
     try:

@@ -12,7 +12,7 @@ pressure to the ghost nodes.
 import numpy as np
 
 from .errors import SolverError
-from .linsolve import LinearSolver, PressureMatrix
+from .linalg.solvers import LinearSolver, PressureMatrix
 
 SETUP_ERRORS = (np.linalg.LinAlgError, RuntimeError, ValueError)
 

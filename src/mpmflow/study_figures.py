@@ -4,7 +4,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .mpl import pyplot
+from .plotting.mpl import pyplot
 from .reference import MM_HEIGHT_AR2, VOF_AR2, G, load
 
 A = 0.114  # m, width of both columns

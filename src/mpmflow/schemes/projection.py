@@ -12,7 +12,7 @@ import numpy as np
 from .. import materials, pressure, state, volume_correction
 from ..boundaries import obstacles, walls
 from ..errors import SolverError
-from ..linsolve import SMOOTHING_SWEEPS
+from ..linalg.solvers import SMOOTHING_SWEEPS
 from ..transfers import flip_per_step
 from . import register
 

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import mpl
 from ..case import load_case
+from ..plotting import mpl
 from ..simulation import Simulation
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -113,7 +113,7 @@ DPI = 90  # of the report's figures
 
 
 def pyplot():
-    """matplotlib.pyplot (see ``mpmflow.mpl``)."""
+    """matplotlib.pyplot (see ``plotting.mpl``)."""
     return mpl.pyplot("mpmflow validate")
 
 

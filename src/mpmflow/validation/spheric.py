@@ -21,7 +21,7 @@ explains (the example's gauges are named by their position).
 The 3D pictures (spheric_3d.png) show the finest mesh's water at the times of the
 experiment's photographs (PHOTOS: 0.4, 0.6, 1.0 and 1.5 s; the quick run, which ends at
 0.75 s, the first two): the surface where the particles' volume fraction is 1/2, as
-`mpmflow plot` draws it (``mpmflow.surface``), taken from the particles in memory at those
+`mpmflow plot` draws it (``plotting.surface``), taken from the particles in memory at those
 output times (no snapshot files).
 """
 
@@ -184,9 +184,9 @@ def _photographer(photos):
 
 
 def pictures(out, sim, photos, res):
-    """spheric_3d.png: the water's surface (volume fraction 1/2, ``mpmflow.surface``) and
+    """spheric_3d.png: the water's surface (volume fraction 1/2, ``plotting.surface``) and
     the box at the photograph times the run reached, one panel each."""
-    from ..surface import draw_surface, obstacle_triangles, volume_fraction, water_surface
+    from ..plotting.surface import draw_surface, obstacle_triangles, volume_fraction, water_surface
 
     if not photos:
         return

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import state
+from .. import state
 
 SMOOTHING_SWEEPS = 1  # Gauss-Seidel sweeps before and after each coarse correction
 

@@ -37,7 +37,7 @@ LEVEL = 0.5
 
 def need_skimage(needs="mpmflow plot"):
     """skimage.measure, or CaseError saying how to install scikit-image."""
-    from .errors import CaseError
+    from ..errors import CaseError
 
     try:
         from skimage import measure
@@ -52,9 +52,9 @@ def volume_fraction(x, volume, spacing, cells):
     ``volume`` (n,) m^3: their volume per cell over the cell's volume, clipped to [0, 1].
     The cells are the solver's (``state.cell_index``: particles on or past the domain's
     faces count in the cells at the faces)."""
-    from . import state
-    from .diagnostics import volume_fraction_field
-    from .grid import Grid
+    from .. import state
+    from ..diagnostics import volume_fraction_field
+    from ..grid import Grid
 
     grid = Grid(float(spacing), tuple(int(c) for c in cells))
     index = np.empty(len(x), dtype=np.int64)
@@ -102,10 +102,10 @@ def obstacle_triangles(summary, notes, samples=32):
     distance by marching cubes on ``samples`` points along its bounding box's longest
     side. Rebuilt from the case in summary.json; what cannot be rebuilt is left out with a
     note (as for the slice's obstacles)."""
-    from .case import validate_case
-    from .errors import CaseError
-    from .geometry.meshes import Mesh
-    from .geometry.shapes import Box
+    from ..case import validate_case
+    from ..errors import CaseError
+    from ..geometry.meshes import Mesh
+    from ..geometry.shapes import Box
 
     spec = summary.get("case", {})
     if not spec.get("obstacles"):

@@ -1,8 +1,8 @@
 """The one way mpmflow uses matplotlib (an optional extra): the non-interactive pyplot, with
 a clear error when matplotlib is missing, and an atomic PNG save."""
 
-from .errors import CaseError
-from .output.atomic import atomic_path
+from ..errors import CaseError
+from ..output.atomic import atomic_path
 
 
 def pyplot(needs="mpmflow plot"):

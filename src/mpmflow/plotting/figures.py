@@ -14,7 +14,7 @@ writes into the plot folder:
 - ``animation.gif``    the snapshots as an animation (matplotlib's PillowWriter);
 - in 3D, beside each slice: ``snapshots/surface_NNNNNN.png`` the water's surface (the
   particles' volume fraction on the grid at 1/2, by marching cubes) and the obstacles in
-  a 3D view, and ``surfaces.png`` the overview's snapshots so (``mpmflow.surface``;
+  a 3D view, and ``surfaces.png`` the overview's snapshots so (``plotting.surface``;
   separate files, as the 3D box wants another shape of figure than the slice's plane).
   Without scikit-image they are left out with a note.
 """
@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CaseError
-from .grid import Grid
+from ..errors import CaseError
+from ..grid import Grid
+from ..output import check_out_dir
+from ..results import open_run
 from .mpl import pyplot, save
-from .output import check_out_dir
-from .results import open_run
 
 DPI = 80
 
@@ -208,7 +208,7 @@ def obstacle_section(summary, plane, notes):
     3D) as (X, Y, signed distance) on a fine raster, or None without obstacles. Rebuilt from
     the case in summary.json; an obstacle that cannot be rebuilt (a mesh file moved away) is
     left out with a note."""
-    from .case import validate_case
+    from ..case import validate_case
 
     spec = summary.get("case", {})
     if not spec.get("obstacles"):
@@ -347,7 +347,7 @@ def _water(d, summary):
 
 
 def plot_surfaces(fields, summary, folder, plt, notes):
-    """The 3D pictures (``mpmflow.surface``): snapshots/surface_NNNNNN.png for each snapshot
+    """The 3D pictures (``plotting.surface``): snapshots/surface_NNNNNN.png for each snapshot
     (beside its slice particles_NNNNNN.png) and surfaces.png, the overview's snapshots side
     by side. ``fields``: [(time, snapshot file, volume fraction field)]. Returns the
     paths."""
