@@ -307,7 +307,7 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
       dt = span / static_cast<double>(nsteps);
     }
     if (dt < smallest) smallest = dt;
-    const double flip = std::pow(flip_ms, dt / 1e-3);
+    const double flip = flip_per_step(flip_ms, dt);
     // (2) nodal forces (gathered per node over its cells, in cell order), grid update
     parallel_for(nnode, [&](index_t i) {
       double f[D];

@@ -651,7 +651,7 @@ double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double
     else if (2.0 * dt > rest)
       dt = 0.5 * rest;
     Ok.dt = dt;
-    Ok.flip = std::pow(O.flip_rate, dt / FLIP_TIME);
+    Ok.flip = flip_per_step(O.flip_rate, dt);
     bool correct = false;
     if (O.volume_rate > 0.0) {
       since_volume_ += dt;

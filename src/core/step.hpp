@@ -109,8 +109,6 @@ struct Options {
   double volume_interval = 2e-3;
 };
 
-constexpr double FLIP_TIME = 1e-3;  // s: solver.flip is the FLIP fraction per this much time
-
 // The particles: views of the caller's arrays (n particles).
 template <int D>
 struct Particles {

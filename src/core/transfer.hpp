@@ -1,5 +1,5 @@
 // Particle-grid transfers with multilinear shape functions, for 2D and 3D
-// (kernels/transfer.py).
+// (docs/method.md, steps 2 and 7).
 //
 // Particle-to-grid: nodal mass, momentum and material volume, the velocity and the
 // predictor with gravity, and (for the volume correction) the particles' volume on the
@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 
 #include "grid.hpp"
 #include "periodic.hpp"
@@ -17,6 +18,14 @@
 #include "view.hpp"
 
 namespace mpmflow {
+
+constexpr double FLIP_TIME = 1e-3;  // s: solver.flip is the FLIP fraction per this much time
+
+// The FLIP fraction of one step of dt (s): flip_rate^(dt / FLIP_TIME), the same PIC damping
+// per second of flow whatever the step (both schemes, fixed and adaptive steps).
+inline double flip_per_step(double flip_rate, double dt) {
+  return std::pow(flip_rate, dt / FLIP_TIME);
+}
 
 // The multilinear hat of the cell-centred grid at point x (D coordinates, m): for each of
 // its 2^D corners, body(i, w) with i the corner cell's coordinates and w = volume times its

@@ -135,6 +135,12 @@ def _cells(grid):
     return [int(c) for c in grid.cells]
 
 
+def flip_per_step(flip, dt):
+    """The FLIP fraction of one step of dt (s): flip^(dt / 1 ms), the same PIC damping per
+    second whatever the step (the core's, used by both schemes)."""
+    return float(_core.flip_per_step(float(flip), float(dt)))
+
+
 def particles_to_grid(grid, x, v, mass, volume, order, start, gravity, dt, node_mass, node_mom,
                       node_vol, v_old, v_star, cell_vol, affine=None):
     """Particle-to-grid (eqs. 10-12): nodal mass, momentum, material volume, velocity v_old

@@ -12,6 +12,8 @@
 namespace mpmflow::bind {
 
 void bind_transfer(nb::module_& m) {
+  m.def("flip_per_step", &flip_per_step, nb::arg("flip_rate"), nb::arg("dt"),
+        "The FLIP fraction of one step of dt (s): flip_rate^(dt / 1 ms).");
   m.def(
       "particles_to_grid",
       [](Array<const double> x, Array<const double> v, Array<const double> mass,

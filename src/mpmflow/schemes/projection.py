@@ -13,7 +13,6 @@ from .. import materials, pressure, state, volume_correction
 from ..boundaries import obstacles, walls
 from ..errors import SolverError
 from ..linalg.solvers import SMOOTHING_SWEEPS
-from ..transfers import flip_per_step
 from . import register
 
 MARGIN = 1e-6  # particles put back inside stay this fraction of a cell off the wall
@@ -119,7 +118,7 @@ class ProjectionScheme:
         return state.step_options(
             self.grid.dim, dt=float(dt),
             gravity=[float(g) for g in self.case.physics.gravity],
-            rho=float(m.density), flip=float(flip_per_step(s.flip, dt)),
+            rho=float(m.density), flip=state.flip_per_step(s.flip, dt),
             full=float(s.full_cell_threshold), sparse=float(s.sparse_cell_threshold),
             partial_particles=particles,
             surface=(state.SURFACE_QUADRATURE["gauss"] if particles
