@@ -28,9 +28,10 @@ setup: $(VENV)/.installed
 test: setup
 	$(BIN)/python -m pytest
 
-# ruff (lint rules and, soon, the format) and mypy, as configured in pyproject.toml
+# ruff (lint rules and the format) and mypy, as configured in pyproject.toml
 lint: setup
 	$(BIN)/ruff check src tests benchmarks scripts
+	$(BIN)/ruff format --check src tests benchmarks scripts
 	$(BIN)/mypy
 
 # the unit tier: every test but the physics runs marked slow (under a minute)

@@ -39,8 +39,12 @@ def run(python, src, case, out, overrides):
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = str(src)
-    subprocess.run([python, "-c", RUN, str(case), str(out), *overrides], check=True, env=env,
-                   cwd=tempfile.gettempdir())
+    subprocess.run(
+        [python, "-c", RUN, str(case), str(out), *overrides],
+        check=True,
+        env=env,
+        cwd=tempfile.gettempdir(),
+    )
     return np.load(out)
 
 
@@ -54,18 +58,20 @@ def main():
     ap.add_argument("--tolerance", type=float, default=1e-10)
     ap.add_argument("--set", action="append", default=[])
     a = ap.parse_args()
-    overrides = [f"time.dt={a.dt}", f"time.end={a.steps * a.dt}", "output.snapshots=false",
-                 *a.set]
+    overrides = [f"time.dt={a.dt}", f"time.end={a.steps * a.dt}", "output.snapshots=false", *a.set]
     with tempfile.TemporaryDirectory() as tmp:
         new = run(sys.executable, None, a.case.resolve(), Path(tmp) / "core.npz", overrides)
-        old = run(a.python, a.baseline / "src", a.case.resolve(), Path(tmp) / "numba.npz",
-                  overrides)
+        old = run(
+            a.python, a.baseline / "src", a.case.resolve(), Path(tmp) / "numba.npz", overrides
+        )
     dx = float(np.abs(new["x"] - old["x"]).max())
     dv = float(np.abs(new["v"] - old["v"]).max())
     dp = float(np.abs(new["pressure"] - old["pressure"]).max())
-    print(f"{new['x'].shape[0]} particles, {a.steps} steps of {a.dt:g} s: "
-          f"max |dx| = {dx:.3e} m, max |dv| = {dv:.3e} m/s, max |dp| = {dp:.3e} Pa "
-          f"(tolerance on x: {a.tolerance:g} m)")
+    print(
+        f"{new['x'].shape[0]} particles, {a.steps} steps of {a.dt:g} s: "
+        f"max |dx| = {dx:.3e} m, max |dv| = {dv:.3e} m/s, max |dp| = {dp:.3e} Pa "
+        f"(tolerance on x: {a.tolerance:g} m)"
+    )
     sys.exit(0 if dx <= a.tolerance else 1)
 
 

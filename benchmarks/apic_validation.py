@@ -10,6 +10,7 @@ validate` writes them) and prints a Markdown table: row, value with the default 
 value with APIC, APIC - default. ``--set`` adds overrides to the APIC runs only (e.g.
 ``--set solver.volume_correction=0``). Default cases: dam_break, dam_break_ar1, sloshing.
 """
+
 import argparse
 import csv
 import json
@@ -21,15 +22,23 @@ from mpmflow.validation import common, run_validation
 ROOT = Path(__file__).resolve().parents[1]
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-ap.add_argument("--quick", action="store_true", help="the quick versions (mpmflow validate "
-                "--quick)")
-ap.add_argument("--case", action="append", default=[], dest="cases",
-                help="a validation case (repeatable; default dam_break, dam_break_ar1, "
-                "sloshing)")
+ap.add_argument(
+    "--quick", action="store_true", help="the quick versions (mpmflow validate --quick)"
+)
+ap.add_argument(
+    "--case",
+    action="append",
+    default=[],
+    dest="cases",
+    help="a validation case (repeatable; default dam_break, dam_break_ar1, sloshing)",
+)
 ap.add_argument("--out", default=str(ROOT / "runs" / "apic_validation"))
 ap.add_argument("--set", action="append", default=[], help="more overrides of the APIC runs")
-ap.add_argument("--only", choices=("flip", "apic"), help="run one transfer only (the other's "
-                "report, if there, is read)")
+ap.add_argument(
+    "--only",
+    choices=("flip", "apic"),
+    help="run one transfer only (the other's report, if there, is read)",
+)
 cli = ap.parse_args()
 cases = cli.cases or ["dam_break", "dam_break_ar1", "sloshing"]
 out = Path(cli.out)
@@ -69,7 +78,8 @@ for key, r in a.items():
     va = float(r["value"])
     vb = float(s["value"]) if s else float("nan")
     unit = f" {r['unit']}" if r.get("unit") else ""
-    print(f"| {key[0]}: {key[1]} | {r['measure']} | {va:.4g}{unit} ({r['status']}) | "
-          f"{vb:.4g} ({s['status'] if s else '-'}) | {vb - va:+.4f} |")
-print(json.dumps({"quick": cli.quick, "cases": cases, "apic_overrides": cli.set,
-                  "wall_s": wall}))
+    print(
+        f"| {key[0]}: {key[1]} | {r['measure']} | {va:.4g}{unit} ({r['status']}) | "
+        f"{vb:.4g} ({s['status'] if s else '-'}) | {vb - va:+.4f} |"
+    )
+print(json.dumps({"quick": cli.quick, "cases": cases, "apic_overrides": cli.set, "wall_s": wall}))

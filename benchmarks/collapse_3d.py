@@ -20,6 +20,7 @@ the largest particle speed at the end, whether a particle came within a cell of 
 the particles and the wall time; then the run-out against time (t: runout_max: largest
 speed).
 """
+
 import json
 import math
 import sys
@@ -37,7 +38,7 @@ extra = args[2:]
 r0 = 0.05
 H0 = a * r0
 h = r0 / cells
-law = 1.24 * a if a < 1.7 else 1.6 * a ** 0.5
+law = 1.24 * a if a < 1.7 else 1.6 * a**0.5
 L = r0 * (1 + 2.5 * law) + 0.02  # wide: APIC over-runs the law
 L = h * math.ceil(L / h)
 dt = min(5e-4, 0.35 * h / math.sqrt(2 * 9.81 * H0))
@@ -48,19 +49,31 @@ folder = Path(tempfile.mkdtemp())
 def quarter_cylinder_obj(path, n=128):
     """The quarter of the column in x, y >= 0 as a closed OBJ mesh (n facets on the arc: the
     facets lie within r0 (1 - cos(pi / 4 n)) = 4 um of the circle)."""
-    arc = [(r0 * math.cos(0.5 * math.pi * i / n), r0 * math.sin(0.5 * math.pi * i / n))
-           for i in range(n + 1)]
+    arc = [
+        (r0 * math.cos(0.5 * math.pi * i / n), r0 * math.sin(0.5 * math.pi * i / n))
+        for i in range(n + 1)
+    ]
     v = [(0.0, 0.0, 0.0), (0.0, 0.0, H0)] + [(x, y, z) for z in (0.0, H0) for x, y in arc]
     bot = lambda i: 3 + i  # noqa: E731  (OBJ numbers vertices from 1)
     top = lambda i: 3 + n + 1 + i  # noqa: E731
     f = []
     for i in range(n):
-        f += [(1, bot(i + 1), bot(i)), (2, top(i), top(i + 1)),  # bottom and top, outward
-              (bot(i), bot(i + 1), top(i + 1)), (bot(i), top(i + 1), top(i))]  # the arc
-    f += [(1, bot(0), top(0)), (1, top(0), 2),  # the face on y = 0
-          (1, 2, top(n)), (1, top(n), bot(n))]  # the face on x = 0
-    path.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v)
-                    + "".join(f"f {i} {j} {k}\n" for i, j, k in f))
+        f += [
+            (1, bot(i + 1), bot(i)),
+            (2, top(i), top(i + 1)),  # bottom and top, outward
+            (bot(i), bot(i + 1), top(i + 1)),
+            (bot(i), top(i + 1), top(i)),
+        ]  # the arc
+    f += [
+        (1, bot(0), top(0)),
+        (1, top(0), 2),  # the face on y = 0
+        (1, 2, top(n)),
+        (1, top(n), bot(n)),
+    ]  # the face on x = 0
+    path.write_text(
+        "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v)
+        + "".join(f"f {i} {j} {k}\n" for i, j, k in f)
+    )
 
 
 if whole:
@@ -76,7 +89,9 @@ else:
     quarter_cylinder_obj(folder / "quarter.obj")
     body = 'type = "mesh"\npath = "quarter.obj"'
 src = (Path(__file__).resolve().parent.parent / "examples" / "granular_collapse.toml").read_text()
-src = src.split("[domain]")[0] + f"""
+src = (
+    src.split("[domain]")[0]
+    + f"""
 [domain]
 size = [{size[0]}, {size[1]}, {H0 * 1.15 + 2 * h}]
 walls = {walls}
@@ -85,12 +100,23 @@ spacing = {h}
 [[bodies]]
 {body}
 particles_per_cell = 2
-""" + "[material]" + src.split("[material]")[1]
+"""
+    + "[material]"
+    + src.split("[material]")[1]
+)
 src = src.replace("gravity = [0.0, -9.81]", "gravity = [0.0, 0.0, -9.81]")
 p = folder / f"col3d_{a}.toml"
 p.write_text(src)
-case = common.load_case(p, ["output.snapshots=false", f"time.dt={dt:.4g}", f"time.end={end:.3f}",
-                            "output.interval=0.05", *extra])
+case = common.load_case(
+    p,
+    [
+        "output.snapshots=false",
+        f"time.dt={dt:.4g}",
+        f"time.end={end:.3f}",
+        "output.interval=0.05",
+        *extra,
+    ],
+)
 sim = common.Simulation(case)
 fr = []
 
@@ -100,8 +126,13 @@ def radius(x):
 
 
 def rec(s):
-    fr.append((s.time, radius(s.particles.x).max() / r0 - 1,
-               float(np.linalg.norm(s.particles.v, axis=1).max())))
+    fr.append(
+        (
+            s.time,
+            radius(s.particles.x).max() / r0 - 1,
+            float(np.linalg.norm(s.particles.v, axis=1).max()),
+        )
+    )
 
 
 sim.on_output = rec
@@ -116,11 +147,25 @@ thick = np.nonzero(vol / area >= h / 2)[0]
 toe = edges[thick[-1] + 1] if len(thick) else 0.0
 far = (x[:, :2].max() > 2 * L - h or x[:, :2].min() < h) if whole else x[:, :2].max() > L - h
 law_off = lambda q: (q - law) / law  # noqa: E731
-print(json.dumps({
-    "a": a, "cells": cells, "whole": whole, "extra": extra, "particles": sim.particles.count,
-    "runout_max": r.max() / r0 - 1, "runout_toe": toe / r0 - 1, "law": law,
-    "off_max": law_off(r.max() / r0 - 1), "off_toe": law_off(toe / r0 - 1),
-    "H_inf/H0": float(x[:, 2].max()) / H0, "vmax_end": fr[-1][2], "far_wall_reached": bool(far),
-    "closest_to_far_wall": float(L - x[:, :2].max()) if not whole else None,
-    "wall": sim.summary["wall_seconds"]}))
+print(
+    json.dumps(
+        {
+            "a": a,
+            "cells": cells,
+            "whole": whole,
+            "extra": extra,
+            "particles": sim.particles.count,
+            "runout_max": r.max() / r0 - 1,
+            "runout_toe": toe / r0 - 1,
+            "law": law,
+            "off_max": law_off(r.max() / r0 - 1),
+            "off_toe": law_off(toe / r0 - 1),
+            "H_inf/H0": float(x[:, 2].max()) / H0,
+            "vmax_end": fr[-1][2],
+            "far_wall_reached": bool(far),
+            "closest_to_far_wall": float(L - x[:, :2].max()) if not whole else None,
+            "wall": sim.summary["wall_seconds"],
+        }
+    )
+)
 print(" ".join(f"{t:.2f}:{q:.2f}:{v:.3f}" for t, q, v in fr[::2]))

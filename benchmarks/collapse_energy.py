@@ -24,6 +24,7 @@ L0 + WIDTH x Lube's run-out + 0.02 m. Every output (INTERVAL s) it records:
 
 Prints a table row per output and a summary (JSON) at the end.
 """
+
 import argparse
 import json
 import math
@@ -34,8 +35,11 @@ import numpy as np
 from mpmflow.validation import common, materials
 
 G = 9.81
-TRANSFERS = {"pic": ["solver.flip=0"], "flip": ["solver.flip=0.99"],
-             "apic": ["solver.transfer=apic"]}
+TRANSFERS = {
+    "pic": ["solver.flip=0"],
+    "flip": ["solver.flip=0.99"],
+    "apic": ["solver.transfer=apic"],
+}
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 ap.add_argument("--aspect", type=float, default=2.0)
@@ -59,10 +63,17 @@ half = L0 + cli.width * materials.lube(a) * L0 + 0.02
 h = L0 / cli.cells
 dt = min(5e-4, 0.35 * h / math.sqrt(2 * G * H0)) * cli.dt_factor
 end = cli.end if cli.end is not None else 0.6 + 6 * math.sqrt(H0 / G)
-overrides = [f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]", f"grid.spacing={h}",
-             f"bodies.0.min=[{half - L0:.4f}, 0.0]", f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
-             f"time.dt={dt:.4g}", f"time.end={end:.3f}", f"output.interval={cli.interval}",
-             *TRANSFERS[cli.transfer], *cli.set]
+overrides = [
+    f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
+    f"grid.spacing={h}",
+    f"bodies.0.min=[{half - L0:.4f}, 0.0]",
+    f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
+    f"time.dt={dt:.4g}",
+    f"time.end={end:.3f}",
+    f"output.interval={cli.interval}",
+    *TRANSFERS[cli.transfer],
+    *cli.set,
+]
 if cli.model != "mu_i":
     overrides.append(f"material.model='{cli.model}'")
 
@@ -84,8 +95,13 @@ def viscosity_measures(sim):
     if eta.size == 0:
         return {}
     m = sim.case.material
-    par = (m.friction_static, m.friction_limit, m.inertial_number_ref, m.grain_diameter,
-           m.grain_density)
+    par = (
+        m.friction_static,
+        m.friction_limit,
+        m.inertial_number_ref,
+        m.grain_diameter,
+        m.grain_density,
+    )
     cap = m.max_viscosity
     nx, ny = (int(c) for c in sim.grid.cells)
     NX = nx + 1
@@ -105,19 +121,29 @@ def viscosity_measures(sim):
     dudy = ((u01 + u11) - (u00 + u10)) / (2 * h)
     dxx, dyy, dxy = dudx[:, 0], dudy[:, 1], 0.5 * (dudy[:, 0] + dudx[:, 1])
     rate = np.sqrt(2 * (dxx**2 + dyy**2 + 2 * dxy**2))
-    pc = 0.25 * (np.maximum(p[n00], 0) + np.maximum(p[n00 + 1], 0) + np.maximum(p[n00 + NX], 0)
-                 + np.maximum(p[n00 + NX + 1], 0))
+    pc = 0.25 * (
+        np.maximum(p[n00], 0)
+        + np.maximum(p[n00 + 1], 0)
+        + np.maximum(p[n00 + NX], 0)
+        + np.maximum(p[n00 + NX + 1], 0)
+    )
     yielding = (e > 0) & (e < cap) & (pc > 0) & (rate > 0)
-    ratio = e[yielding] * rate[yielding] / (mu_of(rate[yielding], pc[yielding], par)
-                                             * pc[yielding])
-    out = {"cells": int(c.size), "capped": float(np.mean(e >= cap)),
-           "zero": float(np.mean(e == 0)),
-           "zero_but_p": float(np.mean((e == 0) & (pc > 0))),
-           "yielding": float(np.mean((e > 0) & (e < cap)))}
+    ratio = e[yielding] * rate[yielding] / (mu_of(rate[yielding], pc[yielding], par) * pc[yielding])
+    out = {
+        "cells": int(c.size),
+        "capped": float(np.mean(e >= cap)),
+        "zero": float(np.mean(e == 0)),
+        "zero_but_p": float(np.mean((e == 0) & (pc > 0))),
+        "yielding": float(np.mean((e > 0) & (e < cap))),
+    }
     if ratio.size:
-        out.update({"stress_ratio_median": float(np.median(ratio)),
-                    "stress_ratio_mean": float(np.mean(ratio)),
-                    "stress_ratio_lt_half": float(np.mean(ratio < 0.5))})
+        out.update(
+            {
+                "stress_ratio_median": float(np.median(ratio)),
+                "stress_ratio_mean": float(np.mean(ratio)),
+                "stress_ratio_lt_half": float(np.mean(ratio < 0.5)),
+            }
+        )
     return out
 
 
@@ -135,8 +161,10 @@ def floor_measures(sim):
     near[ci + 1] = True
     nodes = np.flatnonzero(near)
     free = ~contact[nodes, 1]
-    return {"floor_nodes": int(nodes.size), "floor_free": float(np.mean(free)) if nodes.size
-            else 0.0}
+    return {
+        "floor_nodes": int(nodes.size),
+        "floor_free": float(np.mean(free)) if nodes.size else 0.0,
+    }
 
 
 def record(sim):
@@ -156,12 +184,18 @@ def record(sim):
     front = 0.5 * (right + left) - L0
     near_r, near_l = x[:, 0] > half + right - h, x[:, 0] < half - left + h
     ufront = 0.5 * (v[near_r, 0].max() - v[near_l, 0].min())
-    row = {"t": sim.time, "ke": ke, "ke_aff": ke_aff, "pe": pe - state["pe0"],
-           "total": ke + ke_aff + pe - state["pe0"], "front": front, "ufront": ufront,
-           "vmax": float(np.sqrt((v**2).sum(1)).max())}
+    row = {
+        "t": sim.time,
+        "ke": ke,
+        "ke_aff": ke_aff,
+        "pe": pe - state["pe0"],
+        "total": ke + ke_aff + pe - state["pe0"],
+        "front": front,
+        "ufront": ufront,
+        "vmax": float(np.sqrt((v**2).sum(1)).max()),
+    }
     prev = state["prev"]
-    row["front_speed"] = ((front - prev["front"]) / (sim.time - prev["t"])
-                          if prev else 0.0)
+    row["front_speed"] = (front - prev["front"]) / (sim.time - prev["t"]) if prev else 0.0
     row.update(viscosity_measures(sim))
     row.update(floor_measures(sim))
     rows.append(row)
@@ -170,8 +204,13 @@ def record(sim):
         if abs(sim.time - ts) < 1e-6:
             snaps[f"x_{ts:g}"], snaps[f"v_{ts:g}"] = x.copy(), v.copy()
     if not cli.quiet:
-        print(" ".join(f"{k}={val:.5g}" if isinstance(val, float) else f"{k}={val}"
-                       for k, val in row.items()), flush=True)
+        print(
+            " ".join(
+                f"{k}={val:.5g}" if isinstance(val, float) else f"{k}={val}"
+                for k, val in row.items()
+            ),
+            flush=True,
+        )
 
 
 sim = common.run_example("granular_collapse.toml", overrides, on_output=record)
@@ -179,29 +218,39 @@ x = sim.particles.x
 reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))
 tot = np.array([r["total"] for r in rows])
 rise = np.diff(tot)
-summary = {"aspect": a, "transfer": cli.transfer, "model": cli.model, "h": h, "dt": dt,
-           "picard": os.environ.get("MPMFLOW_PICARD", "0"), "set": cli.set,
-           "runout": (reach - L0) / L0, "law": materials.lube(a),
-           "pe_start": float(-G * np.sum(sim.particles.mass) * H0 / 2),
-           "total_end": float(tot[-1]), "total_max": float(tot.max()),
-           "rise_sum": float(rise[rise > 0].sum()),
-           "largest_rise": float(rise.max()) if rise.size else 0.0,
-           "t_largest_rise": float(rows[int(np.argmax(rise)) + 1]["t"]) if rise.size else 0.0,
-           "front_speed_max": float(max(r["front_speed"] for r in rows)),
-           "t_front_speed_max": float(max(rows, key=lambda r: r["front_speed"])["t"]),
-           "ufront_max": float(max(r["ufront"] for r in rows)),
-           "vmax_max": float(max(r["vmax"] for r in rows)),
-           "free_fall": math.sqrt(2 * G * H0), "ritter": 2 * math.sqrt(G * H0),
-           "capped_cell_steps": sum(r["count"] for r in sim.fallbacks.rows()
-                                    if "viscosity" in r["what"]),
-           "wall": sim.summary["wall_seconds"]}
+summary = {
+    "aspect": a,
+    "transfer": cli.transfer,
+    "model": cli.model,
+    "h": h,
+    "dt": dt,
+    "picard": os.environ.get("MPMFLOW_PICARD", "0"),
+    "set": cli.set,
+    "runout": (reach - L0) / L0,
+    "law": materials.lube(a),
+    "pe_start": float(-G * np.sum(sim.particles.mass) * H0 / 2),
+    "total_end": float(tot[-1]),
+    "total_max": float(tot.max()),
+    "rise_sum": float(rise[rise > 0].sum()),
+    "largest_rise": float(rise.max()) if rise.size else 0.0,
+    "t_largest_rise": float(rows[int(np.argmax(rise)) + 1]["t"]) if rise.size else 0.0,
+    "front_speed_max": float(max(r["front_speed"] for r in rows)),
+    "t_front_speed_max": float(max(rows, key=lambda r: r["front_speed"])["t"]),
+    "ufront_max": float(max(r["ufront"] for r in rows)),
+    "vmax_max": float(max(r["vmax"] for r in rows)),
+    "free_fall": math.sqrt(2 * G * H0),
+    "ritter": 2 * math.sqrt(G * H0),
+    "capped_cell_steps": sum(r["count"] for r in sim.fallbacks.rows() if "viscosity" in r["what"]),
+    "wall": sim.summary["wall_seconds"],
+}
 print(json.dumps(summary))
 if cli.npz:
     snaps["x_end"], snaps["v_end"] = sim.particles.x, sim.particles.v
     np.savez(cli.npz, half=half, h=h, L0=L0, H0=H0, **snaps)
 if cli.csv:
-    keys = sorted({k for r in rows for k in r}, key=lambda k: list(rows[-1]).index(k)
-                  if k in rows[-1] else 99)
+    keys = sorted(
+        {k for r in rows for k in r}, key=lambda k: list(rows[-1]).index(k) if k in rows[-1] else 99
+    )
     with open(cli.csv, "w") as fh:
         fh.write(",".join(keys) + "\n")
         for r in rows:

@@ -47,8 +47,19 @@ def run_case(out, threads, pool, overrides):
     """(time loop s, whole process s, threads chosen) of one run."""
     env = {k: v for k, v in os.environ.items() if k != "MPMFLOW_THREADS"}
     env["OMP_NUM_THREADS"] = str(pool)
-    cmd = [sys.executable, "-m", "mpmflow.cli", "run", str(CASE), "--out", str(out), "-q",
-           "--overwrite", "--set", f"execution.threads={threads}"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "mpmflow.cli",
+        "run",
+        str(CASE),
+        "--out",
+        str(out),
+        "-q",
+        "--overwrite",
+        "--set",
+        f"execution.threads={threads}",
+    ]
     for item in overrides:
         cmd += ["--set", item]
     t0 = time.perf_counter()
@@ -83,11 +94,20 @@ class Busy:
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--pool", type=int, default=len(os.sched_getaffinity(0)),
-                    help="the core's threads (OMP_NUM_THREADS of the runs)")
-    ap.add_argument("--set", action="append", default=[], dest="overrides",
-                    metavar="KEY=VALUE", help="override a case key (e.g. time.end=0.02 for a "
-                    "check that the script works)")
+    ap.add_argument(
+        "--pool",
+        type=int,
+        default=len(os.sched_getaffinity(0)),
+        help="the core's threads (OMP_NUM_THREADS of the runs)",
+    )
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        dest="overrides",
+        metavar="KEY=VALUE",
+        help="override a case key (e.g. time.end=0.02 for a check that the script works)",
+    )
     args = ap.parse_args()
     fixed = list(range(1, min(args.pool, 2) + 1))
     last_cpu = max(os.sched_getaffinity(0))
@@ -105,41 +125,61 @@ def main():
                     results[setting].append(run_case(out, threads, args.pool, args.overrides))
                 else:
                     with Busy(cpu):
-                        results[setting].append(run_case(out, threads, args.pool,
-                                                         args.overrides))
+                        results[setting].append(run_case(out, threads, args.pool, args.overrides))
             print(f"round {k + 1} of {args.repeat} done", file=sys.stderr, flush=True)
     rows = []
     for (where, _cpu, threads), runs in results.items():
-        rows.append({"where": where, "threads": threads,
-                     "loop_s": statistics.median(r[0] for r in runs),
-                     "wall_s": statistics.median(r[1] for r in runs),
-                     "loop_all": [r[0] for r in runs],
-                     "chosen": sorted({tuple(r[2]) for r in runs})})
+        rows.append(
+            {
+                "where": where,
+                "threads": threads,
+                "loop_s": statistics.median(r[0] for r in runs),
+                "wall_s": statistics.median(r[1] for r in runs),
+                "loop_all": [r[0] for r in runs],
+                "chosen": sorted({tuple(r[2]) for r in runs}),
+            }
+        )
     best = min(r["loop_s"] for r in rows if r["where"] == "alone" and r["threads"] != "auto")
-    best_wall = min(r["wall_s"] for r in rows
-                    if r["where"] == "alone" and r["threads"] != "auto")
-    print(f"\nexamples/dam_break.toml {' '.join(args.overrides)}, thread pool {args.pool}, "
-          f"median of {args.repeat}; ratio = time loop / the better alone run with a fixed "
-          f"count ({best:.2f} s; whole process {best_wall:.2f} s)\n")
-    print("| setting | execution.threads | threads chosen | time loop | whole process | ratio "
-          "(loop) | ratio (whole) |")
+    best_wall = min(r["wall_s"] for r in rows if r["where"] == "alone" and r["threads"] != "auto")
+    print(
+        f"\nexamples/dam_break.toml {' '.join(args.overrides)}, thread pool {args.pool}, "
+        f"median of {args.repeat}; ratio = time loop / the better alone run with a fixed "
+        f"count ({best:.2f} s; whole process {best_wall:.2f} s)\n"
+    )
+    print(
+        "| setting | execution.threads | threads chosen | time loop | whole process | ratio "
+        "(loop) | ratio (whole) |"
+    )
     print("|---|---|---|---|---|---|---|")
     for r in rows:
         r["ratio"] = r["loop_s"] / best
         r["ratio_wall"] = r["wall_s"] / best_wall
         chosen = "; ".join(" -> ".join(map(str, c)) for c in r["chosen"]) or "-"
-        print(f"| {r['where']} | {r['threads']} | {chosen} | {r['loop_s']:.2f} s | "
-              f"{r['wall_s']:.2f} s | {r['ratio']:.2f} | {r['ratio_wall']:.2f} |")
+        print(
+            f"| {r['where']} | {r['threads']} | {chosen} | {r['loop_s']:.2f} s | "
+            f"{r['wall_s']:.2f} s | {r['ratio']:.2f} | {r['ratio_wall']:.2f} |"
+        )
     busy_auto = [r for r in rows if r["where"] != "alone" and r["threads"] == "auto"]
     worst = max(r["ratio"] for r in busy_auto)
     worst_wall = max(r["ratio_wall"] for r in busy_auto)
-    print(f"\nworst busy \"auto\" run: {worst:.2f} x (time loop), {worst_wall:.2f} x (whole "
-          f"process) the better alone run; target: at most {TARGET}: "
-          f"{'met' if max(worst, worst_wall) <= TARGET else 'NOT met'}")
-    save({"label": "contention", "overrides": args.overrides, "pool": args.pool,
-          "repeat": args.repeat, "rows": rows, "worst_auto_ratio": worst,
-          "worst_auto_ratio_wall": worst_wall,
-          "machine": machine(), "date": time.strftime("%Y-%m-%d")})
+    print(
+        f'\nworst busy "auto" run: {worst:.2f} x (time loop), {worst_wall:.2f} x (whole '
+        f"process) the better alone run; target: at most {TARGET}: "
+        f"{'met' if max(worst, worst_wall) <= TARGET else 'NOT met'}"
+    )
+    save(
+        {
+            "label": "contention",
+            "overrides": args.overrides,
+            "pool": args.pool,
+            "repeat": args.repeat,
+            "rows": rows,
+            "worst_auto_ratio": worst,
+            "worst_auto_ratio_wall": worst_wall,
+            "machine": machine(),
+            "date": time.strftime("%Y-%m-%d"),
+        }
+    )
 
 
 if __name__ == "__main__":

@@ -35,13 +35,19 @@ def machine():
     import numpy
 
     try:
-        commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                                capture_output=True, text=True).stdout.strip()
+        commit = subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        ).stdout.strip()
     except OSError:
         commit = "?"
-    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "numpy": numpy.__version__, "commit": commit,
-            "threads": os.environ.get("OMP_NUM_THREADS", "default")}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": numpy.__version__,
+        "commit": commit,
+        "threads": os.environ.get("OMP_NUM_THREADS", "default"),
+    }
 
 
 def save(record):
@@ -52,8 +58,17 @@ def save(record):
 
 
 def run_once(case, out, overrides):
-    cmd = [sys.executable, "-m", "mpmflow.cli", "run", str(case), "--out", str(out), "--quiet",
-           "--overwrite"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "mpmflow.cli",
+        "run",
+        str(case),
+        "--out",
+        str(out),
+        "--quiet",
+        "--overwrite",
+    ]
     for o in overrides:
         cmd += ["--set", o]
     t0 = time.perf_counter()
@@ -77,17 +92,27 @@ def main():
             wall, summary = run_once(args.case, tmp, args.overrides)
             walls.append(wall)
             loops.append(summary["wall_seconds"])
-    record = {"label": args.label, "case": Path(args.case).name, "overrides": args.overrides,
-              "repeat": args.repeat, "process_median_s": statistics.median(walls),
-              "process_min_s": min(walls), "process_max_s": max(walls),
-              "time_loop_median_s": statistics.median(loops), "steps": summary["steps"],
-              "particles": summary["particles"], "machine": machine(),
-              "date": time.strftime("%Y-%m-%d")}
-    print(f"{record['case']} {' '.join(args.overrides)}: whole process median "
-          f"{record['process_median_s']:.2f} s (min {record['process_min_s']:.2f}, max "
-          f"{record['process_max_s']:.2f}; {args.repeat} runs after a warm-up), time loop "
-          f"{record['time_loop_median_s']:.2f} s, {record['steps']} steps, "
-          f"{record['particles']} particles")
+    record = {
+        "label": args.label,
+        "case": Path(args.case).name,
+        "overrides": args.overrides,
+        "repeat": args.repeat,
+        "process_median_s": statistics.median(walls),
+        "process_min_s": min(walls),
+        "process_max_s": max(walls),
+        "time_loop_median_s": statistics.median(loops),
+        "steps": summary["steps"],
+        "particles": summary["particles"],
+        "machine": machine(),
+        "date": time.strftime("%Y-%m-%d"),
+    }
+    print(
+        f"{record['case']} {' '.join(args.overrides)}: whole process median "
+        f"{record['process_median_s']:.2f} s (min {record['process_min_s']:.2f}, max "
+        f"{record['process_max_s']:.2f}; {args.repeat} runs after a warm-up), time loop "
+        f"{record['time_loop_median_s']:.2f} s, {record['steps']} steps, "
+        f"{record['particles']} particles"
+    )
     save(record)
 
 

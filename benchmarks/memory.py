@@ -34,10 +34,26 @@ def measure(spacing, steps, folder):
     """(estimate dict, peak resident bytes, wall s) of one run in its own process."""
     dt = 1e-3 * spacing / 0.004
     out = Path(folder) / f"run_{spacing:g}"
-    cmd = [sys.executable, "-m", "mpmflow.cli", "run", str(CASE), "--out", str(out), "-q",
-           "--set", f"grid.spacing={spacing}", "--set", f"time.dt={dt}",
-           "--set", f"time.end={steps * dt}", "--set", f"output.interval={dt}",
-           "--set", f"output.snapshot_interval={steps * dt}"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "mpmflow.cli",
+        "run",
+        str(CASE),
+        "--out",
+        str(out),
+        "-q",
+        "--set",
+        f"grid.spacing={spacing}",
+        "--set",
+        f"time.dt={dt}",
+        "--set",
+        f"time.end={steps * dt}",
+        "--set",
+        f"output.interval={dt}",
+        "--set",
+        f"output.snapshot_interval={steps * dt}",
+    ]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
     _, status, usage = os.wait4(proc.pid, 0)
@@ -60,17 +76,38 @@ def main():
         for spacing in args.spacing:
             est, peak, wall = measure(spacing, args.steps, tmp)
             ratio = est["total"] / peak
-            rows.append({"spacing": spacing, "particles": est["counts"]["particles"],
-                         "nodes": est["counts"]["nodes"], "estimate": est["total"],
-                         "peak": peak, "ratio": ratio, "wall_s": wall, "parts": est})
-            print(f"{spacing:g} m: {est['counts']['particles']:,} particles, estimate "
-                  f"{est['total'] / 2**20:.0f} MB, peak {peak / 2**20:.0f} MB, "
-                  f"estimate / peak = {ratio:.2f} ({wall:.1f} s)", flush=True)
+            rows.append(
+                {
+                    "spacing": spacing,
+                    "particles": est["counts"]["particles"],
+                    "nodes": est["counts"]["nodes"],
+                    "estimate": est["total"],
+                    "peak": peak,
+                    "ratio": ratio,
+                    "wall_s": wall,
+                    "parts": est,
+                }
+            )
+            print(
+                f"{spacing:g} m: {est['counts']['particles']:,} particles, estimate "
+                f"{est['total'] / 2**20:.0f} MB, peak {peak / 2**20:.0f} MB, "
+                f"estimate / peak = {ratio:.2f} ({wall:.1f} s)",
+                flush=True,
+            )
     worst = max(abs(r["ratio"] - 1) for r in rows)
-    print(f"largest deviation of the estimate from the peak: {100 * worst:.0f}% "
-          "(issue 17 asks for at most 30%)")
-    save({"label": "memory", "steps": args.steps, "rows": rows, "machine": machine(),
-          "date": time.strftime("%Y-%m-%d")})
+    print(
+        f"largest deviation of the estimate from the peak: {100 * worst:.0f}% "
+        "(issue 17 asks for at most 30%)"
+    )
+    save(
+        {
+            "label": "memory",
+            "steps": args.steps,
+            "rows": rows,
+            "machine": machine(),
+            "date": time.strftime("%Y-%m-%d"),
+        }
+    )
 
 
 if __name__ == "__main__":

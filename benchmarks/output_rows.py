@@ -40,8 +40,12 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from dam_break import machine, save  # noqa: E402
 
 CASE = ROOT / "examples" / "hydrostatic.toml"
-SETTINGS = ["bodies.0.particles_per_cell=2", "time.dt=1e-3", "output.interval=1e-3",
-            "output.snapshot_interval=1.0"]
+SETTINGS = [
+    "bodies.0.particles_per_cell=2",
+    "time.dt=1e-3",
+    "output.interval=1e-3",
+    "output.snapshot_interval=1.0",
+]
 
 
 def run(out, rows, src=None, restart=False):
@@ -68,8 +72,10 @@ def run(out, rows, src=None, restart=False):
 
 def sizes(out):
     checkpoints = [p.stat().st_size for p in Path(out).glob("checkpoint_*.npz")]
-    return {"timeseries_bytes": (Path(out) / "timeseries.csv").stat().st_size,
-            "largest_checkpoint_bytes": max(checkpoints, default=0)}
+    return {
+        "timeseries_bytes": (Path(out) / "timeseries.csv").stat().st_size,
+        "largest_checkpoint_bytes": max(checkpoints, default=0),
+    }
 
 
 def main():
@@ -78,38 +84,55 @@ def main():
     ap.add_argument("--src", default=None, help="the src folder of another checkout to run")
     args = ap.parse_args()
     n = args.rows
-    record = {"label": "output_rows", "rows": n, "src": args.src or "this checkout",
-              "machine": machine(), "date": time.strftime("%Y-%m-%d")}
+    record = {
+        "label": "output_rows",
+        "rows": n,
+        "src": args.src or "this checkout",
+        "machine": machine(),
+        "date": time.strftime("%Y-%m-%d"),
+    }
     with tempfile.TemporaryDirectory() as tmp:
         run(Path(tmp) / "warm", 10, args.src)  # the page cache
         for label, rows in (("short", n), ("long", 2 * n)):
             out = Path(tmp) / label
             wall, summary = run(out, rows, args.src)
-            record[label] = {"rows": rows, "wall_s": wall, "loop_s": summary["wall_seconds"],
-                             "cpu_s": summary["cpu_s"], "particles": summary["particles"],
-                             **sizes(out)}
-            print(f"{rows:,} rows: {wall:.2f} s whole process ({summary['cpu_s']:.2f} s CPU), "
-                  f"{summary['wall_seconds']:.2f} s time loop ({summary['particles']} "
-                  "particles); timeseries.csv "
-                  f"{record[label]['timeseries_bytes']:,} B, largest checkpoint "
-                  f"{record[label]['largest_checkpoint_bytes']:,} B", flush=True)
+            record[label] = {
+                "rows": rows,
+                "wall_s": wall,
+                "loop_s": summary["wall_seconds"],
+                "cpu_s": summary["cpu_s"],
+                "particles": summary["particles"],
+                **sizes(out),
+            }
+            print(
+                f"{rows:,} rows: {wall:.2f} s whole process ({summary['cpu_s']:.2f} s CPU), "
+                f"{summary['wall_seconds']:.2f} s time loop ({summary['particles']} "
+                "particles); timeseries.csv "
+                f"{record[label]['timeseries_bytes']:,} B, largest checkpoint "
+                f"{record[label]['largest_checkpoint_bytes']:,} B",
+                flush=True,
+            )
         wall, summary = run(Path(tmp) / "short", 2 * n, args.src, restart=True)
         first = record["short"]["loop_s"]
         second = summary["wall_seconds"] - first  # wall_seconds counts the whole run
         record["second_half"] = {"wall_s": wall, "loop_s": second, "cpu_s": summary["cpu_s"]}
-        print(f"rows {n:,} to {2 * n:,} as a restart: {wall:.2f} s whole process "
-              f"({summary['cpu_s']:.2f} s CPU), {second:.2f} s time loop")
+        print(
+            f"rows {n:,} to {2 * n:,} as a restart: {wall:.2f} s whole process "
+            f"({summary['cpu_s']:.2f} s CPU), {second:.2f} s time loop"
+        )
     short, long = record["short"], record["long"]
     record["ratio_wall"] = long["wall_s"] / short["wall_s"]
     record["ratio_cpu"] = long["cpu_s"] / short["cpu_s"]
     record["ratio_loop"] = long["loop_s"] / short["loop_s"]
     record["ratio_halves"] = record["second_half"]["loop_s"] / short["loop_s"]
     record["ratio_halves_cpu"] = record["second_half"]["cpu_s"] / short["cpu_s"]
-    print(f"{2 * n:,} rows / {n:,} rows: {record['ratio_wall']:.2f} (whole process), "
-          f"{record['ratio_cpu']:.2f} (its CPU time), {record['ratio_loop']:.2f} (time loop); "
-          f"second {n:,} / first {n:,}: "
-          f"{record['ratio_halves']:.2f} (time loop), {record['ratio_halves_cpu']:.2f} (CPU) "
-          f"(issue 17 asks for a whole-run ratio below 2)")
+    print(
+        f"{2 * n:,} rows / {n:,} rows: {record['ratio_wall']:.2f} (whole process), "
+        f"{record['ratio_cpu']:.2f} (its CPU time), {record['ratio_loop']:.2f} (time loop); "
+        f"second {n:,} / first {n:,}: "
+        f"{record['ratio_halves']:.2f} (time loop), {record['ratio_halves_cpu']:.2f} (CPU) "
+        f"(issue 17 asks for a whole-run ratio below 2)"
+    )
     save(record)
 
 

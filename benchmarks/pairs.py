@@ -30,8 +30,17 @@ def run(python, src, case, out, overrides):
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = str(src)
-    cmd = [python, "-m", "mpmflow.cli", "run", str(case), "--out", str(out), "--quiet",
-           "--overwrite"]
+    cmd = [
+        python,
+        "-m",
+        "mpmflow.cli",
+        "run",
+        str(case),
+        "--out",
+        str(out),
+        "--quiet",
+        "--overwrite",
+    ]
     for o in overrides:
         cmd += ["--set", o]
     t0 = time.perf_counter()
@@ -59,15 +68,25 @@ def main():
             for name, (py, src) in codes.items():
                 wall, summary = run(py, src, case, Path(tmp) / name, a.set)
                 walls[name].append(wall)
-                print(f"pair {k + 1} {name}: {wall:.2f} s ({summary['steps']} steps)",
-                      flush=True)
+                print(f"pair {k + 1} {name}: {wall:.2f} s ({summary['steps']} steps)", flush=True)
     med = {name: statistics.median(w) for name, w in walls.items()}
     ratio = med["baseline"] / med["this"]
-    print(f"{case.name} {' '.join(a.set)}: this {med['this']:.2f} s, baseline "
-          f"{med['baseline']:.2f} s (medians of {a.pairs}): {ratio:.2f}x")
-    save({"script": "pairs.py", "case": case.name, "overrides": a.set, "walls": walls,
-          "medians": med, "speedup": ratio, "baseline": str(a.baseline),
-          "machine": machine()})
+    print(
+        f"{case.name} {' '.join(a.set)}: this {med['this']:.2f} s, baseline "
+        f"{med['baseline']:.2f} s (medians of {a.pairs}): {ratio:.2f}x"
+    )
+    save(
+        {
+            "script": "pairs.py",
+            "case": case.name,
+            "overrides": a.set,
+            "walls": walls,
+            "medians": med,
+            "speedup": ratio,
+            "baseline": str(a.baseline),
+            "machine": machine(),
+        }
+    )
 
 
 if __name__ == "__main__":

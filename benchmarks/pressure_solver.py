@@ -27,8 +27,9 @@ TIMES = (0.1, 0.3, 0.5)
 def capture():
     from mpmflow import Simulation, load_case
 
-    case = load_case(ROOT / "examples" / "dam_break.toml", ["time.end=0.5",
-                                                            "output.snapshots=false"])
+    case = load_case(
+        ROOT / "examples" / "dam_break.toml", ["time.end=0.5", "output.snapshots=false"]
+    )
     sim = Simulation(case)
     systems = []
 
@@ -40,9 +41,16 @@ def capture():
             core.predict(P.x.copy(), P.v.copy(), P.mass, P.volume, P.pressure.copy(), O, False)
             core.pressure_matrix(O)
             core.pressure_rhs(O)
-            systems.append((s.time, core.matrix_cols.copy(), core.matrix_vals.copy(),
-                            core.rows.copy(), core.rhs.copy(),
-                            tuple(c + 1 for c in s.grid.cells)))
+            systems.append(
+                (
+                    s.time,
+                    core.matrix_cols.copy(),
+                    core.matrix_vals.copy(),
+                    core.rows.copy(),
+                    core.rhs.copy(),
+                    tuple(c + 1 for c in s.grid.cells),
+                )
+            )
 
     sim.on_output = grab
     sim.run()
@@ -77,17 +85,34 @@ def main():
             result = solver.solve(rhs)
             solve = median_time(lambda s=solver, b=rhs: s.solve(b), args.repeat)
             solutions[method] = result.x
-            rows_out.append({"t": t, "unknowns": int(rows.size), "solver": method,
-                             "setup_ms": 1e3 * setup, "solve_ms": 1e3 * solve,
-                             "iterations": result.iterations})
-            print(f"| {t:.1f} | {rows.size} | {method} | {1e3 * setup:.3f} | "
-                  f"{1e3 * solve:.3f} | {result.iterations} |", flush=True)
+            rows_out.append(
+                {
+                    "t": t,
+                    "unknowns": int(rows.size),
+                    "solver": method,
+                    "setup_ms": 1e3 * setup,
+                    "solve_ms": 1e3 * solve,
+                    "iterations": result.iterations,
+                }
+            )
+            print(
+                f"| {t:.1f} | {rows.size} | {method} | {1e3 * setup:.3f} | "
+                f"{1e3 * solve:.3f} | {result.iterations} |",
+                flush=True,
+            )
         ref = solutions["direct"]
         for method in ("multigrid", "amg"):
             err = np.linalg.norm(solutions[method] - ref) / np.linalg.norm(ref)
             assert err < 1e-6, (method, err)
-    save({"label": "pressure_solver", "repeat": args.repeat, "rows": rows_out,
-          "machine": machine(), "date": time.strftime("%Y-%m-%d")})
+    save(
+        {
+            "label": "pressure_solver",
+            "repeat": args.repeat,
+            "rows": rows_out,
+            "machine": machine(),
+            "date": time.strftime("%Y-%m-%d"),
+        }
+    )
 
 
 if __name__ == "__main__":

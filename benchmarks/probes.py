@@ -30,12 +30,20 @@ def main():
     wall = [[3.22, 0.5, z] for z in np.linspace(0.0, 0.5, 8)]
     inside = [[2.5, y, z] for y, z in zip(np.linspace(0.1, 0.9, 8), np.linspace(0.02, 0.5, 8))]
     gauges = [[x, 0.5, 0.0] for x in (0.496, 0.992, 1.488, 2.638)]
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml", {
-        "domain.size": [3.22, 1.0, 1.0], "grid.spacing": 0.02,
-        "bodies.0.min": [1.992, 0.0, 0.0], "bodies.0.max": [3.22, 1.0, DEPTH],
-        "probes": [{"name": f"p{k}", "quantity": "pressure", "position": p}
-                   for k, p in enumerate(wall + inside)]
-        + [{"name": f"h{k}", "quantity": "level", "position": p} for k, p in enumerate(gauges)]})
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        {
+            "domain.size": [3.22, 1.0, 1.0],
+            "grid.spacing": 0.02,
+            "bodies.0.min": [1.992, 0.0, 0.0],
+            "bodies.0.max": [3.22, 1.0, DEPTH],
+            "probes": [
+                {"name": f"p{k}", "quantity": "pressure", "position": p}
+                for k, p in enumerate(wall + inside)
+            ]
+            + [{"name": f"h{k}", "quantity": "level", "position": p} for k, p in enumerate(gauges)],
+        },
+    )
     grid = Grid.of_case(case)
     particles = build_particles(case, grid)
     particles.pressure[:] = RHO * G * (DEPTH - particles.x[:, 2])
@@ -50,13 +58,19 @@ def main():
         t2 = time.perf_counter()
         t_bin.append(t1 - t0)
         t_probe.append(t2 - t1)
-    err = max(abs(row[p.name] - RHO * G * max(DEPTH - p.position[2], 0.0))
-              for p in case.probes if p.quantity == "pressure")
-    print(f"{particles.count} particles, {len(case.probes)} probes: probes "
-          f"{statistics.median(t_probe) * 1e3:.2f} ms per output (median of 5), binning "
-          f"(done by every output anyway) {statistics.median(t_bin) * 1e3:.0f} ms; largest "
-          f"pressure error {err:.2e} Pa; levels "
-          + ", ".join(f"{row[f'h{k}']:.4f}" for k in range(len(gauges))) + " m")
+    err = max(
+        abs(row[p.name] - RHO * G * max(DEPTH - p.position[2], 0.0))
+        for p in case.probes
+        if p.quantity == "pressure"
+    )
+    print(
+        f"{particles.count} particles, {len(case.probes)} probes: probes "
+        f"{statistics.median(t_probe) * 1e3:.2f} ms per output (median of 5), binning "
+        f"(done by every output anyway) {statistics.median(t_bin) * 1e3:.0f} ms; largest "
+        f"pressure error {err:.2e} Pa; levels "
+        + ", ".join(f"{row[f'h{k}']:.4f}" for k in range(len(gauges)))
+        + " m"
+    )
 
 
 if __name__ == "__main__":

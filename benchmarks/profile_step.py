@@ -24,17 +24,20 @@ def main():
     args = ap.parse_args()
     from mpmflow import Simulation, load_case, state
 
-    Simulation(load_case(args.case, [*args.overrides, "time.end=0.003",
-                                     "output.interval=0.001"])).run()
+    Simulation(
+        load_case(args.case, [*args.overrides, "time.end=0.003", "output.interval=0.001"])
+    ).run()
     sim = Simulation(load_case(args.case, args.overrides))
     t0 = time.perf_counter()
     sim.run()
     wall = time.perf_counter() - t0
     steps = sim.steps
     totals = dict(zip(state.PHASES, sim.scheme.core.phase_seconds))
-    print(f"{Path(args.case).name} {' '.join(args.overrides)}: {sim.particles.count} "
-          f"particles, {steps} steps, {state.max_threads()} threads; the run takes "
-          f"{wall:.2f} s")
+    print(
+        f"{Path(args.case).name} {' '.join(args.overrides)}: {sim.particles.count} "
+        f"particles, {steps} steps, {state.max_threads()} threads; the run takes "
+        f"{wall:.2f} s"
+    )
     print()
     print("| phase | ms per step | share |")
     print("|---|---|---|")

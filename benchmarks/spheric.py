@@ -27,8 +27,9 @@ def main():
     ap.add_argument("--spacing", type=float, default=0.02)
     ap.add_argument("--end", type=float, default=6.0)
     ap.add_argument("--out", default=str(ROOT / "runs" / "spheric_bench"))
-    ap.add_argument("--set", action="append", default=[],
-                    help="more overrides, e.g. --set time.dt=auto")
+    ap.add_argument(
+        "--set", action="append", default=[], help="more overrides, e.g. --set time.dt=auto"
+    )
     args = ap.parse_args()
     from mpmflow import open_run
     from mpmflow.validation import spheric
@@ -36,9 +37,18 @@ def main():
     sets = []
     for o in spheric.overrides(args.spacing, args.end) + args.set:
         sets += ["--set", o]
-    cmd = [sys.executable, "-m", "mpmflow.cli", "run",
-           str(ROOT / "examples" / "spheric_test2.toml"),
-           "--out", args.out, "--overwrite", "-q", *sets]
+    cmd = [
+        sys.executable,
+        "-m",
+        "mpmflow.cli",
+        "run",
+        str(ROOT / "examples" / "spheric_test2.toml"),
+        "--out",
+        args.out,
+        "--overwrite",
+        "-q",
+        *sets,
+    ]
     t0 = time.perf_counter()
     res = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
@@ -59,13 +69,23 @@ def main():
             return run.probes[name]
 
     m = spheric.measures(Series, spheric.data(), args.end)
-    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
-    record = {"benchmark": "spheric", "commit": commit, "spacing": args.spacing, "end": args.end,
-              "overrides": args.set,
-              "particles": run.summary["particles"], "steps": run.summary["steps"],
-              "wall_s": wall, "loop_s": run.summary["wall_seconds"], "peak_mb": peak,
-              "measures": m, "machine": machine()}
+    commit = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+    ).stdout.strip()
+    record = {
+        "benchmark": "spheric",
+        "commit": commit,
+        "spacing": args.spacing,
+        "end": args.end,
+        "overrides": args.set,
+        "particles": run.summary["particles"],
+        "steps": run.summary["steps"],
+        "wall_s": wall,
+        "loop_s": run.summary["wall_seconds"],
+        "peak_mb": peak,
+        "measures": m,
+        "machine": machine(),
+    }
     print(json.dumps(record))
     save(record)
 

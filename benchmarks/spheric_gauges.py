@@ -8,6 +8,7 @@ mean over 1-2 s. time.dt = "auto".
 
 Prints one JSON object; the series go to runs/spheric_gauges_<spacing>.npz.
 """
+
 import json
 import sys
 from pathlib import Path
@@ -21,10 +22,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(spacing, end=6.0):
-    case = load_case(ROOT / "examples" / "spheric_test2.toml",
-                     spheric.overrides(spacing, end) + ["time.dt='auto'"])
-    first_drop = [dict(name=p.name + "_fd", quantity="level", position=p.position,
-                       gauge="first_drop") for p in case.probes if p.quantity == "level"]
+    case = load_case(
+        ROOT / "examples" / "spheric_test2.toml",
+        spheric.overrides(spacing, end) + ["time.dt='auto'"],
+    )
+    first_drop = [
+        dict(name=p.name + "_fd", quantity="level", position=p.position, gauge="first_drop")
+        for p in case.probes
+        if p.quantity == "level"
+    ]
     case.probes = [p.model_dump(exclude_none=True) for p in case.probes] + first_drop
     sim = Simulation(case)
     sim.run()
@@ -43,8 +49,11 @@ def main(spacing, end=6.0):
             res[f"{gauge}{suffix}_mean_1_2s"] = float(np.mean(h[early]))
     (ROOT / "runs").mkdir(exist_ok=True)
     names = list(spheric.GAUGES) + [g + "_fd" for g in spheric.GAUGES]
-    np.savez(ROOT / "runs" / f"spheric_gauges_{spacing}.npz", t=t,
-             **{g: sim.probe_series(g) for g in names})
+    np.savez(
+        ROOT / "runs" / f"spheric_gauges_{spacing}.npz",
+        t=t,
+        **{g: sim.probe_series(g) for g in names},
+    )
     print(json.dumps(res, indent=1))
 
 

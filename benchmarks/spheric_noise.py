@@ -11,6 +11,7 @@ node (the nodal pressure interpolated at the sensor's point), node1 (one cell of
 face), and the nodal pressure at points away from the box (x_*). Prints one JSON object
 (also runs/spheric_noise_TAG.json, the series in runs/spheric_noise_TAG.npz).
 """
+
 import argparse
 import json
 import time as _time
@@ -37,10 +38,18 @@ case = load_case(EXAMPLES / "spheric_test2.toml", ["output.snapshots=false", *ov
 sim = Simulation(case)
 SENS = ("P1", "P3")
 probes = {p.name: p for p in case.probes}
-rec = {k: [] for k in ["t"] + [f"{s}_{v}" for s in SENS
-                               for v in ("fit", "mean", "fit9", "mean9", "node", "node1")]}
-EXTRA = {"far_floor": (1.6, 0.5, 0.02), "end_wall": (3.2, 0.5, 0.05), "beside": (0.75, 0.2, 0.05),
-         "above": (0.75, 0.471, 0.2), "front2": (0.9245, 0.471, 0.06)}
+rec = {
+    k: []
+    for k in ["t"]
+    + [f"{s}_{v}" for s in SENS for v in ("fit", "mean", "fit9", "mean9", "node", "node1")]
+}
+EXTRA = {
+    "far_floor": (1.6, 0.5, 0.02),
+    "end_wall": (3.2, 0.5, 0.05),
+    "beside": (0.75, 0.2, 0.05),
+    "above": (0.75, 0.471, 0.2),
+    "front2": (0.9245, 0.471, 0.06),
+}
 for k in EXTRA:
     rec["x_" + k] = []
 grid = sim.grid
@@ -70,8 +79,12 @@ def on_output(s):
     rec["t"].append(s.time)
     for name in SENS:
         pr = probes[name]
-        for est, win, key in (("fit", None, "fit"), ("mean", None, "mean"),
-                              ("fit", 0.009, "fit9"), ("mean", 0.009, "mean9")):
+        for est, win, key in (
+            ("fit", None, "fit"),
+            ("mean", None, "mean"),
+            ("fit", 0.009, "fit9"),
+            ("mean", 0.009, "mean9"),
+        ):
             q = pr.model_copy(update={"estimate": est, "window": win})
             rec[f"{name}_{key}"].append(P.pressure_at(grid, s.particles, bins, q, case, dist))
         pos = np.array(pr.position)
@@ -88,8 +101,17 @@ _adv = sim.scheme.advance
 
 def advance(dt, nsteps, where=""):
     r = _adv(dt, nsteps, where)
-    reports.append((sim.time, r.released, r.pockets, r.solves, getattr(r, "steps", nsteps),
-                    r.unknowns, r.moved_inside))
+    reports.append(
+        (
+            sim.time,
+            r.released,
+            r.pockets,
+            r.solves,
+            getattr(r, "steps", nsteps),
+            r.unknowns,
+            r.moved_inside,
+        )
+    )
     return r
 
 
@@ -108,13 +130,18 @@ def noise(y):
     k = 5
     ma = np.convolve(y, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
     valid = np.zeros(y.size, bool)
-    valid[k:y.size - k] = True
+    valid[k : y.size - k] = True
     sel = keep & valid
     return float(np.sqrt(np.mean((y - ma)[sel] ** 2)))
 
 
-out = {"tag": tag, "over": cli.set, "wall_s": wall, "steps": sim.steps,
-       "particles": sim.particles.count}
+out = {
+    "tag": tag,
+    "over": cli.set,
+    "wall_s": wall,
+    "steps": sim.steps,
+    "particles": sim.particles.count,
+}
 wexp = (te >= 0.45) & (te <= 1.0)
 for name in SENS:
     mexp = float(exp[f"{name} [Pa]"][wexp].mean())

@@ -21,17 +21,20 @@ MESHES = (0.008, 0.004)  # m: 6.5k and 26k particles
 MATERIALS = {
     "water (inviscid)": [],
     "newtonian, 1e-3 Pa s": ["material.model=newtonian", "material.viscosity=1e-3"],
-    "herschel_bulkley, 5 Pa / 0.1 Pa s": ["material.model=herschel_bulkley",
-                                          "material.yield_stress=5.0",
-                                          "material.consistency=0.1"],
+    "herschel_bulkley, 5 Pa / 0.1 Pa s": [
+        "material.model=herschel_bulkley",
+        "material.yield_stress=5.0",
+        "material.consistency=0.1",
+    ],
 }
 
 
 def run(overrides):
     from mpmflow import Simulation, load_case, state
 
-    sim = Simulation(load_case(ROOT / "examples" / "dam_break.toml",
-                               [*overrides, "output.snapshots=false"]))
+    sim = Simulation(
+        load_case(ROOT / "examples" / "dam_break.toml", [*overrides, "output.snapshots=false"])
+    )
     t0 = time.perf_counter()
     sim.run()
     wall = time.perf_counter() - t0
@@ -47,11 +50,12 @@ def main():
     args = ap.parse_args()
     from mpmflow import state
 
-    print(f"{state.max_threads()} threads, dam break to t = {args.end} s, median of "
-          f"{args.repeat}")
+    print(f"{state.max_threads()} threads, dam break to t = {args.end} s, median of {args.repeat}")
     print()
-    print("| h (m) | particles | material | ms per step | viscous phase (ms per step) | "
-          "viscous share | step vs inviscid |")
+    print(
+        "| h (m) | particles | material | ms per step | viscous phase (ms per step) | "
+        "viscous share | step vs inviscid |"
+    )
     print("|---|---|---|---|---|---|---|")
     for h in MESHES:
         runs = {name: [] for name in MATERIALS}
@@ -66,8 +70,11 @@ def main():
             step = statistics.median(r[2] for r in got) / steps * 1e3
             visc = statistics.median(r[3] for r in got) / steps * 1e3
             base = base or step
-            print(f"| {h} | {count} | {name} | {step:.2f} | {visc:.2f} | "
-                  f"{100 * visc / step:.0f}% | {step / base:.2f}x |", flush=True)
+            print(
+                f"| {h} | {count} | {name} | {step:.2f} | {visc:.2f} | "
+                f"{100 * visc / step:.0f}% | {step / base:.2f}x |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -51,8 +51,11 @@ def main(argv=None):
         return 0
     with np.load(args.compare) as before:
         keys = sorted(set(before.files) | set(now))
-        differ = [k for k in keys if k not in before.files or k not in now
-                  or not np.array_equal(before[k], now[k])]
+        differ = [
+            k
+            for k in keys
+            if k not in before.files or k not in now or not np.array_equal(before[k], now[k])
+        ]
     for k in differ:
         print(f"differs: {k}")
     print(f"{len(keys) - len(differ)} of {len(keys)} arrays identical")

@@ -28,18 +28,27 @@ VARIANTS = [
     ("+ sub-cell free surface", GAUSS),
     ("sub-cell with particle quadrature", SUBCELL),
     ("+ cells down to theta = 0.01 in the system", GAUSS + ["solver.sparse_cell_threshold=0.01"]),
-    ("+ volume correction 0.5", GAUSS + ["solver.sparse_cell_threshold=0.01",
-                                         "solver.volume_correction=0.5"]),
+    (
+        "+ volume correction 0.5",
+        GAUSS + ["solver.sparse_cell_threshold=0.01", "solver.volume_correction=0.5"],
+    ),
     ("mpmflow default (+ 1% PIC per ms)", []),
-    ("the earlier default (velocity density correction 0.2, theta >= 0.2)",
-     ["solver.volume_correction=0", "solver.density_correction=0.2",
-      "solver.sparse_cell_threshold=0.2"]),
+    (
+        "the earlier default (velocity density correction 0.2, theta >= 0.2)",
+        [
+            "solver.volume_correction=0",
+            "solver.density_correction=0.2",
+            "solver.sparse_cell_threshold=0.2",
+        ],
+    ),
 ]
 
 
 def hydrostatic(settings, depth):
-    case = load_case(ROOT / "examples/hydrostatic.toml",
-                     settings + [f"bodies.0.max=[0.1, {depth}]", "output.snapshots=false"])
+    case = load_case(
+        ROOT / "examples/hydrostatic.toml",
+        settings + [f"bodies.0.max=[0.1, {depth}]", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     sim.run()
     P = sim.particles
@@ -49,9 +58,10 @@ def hydrostatic(settings, depth):
 
 
 def dam_break(settings, spacing):
-    case = load_case(ROOT / "examples/dam_break.toml",
-                     settings + [f"grid.spacing={spacing}", "time.end=0.4",
-                                 "output.snapshots=false"])
+    case = load_case(
+        ROOT / "examples/dam_break.toml",
+        settings + [f"grid.spacing={spacing}", "time.end=0.4", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     sim.run()
     t, front, height = sim.series("time"), sim.series("front"), sim.series("height")
@@ -99,7 +109,8 @@ def main():
             f"| {r['still0.195_vmax']:.1e} / {100 * r['still0.195_perr']:.1f}% "
             f"| {r['db0.008_front']:.3f} / {r['db0.008_height']:.3f} / {r['db0.008_mm']:.3f} "
             f"| {r['db0.004_front']:.3f} / {r['db0.004_height']:.3f} / {r['db0.004_mm']:.3f} "
-            f"| {r['db0.008_ppc']} / {r['db0.004_ppc']} |")
+            f"| {r['db0.008_ppc']} / {r['db0.004_ppc']} |"
+        )
     table = "\n".join(lines)
     (out / "variants.md").write_text(
         "# Formulations of the projection, measured\n\n"
@@ -110,8 +121,12 @@ def main():
         "reference, and of the height against Martin & Moyce Table 6 (tau <= 3.5), in units "
         "of the column width a = 0.114 m. Acceptance floors: front 0.10 a / 0.05 a at 0.008 / "
         "0.004 m, height 0.07 a, M&M 0.08 a; still water under 0.01 m/s with pressure errors "
-        "of at most 2% (0.2 m) and 5% (0.195 m).\n\n" + table + "\n\nSettings of each row:\n\n"
-        + "\n".join(f"- {r['variant']}: `{r['settings']}`" for r in rows) + "\n")
+        "of at most 2% (0.2 m) and 5% (0.195 m).\n\n"
+        + table
+        + "\n\nSettings of each row:\n\n"
+        + "\n".join(f"- {r['variant']}: `{r['settings']}`" for r in rows)
+        + "\n"
+    )
     print(table)
 
 

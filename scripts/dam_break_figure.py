@@ -26,9 +26,15 @@ MM_FRONT = "validation/martin_moyce_1952_n2eq2_a2.25in_front_table2.csv"
 
 
 def run(spacing, dt, out):
-    case = load_case(ROOT / "examples/dam_break.toml",
-                     [f"grid.spacing={spacing}", f"time.dt={dt}", "time.end=0.5",
-                      "output.snapshot_interval=0.1"])
+    case = load_case(
+        ROOT / "examples/dam_break.toml",
+        [
+            f"grid.spacing={spacing}",
+            f"time.dt={dt}",
+            "time.end=0.5",
+            "output.snapshot_interval=0.1",
+        ],
+    )
     sim = Simulation(case, out)
     sim.run()
     return sim
@@ -53,8 +59,14 @@ def main():
     mm_h = load(MM_HEIGHT_AR2)
     mm_f = load(MM_FRONT)
     tau = np.sqrt(G / A)
-    ax_h.plot(vof[:, 0] * tau, vof[:, 2] / (2 * A), "k-", lw=2.5, alpha=0.35,
-              label="VOF (interFoam, 0.004 m)")
+    ax_h.plot(
+        vof[:, 0] * tau,
+        vof[:, 2] / (2 * A),
+        "k-",
+        lw=2.5,
+        alpha=0.35,
+        label="VOF (interFoam, 0.004 m)",
+    )
     ax_h.plot(mm_h[:, 0], mm_h[:, 1], "ks", mfc="none", label="Martin & Moyce, Table 6")
     ax_f.plot(vof[:, 0] * tau * np.sqrt(2), vof[:, 1] / A, "k-", lw=2.5, alpha=0.35, label="VOF")
     ax_f.plot(mm_f[:, 0], mm_f[:, 1], "ks", mfc="none", label="Martin & Moyce, Table 2")
@@ -70,17 +82,40 @@ def main():
         for k, time in enumerate((0.1, 0.2, 0.3)):
             ax = fig.add_subplot(grid[1, k])
             mesh = snapshot(fine, time)
-            sc = ax.scatter(mesh.points[:, 0], mesh.points[:, 1], c=mesh.point_data["pressure"],
-                            s=0.6, cmap="viridis", vmin=0, vmax=2300, rasterized=True)
-            ax.set(xlim=(0, 0.42), ylim=(0, 0.25), aspect="equal", xlabel="x (m)",
-                   title=f"t = {time:.1f} s, 0.004 m mesh")
+            sc = ax.scatter(
+                mesh.points[:, 0],
+                mesh.points[:, 1],
+                c=mesh.point_data["pressure"],
+                s=0.6,
+                cmap="viridis",
+                vmin=0,
+                vmax=2300,
+                rasterized=True,
+            )
+            ax.set(
+                xlim=(0, 0.42),
+                ylim=(0, 0.25),
+                aspect="equal",
+                xlabel="x (m)",
+                title=f"t = {time:.1f} s, 0.004 m mesh",
+            )
             if k == 0:
                 ax.set_ylabel("y (m)")
         fig.colorbar(sc, ax=fig.axes[-3:], label="particle pressure (Pa)", shrink=0.8)
-    ax_h.set(xlabel="tau = t sqrt(g/a)", ylabel="height at left wall / (2a)", xlim=(0, 4.2),
-             ylim=(0, 1.05), title="Column height (a = 0.114 m)")
-    ax_f.set(xlabel="T = t sqrt(2g/a)", ylabel="surge front / a", xlim=(0, 3.6), ylim=(1, 3.8),
-             title="Surge front")
+    ax_h.set(
+        xlabel="tau = t sqrt(g/a)",
+        ylabel="height at left wall / (2a)",
+        xlim=(0, 4.2),
+        ylim=(0, 1.05),
+        title="Column height (a = 0.114 m)",
+    )
+    ax_f.set(
+        xlabel="T = t sqrt(2g/a)",
+        ylabel="surge front / a",
+        xlim=(0, 3.6),
+        ylim=(1, 3.8),
+        title="Surge front",
+    )
     ax_h.legend(fontsize=8)
     ax_f.legend(fontsize=7, loc="upper left")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """Regenerate the case-file reference, docs/reference.md, from the schema (mpmflow.case).
 
-    python scripts/update_readme_reference.py
+python scripts/update_readme_reference.py
 """
 
 from pathlib import Path

@@ -11,11 +11,22 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 
 
-def make_case(size=(0.1, 0.3), spacing=0.01, body=((0.0, 0.0), (0.1, 0.2)), ppc=4, dt=1e-3,
-              end=0.01, **sections):
-    data = dict(domain=dict(size=list(size)), grid=dict(spacing=spacing),
-                bodies=[dict(min=list(body[0]), max=list(body[1]), particles_per_cell=ppc)],
-                time=dict(dt=dt, end=end), output=dict(interval=max(dt, 0.01)))
+def make_case(
+    size=(0.1, 0.3),
+    spacing=0.01,
+    body=((0.0, 0.0), (0.1, 0.2)),
+    ppc=4,
+    dt=1e-3,
+    end=0.01,
+    **sections,
+):
+    data = dict(
+        domain=dict(size=list(size)),
+        grid=dict(spacing=spacing),
+        bodies=[dict(min=list(body[0]), max=list(body[1]), particles_per_cell=ppc)],
+        time=dict(dt=dt, end=end),
+        output=dict(interval=max(dt, 0.01)),
+    )
     for key, value in sections.items():
         data.setdefault(key, {}).update(value)
     return validate(data)

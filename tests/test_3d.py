@@ -19,9 +19,10 @@ def test_column_at_rest_in_3d_is_exact(depth, end):
     """The 3D column at rest with the defaults, surface half a cell off the grid (over 1 s)
     and on a grid line: the particle pressure is rho g (H - z) to 1e-6 relative and no
     particle moves faster than 1e-6 m/s, as in 2D."""
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml",
-                     [f"bodies.0.max=[0.1, 0.05, {depth}]", f"time.end={end}",
-                      "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        [f"bodies.0.max=[0.1, 0.05, {depth}]", f"time.end={end}", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     sim.run()
     assert sim.time == pytest.approx(end)
@@ -33,8 +34,11 @@ def test_column_at_rest_in_3d_is_exact(depth, end):
 
 
 def test_every_vector_has_one_entry_per_axis():
-    with pytest.raises(CaseError, match=r"bodies.0.max = \[0.1, 0.2\] has 2 entries but "
-                                        r"domain.size = \[0.1, 0.05, 0.3\] has 3"):
+    with pytest.raises(
+        CaseError,
+        match=r"bodies.0.max = \[0.1, 0.2\] has 2 entries but "
+        r"domain.size = \[0.1, 0.05, 0.3\] has 3",
+    ):
         load_case(EXAMPLES / "hydrostatic_3d.toml", ["bodies.0.max=[0.1, 0.2]"])
     with pytest.raises(CaseError, match="physics.gravity"):
         load_case(EXAMPLES / "hydrostatic_3d.toml", ["physics.gravity=[0, -9.81]"])
@@ -44,9 +48,10 @@ def test_every_vector_has_one_entry_per_axis():
     assert make_case().physics.gravity == [0.0, -9.81]
 
 
-@pytest.mark.parametrize("override, words", [
-    (["bodies.0.surface_amplitude=0.01"], "cosine top surface is defined for 2D cases only"),
-])
+@pytest.mark.parametrize(
+    "override, words",
+    [(["bodies.0.surface_amplitude=0.01"], "cosine top surface is defined for 2D cases only")],
+)
 def test_what_is_2d_only_is_refused_in_3d_with_the_fix(override, words):
     with pytest.raises(CaseError, match=words):
         load_case(EXAMPLES / "hydrostatic_3d.toml", override)
@@ -113,11 +118,12 @@ def test_water_surface_of_a_column_at_rest_is_the_column(depth):
     its top is the water's depth (float32 vertices: to 1e-6 m)."""
     from mpmflow.plotting.surface import volume_fraction, water_surface
 
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml", [f"bodies.0.max=[0.1, 0.05, {depth}]",
-                                                         "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        [f"bodies.0.max=[0.1, 0.05, {depth}]", "output.snapshots=false"],
+    )
     sim = Simulation(case)
-    f = volume_fraction(sim.particles.x, sim.particles.volume, sim.grid.spacing,
-                        sim.grid.cells)
+    f = volume_fraction(sim.particles.x, sim.particles.volume, sim.grid.spacing, sim.grid.cells)
     assert f.shape == (10, 5, 30) and f.max() == 1.0
     verts, faces = water_surface(f, sim.grid.spacing)
     hi = np.array([0.1, 0.05, depth])
@@ -137,8 +143,10 @@ def test_water_surface_area_of_whole_cells_is_the_box_with_chamfered_edges():
     chamfers alone are 6%)."""
     from mpmflow.plotting.surface import surface_area, volume_fraction, water_surface
 
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml", ["bodies.0.max=[0.1, 0.05, 0.2]",
-                                                         "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        ["bodies.0.max=[0.1, 0.05, 0.2]", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     h = sim.grid.spacing
     f = volume_fraction(sim.particles.x, sim.particles.volume, h, sim.grid.cells)
@@ -159,21 +167,25 @@ def test_a_dry_field_has_no_surface_and_obstacles_are_drawn_as_their_surfaces():
 
     verts, faces = water_surface(np.full((4, 3, 5), 0.49), 0.01)
     assert verts.shape == (0, 3) and faces.shape == (0, 3)
-    case = load_case(EXAMPLES / "stl_drop_3d.toml", [
-        "obstacles=[{type = 'box', min = [0.2, 0.05, 0.0], max = [0.25, 0.15, 0.04]}, "
-        "{type = 'cylinder', centre = [0.0637, 0.1513, 0.0], axis = [0, 0, 1], "
-        "radius = 0.0213, length = 0.15}]"])
+    case = load_case(
+        EXAMPLES / "stl_drop_3d.toml",
+        [
+            "obstacles=[{type = 'box', min = [0.2, 0.05, 0.0], max = [0.25, 0.15, 0.04]}, "
+            "{type = 'cylinder', centre = [0.0637, 0.1513, 0.0], axis = [0, 0, 1], "
+            "radius = 0.0213, length = 0.15}]"
+        ],
+    )
     notes = []
     tris = obstacle_triangles({"case": resolved(case)}, notes)
     assert notes == []
     box, cyl = tris[:12], tris[12:]
     flat = box.reshape(-1, 3)
     assert surface_area(flat, np.arange(len(flat)).reshape(-1, 3)) == pytest.approx(
-        2 * (0.05 * 0.1 + 0.1 * 0.04 + 0.04 * 0.05), rel=1e-12)
+        2 * (0.05 * 0.1 + 0.1 * 0.04 + 0.04 * 0.05), rel=1e-12
+    )
     r, length = 0.0213, 0.15
     flat = cyl.reshape(-1, 3)
     exact = 2 * np.pi * r * length + 2 * np.pi * r**2
-    assert surface_area(flat, np.arange(len(flat)).reshape(-1, 3)) == pytest.approx(exact,
-                                                                                     rel=0.03)
+    assert surface_area(flat, np.arange(len(flat)).reshape(-1, 3)) == pytest.approx(exact, rel=0.03)
     d = case.obstacle_shape(1).signed_distance(flat)
     assert np.abs(d).max() <= 0.1 * length / 32  # a tenth of a sample

@@ -1,7 +1,6 @@
 """time.dt = "auto" with the projection scheme: each step set by the particles' speeds
 (State.advance_span), within time.max_dt, landing on every output time exactly."""
 
-
 import numpy as np
 import pytest
 from conftest import EXAMPLES
@@ -14,9 +13,16 @@ RHO, G = 1000.0, 9.81
 def test_a_column_at_rest_takes_the_longest_step_and_stays_exact():
     """At rest the fastest particle is still, so every step is time.max_dt; the column stays
     exact to the solve's tolerance, as with a fixed step."""
-    case = load_case(EXAMPLES / "hydrostatic.toml",
-                     ["bodies.0.max=[0.1, 0.2]", "time.dt=auto", "time.max_dt=5e-3",
-                      "time.end=0.2", "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        [
+            "bodies.0.max=[0.1, 0.2]",
+            "time.dt=auto",
+            "time.max_dt=5e-3",
+            "time.end=0.2",
+            "output.snapshots=false",
+        ],
+    )
     sim = Simulation(case)
     summary = sim.run()
     assert sim.steps == 40  # 0.2 s in steps of 5 ms
@@ -37,9 +43,16 @@ def test_the_steps_follow_the_courant_number_and_land_on_every_output(tmp_path):
     steps = {}
     for courant in (1.0, 0.5):
         out = tmp_path / f"co{courant}"
-        case = load_case(EXAMPLES / "dam_break.toml",
-                         ["grid.spacing=0.008", "time.end=0.3", "time.dt=auto",
-                          f"time.courant={courant}", "output.snapshots=false"])
+        case = load_case(
+            EXAMPLES / "dam_break.toml",
+            [
+                "grid.spacing=0.008",
+                "time.end=0.3",
+                "time.dt=auto",
+                f"time.courant={courant}",
+                "output.snapshots=false",
+            ],
+        )
         sim = Simulation(case, out_dir=out)
         summary = sim.run()
         assert summary["status"] == "completed"

@@ -24,9 +24,24 @@ def _p2g(grid, x, v, m, affine):
     out = {k: np.zeros(nn) for k in ("mass", "vol")}
     mom, v_old, v_star = (np.zeros((nn, dim)) for _ in range(3))
     bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, m / 1000))
-    state.particles_to_grid(grid, x, v, m, m / 1000, bins.order, bins.start, np.zeros(dim), 0.0,
-                            out["mass"], mom, out["vol"], v_old, v_star, np.empty(0),
-                            affine=affine)
+    state.particles_to_grid(
+        grid,
+        x,
+        v,
+        m,
+        m / 1000,
+        bins.order,
+        bins.start,
+        np.zeros(dim),
+        0.0,
+        out["mass"],
+        mom,
+        out["vol"],
+        v_old,
+        v_star,
+        np.empty(0),
+        affine=affine,
+    )
     return out["mass"], mom, v_old
 
 
@@ -58,8 +73,20 @@ def test_apic_carries_an_affine_velocity_field_exactly(dim):
     u = np.zeros((n, dim))
     Cp = np.zeros((n, dim, dim))
     still = np.zeros_like(exact)
-    state.grid_to_particles(grid, y, u, np.zeros(n), still, exact, np.zeros(grid.nnodes), 0.0,
-                            0.99, np.full(dim, 0.6), 1e-9, affine=Cp)
+    state.grid_to_particles(
+        grid,
+        y,
+        u,
+        np.zeros(n),
+        still,
+        exact,
+        np.zeros(grid.nnodes),
+        0.0,
+        0.99,
+        np.full(dim, 0.6),
+        1e-9,
+        affine=Cp,
+    )
     np.testing.assert_allclose(u, a + y @ B.T, atol=1e-12)  # the PIC velocity, no FLIP part
     np.testing.assert_allclose(Cp, np.tile(B, (n, 1, 1)), atol=1e-11)
 
@@ -95,13 +122,36 @@ def test_apic_transfers_conserve_angular_momentum():
     # back to the same particles from an arbitrary grid velocity on the nodes with mass
     w = np.where(mass[:, None] > 0, rng.normal(size=v_grid.shape), 0.0)
     u, Cp = np.zeros((n, 2)), np.zeros((n, 2, 2))
-    state.grid_to_particles(grid, x.copy(), u, np.zeros(n), w, w, np.zeros(grid.nnodes), 0.0,
-                            1.0, np.array([0.8, 0.8]), 1e-9, affine=Cp)
+    state.grid_to_particles(
+        grid,
+        x.copy(),
+        u,
+        np.zeros(n),
+        w,
+        w,
+        np.zeros(grid.nnodes),
+        0.0,
+        1.0,
+        np.array([0.8, 0.8]),
+        1e-9,
+        affine=Cp,
+    )
     assert _angular(x, u, m, Cp, h) == pytest.approx(grid_L(mass, w), rel=1e-12)
     # PIC (the same velocities, no affine part) loses the part the particles' spread carries
     u_pic = np.zeros((n, 2))
-    state.grid_to_particles(grid, x.copy(), u_pic, np.zeros(n), w, w, np.zeros(grid.nnodes),
-                            0.0, 0.0, np.array([0.8, 0.8]), 1e-9)
+    state.grid_to_particles(
+        grid,
+        x.copy(),
+        u_pic,
+        np.zeros(n),
+        w,
+        w,
+        np.zeros(grid.nnodes),
+        0.0,
+        0.0,
+        np.array([0.8, 0.8]),
+        1e-9,
+    )
     np.testing.assert_array_equal(u_pic, u)
 
 
@@ -115,12 +165,18 @@ def _disc(transfer, flip, end):
     steady solution (p = rho OMEGA^2 (r^2 - R^2) / 2, 0 on its free surface). Its free
     surface is Rayleigh-Taylor unstable (the centrifugal acceleration points out of the
     water); at OMEGA = 2 rad/s it breaks up at about 2.7 s (measured), beyond these runs."""
-    case = validate({"domain": {"size": [0.4, 0.4]}, "grid": {"spacing": H},
-                     "bodies": [{"type": "disc", "centre": [0.2, 0.2], "radius": R}],
-                     "physics": {"gravity": [0.0, 0.0]},
-                     "time": {"dt": 1e-3, "end": end},
-                     "output": {"interval": 0.05, "snapshots": False},
-                     "solver": {"transfer": transfer, "flip": flip}}, source="disc")
+    case = validate(
+        {
+            "domain": {"size": [0.4, 0.4]},
+            "grid": {"spacing": H},
+            "bodies": [{"type": "disc", "centre": [0.2, 0.2], "radius": R}],
+            "physics": {"gravity": [0.0, 0.0]},
+            "time": {"dt": 1e-3, "end": end},
+            "output": {"interval": 0.05, "snapshots": False},
+            "solver": {"transfer": transfer, "flip": flip},
+        },
+        source="disc",
+    )
     sim = Simulation(case)
     P = sim.particles
     r = P.x - 0.2
@@ -134,8 +190,9 @@ def _disc(transfer, flip, end):
         c = np.sum(P.mass[:, None] * P.x, axis=0) / P.mass.sum()
         C = s.scheme.affine if s.scheme.affine is not None else np.zeros((P.count, 2, 2))
         # about the centre of mass: D_p depends on x_p's place in its cell, not on c
-        L = _angular(P.x, P.v, P.mass, C, H) - (c[0] * np.sum(P.mass * P.v[:, 1])
-                                              - c[1] * np.sum(P.mass * P.v[:, 0]))
+        L = _angular(P.x, P.v, P.mass, C, H) - (
+            c[0] * np.sum(P.mass * P.v[:, 1]) - c[1] * np.sum(P.mass * P.v[:, 0])
+        )
         r = P.x - c
         # the rigid rotation closest to the particles' velocities
         spin = np.sum(P.mass * (r[:, 0] * P.v[:, 1] - r[:, 1] * P.v[:, 0]))
@@ -171,16 +228,27 @@ def test_a_spinning_disc_keeps_its_angular_momentum_with_apic_and_loses_it_with_
 
 
 def test_transfer_setting_is_checked():
-    base = {"domain": {"size": [0.4, 0.4]}, "grid": {"spacing": 0.02},
-            "bodies": [{"min": [0, 0], "max": [0.1, 0.1]}],
-            "time": {"end": 0.01, "dt": 1e-3}}
+    base = {
+        "domain": {"size": [0.4, 0.4]},
+        "grid": {"spacing": 0.02},
+        "bodies": [{"min": [0, 0], "max": [0.1, 0.1]}],
+        "time": {"end": 0.01, "dt": 1e-3},
+    }
     with pytest.raises(CaseError, match="solver.transfer"):
         validate({**base, "solver": {"transfer": "mls"}}, source="t")
-    with pytest.raises(CaseError, match=r'solver.scheme = "explicit" does not support APIC '
-                       r'transfers \(solver.transfer = "apic"; it transfers by FLIP/PIC only\); '
-                       r'set solver.scheme = "projection", or set solver.transfer = "flip"'):
-        validate({**base, "solver": {"transfer": "apic", "scheme": "explicit"},
-                  "material": {"bulk_modulus": 4e5}, "time": {"end": 0.01, "dt": "auto"}},
-                 source="t")
+    with pytest.raises(
+        CaseError,
+        match=r'solver.scheme = "explicit" does not support APIC '
+        r'transfers \(solver.transfer = "apic"; it transfers by FLIP/PIC only\); '
+        r'set solver.scheme = "projection", or set solver.transfer = "flip"',
+    ):
+        validate(
+            {
+                **base,
+                "solver": {"transfer": "apic", "scheme": "explicit"},
+                "material": {"bulk_modulus": 4e5},
+                "time": {"end": 0.01, "dt": "auto"},
+            },
+            source="t",
+        )
     assert validate(base, source="t").solver.transfer == "flip"  # the default
-

@@ -18,8 +18,7 @@ def test_startup_series_starts_at_rest_and_tends_to_the_steady_parabola():
     steady = cf.poiseuille(y, H, NU, GS)
     assert steady[-1] == pytest.approx(GS * H * H / (2 * NU))
     assert np.max(np.abs(cf.poiseuille(y, H, NU, GS, t=0.0))) < 1e-5 * steady[-1]
-    assert np.allclose(cf.poiseuille(y, H, NU, GS, t=20 * H * H / NU), steady, rtol=0,
-                       atol=1e-12)
+    assert np.allclose(cf.poiseuille(y, H, NU, GS, t=20 * H * H / NU), steady, rtol=0, atol=1e-12)
     # it rises monotonically everywhere
     u = [cf.poiseuille(y, H, NU, GS, t=t) for t in (0.005, 0.025, 0.1, 0.5)]
     assert all(np.all(b[1:] > a[1:]) for a, b in zip(u, u[1:]))
@@ -30,7 +29,7 @@ def test_startup_series_solves_the_momentum_equation_and_its_boundary_conditions
     t, y, e = 0.02, np.array([0.01, 0.025, 0.04]), 1e-4
     f = lambda yy, tt=t: cf.poiseuille(yy, H, NU, GS, t=tt, terms=2000)  # noqa: E731
     u_t = (f(y, t + 1e-5) - f(y, t - 1e-5)) / 2e-5
-    u_yy = (f(y + e) - 2 * f(y) + f(y - e)) / e ** 2
+    u_yy = (f(y + e) - 2 * f(y) + f(y - e)) / e**2
     assert np.allclose(u_t, NU * u_yy + GS, rtol=1e-4)
     assert f(np.array([0.0]))[0] == 0.0
     assert abs(f(np.array([H])) - f(np.array([H - e])))[0] < 1e-6
@@ -68,12 +67,14 @@ def test_bagnold_profile_against_integrating_the_models_mu_of_i():
         def excess(r):
             inertial = r * d / math.sqrt(p / rho_s)
             return (mu_s + (mu_2 - mu_s) * inertial / (I0 + inertial)) * p - tau
+
         return brentq(excess, 1e-12, 1e6, xtol=1e-14, rtol=1e-14)
 
     for y in (0.002, 0.01, 0.019, Hl):
         numeric = quad(rate, 0.0, y, epsabs=1e-13, epsrel=1e-11, limit=200)[0]
-        assert cf.bagnold(y, Hl, theta, mu_s, mu_2, I0, d, rho / rho_s, g) == \
-            pytest.approx(numeric, rel=1e-7)
+        assert cf.bagnold(y, Hl, theta, mu_s, mu_2, I0, d, rho / rho_s, g) == pytest.approx(
+            numeric, rel=1e-7
+        )
     assert cf.inertial_number(theta, mu_s, mu_2, I0) == pytest.approx(0.138635, rel=1e-5)
     assert math.isnan(cf.inertial_number(math.radians(15), mu_s, mu_2, I0))  # below mu_s
 
@@ -82,8 +83,9 @@ def test_plug_fit_recovers_a_bingham_profile_from_scattered_points():
     rng = np.random.default_rng(1)
     y = rng.uniform(0.0, H, 4000)
     u = cf.bingham(y, H, 1000.0, 10.0, 30.0, GS)
-    assert cf.fit_plug(y, u, H, 0.005) == pytest.approx(cf.plug_width(H, 1000.0, 30.0, GS),
-                                                        rel=1e-4)
+    assert cf.fit_plug(y, u, H, 0.005) == pytest.approx(
+        cf.plug_width(H, 1000.0, 30.0, GS), rel=1e-4
+    )
 
 
 @pytest.mark.slow

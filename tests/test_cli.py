@@ -18,15 +18,21 @@ QUICK = ["--set", "time.end=0.05", "--set", "output.snapshot_interval=0.02"]
 
 
 def mpmflow(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "mpmflow.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "mpmflow.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+    )
 
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("run") / "out"
-    res = mpmflow("run", EXAMPLES / "dam_break.toml", "--out", out, "--set",
-                  "grid.spacing=0.008", *QUICK)
+    res = mpmflow(
+        "run", EXAMPLES / "dam_break.toml", "--out", out, "--set", "grid.spacing=0.008", *QUICK
+    )
     assert res.returncode == 0, res.stderr
     return out, res
 
@@ -107,11 +113,14 @@ def test_bad_settings_give_one_clear_error(tmp_path, args, key, hint):
     assert not (tmp_path / "o").exists()  # nothing was run
 
 
-@pytest.mark.parametrize("text, hint", [
-    ("[domain\nsize = [1, 1]\n", "not valid TOML"),
-    ("[domain]\nsize = [1.0, 1.0]\nsise = 2\n", "`domain.sise`"),
-    ("[grid]\nspacing = 0.1\n", "missing key `domain`"),
-])
+@pytest.mark.parametrize(
+    "text, hint",
+    [
+        ("[domain\nsize = [1, 1]\n", "not valid TOML"),
+        ("[domain]\nsize = [1.0, 1.0]\nsise = 2\n", "`domain.sise`"),
+        ("[grid]\nspacing = 0.1\n", "missing key `domain`"),
+    ],
+)
 @pytest.mark.slow
 def test_bad_case_files(tmp_path, text, hint):
     case = tmp_path / "case.toml"
@@ -130,8 +139,16 @@ def test_missing_case_file(tmp_path):
 @pytest.mark.slow
 def test_pressure_solve_failure_stops_the_run_and_says_where(tmp_path):
     out = tmp_path / "o"
-    res = mpmflow("run", EXAMPLES / "hydrostatic.toml", "--out", out, "--set",
-                  "solver.max_iterations=1", "--set", "solver.tolerance=1e-14")
+    res = mpmflow(
+        "run",
+        EXAMPLES / "hydrostatic.toml",
+        "--out",
+        out,
+        "--set",
+        "solver.max_iterations=1",
+        "--set",
+        "solver.tolerance=1e-14",
+    )
     assert res.returncode == 3 and "Traceback" not in res.stderr
     assert "did not converge at step 1" in res.stderr and "largest residual at node" in res.stderr
     summary = json.loads((out / "summary.json").read_text())
@@ -143,21 +160,33 @@ def test_pressure_solve_failure_stops_the_run_and_says_where(tmp_path):
 def test_keys_into_a_pipe_closed_early_exits_quietly():
     """`mpmflow keys | head -1` raised BrokenPipeError with a traceback: the reader going
     away now stops the command quietly with 141 (128 + SIGPIPE), as other tools do."""
-    proc = subprocess.Popen([sys.executable, "-m", "mpmflow.cli", "keys"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mpmflow.cli", "keys"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     proc.stdout.close()  # the reader is gone before the first line is written
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 141 and err == b"", err
-    res = subprocess.run(["bash", "-c", f"{shlex.quote(sys.executable)} -m mpmflow.cli keys "
-                          "| head -1; echo \"${PIPESTATUS[0]}\""],
-                         capture_output=True, text=True, timeout=60)
+    res = subprocess.run(
+        [
+            "bash",
+            "-c",
+            f"{shlex.quote(sys.executable)} -m mpmflow.cli keys "
+            '| head -1; echo "${PIPESTATUS[0]}"',
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     lines = res.stdout.splitlines()
     assert lines[0].startswith("title  (") and lines[1] in ("0", "141"), res.stdout
     assert res.stderr == ""
 
 
-@pytest.mark.parametrize("signum, delay", [(signal.SIGTERM, 0.25), (signal.SIGINT, 0.5),
-                                           (signal.SIGTERM, 1.0)])
+@pytest.mark.parametrize(
+    "signum, delay", [(signal.SIGTERM, 0.25), (signal.SIGINT, 0.5), (signal.SIGTERM, 1.0)]
+)
 @pytest.mark.slow
 def test_a_signal_in_the_first_second_stops_with_a_message(tmp_path, signum, delay):
     """SIGTERM during the first ~0.6 s (imports, loading, placing particles) killed the
@@ -165,10 +194,24 @@ def test_a_signal_in_the_first_second_stops_with_a_message(tmp_path, signum, del
     128 + the signal's number. (Where the command is at a given delay depends on the
     machine's speed: before the time loop nothing was run; in it, a checkpoint is written.)"""
     out = tmp_path / "o"
-    proc = subprocess.Popen([sys.executable, "-m", "mpmflow.cli", "run",
-                             str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q",
-                             "--set", "grid.spacing=0.001", "--set", "time.dt=2.5e-4"],
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            str(EXAMPLES / "dam_break.toml"),
+            "--out",
+            str(out),
+            "-q",
+            "--set",
+            "grid.spacing=0.001",
+            "--set",
+            "time.dt=2.5e-4",
+        ],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(delay)
     proc.send_signal(signum)
     _, err = proc.communicate(timeout=120)
@@ -193,14 +236,33 @@ def _progress_frames(out, end, *extra):
     import re
 
     env = dict(os.environ, TQDM_MININTERVAL="0", TQDM_MINITERS="0")
-    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
-                          EXAMPLES / "hydrostatic.toml", "--out", out, "--set",
-                          "grid.spacing=0.02", "--set", "output.snapshots=false", "--set",
-                          f"time.end={end}", *extra], capture_output=True, text=True,
-                         env=env, timeout=300)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            EXAMPLES / "hydrostatic.toml",
+            "--out",
+            out,
+            "--set",
+            "grid.spacing=0.02",
+            "--set",
+            "output.snapshots=false",
+            "--set",
+            f"time.end={end}",
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert res.returncode == 0, res.stderr
-    return [(round(float(t), 3), int(s)) for t, s in
-            re.findall(r"t = ([0-9.]+)/[0-9.]+ s \[[^\]]*\], step (\d+)", res.stderr)]
+    return [
+        (round(float(t), 3), int(s))
+        for t, s in re.findall(r"t = ([0-9.]+)/[0-9.]+ s \[[^\]]*\], step (\d+)", res.stderr)
+    ]
 
 
 @pytest.mark.slow
@@ -215,14 +277,14 @@ def test_progress_bar_shows_the_steps_taken_by_the_time_it_shows(tmp_path):
     assert sorted(set(frames)) == sorted(taken.items())  # every output, and only those
     assert taken == {0.0: 0, 0.01: 10, 0.02: 20, 0.03: 30}
     frames = _progress_frames(out, 0.05, "--restart")
-    assert frames[0] == (0.03, 30) and sorted(set(frames)) == [(0.03, 30), (0.04, 40),
-                                                                (0.05, 50)]
+    assert frames[0] == (0.03, 30) and sorted(set(frames)) == [(0.03, 30), (0.04, 40), (0.05, 50)]
 
 
 OBSTACLE_CASE = (
-    '[domain]\nsize = [0.3, 0.3]\n[grid]\nspacing = 0.01\n[time]\ndt = 1e-3\nend = 2e-3\n'
-    '[output]\ninterval = 1e-3\nsnapshots = false\n[[bodies]]\nmin = [0.0, 0.0]\n'
-    'max = [0.1, 0.1]\n[[obstacles]]\nmin = [0.2, 0.0]\nmax = [0.25, 0.05]\n')
+    "[domain]\nsize = [0.3, 0.3]\n[grid]\nspacing = 0.01\n[time]\ndt = 1e-3\nend = 2e-3\n"
+    "[output]\ninterval = 1e-3\nsnapshots = false\n[[bodies]]\nmin = [0.0, 0.0]\n"
+    "max = [0.1, 0.1]\n[[obstacles]]\nmin = [0.2, 0.0]\nmax = [0.25, 0.05]\n"
+)
 
 
 def _run_in_process(tmp_path, capsys, text, *args):
@@ -230,33 +292,50 @@ def _run_in_process(tmp_path, capsys, text, *args):
 
     (tmp_path / "case.toml").write_text(text)
     out = tmp_path / "o"
-    code = main(["run", str(tmp_path / "case.toml"), "--out", str(out), "-q", "--overwrite",
-                 *args])
+    code = main(["run", str(tmp_path / "case.toml"), "--out", str(out), "-q", "--overwrite", *args])
     err = capsys.readouterr().err
     assert "Traceback" not in err
     return code, err
 
 
-@pytest.mark.parametrize("text, args, message", [
-    # an index out of range for obstacles gave an example naming bodies
-    (OBSTACLE_CASE, ["--set", "obstacles.3.min=[0.2, 0.0]"],
-     "--set obstacles.3.min: `obstacles` has 1 entry; use an index from 0 to 0, e.g. --set "
-     "obstacles.0.min=[0.2, 0.0]."),
-    (OBSTACLE_CASE, ["--set", "obstacles.3={min = [0.2, 0.1], max = [0.25, 0.15]}"],
-     "--set obstacles.3: `obstacles` has 1 entry; use an index from 0 to 0, e.g. --set "
-     "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}, or --set 'obstacles.1={type = "
-     "\"box\", min = [...], max = [...]}' to add one."),
-    # a case without obstacles: "obstacles: Input should be a valid list"
-    (OBSTACLE_CASE.split("[[obstacles]]")[0], ["--set", "obstacles.0.min=[0.2, 0.0]"],
-     "--set obstacles.0.min: `obstacles` has no entries; add one first, e.g. --set "
-     "'obstacles.0={type = \"box\", min = [...], max = [...]}', or a [[obstacles]] table in "
-     "the case file."),
-    # [[obstacle]] suggested `obstacles.0.min`
-    (OBSTACLE_CASE.replace("[[obstacles]]", "[[obstacle]]"), [],
-     "unknown key `obstacle`. Did you mean `obstacles` ([[obstacles]] tables)?"),
-    (OBSTACLE_CASE, ["--set", "obstacle.0.max=[0.25, 0.06]"],
-     "unknown case key `obstacle.0.max`. Did you mean `obstacles.0.max`?"),
-])
+@pytest.mark.parametrize(
+    "text, args, message",
+    [
+        # an index out of range for obstacles gave an example naming bodies
+        (
+            OBSTACLE_CASE,
+            ["--set", "obstacles.3.min=[0.2, 0.0]"],
+            "--set obstacles.3.min: `obstacles` has 1 entry; use an index from 0 to 0, e.g. --set "
+            "obstacles.0.min=[0.2, 0.0].",
+        ),
+        (
+            OBSTACLE_CASE,
+            ["--set", "obstacles.3={min = [0.2, 0.1], max = [0.25, 0.15]}"],
+            "--set obstacles.3: `obstacles` has 1 entry; use an index from 0 to 0, e.g. --set "
+            "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}, or --set 'obstacles.1={type = "
+            '"box", min = [...], max = [...]}\' to add one.',
+        ),
+        # a case without obstacles: "obstacles: Input should be a valid list"
+        (
+            OBSTACLE_CASE.split("[[obstacles]]")[0],
+            ["--set", "obstacles.0.min=[0.2, 0.0]"],
+            "--set obstacles.0.min: `obstacles` has no entries; add one first, e.g. --set "
+            "'obstacles.0={type = \"box\", min = [...], max = [...]}', or a [[obstacles]] table in "
+            "the case file.",
+        ),
+        # [[obstacle]] suggested `obstacles.0.min`
+        (
+            OBSTACLE_CASE.replace("[[obstacles]]", "[[obstacle]]"),
+            [],
+            "unknown key `obstacle`. Did you mean `obstacles` ([[obstacles]] tables)?",
+        ),
+        (
+            OBSTACLE_CASE,
+            ["--set", "obstacle.0.max=[0.25, 0.06]"],
+            "unknown case key `obstacle.0.max`. Did you mean `obstacles.0.max`?",
+        ),
+    ],
+)
 def test_list_keys_are_named_in_their_messages(tmp_path, capsys, text, args, message):
     code, err = _run_in_process(tmp_path, capsys, text, *args)
     assert code == 2 and err.count("\n") == 1 and message in err, err
@@ -268,12 +347,21 @@ def test_a_whole_table_of_a_list_can_be_set(tmp_path, capsys):
     from mpmflow import load_case
 
     (tmp_path / "case.toml").write_text(OBSTACLE_CASE)
-    loaded = load_case(tmp_path / "case.toml", [
-        "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}",
-        "obstacles.1={type = 'disc', centre = [0.2, 0.25], radius = 0.03}",
-        "bodies.0={min = [0.0, 0.0], max = [0.1, 0.05]}"])
+    loaded = load_case(
+        tmp_path / "case.toml",
+        [
+            "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}",
+            "obstacles.1={type = 'disc', centre = [0.2, 0.25], radius = 0.03}",
+            "bodies.0={min = [0.0, 0.0], max = [0.1, 0.05]}",
+        ],
+    )
     assert [o.type for o in loaded.obstacles] == ["box", "disc"]
     assert loaded.obstacles[0].min == [0.2, 0.1] and loaded.bodies[0].max == [0.1, 0.05]
-    code, err = _run_in_process(tmp_path, capsys, OBSTACLE_CASE, "--set",
-                                "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}")
+    code, err = _run_in_process(
+        tmp_path,
+        capsys,
+        OBSTACLE_CASE,
+        "--set",
+        "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}",
+    )
     assert code == 0, err

@@ -12,8 +12,10 @@ A = 0.114
 
 @pytest.fixture(scope="module")
 def run_0008(shared_data):
-    case = load_case(EXAMPLES / "dam_break.toml",
-                     ["grid.spacing=0.008", "time.end=0.4", "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "dam_break.toml",
+        ["grid.spacing=0.008", "time.end=0.4", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     sim.run()
     return sim
@@ -22,8 +24,14 @@ def run_0008(shared_data):
 @pytest.mark.slow
 def test_front_and_height_against_vof_at_0008(run_0008):
     sim = run_0008
-    e = errors_against_vof(sim.series("time"), sim.series("front"), sim.series("height"), A,
-                           front_until=0.2, height_until=0.4)
+    e = errors_against_vof(
+        sim.series("time"),
+        sim.series("front"),
+        sim.series("height"),
+        A,
+        front_until=0.2,
+        height_until=0.4,
+    )
     assert e["front"] <= 0.10  # acceptance floor at 0.008 m (measured: ~0.04)
     assert e["height"] <= 0.07  # (measured: ~0.03)
 
@@ -62,8 +70,10 @@ def test_paper_coarse_mesh_with_large_steps_runs_one_second():
     """Table 1's coarse case: 0.0114 m, dt = 1e-2 s (Courant number about 2), 1.0 s: no NaN,
     clumping well below the 150 particles per cell of the paper group's code, and the water's
     volume kept within 10% even at these steps (the default's drift at 1 ms is below 3%)."""
-    case = load_case(EXAMPLES / "dam_break.toml",
-                     ["grid.spacing=0.0114", "time.dt=0.01", "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "dam_break.toml",
+        ["grid.spacing=0.0114", "time.dt=0.01", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     s = sim.run()
     assert s["status"] == "completed" and s["steps"] == 100

@@ -21,8 +21,13 @@ def test_readme_commands_are_the_ci_commands():
 
 def test_documentation_pages_are_linked_and_present():
     readme = (ROOT / "README.md").read_text()
-    for page in ("docs/getting-started.md", "docs/theory.md", "docs/reference.md",
-                 "docs/method.md", "benchmarks/README.md"):
+    for page in (
+        "docs/getting-started.md",
+        "docs/theory.md",
+        "docs/reference.md",
+        "docs/method.md",
+        "benchmarks/README.md",
+    ):
         assert f"({page})" in readme, page
         assert (ROOT / page).is_file(), page
     assert "(docs/validation/README.md)" in readme  # written with the validation work

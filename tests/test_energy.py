@@ -7,14 +7,20 @@ from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
 
-EARLIER = ["solver.volume_correction=0", "solver.density_correction=0.2",
-           "solver.sparse_cell_threshold=0.2", "solver.surface_quadrature=gauss"]
+EARLIER = [
+    "solver.volume_correction=0",
+    "solver.density_correction=0.2",
+    "solver.sparse_cell_threshold=0.2",
+    "solver.surface_quadrature=gauss",
+]
 
 
 @pytest.mark.parametrize("surface", ["divergence", "consistent", "gauss"])
 def test_column_at_rest_is_exact_with_every_surface_quadrature(surface):
-    case = load_case(EXAMPLES / "hydrostatic.toml", ["output.snapshots=false", "time.end=0.3",
-                                                     f"solver.surface_quadrature={surface}"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        ["output.snapshots=false", "time.end=0.3", f"solver.surface_quadrature={surface}"],
+    )
     sim = Simulation(case)
     sim.run()
     assert np.nanmax(sim.series("max_speed")) < 1e-8
@@ -24,8 +30,9 @@ def test_column_at_rest_is_exact_with_every_surface_quadrature(surface):
 
 
 def _sloshing_energy(settings, end=3.0):
-    case = load_case(EXAMPLES / "sloshing.toml", ["output.snapshots=false", f"time.end={end}",
-                                                  *settings])
+    case = load_case(
+        EXAMPLES / "sloshing.toml", ["output.snapshots=false", f"time.end={end}", *settings]
+    )
     sim = Simulation(case)
     sim.run()
     e = sim.series("kinetic_energy") + sim.series("potential_energy")
@@ -76,9 +83,16 @@ def test_total_energy_change_starts_at_zero_for_a_body_thrown_in(tmp_path, monke
     of kinetic plus potential energy after; the axis states J/m (2D)."""
     from mpmflow import open_run
 
-    case = load_case(EXAMPLES / "hydrostatic.toml", [
-        "output.snapshots=false", "time.end=0.03", "bodies.0.max=[0.05,0.1]",
-        "bodies.0.velocity=[1.0,0.0]", "bodies.0.particles_per_cell=2"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        [
+            "output.snapshots=false",
+            "time.end=0.03",
+            "bodies.0.max=[0.05,0.1]",
+            "bodies.0.velocity=[1.0,0.0]",
+            "bodies.0.particles_per_cell=2",
+        ],
+    )
     Simulation(case, tmp_path / "run").run()
     run = open_run(tmp_path / "run")
     ke, pe = run.timeseries["kinetic_energy"], run.timeseries["potential_energy"]
@@ -94,9 +108,18 @@ def test_total_energy_change_starts_at_zero_for_a_body_thrown_in(tmp_path, monke
 def test_energy_axis_states_its_unit_in_3d_and_while_the_run_goes(tmp_path, monkeypatch):
     """3D energies are in J (the summary's units); a run still going has no summary, and the
     label says both units rather than guess J/m."""
-    series = {c: np.array([0.0, 0.01]) for c in ("time", "front", "height", "max_speed",
-                                                 "max_pressure", "pressure_noise",
-                                                 "volume_ratio")}
+    series = {
+        c: np.array([0.0, 0.01])
+        for c in (
+            "time",
+            "front",
+            "height",
+            "max_speed",
+            "max_pressure",
+            "pressure_noise",
+            "volume_ratio",
+        )
+    }
     series.update(kinetic_energy=np.array([0.26, 0.5]), potential_energy=np.array([3.0, 2.8]))
     ax, lines = _energy_panel(series, {"units": {"kinetic_energy": "J"}}, monkeypatch, tmp_path)
     assert ax.get_ylabel() == "energy [J]"

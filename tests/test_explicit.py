@@ -36,17 +36,31 @@ def test_dt_above_the_stable_step_is_refused_with_the_limit():
 
 @pytest.mark.slow
 def test_cli_refuses_an_unstable_step(tmp_path):
-    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
-                          str(EXAMPLES / "dam_break.toml"), "--out", str(tmp_path / "o"),
-                          "--set", "solver.scheme=explicit"], capture_output=True, text=True)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            str(EXAMPLES / "dam_break.toml"),
+            "--out",
+            str(tmp_path / "o"),
+            "--set",
+            "solver.scheme=explicit",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert res.returncode == 2
     assert "stable step" in res.stderr and "2.697e-06 s" in res.stderr
     assert "Traceback" not in res.stderr
 
 
 def test_auto_step_is_safety_times_the_limit():
-    case = load_case(EXAMPLES / "hydrostatic.toml", EXPLICIT + [
-        "time.dt=auto", "time.safety_factor=0.3", "material.bulk_modulus=4e5"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        EXPLICIT + ["time.dt=auto", "time.safety_factor=0.3", "material.bulk_modulus=4e5"],
+    )
     sim = Simulation(case)
     assert sim.dt == pytest.approx(0.3 * 0.01 / 20.0)
     # the projection scheme takes "auto" too (issue 23): its steps follow the flow, up to
@@ -60,12 +74,15 @@ def test_column_at_rest_settles_to_hydrostatic():
     """Acceptance: released without pressure, the column rings (sound speed 20 m/s); its
     pressure averaged over 0.5-1.0 s is within 2% (relative L2) of rho g (H - y)."""
     depth = 0.195
-    case = load_case(EXAMPLES / "hydrostatic.toml", EXPLICIT + [
-        "time.dt=auto", "material.bulk_modulus=4e5", "time.end=1.0"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        EXPLICIT + ["time.dt=auto", "material.bulk_modulus=4e5", "time.end=1.0"],
+    )
     sim = Simulation(case)
     samples = []
-    sim.on_output = lambda s: samples.append(s.particles.pressure.copy()) \
-        if s.time > 0.5 + 1e-9 else None
+    sim.on_output = lambda s: (
+        samples.append(s.particles.pressure.copy()) if s.time > 0.5 + 1e-9 else None
+    )
     sim.run()
     assert len(samples) == 50
     mean = np.mean(samples, axis=0)
@@ -81,14 +98,20 @@ def test_column_at_rest_settles_to_hydrostatic():
     J = P.volume / (P.mass / RHO)
     compression = 1 - J.mean()
     assert compression > 0.003  # the column is compressed by its weight: ~rho g H / (2K)
-    assert abs(J.mean() - (1 - P.pressure.mean() / case.material.bulk_modulus)) \
-        < 0.05 * compression
+    assert abs(J.mean() - (1 - P.pressure.mean() / case.material.bulk_modulus)) < 0.05 * compression
 
 
 def test_hydrostatic_start_stays_at_rest():
-    case = load_case(EXAMPLES / "hydrostatic.toml", EXPLICIT + [
-        "time.dt=auto", "material.bulk_modulus=4e5", "time.end=0.5",
-        "bodies.0.initial_pressure=hydrostatic"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        EXPLICIT
+        + [
+            "time.dt=auto",
+            "material.bulk_modulus=4e5",
+            "time.end=0.5",
+            "bodies.0.initial_pressure=hydrostatic",
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     assert np.max(sim.series("max_speed")) < 1e-3
@@ -103,12 +126,15 @@ def test_3d_column_at_rest_settles_to_hydrostatic():
     and settles, as the 2D one, to rho g (H - z) within the 2D test's 2% (averaged over
     0.5-1.0 s), its compression matching its pressure."""
     depth = 0.195
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml", EXPLICIT + [
-        "time.dt=auto", "material.bulk_modulus=4e5", "time.end=1.0"])
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        EXPLICIT + ["time.dt=auto", "material.bulk_modulus=4e5", "time.end=1.0"],
+    )
     sim = Simulation(case)
     samples = []
-    sim.on_output = lambda s: samples.append(s.particles.pressure.copy()) \
-        if s.time > 0.5 + 1e-9 else None
+    sim.on_output = lambda s: (
+        samples.append(s.particles.pressure.copy()) if s.time > 0.5 + 1e-9 else None
+    )
     sim.run()
     assert len(samples) == 50
     mean = np.mean(samples, axis=0)
@@ -121,8 +147,7 @@ def test_3d_column_at_rest_settles_to_hydrostatic():
     J = P.volume / (P.mass / RHO)
     compression = 1 - J.mean()
     assert compression > 0.003
-    assert abs(J.mean() - (1 - P.pressure.mean() / case.material.bulk_modulus)) \
-        < 0.05 * compression
+    assert abs(J.mean() - (1 - P.pressure.mean() / case.material.bulk_modulus)) < 0.05 * compression
 
 
 @pytest.mark.slow
@@ -132,9 +157,14 @@ def test_3d_dam_break_across_a_narrow_slip_tank_is_the_2d_one():
     run on the same mesh at every output to 0.002 a (measured: equal to rounding), the
     front well on its way to the far wall by 0.2 s."""
     k = reduced_bulk_modulus(load_case(EXAMPLES / "dam_break.toml"))
-    common = EXPLICIT + ["grid.spacing=0.008", "bodies.0.particles_per_cell=2",
-                         "time.dt=auto", f"material.bulk_modulus={k}",
-                         "bodies.0.initial_pressure=hydrostatic", "time.end=0.2"]
+    common = EXPLICIT + [
+        "grid.spacing=0.008",
+        "bodies.0.particles_per_cell=2",
+        "time.dt=auto",
+        f"material.bulk_modulus={k}",
+        "bodies.0.initial_pressure=hydrostatic",
+        "time.end=0.2",
+    ]
     runs = []
     for example in ("dam_break.toml", "dam_break_3d.toml"):
         sim = Simulation(load_case(EXAMPLES / example, common))
@@ -152,8 +182,12 @@ def test_3d_dam_break_across_a_narrow_slip_tank_is_the_2d_one():
 
 
 def _series(overrides, end=0.3):
-    sim = Simulation(load_case(EXAMPLES / "dam_break.toml", [
-        "grid.spacing=0.008", f"time.end={end}", "output.snapshots=false", *overrides]))
+    sim = Simulation(
+        load_case(
+            EXAMPLES / "dam_break.toml",
+            ["grid.spacing=0.008", f"time.end={end}", "output.snapshots=false", *overrides],
+        )
+    )
     sim.run()
     return sim.series("time"), sim.series("front"), sim.series("height")
 
@@ -165,8 +199,15 @@ def reduced_k_runs():
     k = reduced_bulk_modulus(load_case(EXAMPLES / "dam_break.toml"))
     assert math.sqrt(k / RHO) == pytest.approx(10 * math.sqrt(2 * G * 0.228))
     projection = _series([], end=0.4)
-    explicit = _series(["solver.scheme=explicit", "time.dt=auto", f"material.bulk_modulus={k}",
-                        "bodies.0.initial_pressure=hydrostatic"], end=0.4)
+    explicit = _series(
+        [
+            "solver.scheme=explicit",
+            "time.dt=auto",
+            f"material.bulk_modulus={k}",
+            "bodies.0.initial_pressure=hydrostatic",
+        ],
+        end=0.4,
+    )
     assert np.array_equal(projection[0], explicit[0])
     return projection, explicit
 
@@ -180,13 +221,17 @@ def test_reduced_k_dam_break_is_within_the_vof_tolerance_at_every_output(reduced
     assert err["front"] <= 0.08 and err["height"] <= 0.08
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 13 is blocked on this criterion: the explicit front is 0.087 a and the height "
-    "0.074 a from the projection's (0.06 a asked). The projection's surge tip runs ahead as a "
-    "sheet one or two particles thick at a slightly negative pressure; the explicit tip, whose "
-    "pressure cannot go below zero, stays blunt. The gap shrinks with the mesh (0.094, 0.087, "
-    "0.050 a at 0.0114, 0.008, 0.004 m) and no explicit cure measured closes it "
-    "(docs/method.md, 'The explicit comparator')."))
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "issue 13 is blocked on this criterion: the explicit front is 0.087 a and the height "
+        "0.074 a from the projection's (0.06 a asked). The projection's surge tip runs ahead as a "
+        "sheet one or two particles thick at a slightly negative pressure; the explicit tip, whose "
+        "pressure cannot go below zero, stays blunt. The gap shrinks with the mesh (0.094, 0.087, "
+        "0.050 a at 0.0114, 0.008, 0.004 m) and no explicit cure measured closes it "
+        "(docs/method.md, 'The explicit comparator')."
+    ),
+)
 @pytest.mark.slow
 def test_reduced_k_dam_break_matches_the_projection_at_every_output(reduced_k_runs):
     """Acceptance (issue 13): front (t <= 0.2 s) and height (t <= 0.4 s) within 0.06 a of the
@@ -204,9 +249,19 @@ def test_real_k_dam_break_survives_the_wall_impact():
     right wall at ~0.3 s drove the run to 500 m/s and stopped it at 0.31 s; with cells too
     empty to define a volumetric strain left out (solver.explicit_cell_threshold, default
     0.1) it passes the impact, its fastest particles those of the jet up the wall."""
-    sim = Simulation(load_case(EXAMPLES / "dam_break.toml", EXPLICIT + [
-        "grid.spacing=0.0114", "time.end=0.4", "time.dt=auto", "material.bulk_modulus=2.2e9",
-        "bodies.0.initial_pressure=hydrostatic"]))
+    sim = Simulation(
+        load_case(
+            EXAMPLES / "dam_break.toml",
+            EXPLICIT
+            + [
+                "grid.spacing=0.0114",
+                "time.end=0.4",
+                "time.dt=auto",
+                "material.bulk_modulus=2.2e9",
+                "bodies.0.initial_pressure=hydrostatic",
+            ],
+        )
+    )
     sim.run()
     assert sim.time == pytest.approx(0.4)
     # the jet up the right wall reaches ~6 m/s (three times the free-fall speed sqrt(2 g H),
@@ -222,30 +277,51 @@ def test_real_k_dam_break_survives_the_wall_impact():
 @pytest.mark.slow
 def test_study_quick(tmp_path):
     """The study command end to end on its smoke-test size: tables and figures written."""
-    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "study", "paper", "--out",
-                          str(tmp_path), "--quick"], capture_output=True, text=True,
-                         timeout=600)
+    res = subprocess.run(
+        [sys.executable, "-m", "mpmflow.cli", "study", "paper", "--out", str(tmp_path), "--quick"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert res.returncode == 0, res.stderr
-    for name in ("study.md", "study.csv", "fig2_height_front_ar2.png",
-                 "fig3_pressure_ar2.png", "fig4_surface_ar2.png"):
+    for name in (
+        "study.md",
+        "study.csv",
+        "fig2_height_front_ar2.png",
+        "fig3_pressure_ar2.png",
+        "fig4_surface_ar2.png",
+    ):
         assert (tmp_path / name).stat().st_size > 0
     rows = (tmp_path / "study.csv").read_text().splitlines()
     assert len(rows) == 4  # header + projection, explicit real K, explicit reduced K
     assert "time-step ratio" in (tmp_path / "study.md").read_text()
 
 
-@pytest.mark.parametrize("override, feature, instead", [
-    (["obstacles.0={type='box', min=[0.2, 0.0], max=[0.25, 0.05]}"],
-     r"fixed obstacles \(\[\[obstacles\]\]\)", r"remove the \[\[obstacles\]\]"),
-    (["material.model=newtonian", "material.viscosity=0.01"],
-     r"materials other than inviscid water \(material.model\)",
-     'set material.model = "water"'),
-])
+@pytest.mark.parametrize(
+    "override, feature, instead",
+    [
+        (
+            ["obstacles.0={type='box', min=[0.2, 0.0], max=[0.25, 0.05]}"],
+            r"fixed obstacles \(\[\[obstacles\]\]\)",
+            r"remove the \[\[obstacles\]\]",
+        ),
+        (
+            ["material.model=newtonian", "material.viscosity=0.01"],
+            r"materials other than inviscid water \(material.model\)",
+            'set material.model = "water"',
+        ),
+    ],
+)
 def test_what_the_explicit_scheme_does_not_support_is_refused_with_the_fix(
-        override, feature, instead):
+    override, feature, instead
+):
     """The rule asks the scheme (schemes.SUPPORTS) and names the schemes that would do."""
-    with pytest.raises(CaseError, match=rf'solver.scheme = "explicit" does not support '
-                       rf'{feature}; set solver.scheme = "projection", or {instead}'):
-        load_case(EXAMPLES / "dam_break.toml",
-                  ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
-                   *override])
+    with pytest.raises(
+        CaseError,
+        match=rf'solver.scheme = "explicit" does not support '
+        rf'{feature}; set solver.scheme = "projection", or {instead}',
+    ):
+        load_case(
+            EXAMPLES / "dam_break.toml",
+            ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5", *override],
+        )

@@ -20,14 +20,35 @@ from mpmflow.output.timeseries import COLUMNS
 from mpmflow.particles import Particles
 from mpmflow.schemes.projection import ProjectionScheme
 
-LONG = ["--set", "grid.spacing=0.008", "--set", "time.end=1.0", "--set",
-        "output.snapshot_interval=0.1", "--set", "checkpoint.interval=0.25"]
+LONG = [
+    "--set",
+    "grid.spacing=0.008",
+    "--set",
+    "time.end=1.0",
+    "--set",
+    "output.snapshot_interval=0.1",
+    "--set",
+    "checkpoint.interval=0.25",
+]
 
 
 def _start(out, *extra):
-    return subprocess.Popen([sys.executable, "-m", "mpmflow.cli", "run",
-                             str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", *LONG,
-                             *extra], stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            str(EXAMPLES / "dam_break.toml"),
+            "--out",
+            str(out),
+            "-q",
+            *LONG,
+            *extra,
+        ],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def _wait_for_rows(path, rows, proc, timeout=120):
@@ -68,9 +89,23 @@ def test_sigint_checkpoints_and_the_restart_matches_an_uninterrupted_run(tmp_pat
     assert checkpoints(out)[-1].name == summary["last_checkpoint"]
     assert not list(out.glob(".*.tmp"))
     # continue to the end: exactly the uninterrupted run
-    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
-                          str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", *LONG,
-                          "--restart"], capture_output=True, text=True, timeout=300)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            str(EXAMPLES / "dam_break.toml"),
+            "--out",
+            str(out),
+            "-q",
+            *LONG,
+            "--restart",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert res.returncode == 0, res.stderr
     assert "continuing from" in res.stderr
     whole = Simulation(load_case(EXAMPLES / "dam_break.toml", LONG[1::2]), tmp_path / "whole")
@@ -110,13 +145,27 @@ def test_nan_stops_the_run_with_step_time_and_cause(tmp_path, monkeypatch, capsy
 
     monkeypatch.setattr(ProjectionScheme, "advance", poisoned)
     out = tmp_path / "o"
-    code = main(["run", str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q",
-                 "--set", "grid.spacing=0.008", "--set", "time.end=0.1",
-                 "--set", "checkpoint.interval=0.01"])
+    code = main(
+        [
+            "run",
+            str(EXAMPLES / "dam_break.toml"),
+            "--out",
+            str(out),
+            "-q",
+            "--set",
+            "grid.spacing=0.008",
+            "--set",
+            "time.end=0.1",
+            "--set",
+            "checkpoint.interval=0.01",
+        ]
+    )
     err = capsys.readouterr().err
-    expected = ("The run blew up in steps 21 to 30 (t = 0.02 to 0.03 s): 1 particles have "
-                "non-finite velocity or position (first: particle 7). The outputs up to "
-                "t = 0.02 s are kept.")
+    expected = (
+        "The run blew up in steps 21 to 30 (t = 0.02 to 0.03 s): 1 particles have "
+        "non-finite velocity or position (first: particle 7). The outputs up to "
+        "t = 0.02 s are kept."
+    )
     assert code == 3 and expected in err and "Traceback" not in err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and expected in summary["message"]
@@ -127,9 +176,21 @@ def test_nan_stops_the_run_with_step_time_and_cause(tmp_path, monkeypatch, capsy
 
 def test_a_speed_above_the_bound_stops_the_run(tmp_path, capsys):
     out = tmp_path / "o"
-    code = main(["run", str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q",
-                 "--set", "grid.spacing=0.008", "--set", "time.end=0.3",
-                 "--set", "solver.max_speed=1.0"])
+    code = main(
+        [
+            "run",
+            str(EXAMPLES / "dam_break.toml"),
+            "--out",
+            str(out),
+            "-q",
+            "--set",
+            "grid.spacing=0.008",
+            "--set",
+            "time.end=0.3",
+            "--set",
+            "solver.max_speed=1.0",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 3 and "Traceback" not in err
     assert "moves at" in err and "above solver.max_speed = 1 m/s" in err
@@ -140,12 +201,20 @@ def test_a_speed_above_the_bound_stops_the_run(tmp_path, capsys):
     assert rows["time"][-1] < 0.3
 
 
-@pytest.mark.parametrize("scheme", [
-    {}, {"solver": {"scheme": "explicit"}, "material": {"bulk_modulus": 4e5}}])
+@pytest.mark.parametrize(
+    "scheme", [{}, {"solver": {"scheme": "explicit"}, "material": {"bulk_modulus": 4e5}}]
+)
 def test_a_particle_pushed_outside_is_put_back_and_counted(scheme):
     dt = 1e-3 if not scheme else 1e-4
-    case = make_case(size=(0.1, 0.3), spacing=0.01, body=((0.0, 0.0), (0.1, 0.1)), dt=dt,
-                     end=dt, output={"snapshots": False, "interval": dt}, **scheme)
+    case = make_case(
+        size=(0.1, 0.3),
+        spacing=0.01,
+        body=((0.0, 0.0), (0.1, 0.1)),
+        dt=dt,
+        end=dt,
+        output={"snapshots": False, "interval": dt},
+        **scheme,
+    )
     sim = Simulation(case)
     P = sim.particles
     P.x[0] = [-0.002, 0.05]  # beyond the left wall
@@ -158,8 +227,16 @@ def test_a_particle_pushed_outside_is_put_back_and_counted(scheme):
 
 
 def test_a_body_faster_than_the_bound_is_refused_before_the_run(tmp_path, capsys):
-    code = main(["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(tmp_path / "o"),
-                 "--set", "bodies.0.velocity=[300.0, 400.0]"])
+    code = main(
+        [
+            "run",
+            str(EXAMPLES / "hydrostatic.toml"),
+            "--out",
+            str(tmp_path / "o"),
+            "--set",
+            "bodies.0.velocity=[300.0, 400.0]",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "bodies.0.velocity = [300.0, 400.0] m/s is 500 m/s fast" in err
     assert "solver.max_speed = 100 m/s" in err and not (tmp_path / "o").exists()
@@ -173,8 +250,15 @@ def test_a_second_sigterm_stops_at_once_with_143(tmp_path):
     out = tmp_path / "o"
     # one chunk to t = 1 s at 0.004 m: seconds of stepping, so the second signal lands in
     # it even on a fast machine (at 0.008 m to 0.5 s the chunk could end first)
-    proc = _start(out, "--set", "grid.spacing=0.004", "--set", "output.interval=1.0",
-                  "--set", "checkpoint.interval=1.0")
+    proc = _start(
+        out,
+        "--set",
+        "grid.spacing=0.004",
+        "--set",
+        "output.interval=1.0",
+        "--set",
+        "checkpoint.interval=1.0",
+    )
     _wait_for_rows(out / "timeseries.csv", 1, proc)  # the row at t = 0: stepping
     proc.send_signal(signal.SIGTERM)
     for line in proc.stderr:  # the handler's message: the first signal was handled
@@ -196,14 +280,20 @@ def test_a_second_sigterm_stops_at_once_with_143(tmp_path):
 def test_a_stop_request_without_an_output_folder():
     """``stop_signal`` is public: a library run without out_dir stops at the next output
     time without a checkpoint (it used to fail in Path(None))."""
-    sim = Simulation(load_case(EXAMPLES / "hydrostatic.toml",
-                               ["time.end=0.05", "output.interval=0.01", "grid.spacing=0.02"]))
+    sim = Simulation(
+        load_case(
+            EXAMPLES / "hydrostatic.toml",
+            ["time.end=0.05", "output.interval=0.01", "grid.spacing=0.02"],
+        )
+    )
 
     def hook(s):
         if s.time >= 0.02 - 1e-12:
             s.stop_signal = signal.SIGTERM
+
     sim.on_output = hook
     summary = sim.run()
     assert summary["status"] == "interrupted" and summary["time"] == pytest.approx(0.02)
-    assert summary["message"] == ("interrupted by SIGTERM at t = 0.02 s (step "
-                                  f"{sim.steps}); no checkpoint: no output folder")
+    assert summary["message"] == (
+        f"interrupted by SIGTERM at t = 0.02 s (step {sim.steps}); no checkpoint: no output folder"
+    )

@@ -16,8 +16,9 @@ RHO, G = 1000.0, 9.81
 def test_column_at_rest_for_one_second(depth, tolerance):
     """Acceptance: no particle faster than 0.01 m/s, pressure L2 error <= 2% (surface on a
     grid line) and <= 5% (half a cell off it), with the example's default settings."""
-    case = load_case(EXAMPLES / "hydrostatic.toml",
-                     [f"bodies.0.max=[0.1, {depth}]", "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml", [f"bodies.0.max=[0.1, {depth}]", "output.snapshots=false"]
+    )
     sim = Simulation(case)
     sim.run()
     assert sim.time == pytest.approx(1.0)
@@ -48,13 +49,16 @@ def test_subcell_surface_makes_one_step_exactly_hydrostatic(depth):
     exact = RHO * G * (top - P.x[:, 1])
     assert np.abs(P.v).max() < 1e-10
     # exact up to the pressure solve's relative tolerance
-    np.testing.assert_allclose(P.pressure, exact, rtol=0,
-                               atol=100 * case.solver.tolerance * exact.max())
+    np.testing.assert_allclose(
+        P.pressure, exact, rtol=0, atol=100 * case.solver.tolerance * exact.max()
+    )
 
 
 def test_no_slip_walls_keep_the_column_at_rest_too():
-    case = load_case(EXAMPLES / "hydrostatic.toml",
-                     ["domain.walls=no_slip", "time.end=0.2", "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        ["domain.walls=no_slip", "time.end=0.2", "output.snapshots=false"],
+    )
     sim = Simulation(case)
     sim.run()
     assert np.nanmax(sim.series("max_speed")) < 1e-8

@@ -41,27 +41,51 @@ BASE = {
     "title": "fuzz",
     "domain": {"size": [0.1, 0.1], "walls": "slip"},
     "grid": {"spacing": 0.02},
-    "bodies": [{"type": "box", "min": [0.0, 0.0], "max": [0.04, 0.06],
-                "particles_per_cell": 2, "velocity": [0.0, 0.0], "initial_pressure": "zero"}],
+    "bodies": [
+        {
+            "type": "box",
+            "min": [0.0, 0.0],
+            "max": [0.04, 0.06],
+            "particles_per_cell": 2,
+            "velocity": [0.0, 0.0],
+            "initial_pressure": "zero",
+        }
+    ],
     "material": {"density": 1000.0, "viscosity": 0.0, "bulk_modulus": 2.2e9},
     "physics": {"gravity": [0.0, -9.81]},
     "time": {"dt": 1e-3, "end": 3e-3, "safety_factor": 0.5},
     "output": {"interval": 1e-3, "snapshot_interval": 2e-3, "snapshots": True},
-    "solver": {"scheme": "projection", "formulation": "mpmflow", "flip": 0.99,
-               "max_iterations": 200, "tolerance": 1e-8, "max_speed": 100.0},
+    "solver": {
+        "scheme": "projection",
+        "formulation": "mpmflow",
+        "flip": 0.99,
+        "max_iterations": 200,
+        "tolerance": 1e-8,
+        "max_speed": 100.0,
+    },
     "checkpoint": {"interval": 2e-3},
-    "probes": [{"name": "p1", "quantity": "pressure", "position": [0.1, 0.01]},
-               {"name": "h1", "quantity": "level", "position": [0.05, 0.0]}],
+    "probes": [
+        {"name": "p1", "quantity": "pressure", "position": [0.1, 0.01]},
+        {"name": "h1", "quantity": "level", "position": [0.05, 0.0]},
+    ],
 }
-EXPLICIT = {"solver": {"scheme": "explicit"}, "material": {"bulk_modulus": 4e5},
-            "time": {"dt": "auto"}}
+EXPLICIT = {
+    "solver": {"scheme": "explicit"},
+    "material": {"bulk_modulus": 4e5},
+    "time": {"dt": "auto"},
+}
 
 
 # ----------------------------------------------------------------------- TOML writing
 def _string(text):
     """A TOML basic string: quote, backslash and control characters escaped."""
-    return '"' + "".join(f"\\u{ord(c):04x}" if ord(c) < 0x20 or ord(c) == 0x7F or c in '"\\'
-                         else c for c in text) + '"'
+    return (
+        '"'
+        + "".join(
+            f"\\u{ord(c):04x}" if ord(c) < 0x20 or ord(c) == 0x7F or c in '"\\' else c for c in text
+        )
+        + '"'
+    )
 
 
 def _value(v):
@@ -112,28 +136,76 @@ def _paths(data, prefix=()):
 
 
 scalars = st.one_of(
-    st.sampled_from([0, -1, 1, 0.0, -0.0, 1e308, -1e308, 5e-324, 1e-9, 1e9, 2**63 - 1,
-                     float("nan"), float("inf"), float("-inf"), "auto", "", "box", "paper",
-                     "explicit", "node", True, False, [], [1.0], [1.0, 2.0, 3.0],
-                     ["a", "b"], {}, {"x": 1}]),
+    st.sampled_from(
+        [
+            0,
+            -1,
+            1,
+            0.0,
+            -0.0,
+            1e308,
+            -1e308,
+            5e-324,
+            1e-9,
+            1e9,
+            2**63 - 1,
+            float("nan"),
+            float("inf"),
+            float("-inf"),
+            "auto",
+            "",
+            "box",
+            "paper",
+            "explicit",
+            "node",
+            True,
+            False,
+            [],
+            [1.0],
+            [1.0, 2.0, 3.0],
+            ["a", "b"],
+            {},
+            {"x": 1},
+        ]
+    ),
     st.floats(allow_nan=True, allow_infinity=True),
     st.integers(min_value=-(2**63), max_value=2**63 - 1),
     st.text(max_size=8),
     st.lists(st.floats(-1e3, 1e3), min_size=0, max_size=3),
 )
 VALID = {  # other allowed values, so that many mutated cases are accepted and run
-    "walls": ["no_slip", {"y_min": "no_slip", "x": "slip"}], "particles_per_cell": [1, 3], "initial_pressure": ["hydrostatic"],
-    "formulation": ["paper"], "free_surface": ["node"], "wall_flux": [False],
-    "partial_cell_quadrature": ["particles"], "linear_solver": ["direct", "amg"],
-    "flip": [0.0, 1.0], "density_correction": [0.0, 1.0], "velocity": [[0.5, -0.5]],
-    "gravity": [[0.0, 0.0], [3.0, -9.81]], "snapshots": [False], "spacing": [0.01, 0.025],
-    "max": [[0.1, 0.1]], "min": [[0.02, 0.03]], "end": [1e-3], "dt": [5e-4],
-    "pressure_smoothing": ["none"], "max_speed": [1e-3], "quantity": ["level"],
-    "position": [[0.0, 0.0], [0.1, 0.1]], "threads": [1, 2, "auto"],
+    "walls": ["no_slip", {"y_min": "no_slip", "x": "slip"}],
+    "particles_per_cell": [1, 3],
+    "initial_pressure": ["hydrostatic"],
+    "formulation": ["paper"],
+    "free_surface": ["node"],
+    "wall_flux": [False],
+    "partial_cell_quadrature": ["particles"],
+    "linear_solver": ["direct", "amg"],
+    "flip": [0.0, 1.0],
+    "density_correction": [0.0, 1.0],
+    "velocity": [[0.5, -0.5]],
+    "gravity": [[0.0, 0.0], [3.0, -9.81]],
+    "snapshots": [False],
+    "spacing": [0.01, 0.025],
+    "max": [[0.1, 0.1]],
+    "min": [[0.02, 0.03]],
+    "end": [1e-3],
+    "dt": [5e-4],
+    "pressure_smoothing": ["none"],
+    "max_speed": [1e-3],
+    "quantity": ["level"],
+    "position": [[0.0, 0.0], [0.1, 0.1]],
+    "threads": [1, 2, "auto"],
 }
-HUGE = [("grid", "spacing", [1e-5, 1e-7, 1e-300]), ("domain", "size", [[1e6, 1e6], [1e300, 1.0]]),
-        ("time", "end", [1e300, 1e12, 1e9, 1e30]), ("time", "dt", [1e-300, 1e-12]),
-        ("output", "interval", [1e-300, 1e-9]), ("bodies.0", "particles_per_cell", [16])]
+HUGE = [
+    ("grid", "spacing", [1e-5, 1e-7, 1e-300]),
+    ("domain", "size", [[1e6, 1e6], [1e300, 1.0]]),
+    ("time", "end", [1e300, 1e12, 1e9, 1e30]),
+    ("time", "dt", [1e-300, 1e-12]),
+    ("output", "interval", [1e-300, 1e-9]),
+    ("bodies.0", "particles_per_cell", [16]),
+]
 known = sorted({p.split(".")[-1] for p in case_module.KNOWN_KEYS} | set(BASE))
 
 
@@ -153,8 +225,13 @@ def mutated_case(draw):
     if draw(st.integers(0, 4)) == 0:  # a second body, often overlapping the first
         lo = [draw(st.sampled_from([0.0, 0.02, 0.04, 0.06])) for _ in range(2)]
         hi = [a + draw(st.sampled_from([0.02, 0.04, 0.06])) for a in lo]
-        data["bodies"].append({"min": lo, "max": [min(h, 0.1) for h in hi],
-                               "particles_per_cell": draw(st.sampled_from([1, 2, 3]))})
+        data["bodies"].append(
+            {
+                "min": lo,
+                "max": [min(h, 0.1) for h in hi],
+                "particles_per_cell": draw(st.sampled_from([1, 2, 3])),
+            }
+        )
     if draw(st.integers(0, 4)) == 0:  # a huge size or an endless end time
         section, key, values = draw(st.sampled_from(HUGE))
         parent = data["bodies"][0] if section == "bodies.0" else data[section]
@@ -170,21 +247,26 @@ def mutated_case(draw):
             del parent[last]
         elif op == "scale" and isinstance(value, (int, float)) and not isinstance(value, bool):
             factor = draw(st.sampled_from([-1, 0, 0.1, 0.5, 2, 10, 1e6]))
-            parent[last] = type(value)(value * factor) if math.isfinite(value * factor) \
-                else value
+            parent[last] = type(value)(value * factor) if math.isfinite(value * factor) else value
         elif op in ("unknown", "typo") and isinstance(parent, dict):
-            name = draw(st.text("abcdefghijklmnopqrstuvwxyz_", min_size=1, max_size=12)) \
-                if op == "unknown" else draw(st.sampled_from(known)) + draw(
-                    st.sampled_from(["s", "_", "x"]))
+            name = (
+                draw(st.text("abcdefghijklmnopqrstuvwxyz_", min_size=1, max_size=12))
+                if op == "unknown"
+                else draw(st.sampled_from(known)) + draw(st.sampled_from(["s", "_", "x"]))
+            )
             parent[name] = copy.deepcopy(draw(scalars))
         else:
             parent[last] = copy.deepcopy(draw(scalars))
     return to_toml(data)
 
 
-case_text = st.one_of(mutated_case(), mutated_case(), mutated_case(),
-                      st.text(max_size=200),
-                      st.text("[]=.\"',#\n abcdefgxyz0123456789-+e", max_size=200))
+case_text = st.one_of(
+    mutated_case(),
+    mutated_case(),
+    mutated_case(),
+    st.text(max_size=200),
+    st.text("[]=.\"',#\n abcdefgxyz0123456789-+e", max_size=200),
+)
 
 
 # ----------------------------------------------------------------------- the property
@@ -216,8 +298,9 @@ def test_any_case_file_runs_or_fails_cleanly(monkeypatch):
     monkeypatch.setenv("MPMFLOW_THREADS", "1")  # no sampling of the machine's load
     outcomes = {}
 
-    @settings(max_examples=500, deadline=None, database=None,
-              suppress_health_check=[HealthCheck.too_slow])
+    @settings(
+        max_examples=500, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow]
+    )
     @given(text=case_text)
     def one_case(text):
         code, err = _run_case(text)
@@ -235,8 +318,11 @@ def test_any_case_file_runs_or_fails_cleanly(monkeypatch):
         assert outcomes.get(kind, 0) >= 3, (kind, outcomes)
 
 
-REFUSALS = {"overlap": "Bodies may touch but not overlap", "memory": "of memory",
-            "steps": "a run can take"}
+REFUSALS = {
+    "overlap": "Bodies may touch but not overlap",
+    "memory": "of memory",
+    "steps": "a run can take",
+}
 
 
 def _run_case(text, files=None):
@@ -263,18 +349,28 @@ def _run_case(text, files=None):
         lines = [line for line in err.splitlines() if not line.startswith("mpmflow: note: ")]
         assert len(lines) == 1 and lines[0].startswith("mpmflow: error: "), (err, text)
     if code == 3:
-        assert any(cause in err for cause in ("The run blew up", "did not converge",
-                                              "became unstable", "is singular",
-                                              "could not be set up")), err
+        assert any(
+            cause in err
+            for cause in (
+                "The run blew up",
+                "did not converge",
+                "became unstable",
+                "is singular",
+                "could not be set up",
+            )
+        ), err
     return code, err
 
 
-@pytest.mark.parametrize("key, value, words", [
-    ("grid.spacing", 5e-324, "cells along a side of the domain"),
-    ("material.density", 5e-324, "too small for a floating-point number"),
-    ("checkpoint.interval", 5e-324, None),  # every output: runs
-    ("output.snapshot_interval", 5e-324, None),
-])
+@pytest.mark.parametrize(
+    "key, value, words",
+    [
+        ("grid.spacing", 5e-324, "cells along a side of the domain"),
+        ("material.density", 5e-324, "too small for a floating-point number"),
+        ("checkpoint.interval", 5e-324, None),  # every output: runs
+        ("output.snapshot_interval", 5e-324, None),
+    ],
+)
 def test_subnormal_settings_are_refused_or_run(key, value, words):
     """The three subnormal values the fuzzing above found on a clean clone (a traceback each:
     an infinite cell count, particles of zero mass, an infinite checkpoint index), and the
@@ -295,16 +391,29 @@ MESH_STEPS_CASE = {
     "title": "mesh fuzz",
     "domain": {"size": [0.2, 0.2, 0.2], "walls": "slip"},
     "grid": {"spacing": 0.04},
-    "bodies": [{"type": "box", "min": [0.0, 0.0, 0.0], "max": [0.2, 0.2, 0.08],
-                "particles_per_cell": 1, "around_obstacles": True}],
+    "bodies": [
+        {
+            "type": "box",
+            "min": [0.0, 0.0, 0.0],
+            "max": [0.2, 0.2, 0.08],
+            "particles_per_cell": 1,
+            "around_obstacles": True,
+        }
+    ],
     "physics": {"gravity": [0.0, 0.0, -9.81]},
     "time": {"dt": 1e-3, "end": 3e-3},
     "output": {"interval": 1e-3, "snapshots": False},
     "solver": {"scheme": "projection"},
 }
 SCALES = [0.1, 0.1, 0.12, 0.05, 0.001, 1e-6, 1.0, 1000.0, 1e-300, 1e300, 5e-324]
-TRANSLATES = [[0.05, 0.05, 0.09], [0.05, 0.05, 0.09], [0.04, 0.06, 0.1], [0.0, 0.0, 0.0],
-              [-1.0, 0.05, 0.1], [1e300, 0.0, 0.0]]
+TRANSLATES = [
+    [0.05, 0.05, 0.09],
+    [0.05, 0.05, 0.09],
+    [0.04, 0.06, 0.1],
+    [0.0, 0.0, 0.0],
+    [-1.0, 0.05, 0.1],
+    [1e300, 0.0, 0.0],
+]
 
 
 def _solids():
@@ -314,8 +423,11 @@ def _solids():
     cube = trimesh.creation.box(extents=[1, 1, 1])
     ico = trimesh.creation.icosphere(subdivisions=1, radius=0.5)
     tet = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
-    return [cube.vertices[cube.faces] + 0.5, ico.vertices[ico.faces] + 0.5,
-            tet[[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]]]
+    return [
+        cube.vertices[cube.faces] + 0.5,
+        ico.vertices[ico.faces] + 0.5,
+        tet[[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]],
+    ]
 
 
 SOLIDS = _solids()
@@ -329,12 +441,27 @@ def triangles(draw):
     tri = SOLIDS[draw(st.integers(0, len(SOLIDS) - 1))].copy()
     for _ in range(draw(st.sampled_from([0, 0, 0, 1, 2]))):  # most files are sound
         k = draw(st.integers(0, len(tri) - 1))
-        op = draw(st.sampled_from(["drop", "double", "flip", "collapse", "sliver", "nan",
-                                   "inf", "huge", "flatten", "inside_out", "jitter"]))
+        op = draw(
+            st.sampled_from(
+                [
+                    "drop",
+                    "double",
+                    "flip",
+                    "collapse",
+                    "sliver",
+                    "nan",
+                    "inf",
+                    "huge",
+                    "flatten",
+                    "inside_out",
+                    "jitter",
+                ]
+            )
+        )
         if op == "drop":  # an open mesh
             tri = np.delete(tri, k, axis=0)
         elif op == "double":
-            tri = np.concatenate([tri, tri[k:k + 1]])
+            tri = np.concatenate([tri, tri[k : k + 1]])
         elif op == "flip":  # one triangle against its neighbours
             tri[k] = tri[k, ::-1]
         elif op == "collapse":  # a zero-area triangle with a repeated corner
@@ -357,8 +484,9 @@ def triangles(draw):
 def _stl_binary(tri, count, header):
     data = [header[:80].ljust(80, b"\0"), struct.pack("<I", count % 2**32)]
     with np.errstate(over="ignore"):  # huge coordinates become float32 inf, as intended
-        data += [struct.pack("<12fH", 0.0, 0.0, 1.0, *np.ravel(t).astype(np.float32), 0)
-                 for t in tri]
+        data += [
+            struct.pack("<12fH", 0.0, 0.0, 1.0, *np.ravel(t).astype(np.float32), 0) for t in tri
+        ]
     return b"".join(data)
 
 
@@ -372,8 +500,9 @@ def _stl_ascii(tri, name, newline):
 
 
 def _obj(tri, name, newline):
-    lines = [f"# {name}", f"o {name}"] + [f"v {x:.9g} {y:.9g} {z:.9g}"
-                                          for x, y, z in tri.reshape(-1, 3)]
+    lines = [f"# {name}", f"o {name}"] + [
+        f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in tri.reshape(-1, 3)
+    ]
     lines += [f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}" for k in range(len(tri))]
     return newline.join(lines + [""])
 
@@ -395,27 +524,38 @@ def mesh_file(draw):
         header = draw(st.sampled_from([b"", b"solid cube", name.encode("utf-8")]))
         data = _stl_binary(tri, count, header)
         cut = draw(st.sampled_from([0] * 6 + [1, 7, 50, 51]))
-        data = data[:len(data) - cut] + draw(st.sampled_from([b""] * 6 + [b"\0" * 50,
-                                                              b"junk"]))
+        data = data[: len(data) - cut] + draw(st.sampled_from([b""] * 6 + [b"\0" * 50, b"junk"]))
         return "mesh.stl", data
     if kind in ("ascii", "obj"):
         text = (_stl_ascii if kind == "ascii" else _obj)(tri, name, newline)
         data = text.encode(encoding, errors="replace")
         if not sound and draw(st.booleans()):
-            data = data[:draw(st.integers(0, len(data)))]  # a file cut short
+            data = data[: draw(st.integers(0, len(data)))]  # a file cut short
         return "mesh." + ("stl" if kind == "ascii" else "obj"), data
-    return draw(st.sampled_from([("mesh.stl", b""), ("mesh.stl", None), ("mesh.ply", b"ply"),
-                                 ("mesh.obj", b"\xff\xfe\0\0garbage"),
-                                 ("mesh.STL", _stl_binary(SOLIDS[0], 12, b"upper case")),
-                                 ("mesh.stl", bytes(range(256)) * 3)]))
+    return draw(
+        st.sampled_from(
+            [
+                ("mesh.stl", b""),
+                ("mesh.stl", None),
+                ("mesh.ply", b"ply"),
+                ("mesh.obj", b"\xff\xfe\0\0garbage"),
+                ("mesh.STL", _stl_binary(SOLIDS[0], 12, b"upper case")),
+                ("mesh.stl", bytes(range(256)) * 3),
+            ]
+        )
+    )
 
 
 @st.composite
 def mesh_case(draw):
     data = json.loads(json.dumps(MESH_STEPS_CASE))
     name, content = draw(mesh_file())
-    table = {"type": "mesh", "path": name, "scale": draw(st.sampled_from(SCALES)),
-             "translate": draw(st.sampled_from(TRANSLATES))}
+    table = {
+        "type": "mesh",
+        "path": name,
+        "scale": draw(st.sampled_from(SCALES)),
+        "translate": draw(st.sampled_from(TRANSLATES)),
+    }
     if draw(st.booleans()):
         table["particles_per_cell"] = draw(st.sampled_from([1, 2, 3]))
         data["bodies"].append(table)
@@ -454,8 +594,12 @@ def test_any_mesh_case_runs_or_fails_cleanly(monkeypatch):
     logging.getLogger().addHandler(logs)
     outcomes = {}
 
-    @settings(max_examples=MESH_CASES, deadline=None, database=None,
-              suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+    @settings(
+        max_examples=MESH_CASES,
+        deadline=None,
+        database=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
     @given(case=mesh_case())
     def one_case(case):
         text, files = case
@@ -465,8 +609,9 @@ def test_any_mesh_case_runs_or_fails_cleanly(monkeypatch):
         assert not caught, ([str(w.message) for w in caught], text)
         assert not logs.records, ([r.getMessage() for r in logs.records], text)
         if code == 2 and ".path = " in err:
-            assert any(f"{k}.path = 'mesh." in err for k in ("bodies.0", "bodies.1",
-                                                             "obstacles.0")), err
+            assert any(
+                f"{k}.path = 'mesh." in err for k in ("bodies.0", "bodies.1", "obstacles.0")
+            ), err
         outcomes[code] = outcomes.get(code, 0) + 1
 
     try:

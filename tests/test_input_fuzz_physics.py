@@ -18,20 +18,48 @@ from mpmflow.simulation import Simulation
 
 CASES = 400
 
-EXTREMES = [0.0, -1.0, 5e-324, 1e-300, 1e-9, 1e-3, 1.0, 50.0, 1e3, 1e5, 1e8, 1e12, 1e30,
-            1e308, float("inf"), float("nan")]
+EXTREMES = [
+    0.0,
+    -1.0,
+    5e-324,
+    1e-300,
+    1e-9,
+    1e-3,
+    1.0,
+    50.0,
+    1e3,
+    1e5,
+    1e8,
+    1e12,
+    1e30,
+    1e308,
+    float("inf"),
+    float("nan"),
+]
 MODELS = {
     "newtonian": {"viscosity": 1.0},
-    "herschel_bulkley": {"consistency": 1.0, "yield_stress": 50.0, "flow_index": 1.0,
-                         "max_viscosity": 1e5},
-    "mu_i": {"friction_static": 0.38, "friction_limit": 0.64, "inertial_number_ref": 0.28,
-             "grain_diameter": 1e-3, "grain_density": 2450.0, "max_viscosity": 1e5},
+    "herschel_bulkley": {
+        "consistency": 1.0,
+        "yield_stress": 50.0,
+        "flow_index": 1.0,
+        "max_viscosity": 1e5,
+    },
+    "mu_i": {
+        "friction_static": 0.38,
+        "friction_limit": 0.64,
+        "inertial_number_ref": 0.28,
+        "grain_diameter": 1e-3,
+        "grain_density": 2450.0,
+        "max_viscosity": 1e5,
+    },
     "water": {},
 }
 SIZE = [0.1, 0.1]
-OBSTACLES = [{"type": "box", "min": [0.06, 0.0], "max": [0.08, 0.02]},
-             {"type": "disc", "centre": [0.07, 0.05], "radius": 0.012},
-             {"type": "box", "min": [0.0, 0.0], "max": [0.03, 0.03]}]  # in the body
+OBSTACLES = [
+    {"type": "box", "min": [0.06, 0.0], "max": [0.08, 0.02]},
+    {"type": "disc", "centre": [0.07, 0.05], "radius": 0.012},
+    {"type": "box", "min": [0.0, 0.0], "max": [0.03, 0.03]},
+]  # in the body
 
 
 def _along(draw, k):
@@ -40,8 +68,7 @@ def _along(draw, k):
     side = SIZE[k]
     if draw(st.integers(0, 19)) == 0:
         return draw(st.sampled_from([-1e-9, side + 1e-9]))  # refused
-    return draw(st.sampled_from([0.0, side, 1e-12, side - 1e-12, 0.02, 0.05, 0.07, 0.061,
-                                 0.0799]))
+    return draw(st.sampled_from([0.0, side, 1e-12, side - 1e-12, 0.02, 0.05, 0.07, 0.061, 0.0799]))
 
 
 @st.composite
@@ -49,8 +76,7 @@ def physics_case(draw):
     data = json.loads(json.dumps(BASE))
     data["grid"]["spacing"] = 0.01  # the obstacles are two cells thick
     model = draw(st.sampled_from(sorted(MODELS)))
-    material = {"model": model, "density": 1470.0 if model == "mu_i" else 1000.0,
-                **MODELS[model]}
+    material = {"model": model, "density": 1470.0 if model == "mu_i" else 1000.0, **MODELS[model]}
     if draw(st.booleans()):  # one parameter at an extreme, the others usual
         key = draw(st.sampled_from(list(MODELS[model]) + ["density"]))
         material[key] = draw(st.sampled_from(EXTREMES))
@@ -58,14 +84,18 @@ def physics_case(draw):
     if draw(st.booleans()):
         data["domain"]["walls"] = "no_slip"
     if draw(st.booleans()):
-        data["obstacles"] = copy.deepcopy(draw(st.lists(st.sampled_from(OBSTACLES),
-                                                        min_size=1, max_size=2)))
+        data["obstacles"] = copy.deepcopy(
+            draw(st.lists(st.sampled_from(OBSTACLES), min_size=1, max_size=2))
+        )
         data["bodies"][0]["around_obstacles"] = draw(st.booleans())
     probes = []
     for n in range(draw(st.integers(1, 4))):
         quantity = draw(st.sampled_from(["pressure", "level"]))
-        probe = {"name": f"p{n}", "quantity": quantity,
-                 "position": [_along(draw, 0), _along(draw, 1)]}
+        probe = {
+            "name": f"p{n}",
+            "quantity": quantity,
+            "position": [_along(draw, 0), _along(draw, 1)],
+        }
         if quantity == "pressure":
             if draw(st.booleans()):
                 probe["window"] = draw(st.sampled_from([1e-9, 0.001, 0.02, 0.1, 1.0, 1e300]))
@@ -88,8 +118,12 @@ def test_materials_and_probes_run_or_fail_cleanly(monkeypatch):
     monkeypatch.setenv("MPMFLOW_THREADS", "1")
     outcomes = {}
 
-    @settings(max_examples=CASES, deadline=None, database=None,
-              suppress_health_check=[HealthCheck.too_slow])
+    @settings(
+        max_examples=CASES,
+        deadline=None,
+        database=None,
+        suppress_health_check=[HealthCheck.too_slow],
+    )
     @given(text=physics_case())
     def one_case(text):
         code, err = _run_case(text)

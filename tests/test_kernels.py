@@ -34,8 +34,9 @@ def test_gauss_cell_integrals_in_3d_are_those_of_the_trilinear_element():
     for a in range(8):
         for b in range(8):
             hamming = bin(a ^ b).count("1")
-            assert K[a, b] == pytest.approx({0: h / 3, 1: 0.0, 2: -h / 12, 3: -h / 12}[hamming],
-                                            abs=1e-15)
+            assert K[a, b] == pytest.approx(
+                {0: h / 3, 1: 0.0, 2: -h / 12, 3: -h / 12}[hamming], abs=1e-15
+            )
     np.testing.assert_allclose(C.sum(axis=1), 0.0, atol=1e-15)
     # sum_a C[a, b, k] = int dN_b/dx_k = +-h^2/4 on the faces normal to k
     for b in range(8):
@@ -50,8 +51,9 @@ def test_particle_quadrature_integrates_constants_exactly():
     K, C, V = np.zeros((1, 4, 4)), np.zeros((1, 4, 4, 2)), np.zeros((1, 4))
     order = np.arange(len(pts))
     start = np.array([0, len(pts)])
-    state.particle_cell_tensors(pts, np.full(len(pts), (h / 4) ** 2), order, start,
-                                np.array([0]), h, (1, 1), K, C, V)
+    state.particle_cell_tensors(
+        pts, np.full(len(pts), (h / 4) ** 2), order, start, np.array([0]), h, (1, 1), K, C, V
+    )
     assert V.sum() == pytest.approx(h * h)
     np.testing.assert_allclose(K[0].sum(axis=1), 0.0, atol=1e-12)
 
@@ -69,8 +71,9 @@ def test_particles_to_grid_conserves_mass_and_momentum():
     bins = bin_particles(grid, Particles(x, v, np.zeros(n), m, vol))
     g, dt = np.array([0.5, -9.81]), 0.01
     cvol = np.empty(grid.ncells)
-    state.particles_to_grid(grid, x, v, m, vol, bins.order, bins.start, g, dt, mass, mom, nvol,
-                            v_old, v_star, cvol)
+    state.particles_to_grid(
+        grid, x, v, m, vol, bins.order, bins.start, g, dt, mass, mom, nvol, v_old, v_star, cvol
+    )
     assert mass.sum() == pytest.approx(m.sum(), rel=1e-13)
     # the volume on the cell centres (walls mirror): all of it, as the serial kernel has it
     assert cvol.sum() == pytest.approx(vol.sum(), rel=1e-13)
@@ -102,8 +105,9 @@ def test_grid_to_particles_reproduces_linear_fields_and_flip_increments():
     p = np.zeros(200)
     dt = 0.01
     exact = np.stack([1 + 2 * x0[:, 0] - x0[:, 1], 3 * x0[:, 1]], axis=1)
-    moved = state.grid_to_particles(grid, x, v, p, v_old, v_new, p_node, dt, 1.0,
-                                    np.array([1.0, 1.0]), 1e-9, NONE)
+    moved = state.grid_to_particles(
+        grid, x, v, p, v_old, v_new, p_node, dt, 1.0, np.array([1.0, 1.0]), 1e-9, NONE
+    )
     assert moved == 0
     np.testing.assert_allclose(v, 1 + exact, atol=1e-12)  # FLIP: old velocity + increment
     np.testing.assert_allclose(x, x0 + dt * exact, atol=1e-12)  # eq. 21 moves with v^{t+1}
@@ -114,8 +118,20 @@ def test_grid_to_particles_puts_particles_back_inside_and_counts_them():
     x = np.array([[-0.01, 0.5], [0.5, 1.02], [0.5, 0.5], [1.5, -2.0]])
     v = np.array([[-1.0, 0.0], [0.0, 2.0], [1.0, 1.0], [3.0, -3.0]])
     still = np.zeros((121, 2))  # no grid velocity: FLIP keeps v, particles do not move
-    moved = state.grid_to_particles(Grid(0.1, (10, 10)), x, v, np.zeros(4), still, still,
-                                    np.zeros(121), 0.01, 1.0, np.array([1.0, 1.0]), 1e-9, NONE)
+    moved = state.grid_to_particles(
+        Grid(0.1, (10, 10)),
+        x,
+        v,
+        np.zeros(4),
+        still,
+        still,
+        np.zeros(121),
+        0.01,
+        1.0,
+        np.array([1.0, 1.0]),
+        1e-9,
+        NONE,
+    )
     assert moved == 3
     assert np.all((x >= 0) & (x <= 1))
     np.testing.assert_allclose(x[0], [0.01, 0.5])  # mirrored back across the wall
@@ -135,7 +151,7 @@ def test_binning_and_volume_fraction():
     counts = bins.counts()
     assert counts.sum() == P.count
     for c in (0, 191, 199):
-        members = bins.order[bins.start[c]:bins.start[c + 1]]
+        members = bins.order[bins.start[c] : bins.start[c + 1]]
         assert np.all(bins.cell[members] == c)
 
 
@@ -155,8 +171,9 @@ def test_walls_are_one_sided_unless_in_contact():
     contact = np.zeros((n, 2), dtype=np.bool_)
     state.start_contact(*pairs, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
     ix, iy = np.arange(n) % (ncx + 1), np.arange(n) // (ncx + 1)
-    np.testing.assert_array_equal(contact, np.stack([(ix == 0) | (ix == ncx),
-                                                     (iy == 0) | (iy == ncy)], axis=1))
+    np.testing.assert_array_equal(
+        contact, np.stack([(ix == 0) | (ix == ncx), (iy == 0) | (iy == ncy)], axis=1)
+    )
     v = np.tile([[1.0, 1.0]], (n, 1))
     state.apply_walls(*pairs, True, v, contact)  # in contact, no-slip: all zero
     assert np.all(v[bottom_mid] == 0.0)
@@ -172,9 +189,20 @@ def test_each_wall_pair_keeps_its_own_condition():
     state.start_contact(node, axis, sign, np.zeros((n, 2)), np.zeros(n, dtype=np.int64), contact)
     v = np.ones((n, 2))
     state.apply_walls(node, axis, sign, (axis == 1) & (sign < 0), v, contact)
-    np.testing.assert_array_equal(v, [[0, 0], [0, 0], [0, 0],    # the floor
-                                      [0, 1], [1, 1], [0, 1],    # the side walls' normal
-                                      [0, 0], [1, 0], [0, 0]])   # the top's normal, corners
+    np.testing.assert_array_equal(
+        v,
+        [
+            [0, 0],
+            [0, 0],
+            [0, 0],  # the floor
+            [0, 1],
+            [1, 1],
+            [0, 1],  # the side walls' normal
+            [0, 0],
+            [1, 0],
+            [0, 0],
+        ],
+    )  # the top's normal, corners
 
 
 def test_contact_starts_where_material_presses_and_releases_under_tension():
@@ -209,7 +237,7 @@ def test_strips_cover_the_rows_with_room_between_and_balance_the_work(min_rows):
         row_cum = np.concatenate(([0], np.cumsum(work)))
         bounds = np.empty(17, dtype=np.int64)
         k = strips(row_cum, 16, min_rows, bounds)
-        b = bounds[:k + 1]
+        b = bounds[: k + 1]
         assert k >= 1 and b[0] == 0 and b[-1] == nrows
         if nrows >= min_rows:
             assert np.all(np.diff(b) >= min_rows)  # strips two apart never touch
@@ -231,8 +259,9 @@ def test_particle_divergence_tensors_match_the_full_particle_tensors():
     K, C, V = np.zeros((4, 4, 4)), np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
     state.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10), K, C, V)
     C2, V2 = np.zeros((4, 4, 4, 2)), np.zeros((4, 4))
-    state.particle_cell_tensors(x, vol, bins.order, bins.start, cells, 0.1, (10, 10),
-                                np.zeros((0, 4, 4)), C2, V2)
+    state.particle_cell_tensors(
+        x, vol, bins.order, bins.start, cells, 0.1, (10, 10), np.zeros((0, 4, 4)), C2, V2
+    )
     np.testing.assert_allclose(C2, C, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(V2, V, rtol=1e-13, atol=1e-15)
     assert V.sum() > 0

@@ -19,14 +19,19 @@ from mpmflow.errors import CaseError, SolverError
 
 HYDRO = "examples/hydrostatic.toml"
 NEWTONIAN = ["material.model='newtonian'", "material.viscosity=1.0"]
-BINGHAM = ["material.model='herschel_bulkley'", "material.consistency=1.0",
-           "material.yield_stress=10.0"]
+BINGHAM = [
+    "material.model='herschel_bulkley'",
+    "material.consistency=1.0",
+    "material.yield_stress=10.0",
+]
 GRANULAR = ["material.model='mu_i'", "material.density=1470"]
 
 
 def _column(extra, walls="slip", end=0.2):
-    case = load_case(ROOT / HYDRO, [f"time.end={end}", "output.snapshots=false",
-                                    f"domain.walls='{walls}'", *extra])
+    case = load_case(
+        ROOT / HYDRO,
+        [f"time.end={end}", "output.snapshots=false", f"domain.walls='{walls}'", *extra],
+    )
     sim = Simulation(case)
     sim.run()
     P = sim.particles
@@ -34,8 +39,9 @@ def _column(extra, walls="slip", end=0.2):
     return sim, np.abs(P.v).max(), np.abs(P.pressure - exact).max() / exact.max()
 
 
-@pytest.mark.parametrize("extra", [NEWTONIAN, BINGHAM, GRANULAR],
-                         ids=["newtonian", "bingham", "mu_i"])
+@pytest.mark.parametrize(
+    "extra", [NEWTONIAN, BINGHAM, GRANULAR], ids=["newtonian", "bingham", "mu_i"]
+)
 def test_a_column_at_rest_stays_at_rest(extra):
     sim, speed, perr = _column(extra)
     assert sim.counters.viscous_iterations > 0  # the viscous solve ran
@@ -57,9 +63,20 @@ def _system(cells, h, weight, mass, dt, u):
     uu = np.empty_like(u)
     off = np.zeros(D + 1, dtype=np.int64)
     empty_i = np.zeros(0, dtype=np.int64)
-    n = state.number_unknowns(mass, empty_i, empty_i, False, np.zeros((nn, D), dtype=np.bool_),
-                              empty_i, np.zeros(nn, dtype=np.bool_), np.zeros(0, dtype=np.bool_),
-                              u, uu, row, off)
+    n = state.number_unknowns(
+        mass,
+        empty_i,
+        empty_i,
+        False,
+        np.zeros((nn, D), dtype=np.bool_),
+        empty_i,
+        np.zeros(nn, dtype=np.bool_),
+        np.zeros(0, dtype=np.bool_),
+        u,
+        uu,
+        row,
+        off,
+    )
     NS = 3**D
     cols = np.empty((D, n, NS), dtype=np.int64)
     vals = np.empty((D, n, NS))
@@ -69,7 +86,7 @@ def _system(cells, h, weight, mass, dt, u):
     state.viscous_assemble(cells, T, weight, mass, dt, uu, row, off, cols, vals, rhs, node)
     x = np.empty(n)
     for k in range(D):
-        x[off[k]:off[k + 1]] = u[:, k]
+        x[off[k] : off[k + 1]] = u[:, k]
     return cols, vals, off, rhs, x
 
 
@@ -90,8 +107,9 @@ def test_the_viscous_operator_is_the_full_stress(cells):
     h, dt = 0.1, 0.01
     rng = np.random.default_rng(1)
     D = len(cells)
-    nodes = np.stack(np.meshgrid(*[np.arange(c + 1) * h for c in cells], indexing="ij"),
-                     axis=-1).reshape(-1, D, order="F")
+    nodes = np.stack(
+        np.meshgrid(*[np.arange(c + 1) * h for c in cells], indexing="ij"), axis=-1
+    ).reshape(-1, D, order="F")
     weight = rng.uniform(0.5, 2.0, int(np.prod(cells)))  # cell viscosities, varying
     mass = rng.uniform(1.0, 2.0, nodes.shape[0])
     # a rigid rotation (about the last axis) has no strain rate: K u = 0 at every node, the
@@ -121,9 +139,15 @@ def test_the_viscous_step_is_implicit():
     # limit rho h^2 / (2 D eta); the column (0.1 m wide, 0.195 m high) sags slowly instead
     # of blowing up. Stokes scale of its speed: rho g H^2 / eta = 0.37 m/s; a water column
     # reaches sqrt(g H) = 1.4 m/s in 0.2 s.
-    case = load_case(ROOT / "examples/dam_break.toml",
-                     ["time.end=0.2", "output.snapshots=false", "material.model='newtonian'",
-                      "material.viscosity=1000.0"])
+    case = load_case(
+        ROOT / "examples/dam_break.toml",
+        [
+            "time.end=0.2",
+            "output.snapshots=false",
+            "material.model='newtonian'",
+            "material.viscosity=1000.0",
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     speed = np.abs(sim.particles.v).max()
@@ -133,11 +157,21 @@ def test_the_viscous_step_is_implicit():
 def _layer_slope(model, degrees, end):
     theta = math.radians(degrees)
     g = [9.81 * math.sin(theta), -9.81 * math.cos(theta)]
-    case = load_case(ROOT / HYDRO, [
-        f"time.end={end}", "output.snapshots=false", "domain.walls='no_slip'",
-        "domain.size=[0.2, 0.15]", "grid.spacing=0.005", f"physics.gravity={g}",
-        "bodies=[{type='box', min=[0,0], max=[0.2,0.05], particles_per_cell=2}]",
-        "time.dt=5e-4", "output.interval=0.05", *model])
+    case = load_case(
+        ROOT / HYDRO,
+        [
+            f"time.end={end}",
+            "output.snapshots=false",
+            "domain.walls='no_slip'",
+            "domain.size=[0.2, 0.15]",
+            "grid.spacing=0.005",
+            f"physics.gravity={g}",
+            "bodies=[{type='box', min=[0,0], max=[0.2,0.05], particles_per_cell=2}]",
+            "time.dt=5e-4",
+            "output.interval=0.05",
+            *model,
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     x = sim.particles.x
@@ -169,10 +203,17 @@ def _bingham_incline(ratio, end=0.4):
     particles that started in its middle (0.25-0.35 m), and at its top."""
     theta = math.radians(10.0)
     H = ratio * 50.0 / (1000.0 * 9.81 * math.sin(theta))
-    case = load_case(ROOT / "examples/bingham_slump.toml", [
-        f"time.end={end}", "output.snapshots=false", f"domain.size=[0.6, {H + 0.03:.4f}]",
-        "bodies.0.min=[0.1, 0.0]", f"bodies.0.max=[0.5, {H:.5f}]",
-        f"physics.gravity=[{9.81 * math.sin(theta):.6f}, {-9.81 * math.cos(theta):.6f}]"])
+    case = load_case(
+        ROOT / "examples/bingham_slump.toml",
+        [
+            f"time.end={end}",
+            "output.snapshots=false",
+            f"domain.size=[0.6, {H + 0.03:.4f}]",
+            "bodies.0.min=[0.1, 0.0]",
+            f"bodies.0.max=[0.5, {H:.5f}]",
+            f"physics.gravity=[{9.81 * math.sin(theta):.6f}, {-9.81 * math.cos(theta):.6f}]",
+        ],
+    )
     sim = Simulation(case)
     x0 = sim.particles.x.copy()
     sim.run()
@@ -202,24 +243,44 @@ def test_a_bingham_layer_on_an_incline_flows_above_its_critical_thickness():
     assert 2e-3 < surface < 4.6e-2, surface
 
 
-@pytest.mark.parametrize("overrides, words", [
-    (["material.model='honey'"], ["material.model", "newtonian"]),
-    (["material.model='newtonian'", "material.viscosity=-1.0"], ["material.viscosity"]),
-    (["material.model='newtonian'"], ["material.viscosity > 0"]),
-    (["material.viscosity=1e-3"], ["newtonian"]),
-    (["material.model='mu_i'", "material.density=1470", "material.friction_limit=0.3"],
-     ["friction_static", "friction_limit", "mu_s < mu_2"]),
-    (["material.model='mu_i'", "material.density=1470", "material.grain_density=1000"],
-     ["grain_density", "solid fraction"]),
-    (["material.model='herschel_bulkley'", "material.yield_stress=-5.0"],
-     ["material.yield_stress"]),
-    (["material.model='herschel_bulkley'", "material.max_viscosity=0.5"],
-     ["material.max_viscosity"]),
-    (["material.model='newtonian'", "material.viscosity=1.0", "material.yield_stress=3.0"],
-     ["material.yield_stress", "herschel_bulkley"]),
-    (["material.model='newtonian'", "material.viscosity=1.0", "solver.scheme='explicit'",
-      "time.dt='auto'"], ["solver.scheme", "material.model"]),
-])
+@pytest.mark.parametrize(
+    "overrides, words",
+    [
+        (["material.model='honey'"], ["material.model", "newtonian"]),
+        (["material.model='newtonian'", "material.viscosity=-1.0"], ["material.viscosity"]),
+        (["material.model='newtonian'"], ["material.viscosity > 0"]),
+        (["material.viscosity=1e-3"], ["newtonian"]),
+        (
+            ["material.model='mu_i'", "material.density=1470", "material.friction_limit=0.3"],
+            ["friction_static", "friction_limit", "mu_s < mu_2"],
+        ),
+        (
+            ["material.model='mu_i'", "material.density=1470", "material.grain_density=1000"],
+            ["grain_density", "solid fraction"],
+        ),
+        (
+            ["material.model='herschel_bulkley'", "material.yield_stress=-5.0"],
+            ["material.yield_stress"],
+        ),
+        (
+            ["material.model='herschel_bulkley'", "material.max_viscosity=0.5"],
+            ["material.max_viscosity"],
+        ),
+        (
+            ["material.model='newtonian'", "material.viscosity=1.0", "material.yield_stress=3.0"],
+            ["material.yield_stress", "herschel_bulkley"],
+        ),
+        (
+            [
+                "material.model='newtonian'",
+                "material.viscosity=1.0",
+                "solver.scheme='explicit'",
+                "time.dt='auto'",
+            ],
+            ["solver.scheme", "material.model"],
+        ),
+    ],
+)
 def test_bad_material_parameters_are_refused(overrides, words):
     with pytest.raises(CaseError) as err:
         load_case(ROOT / HYDRO, overrides)
@@ -231,11 +292,19 @@ def test_bad_material_parameters_are_refused(overrides, words):
 def test_a_viscous_solve_that_does_not_converge_is_reported_with_its_worst_node():
     # a moving column against no-slip walls: the first viscous solve needs iterations, and
     # it runs before the pressure solve
-    case = load_case(ROOT / "examples/dam_break.toml",
-                     ["time.end=0.01", "output.snapshots=false", "material.model='newtonian'",
-                      "material.viscosity=1000.0", "solver.max_iterations=1",
-                      "solver.tolerance=1e-14", "domain.walls='no_slip'",
-                      "bodies.0.velocity=[0.5, 0.0]"])
+    case = load_case(
+        ROOT / "examples/dam_break.toml",
+        [
+            "time.end=0.01",
+            "output.snapshots=false",
+            "material.model='newtonian'",
+            "material.viscosity=1000.0",
+            "solver.max_iterations=1",
+            "solver.tolerance=1e-14",
+            "domain.walls='no_slip'",
+            "bodies.0.velocity=[0.5, 0.0]",
+        ],
+    )
     with pytest.raises(SolverError) as err:
         Simulation(case).run()
     text = str(err.value)
@@ -257,8 +326,13 @@ def test_a_newtonian_material_too_stiff_for_the_step_is_refused_before_the_run(t
     with pytest.raises(CaseError) as err:
         Simulation(case)
     text = str(err.value)
-    for words in ("material.viscosity = 1e+10 Pa s", "split number", "time.dt below",
-                  "material.viscosity below", "[[obstacles]]"):
+    for words in (
+        "material.viscosity = 1e+10 Pa s",
+        "split number",
+        "time.dt below",
+        "material.viscosity below",
+        "[[obstacles]]",
+    ):
         assert words in text, text
     args = ["run", str(ROOT / "examples/dam_break.toml"), "--out", str(tmp_path / "r")]
     for o in overrides:
@@ -270,12 +344,22 @@ def _block(viscosity, dt, end=0.03):
     """A 0.1 m square block of Newtonian liquid released in the middle of a rough floor (no
     side wall touches it); the particles' median speed (m/s) at ``end`` and the run's
     notices."""
-    case = load_case(ROOT / HYDRO, [
-        "material.model='newtonian'", f"material.viscosity={viscosity}",
-        "domain.size=[0.3, 0.2]", "domain.walls='no_slip'", "bodies.0.min=[0.1, 0.0]",
-        "bodies.0.max=[0.2, 0.1]",
-        "bodies.0.particles_per_cell=2", f"time.dt={dt}", f"time.end={end}",
-        f"output.interval={end}", "output.snapshots=false"])
+    case = load_case(
+        ROOT / HYDRO,
+        [
+            "material.model='newtonian'",
+            f"material.viscosity={viscosity}",
+            "domain.size=[0.3, 0.2]",
+            "domain.walls='no_slip'",
+            "bodies.0.min=[0.1, 0.0]",
+            "bodies.0.max=[0.2, 0.1]",
+            "bodies.0.particles_per_cell=2",
+            f"time.dt={dt}",
+            f"time.end={end}",
+            f"output.interval={end}",
+            "output.snapshots=false",
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     return float(np.median(np.linalg.norm(sim.particles.v, axis=1))), sim.notices
@@ -302,14 +386,28 @@ def test_the_split_error_of_a_viscous_block_is_within_its_estimate():
 def _corner_block(dt, end=0.03, interval=0.003):
     """A 0.1 m square block of Newtonian liquid (1e3 Pa s) standing in the corner of a tank
     with no-slip walls: the particles' median speed (m/s) at every output."""
-    case = load_case(ROOT / HYDRO, [
-        "material.model='newtonian'", "material.viscosity=1e3", "domain.size=[0.3, 0.2]",
-        "domain.walls='no_slip'", "bodies.0.max=[0.1, 0.1]", "bodies.0.particles_per_cell=2",
-        f"time.dt={dt}", f"time.end={end}", f"output.interval={interval}",
-        "output.snapshots=false"])
+    case = load_case(
+        ROOT / HYDRO,
+        [
+            "material.model='newtonian'",
+            "material.viscosity=1e3",
+            "domain.size=[0.3, 0.2]",
+            "domain.walls='no_slip'",
+            "bodies.0.max=[0.1, 0.1]",
+            "bodies.0.particles_per_cell=2",
+            f"time.dt={dt}",
+            f"time.end={end}",
+            f"output.interval={interval}",
+            "output.snapshots=false",
+        ],
+    )
     speeds = []
-    sim = Simulation(case, progress=lambda t, step, end: speeds.append(
-        float(np.median(np.linalg.norm(sim.particles.v, axis=1)))))
+    sim = Simulation(
+        case,
+        progress=lambda t, step, end: speeds.append(
+            float(np.median(np.linalg.norm(sim.particles.v, axis=1)))
+        ),
+    )
     sim.run()
     return np.array(speeds)
 
@@ -358,18 +456,28 @@ def test_granular_example_states_the_speed_its_deposit_creeps_at(tmp_path):
     if rest:
         assert speed[t >= float(rest.group(1)) - 1e-9].max() < 1e-3, (
             f"{rest.group(0)}: the largest particle speed after it is "
-            f"{speed[t >= float(rest.group(1)) - 1e-9].max():.3g} m/s")
-    t0, t1, lo, hi = _claim(r"from ([\d.]+) s to ([\d.]+) s the fastest particle moves at "
-                            r"([\d.]+) to ([\d.]+) cm/s", text)
-    share_lo, share_hi = _claim(r"at the snapshots ([\d.]+) to ([\d.]+)% of the particles "
-                                r"move faster than 1 mm/s", text)
+            f"{speed[t >= float(rest.group(1)) - 1e-9].max():.3g} m/s"
+        )
+    t0, t1, lo, hi = _claim(
+        r"from ([\d.]+) s to ([\d.]+) s the fastest particle moves at "
+        r"([\d.]+) to ([\d.]+) cm/s",
+        text,
+    )
+    share_lo, share_hi = _claim(
+        r"at the snapshots ([\d.]+) to ([\d.]+)% of the particles "
+        r"move faster than 1 mm/s",
+        text,
+    )
     front0, front1 = _claim(r"the front creeps on from ([\d.]+) m to ([\d.]+) m", text)
     assert case.time.end == t1
     late = (t >= t0 - 1e-9) & (t <= t1 + 1e-9)
     assert abs(speed[late].min() * 100 - lo) <= 0.051
     assert abs(speed[late].max() * 100 - hi) <= 0.051
-    shares = [100 * np.mean(np.linalg.norm(s.read()["velocity"], axis=1) > 1e-3)
-              for s in run.snapshots if t0 - 1e-9 <= s.time <= t1 + 1e-9]
+    shares = [
+        100 * np.mean(np.linalg.norm(s.read()["velocity"], axis=1) > 1e-3)
+        for s in run.snapshots
+        if t0 - 1e-9 <= s.time <= t1 + 1e-9
+    ]
     assert len(shares) == 6  # 0.7 to 1.2 s
     assert abs(min(shares) - share_lo) <= 0.51 and abs(max(shares) - share_hi) <= 0.51
     front = run.timeseries["front"]

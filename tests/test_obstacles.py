@@ -14,11 +14,23 @@ RHO, G = 1000.0, 9.81
 # faces off the grid lines (0.01 m mesh) by fractions of a cell that are not multiples of
 # the sub-cell size h / 8
 AT_REST = {
-    "box on the floor (2D)": ("hydrostatic.toml", "{type='box', min=[0.0337, 0.0], max=[0.0663, 0.0517]}"),
+    "box on the floor (2D)": (
+        "hydrostatic.toml",
+        "{type='box', min=[0.0337, 0.0], max=[0.0663, 0.0517]}",
+    ),
     "disc (2D)": ("hydrostatic.toml", "{type='disc', centre=[0.0513, 0.0871], radius=0.0234}"),
-    "triangle on the floor (2D)": ("hydrostatic.toml", "{type='polygon', vertices=[[0.013, 0.0], [0.071, 0.0], [0.043, 0.0617]]}"),
-    "box on the floor (3D)": ("hydrostatic_3d.toml", "{type='box', min=[0.0337, 0.0137, 0.0], max=[0.0663, 0.0363, 0.0517]}"),
-    "sphere (3D)": ("hydrostatic_3d.toml", "{type='sphere', centre=[0.0513, 0.0249, 0.0871], radius=0.0213}"),
+    "triangle on the floor (2D)": (
+        "hydrostatic.toml",
+        "{type='polygon', vertices=[[0.013, 0.0], [0.071, 0.0], [0.043, 0.0617]]}",
+    ),
+    "box on the floor (3D)": (
+        "hydrostatic_3d.toml",
+        "{type='box', min=[0.0337, 0.0137, 0.0], max=[0.0663, 0.0363, 0.0517]}",
+    ),
+    "sphere (3D)": (
+        "hydrostatic_3d.toml",
+        "{type='sphere', centre=[0.0513, 0.0249, 0.0871], radius=0.0213}",
+    ),
 }
 
 
@@ -33,9 +45,15 @@ def test_column_at_rest_around_an_obstacle_is_exact(name):
     ``obstacles`` these runs moved at 0.16-0.29 m/s."""
     example, obstacle = AT_REST[name]
     end = 0.3 if "3D" in name else 1.0
-    case = load_case(EXAMPLES / example, [f"time.end={end}", "output.snapshots=false",
-                                          f"obstacles=[{obstacle}]",
-                                          "bodies.0.around_obstacles=true"])
+    case = load_case(
+        EXAMPLES / example,
+        [
+            f"time.end={end}",
+            "output.snapshots=false",
+            f"obstacles=[{obstacle}]",
+            "bodies.0.around_obstacles=true",
+        ],
+    )
     sim = Simulation(case)
     assert (sim.scheme.solids.static_slot > 0).sum() > 0  # cells are cut
     sim.run()
@@ -75,10 +93,16 @@ def test_water_flows_round_an_obstacle_and_never_into_it():
     inside the solid (phi interpolated at the nodes, to which they are pushed back), the
     mass is that of the particles, and the water keeps its volume within the run's own
     measure (wetted volume / material volume) to 5%."""
-    case = load_case(EXAMPLES / "dam_break.toml", [
-        "time.end=0.5", "grid.spacing=0.008", "bodies.0.particles_per_cell=2",
-        "output.snapshots=false",
-        "obstacles=[{type='box', min=[0.2517, 0.0], max=[0.2863, 0.0617]}]"])
+    case = load_case(
+        EXAMPLES / "dam_break.toml",
+        [
+            "time.end=0.5",
+            "grid.spacing=0.008",
+            "bodies.0.particles_per_cell=2",
+            "output.snapshots=false",
+            "obstacles=[{type='box', min=[0.2517, 0.0], max=[0.2863, 0.0617]}]",
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     P = sim.particles
@@ -94,13 +118,22 @@ def test_water_flows_round_an_obstacle_and_never_into_it():
 def test_an_obstacle_with_no_slip_holds_the_water_on_its_face():
     """obstacles.N.walls = "no_slip": the nodes that hold the material have no velocity; a
     slip obstacle's keep their tangential velocity."""
-    base = ["time.end=0.3", "grid.spacing=0.008", "bodies.0.particles_per_cell=2",
-            "output.snapshots=false"]
+    base = [
+        "time.end=0.3",
+        "grid.spacing=0.008",
+        "bodies.0.particles_per_cell=2",
+        "output.snapshots=false",
+    ]
     speeds = {}
     for walls in ("slip", "no_slip"):
-        case = load_case(EXAMPLES / "dam_break.toml", base + [
-            f"obstacles=[{{type='box', min=[0.2517, 0.0], max=[0.2863, 0.0617], "
-            f"walls='{walls}'}}]"])
+        case = load_case(
+            EXAMPLES / "dam_break.toml",
+            base
+            + [
+                f"obstacles=[{{type='box', min=[0.2517, 0.0], max=[0.2863, 0.0617], "
+                f"walls='{walls}'}}]"
+            ],
+        )
         sim = Simulation(case)
         sim.run()
         W, o = sim.scheme.core, sim.scheme.solids
@@ -110,8 +143,7 @@ def test_an_obstacle_with_no_slip_holds_the_water_on_its_face():
     assert speeds["no_slip"] == 0.0 and speeds["slip"] > 0.1
 
 
-@pytest.mark.parametrize("example", ["obstacle_2d.toml", "stl_drop_3d.toml",
-                                     "spheric_test2.toml"])
+@pytest.mark.parametrize("example", ["obstacle_2d.toml", "stl_drop_3d.toml", "spheric_test2.toml"])
 @pytest.mark.slow
 def test_the_geometry_examples_load_and_start(example, tmp_path):
     """The examples with obstacles, a polygon body, a body from the STL file shipped in
@@ -119,10 +151,15 @@ def test_the_geometry_examples_load_and_start(example, tmp_path):
     no particle inside an obstacle and the probes written."""
     over = ["time.end=0.01", "output.interval=0.01", "output.snapshots=false"]
     if example == "spheric_test2.toml":
-        over += ["grid.spacing=0.08", "domain.size=[3.44, 1.0, 1.04]",
-                 "obstacles=[{type='box', min=[0.6635, 0.2955, 0.0], "
-                 "max=[0.8245, 0.6985, 0.161]}, {type='box', min=[3.22, 0.0, 0.0], "
-                 "max=[3.44, 1.0, 1.04]}]", "time.dt=0.005", "output.interval=0.005"]
+        over += [
+            "grid.spacing=0.08",
+            "domain.size=[3.44, 1.0, 1.04]",
+            "obstacles=[{type='box', min=[0.6635, 0.2955, 0.0], "
+            "max=[0.8245, 0.6985, 0.161]}, {type='box', min=[3.22, 0.0, 0.0], "
+            "max=[3.44, 1.0, 1.04]}]",
+            "time.dt=0.005",
+            "output.interval=0.005",
+        ]
     case = load_case(EXAMPLES / example, over)
     sim = Simulation(case, tmp_path / "run")
     sim.run()
@@ -135,10 +172,16 @@ def test_the_paper_formulation_runs_with_obstacles():
     """With the paper's node free surface, a node whose cells all lie inside a solid is no
     pressure unknown (it was, with an empty row: the multigrid divided by zero)."""
     example, obstacle = AT_REST["disc (2D)"]
-    case = load_case(EXAMPLES / example, ["time.end=0.05", "output.snapshots=false",
-                                          f"obstacles=[{obstacle}]",
-                                          "bodies.0.around_obstacles=true",
-                                          "solver.formulation='paper'"])
+    case = load_case(
+        EXAMPLES / example,
+        [
+            "time.end=0.05",
+            "output.snapshots=false",
+            f"obstacles=[{obstacle}]",
+            "bodies.0.around_obstacles=true",
+            "solver.formulation='paper'",
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     assert sim.time == pytest.approx(0.05)
@@ -199,11 +242,14 @@ snapshots = false
 """
 
 
-@pytest.mark.parametrize("text, fastest, sealed", [(POCKET_2D, 0.02, True),
-                                                  (POCKET_3D, 0.5, False)],
-                         ids=["disc (2D)", "sphere (3D)"])
-def test_water_in_the_corner_between_an_obstacle_and_the_walls_stays_at_rest(text, fastest,
-                                                                             sealed, tmp_path):
+@pytest.mark.parametrize(
+    "text, fastest, sealed",
+    [(POCKET_2D, 0.02, True), (POCKET_3D, 0.5, False)],
+    ids=["disc (2D)", "sphere (3D)"],
+)
+def test_water_in_the_corner_between_an_obstacle_and_the_walls_stays_at_rest(
+    text, fastest, sealed, tmp_path
+):
     """An obstacle touching two or three walls, in a pool at rest. On a fine grid the water
     in the corner between it and the walls is sealed off from the free surface: a part of
     the pressure system with no free-surface row, singular, which the solve could not

@@ -16,10 +16,17 @@ from mpmflow.output.snapshots import read_index
 
 def _tiny(end, snapshots=False, **more):
     """4 particles, an output row every step of 1 ms, a checkpoint every 0.1 s."""
-    return make_case(size=(0.04, 0.04), spacing=0.01, body=((0.0, 0.0), (0.02, 0.02)),
-                     ppc=1, dt=1e-3, end=end, output={"interval": 1e-3,
-                                                      "snapshots": snapshots},
-                     checkpoint={"interval": 0.1}, **more)
+    return make_case(
+        size=(0.04, 0.04),
+        spacing=0.01,
+        body=((0.0, 0.0), (0.02, 0.02)),
+        ppc=1,
+        dt=1e-3,
+        end=end,
+        output={"interval": 1e-3, "snapshots": snapshots},
+        checkpoint={"interval": 0.1},
+        **more,
+    )
 
 
 def _bytes_written():
@@ -78,6 +85,7 @@ def test_a_torn_last_row_is_dropped_by_readers_and_by_the_restart(tmp_path):
     def stop(sim):
         if sim.time >= 0.05 - 1e-12:
             sim.stop_signal = signal.SIGINT
+
     first.on_output = stop
     assert first.run()["status"] == "interrupted"
     with open(out / "timeseries.csv", "a") as f:  # rows after the checkpoint, the last torn
@@ -95,11 +103,20 @@ def test_a_torn_last_row_is_dropped_by_readers_and_by_the_restart(tmp_path):
 
 def test_a_restart_refuses_a_time_series_cut_below_its_checkpoint(tmp_path, capsys):
     out = tmp_path / "o"
-    args = ["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(out), "-q",
-            "--set", "grid.spacing=0.02", "--set", "time.end=0.1"]
+    args = [
+        "run",
+        str(EXAMPLES / "hydrostatic.toml"),
+        "--out",
+        str(out),
+        "-q",
+        "--set",
+        "grid.spacing=0.02",
+        "--set",
+        "time.end=0.1",
+    ]
     assert main(args) == 0
     text = (out / "timeseries.csv").read_text()
-    (out / "timeseries.csv").write_text(text[:len(text) // 2])
+    (out / "timeseries.csv").write_text(text[: len(text) // 2])
     assert main(args[:-1] + ["time.end=0.2", "--restart"]) == 2
     err = capsys.readouterr().err
     assert "timeseries.csv" in err and "does not hold the 11 rows" in err
@@ -123,6 +140,7 @@ def test_a_resumed_run_refuses_a_missing_index(tmp_path):
     def stop(sim):
         if sim.time >= 0.05 - 1e-12:
             sim.stop_signal = signal.SIGINT
+
     first.on_output = stop
     first.run()
     (tmp_path / "particles.pvd").unlink()
@@ -134,23 +152,26 @@ def test_load_case_overrides_and_open_run_read_everything(tmp_path):
     """The Python API: overrides as a dict, probes added after loading, a run, and its
     results read back: time series, probes, snapshots, summary. The water at rest gives
     exact probe values: the wall pressure rho g (H - y) and the level H."""
-    case = load_case(EXAMPLES / "hydrostatic.toml", {
-        "time.end": 0.1, "output.snapshot_interval": 0.05})
-    case.probes = [{"name": "wall_p", "quantity": "pressure", "position": [0.1, 0.05]},
-                   {"name": "gauge", "quantity": "level", "position": [0.03, 0.0]}]
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml", {"time.end": 0.1, "output.snapshot_interval": 0.05}
+    )
+    case.probes = [
+        {"name": "wall_p", "quantity": "pressure", "position": [0.1, 0.05]},
+        {"name": "gauge", "quantity": "level", "position": [0.03, 0.0]},
+    ]
     sim = Simulation(case, tmp_path)
     summary = sim.run()
     run = open_run(tmp_path)
     assert run.status == "completed" and run.summary == summary
     assert len(run.timeseries["time"]) == 11 and run.notes == []
-    np.testing.assert_allclose(run.timeseries["max_pressure"], sim.series("max_pressure"),
-                               rtol=1e-8)
+    np.testing.assert_allclose(
+        run.timeseries["max_pressure"], sim.series("max_pressure"), rtol=1e-8
+    )
     assert set(run.probes) == {"time", "wall_p", "gauge"}
     # the window of the sensor on the right wall: the last cell column, y 0.045-0.055 m,
     # whose particles sit at a mean depth of 0.195 - 0.05 m (the pressure is computed in
     # the first step: 0 before it)
-    np.testing.assert_allclose(run.probes["wall_p"][1:], 1000 * 9.81 * (0.195 - 0.05),
-                               rtol=1e-6)
+    np.testing.assert_allclose(run.probes["wall_p"][1:], 1000 * 9.81 * (0.195 - 0.05), rtol=1e-6)
     np.testing.assert_allclose(run.probes["gauge"], 0.195, rtol=1e-9)
     np.testing.assert_allclose(run.probes["wall_p"], sim.probe_series("wall_p"), rtol=1e-8)
     assert [s.time for s in run.snapshots] == [0.0, 0.05, 0.1]
@@ -166,11 +187,20 @@ def test_an_override_replaces_a_list_of_tables_whole():
     the entries get the same checks as the file's."""
     probe = {"name": "wall_p", "quantity": "pressure", "position": [0.1, 0.05]}
     by_dict = load_case(EXAMPLES / "hydrostatic.toml", {"probes": [probe]})
-    by_set = load_case(EXAMPLES / "hydrostatic.toml", [
-        'probes=[{name = "wall_p", quantity = "pressure", position = [0.1, 0.05]}]'])
+    by_set = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        ['probes=[{name = "wall_p", quantity = "pressure", position = [0.1, 0.05]}]'],
+    )
     assert by_dict == by_set and by_dict.probes[0].position == [0.1, 0.05]
-    two = load_case(EXAMPLES / "hydrostatic.toml", {"bodies": [
-        {"min": [0.0, 0.0], "max": [0.05, 0.1]}, {"min": [0.05, 0.0], "max": [0.1, 0.1]}]})
+    two = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        {
+            "bodies": [
+                {"min": [0.0, 0.0], "max": [0.05, 0.1]},
+                {"min": [0.05, 0.0], "max": [0.1, 0.1]},
+            ]
+        },
+    )
     assert len(two.bodies) == 2
     with pytest.raises(CaseError, match="missing key `probes.0.quantity`"):
         load_case(EXAMPLES / "hydrostatic.toml", {"probes": [{"name": "x", "position": [0, 0]}]})

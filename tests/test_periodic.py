@@ -29,8 +29,9 @@ def test_column_at_rest_is_exact_across_a_periodic_axis():
     0.3 s, the pressure is the one of the same column between walls to the pressure
     solver's tolerance (solver.tolerance = 1e-8 relative; the two hierarchies differ) and
     rho g (H - y) to 1e-6, as the hydrostatic tests check it."""
-    common = dict(size=(0.1, 0.3), body=((0.0, 0.0), (0.1, 0.195)), end=0.3,
-                  output=dict(snapshots=False))
+    common = dict(
+        size=(0.1, 0.3), body=((0.0, 0.0), (0.1, 0.195)), end=0.3, output=dict(snapshots=False)
+    )
     walls = _run(make_case(**common))
     wraps = _run(make_case(**common, domain=dict(periodic=[True, False])))
     assert wraps.case.domain.periodic == [True, False]
@@ -43,10 +44,16 @@ def test_column_at_rest_is_exact_across_a_periodic_axis():
 
 
 def test_column_at_rest_in_3d_with_two_periodic_axes_is_exact():
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml",
-                     ["domain.size=[0.1, 0.04, 0.3]", "bodies.0.max=[0.1, 0.04, 0.1]",
-                      "time.end=0.1",
-                      "domain.periodic=[true, true, false]", "output.snapshots=false"])
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        [
+            "domain.size=[0.1, 0.04, 0.3]",
+            "bodies.0.max=[0.1, 0.04, 0.1]",
+            "time.end=0.1",
+            "domain.periodic=[true, true, false]",
+            "output.snapshots=false",
+        ],
+    )
     sim = _run(case)
     P = sim.particles
     assert np.nanmax(sim.series("max_speed")) <= 1e-8
@@ -63,15 +70,27 @@ def test_a_layer_slides_down_a_slip_incline_as_a_rigid_body(dim):
     theta = math.radians(10.0)
     down = [G * math.sin(theta)] + [0.0] * (dim - 2) + [-G * math.cos(theta)]
     if dim == 2:
-        case = make_case(size=(0.04, 0.2), body=((0.0, 0.0), (0.04, 0.1)), end=0.3,
-                         domain=dict(periodic=[True, False]), physics=dict(gravity=down),
-                         output=dict(snapshots=False))
+        case = make_case(
+            size=(0.04, 0.2),
+            body=((0.0, 0.0), (0.04, 0.1)),
+            end=0.3,
+            domain=dict(periodic=[True, False]),
+            physics=dict(gravity=down),
+            output=dict(snapshots=False),
+        )
     else:
-        case = load_case(EXAMPLES / "hydrostatic_3d.toml",
-                         ["domain.size=[0.04, 0.04, 0.1]", "grid.spacing=0.01",
-                          "bodies.0.max=[0.04, 0.04, 0.05]", "time.end=0.3",
-                          "domain.periodic=[true, false, false]", f"physics.gravity={down}",
-                          "output.snapshots=false"])
+        case = load_case(
+            EXAMPLES / "hydrostatic_3d.toml",
+            [
+                "domain.size=[0.04, 0.04, 0.1]",
+                "grid.spacing=0.01",
+                "bodies.0.max=[0.04, 0.04, 0.05]",
+                "time.end=0.3",
+                "domain.periodic=[true, false, false]",
+                f"physics.gravity={down}",
+                "output.snapshots=false",
+            ],
+        )
     sim = Simulation(case)
     x0 = sim.particles.x.copy()
     sim.run()
@@ -102,10 +121,16 @@ def test_a_probe_on_a_periodic_end_reads_across_it():
     takes the particles of both ends (a fit over one side's particles only would read the
     same here; the window holding twice the particles of a half window shows it wraps), and
     it reads rho g H."""
-    case = load_case(EXAMPLES / "hydrostatic.toml",
-                     ["domain.periodic=[true, false]", "time.end=0.02", "output.snapshots=false",
-                      "probes.0={name='end', quantity='pressure', position=[0.0, 0.0]}",
-                      "probes.1={name='middle', quantity='pressure', position=[0.05, 0.0]}"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        [
+            "domain.periodic=[true, false]",
+            "time.end=0.02",
+            "output.snapshots=false",
+            "probes.0={name='end', quantity='pressure', position=[0.0, 0.0]}",
+            "probes.1={name='middle', quantity='pressure', position=[0.05, 0.0]}",
+        ],
+    )
     sim = _run(case)
     bins = bin_particles(sim.grid, sim.particles)
     side = probes.window(sim.case.probes[0], sim.grid, sim.case)
@@ -119,19 +144,46 @@ def test_a_probe_on_a_periodic_end_reads_across_it():
         assert sim.probe_series(name)[-1] == pytest.approx(RHO * G * 0.195, rel=1e-6)
 
 
-@pytest.mark.parametrize("override, message", [
-    (["domain.periodic=[true]"], "domain.periodic has 1 entries and domain.size 2"),
-    (["domain.size=[0.105, 0.3]", "bodies.0.max=[0.105, 0.195]",
-      "domain.periodic=[true, false]"], r"needs a whole, even number of cells"),
-    (["domain.size=[0.11, 0.3]", "bodies.0.max=[0.11, 0.195]",
-      "domain.periodic=[true, false]"], r"make domain.size\[0\] = 0.1[02]"),
-    (["domain.size=[1.3, 0.3]", "bodies.0.max=[1.3, 0.195]", "domain.periodic=[true, false]"],
-     r"130 cells halve down to no fewer than 130 points.*e.g. 1.28 m \(128 cells\)"),
-    (["domain.periodic=[true, false]", "solver.scheme=explicit", "time.dt=auto",
-      "material.bulk_modulus=4e5"],
-     r'solver.scheme = "explicit" does not support periodic axes \(domain.periodic\); set '
-     r'solver.scheme = "projection", or remove domain.periodic'),
-])
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        (["domain.periodic=[true]"], "domain.periodic has 1 entries and domain.size 2"),
+        (
+            [
+                "domain.size=[0.105, 0.3]",
+                "bodies.0.max=[0.105, 0.195]",
+                "domain.periodic=[true, false]",
+            ],
+            r"needs a whole, even number of cells",
+        ),
+        (
+            [
+                "domain.size=[0.11, 0.3]",
+                "bodies.0.max=[0.11, 0.195]",
+                "domain.periodic=[true, false]",
+            ],
+            r"make domain.size\[0\] = 0.1[02]",
+        ),
+        (
+            [
+                "domain.size=[1.3, 0.3]",
+                "bodies.0.max=[1.3, 0.195]",
+                "domain.periodic=[true, false]",
+            ],
+            r"130 cells halve down to no fewer than 130 points.*e.g. 1.28 m \(128 cells\)",
+        ),
+        (
+            [
+                "domain.periodic=[true, false]",
+                "solver.scheme=explicit",
+                "time.dt=auto",
+                "material.bulk_modulus=4e5",
+            ],
+            r'solver.scheme = "explicit" does not support periodic axes \(domain.periodic\); set '
+            r'solver.scheme = "projection", or remove domain.periodic',
+        ),
+    ],
+)
 def test_bad_periodic_settings_are_refused_with_the_fix(override, message):
     with pytest.raises(CaseError, match=message):
         load_case(EXAMPLES / "hydrostatic.toml", override)
@@ -139,9 +191,14 @@ def test_bad_periodic_settings_are_refused_with_the_fix(override, message):
 
 def test_an_obstacle_at_a_periodic_end_is_refused():
     with pytest.raises(CaseError, match="must stay a grid cell"):
-        load_case(EXAMPLES / "hydrostatic.toml",
-                  ["domain.periodic=[true, false]", "bodies.0.max=[0.1, 0.1]",
-                   "obstacles.0={type='box', min=[0.0, 0.15], max=[0.03, 0.2]}"])
+        load_case(
+            EXAMPLES / "hydrostatic.toml",
+            [
+                "domain.periodic=[true, false]",
+                "bodies.0.max=[0.1, 0.1]",
+                "obstacles.0={type='box', min=[0.0, 0.15], max=[0.03, 0.2]}",
+            ],
+        )
 
 
 def test_a_periodic_run_restarted_from_a_checkpoint_is_the_uninterrupted_run(tmp_path):
@@ -149,17 +206,26 @@ def test_a_periodic_run_restarted_from_a_checkpoint_is_the_uninterrupted_run(tmp
     viscous and pressure systems wrapping): resumed from its checkpoint at 0.06 s, it ends
     bit for bit where the uninterrupted run ends."""
     theta = math.radians(10.0)
-    more = ["domain.size=[0.04, 0.08]", "grid.spacing=0.005", "bodies.0.max=[0.04, 0.05]",
-            "domain.periodic=[true, false]", "domain.walls=no_slip",
-            "material.model=newtonian", "material.viscosity=10.0",
-            f"physics.gravity=[{G * math.sin(theta)}, {-G * math.cos(theta)}]",
-            "time.end=0.1", "checkpoint.interval=0.06", "output.snapshots=false"]
+    more = [
+        "domain.size=[0.04, 0.08]",
+        "grid.spacing=0.005",
+        "bodies.0.max=[0.04, 0.05]",
+        "domain.periodic=[true, false]",
+        "domain.walls=no_slip",
+        "material.model=newtonian",
+        "material.viscosity=10.0",
+        f"physics.gravity=[{G * math.sin(theta)}, {-G * math.cos(theta)}]",
+        "time.end=0.1",
+        "checkpoint.interval=0.06",
+        "output.snapshots=false",
+    ]
     whole = Simulation(load_case(EXAMPLES / "hydrostatic.toml", more), tmp_path / "whole")
     whole.run()
     out = tmp_path / "parts"
     shutil.copytree(tmp_path / "whole", out)  # resuming truncates the later outputs
-    rest = Simulation.resume(load_case(EXAMPLES / "hydrostatic.toml", more), out,
-                             out / "checkpoint_000000060.npz")
+    rest = Simulation.resume(
+        load_case(EXAMPLES / "hydrostatic.toml", more), out, out / "checkpoint_000000060.npz"
+    )
     assert rest.time == pytest.approx(0.06)
     rest.run()
     assert rest.steps == whole.steps
@@ -175,14 +241,19 @@ def test_water_flows_over_a_bump_beside_a_periodic_end_and_stays_in_the_box():
     particles that the obstacle's push-out moves across an end; this case does not happen to
     push any across, so it does not test that.)"""
     theta = math.radians(10.0)
-    case = make_case(size=(0.08, 0.2), body=((0.0, 0.0), (0.08, 0.1)), end=0.3,
-                     domain=dict(periodic=[True, False]),
-                     physics=dict(gravity=[G * math.sin(theta), -G * math.cos(theta)]),
-                     output=dict(snapshots=False))
+    case = make_case(
+        size=(0.08, 0.2),
+        body=((0.0, 0.0), (0.08, 0.1)),
+        end=0.3,
+        domain=dict(periodic=[True, False]),
+        physics=dict(gravity=[G * math.sin(theta), -G * math.cos(theta)]),
+        output=dict(snapshots=False),
+    )
     data = case.model_dump(exclude_none=True)
     data["obstacles"] = [dict(type="box", min=[0.01, 0.0], max=[0.03, 0.03])]
     data["bodies"][0]["around_obstacles"] = True
     from mpmflow.case import validate
+
     sim = _run(validate(data))
     x = sim.particles.x[:, 0]
     assert np.all((x >= 0.0) & (x < 0.08))

@@ -12,13 +12,34 @@ from mpmflow.cli import main
 @pytest.mark.slow
 def test_plot_makes_the_figures_and_the_animation(tmp_path, capsys):
     run = tmp_path / "run"
-    assert main(["run", str(EXAMPLES / "dam_break.toml"), "--out", str(run), "-q",
-                 "--set", "grid.spacing=0.0114", "--set", "time.dt=0.01",
-                 "--set", "time.end=0.3", "--set", "output.snapshot_interval=0.1"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(EXAMPLES / "dam_break.toml"),
+                "--out",
+                str(run),
+                "-q",
+                "--set",
+                "grid.spacing=0.0114",
+                "--set",
+                "time.dt=0.01",
+                "--set",
+                "time.end=0.3",
+                "--set",
+                "output.snapshot_interval=0.1",
+            ]
+        )
+        == 0
+    )
     assert main(["plot", str(run)]) == 0
     plots = run / "plots"
-    names = ["timeseries.png", "snapshots.png", "animation.gif",
-             *(f"snapshots/particles_{k:06d}.png" for k in range(4))]
+    names = [
+        "timeseries.png",
+        "snapshots.png",
+        "animation.gif",
+        *(f"snapshots/particles_{k:06d}.png" for k in range(4)),
+    ]
     for name in names:
         assert (plots / name).stat().st_size > 1000, name
     with Image.open(plots / "timeseries.png") as im:
@@ -36,9 +57,26 @@ def test_plot_of_a_folder_without_a_run(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("plot") / "run"
-    assert main(["run", str(EXAMPLES / "dam_break.toml"), "--out", str(run), "-q",
-                 "--set", "grid.spacing=0.02", "--set", "time.dt=0.01",
-                 "--set", "time.end=0.2", "--set", "output.snapshot_interval=0.1"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(EXAMPLES / "dam_break.toml"),
+                "--out",
+                str(run),
+                "-q",
+                "--set",
+                "grid.spacing=0.02",
+                "--set",
+                "time.dt=0.01",
+                "--set",
+                "time.end=0.2",
+                "--set",
+                "output.snapshot_interval=0.1",
+            ]
+        )
+        == 0
+    )
     return run
 
 
@@ -48,15 +86,19 @@ def _copy(run, tmp_path):
     return out
 
 
-@pytest.mark.parametrize("content, words", [
-    (b"lorem ipsum dolor sit amet\nconsectetur\n", "is not an mpmflow table"),
-    (bytes(range(256)) * 8, "is not a text file (it holds binary data)"),
-    (b"time,front,height\n", "holds no rows yet"),
-    (b"time,front,height\n0,0.1,0.2\n0.1,zz,0.2\n", "line 3, is damaged"),
-    (b"", "is not an mpmflow table"),
-])
-def test_plot_of_a_damaged_time_series_is_one_clear_error(small_run, tmp_path, capsys,
-                                                          content, words):
+@pytest.mark.parametrize(
+    "content, words",
+    [
+        (b"lorem ipsum dolor sit amet\nconsectetur\n", "is not an mpmflow table"),
+        (bytes(range(256)) * 8, "is not a text file (it holds binary data)"),
+        (b"time,front,height\n", "holds no rows yet"),
+        (b"time,front,height\n0,0.1,0.2\n0.1,zz,0.2\n", "line 3, is damaged"),
+        (b"", "is not an mpmflow table"),
+    ],
+)
+def test_plot_of_a_damaged_time_series_is_one_clear_error(
+    small_run, tmp_path, capsys, content, words
+):
     """A garbage, binary, empty or header-only timeseries.csv raised a traceback."""
     run = _copy(small_run, tmp_path)
     (run / "timeseries.csv").write_bytes(content)
@@ -66,14 +108,18 @@ def test_plot_of_a_damaged_time_series_is_one_clear_error(small_run, tmp_path, c
     assert words in err and "Traceback" not in err and err.count("\n") == 1, err
 
 
-@pytest.mark.parametrize("damage, words", [
-    ("missing", "is missing: the index particles.pvd lists it"),
-    ("truncated", "cannot be read"),
-    ("garbage", "cannot be read"),
-])
+@pytest.mark.parametrize(
+    "damage, words",
+    [
+        ("missing", "is missing: the index particles.pvd lists it"),
+        ("truncated", "cannot be read"),
+        ("garbage", "cannot be read"),
+    ],
+)
 @pytest.mark.slow
-def test_plot_leaves_out_a_missing_or_damaged_snapshot_with_a_note(small_run, tmp_path,
-                                                                   capsys, damage, words):
+def test_plot_leaves_out_a_missing_or_damaged_snapshot_with_a_note(
+    small_run, tmp_path, capsys, damage, words
+):
     """A missing VTU raised a traceback, a truncated one exit 1: the others are plotted
     and the note names the file."""
     run = _copy(small_run, tmp_path)
@@ -82,7 +128,7 @@ def test_plot_leaves_out_a_missing_or_damaged_snapshot_with_a_note(small_run, tm
     if damage == "missing":
         vtu.unlink()
     else:
-        vtu.write_bytes(data[:len(data) // 2] if damage == "truncated" else b"\x00junk" * 99)
+        vtu.write_bytes(data[: len(data) // 2] if damage == "truncated" else b"\x00junk" * 99)
     capsys.readouterr()
     assert main(["plot", str(run)]) == 0
     err = capsys.readouterr().err
@@ -150,10 +196,14 @@ def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
     from mpmflow.plotting.mpl import pyplot
 
     x = np.column_stack([np.linspace(0.0, 0.3, 50), np.full(50, 0.15), np.linspace(0, 0.1, 50)])
-    snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
-                             read=lambda: {"x": x, "pressure": np.linspace(0, 500, 50),
-                                           "mass": np.full(50, 1e-3)})
-             for k, t in enumerate((0.0, 0.1))]
+    snaps = [
+        SimpleNamespace(
+            time=t,
+            path=tmp_path / f"particles_{k:06d}.vtu",
+            read=lambda: {"x": x, "pressure": np.linspace(0, 500, 50), "mass": np.full(50, 1e-3)},
+        )
+        for k, t in enumerate((0.0, 0.1))
+    ]
     summary = {"grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01}}
     saved = _figures(monkeypatch)
     plot_snapshots(snaps, summary, tmp_path, pyplot(), [])
@@ -172,16 +222,19 @@ def _with_probes(run, pressure, level, positions=True):
     import numpy as np
 
     t = np.linspace(0.0, 0.2, 21)
-    probes = {f"p{k}": ("Pa", [0.01 + 0.4 * (k % 50) / 50, 0.01 + 0.4 * (k // 50) / 50])
-              for k in range(pressure)}
+    probes = {
+        f"p{k}": ("Pa", [0.01 + 0.4 * (k % 50) / 50, 0.01 + 0.4 * (k // 50) / 50])
+        for k in range(pressure)
+    }
     probes.update({f"l{k}": ("m", [0.4 * k / max(level, 1), 0.0]) for k in range(level)})
     header = ["time [s]"] + [f"{n} [{u}]" for n, (u, _) in probes.items()]
-    rows = [[f"{x:.6g}" for x in [tk, *(np.sin(tk + k) for k in range(len(probes)))]]
-            for tk in t]
+    rows = [[f"{x:.6g}" for x in [tk, *(np.sin(tk + k) for k in range(len(probes)))]] for tk in t]
     (run / "probes.csv").write_text("\n".join(map(",".join, [header, *rows])) + "\n")
     summary = json.loads((run / "summary.json").read_text())
-    summary["probes"] = {n: {"quantity": "pressure" if u == "Pa" else "level", "unit": u,
-                             "position": xy} for n, (u, xy) in probes.items()}
+    summary["probes"] = {
+        n: {"quantity": "pressure" if u == "Pa" else "level", "unit": u, "position": xy}
+        for n, (u, xy) in probes.items()
+    }
     if not positions:  # a run still going: no summary.json yet
         (run / "summary.json").unlink()
     else:
@@ -190,8 +243,7 @@ def _with_probes(run, pressure, level, positions=True):
 
 
 @pytest.mark.slow
-def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path,
-                                                            monkeypatch):
+def test_plot_of_2000_probes_draws_one_collection_per_panel(small_run, tmp_path, monkeypatch):
     """2,000 probes took 18 s to plot (a Line2D and a legend entry each) and the legend
     overflowed the figure. Over LEGEND_MAX probes a panel draws them as one LineCollection
     coloured by the probes' position, with a colour bar and no legend; the work is a handful
@@ -222,20 +274,19 @@ def _probes_figure(run, monkeypatch):
     from mpmflow.plotting.mpl import pyplot
 
     results, saved = open_run(run), _figures(monkeypatch)
-    plot_probes(results.probes, results.summary, results.units, run / "probes.png", pyplot(),
-                [])
+    plot_probes(results.probes, results.summary, results.units, run / "probes.png", pyplot(), [])
     return saved["probes.png"]
 
 
-def test_plot_of_many_probes_without_positions_says_what_the_colour_is(small_run, tmp_path,
-                                                                       monkeypatch):
+def test_plot_of_many_probes_without_positions_says_what_the_colour_is(
+    small_run, tmp_path, monkeypatch
+):
     """A run still going has no summary.json, so no probe positions: the colour is the
     probe's column in probes.csv, and the colour bar says so (not a position)."""
     run = _copy(small_run, tmp_path)
     _with_probes(run, 20, 0, positions=False)
     fig = _probes_figure(run, monkeypatch)
-    assert [ax.get_ylabel() for ax in fig.axes] == ["pressure [Pa]",
-                                                    "probe's column in probes.csv"]
+    assert [ax.get_ylabel() for ax in fig.axes] == ["pressure [Pa]", "probe's column in probes.csv"]
     assert fig.axes[0].get_title() == "20 probes"
 
 
@@ -270,13 +321,20 @@ def test_3d_run_draws_the_water_surface_beside_the_slice(tmp_path, monkeypatch):
 
     axes = [np.arange(0.0025, a, 0.005) for a in (0.1, 0.3, 0.1)]  # 8 particles per cell
     x = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    mass = np.full(len(x), 1000.0 * 0.005 ** 3)
+    mass = np.full(len(x), 1000.0 * 0.005**3)
     frames = {0.0: mass, 0.1: mass, 0.2: 0.4 * mass}  # the last: a fraction 0.4 everywhere
-    snaps = [SimpleNamespace(time=t, path=tmp_path / f"particles_{k:06d}.vtu",
-                             read=lambda m=m: {"x": x, "pressure": x[:, 2], "mass": m})
-             for k, (t, m) in enumerate(frames.items())]
-    summary = {"grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01, "cells": [30] * 3},
-               "case": {"material": {"density": 1000.0}}}
+    snaps = [
+        SimpleNamespace(
+            time=t,
+            path=tmp_path / f"particles_{k:06d}.vtu",
+            read=lambda m=m: {"x": x, "pressure": x[:, 2], "mass": m},
+        )
+        for k, (t, m) in enumerate(frames.items())
+    ]
+    summary = {
+        "grid": {"domain_used": [0.3, 0.3, 0.3], "spacing": 0.01, "cells": [30] * 3},
+        "case": {"material": {"density": 1000.0}},
+    }
     saved = _figures(monkeypatch)
     written = plot_snapshots(snaps, summary, tmp_path, pyplot(), [])
     names = [f"surface_{k:06d}.png" for k in range(3)]
@@ -287,15 +345,16 @@ def test_3d_run_draws_the_water_surface_beside_the_slice(tmp_path, monkeypatch):
     assert len(overview.axes) == 3
     for fig in (overview, *(saved[n] for n in names)):
         for ax in fig.axes:
-            assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("x [m]", "y [m]",
-                                                                           "z [m]")
+            assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == (
+                "x [m]",
+                "y [m]",
+                "z [m]",
+            )
             assert ax.get_xlim() == (0.0, 0.3) and ax.get_zlim() == (0.0, 0.3)
     assert overview._suptitle.get_text() == "water surface (volume fraction 1/2)"
-    (full,) = [c for c in saved[names[0]].axes[0].collections
-               if isinstance(c, Poly3DCollection)]
+    (full,) = [c for c in saved[names[0]].axes[0].collections if isinstance(c, Poly3DCollection)]
     assert saved[names[0]].axes[0].get_title() == "t = 0.000 s"
-    (empty,) = [c for c in saved[names[2]].axes[0].collections
-                if isinstance(c, Poly3DCollection)]
+    (empty,) = [c for c in saved[names[2]].axes[0].collections if isinstance(c, Poly3DCollection)]
     assert len(full.get_facecolor()) > 100 and len(empty.get_facecolor()) == 0
 
 
@@ -312,14 +371,19 @@ def test_3d_pictures_without_scikit_image_are_left_out_with_a_note(tmp_path, mon
 
     monkeypatch.setitem(sys.modules, "skimage", None)
     x = np.random.default_rng(1).uniform(0.0, 0.1, (200, 3))
-    snaps = [SimpleNamespace(time=0.0, path=tmp_path / "particles_000000.vtu",
-                             read=lambda: {"x": x, "pressure": x[:, 2],
-                                           "mass": np.full(200, 1e-3)})]
+    snaps = [
+        SimpleNamespace(
+            time=0.0,
+            path=tmp_path / "particles_000000.vtu",
+            read=lambda: {"x": x, "pressure": x[:, 2], "mass": np.full(200, 1e-3)},
+        )
+    ]
     summary = {"grid": {"domain_used": [0.1, 0.1, 0.1], "spacing": 0.01}}
     notes = []
     written = plot_snapshots(snaps, summary, tmp_path, pyplot(), notes)
-    assert [p.name for p in written] == ["particles_000000.png", "snapshots.png",
-                                         "animation.gif"]
-    assert notes == ["mpmflow plot needs scikit-image for the 3D water surface: pip install "
-                     "'mpmflow[plot]' (or pip install scikit-image). The 3D pictures are "
-                     "left out."]
+    assert [p.name for p in written] == ["particles_000000.png", "snapshots.png", "animation.gif"]
+    assert notes == [
+        "mpmflow plot needs scikit-image for the 3D water surface: pip install "
+        "'mpmflow[plot]' (or pip install scikit-image). The 3D pictures are "
+        "left out."
+    ]

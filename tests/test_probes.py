@@ -29,14 +29,22 @@ def _run(example, probes, overrides, out=None):
 
 # the sensors of the column at rest: on the floor, in a floor corner, on both side walls,
 # inside the water, just under the surface and above it (dry)
-POINTS_2D = {"floor": [0.05, 0.0], "corner": [0.0, 0.0], "left": [0.0, 0.1],
-             "right": [0.1, 0.05], "inside": [0.043, 0.077], "under_surface": [0.05, 0.19],
-             "dry": [0.05, 0.2]}
+POINTS_2D = {
+    "floor": [0.05, 0.0],
+    "corner": [0.0, 0.0],
+    "left": [0.0, 0.1],
+    "right": [0.1, 0.05],
+    "inside": [0.043, 0.077],
+    "under_surface": [0.05, 0.19],
+    "dry": [0.05, 0.2],
+}
 
 
 def _pressure_probes(points, estimate):
-    return [{"name": f"{k}_{estimate}", "quantity": "pressure", "position": v,
-             "estimate": estimate} for k, v in points.items()]
+    return [
+        {"name": f"{k}_{estimate}", "quantity": "pressure", "position": v, "estimate": estimate}
+        for k, v in points.items()
+    ]
 
 
 def _check_hydrostatic(sim, points, depth):
@@ -55,10 +63,11 @@ def _check_hydrostatic(sim, points, depth):
 
 
 def test_pressure_probes_read_the_hydrostatic_pressure_at_their_point_2d():
-    sim = _run("hydrostatic.toml",
-               _pressure_probes(POINTS_2D, "fit") + _pressure_probes({"floor": [0.05, 0.0]},
-                                                                     "mean"),
-               {"time.end": 0.02})
+    sim = _run(
+        "hydrostatic.toml",
+        _pressure_probes(POINTS_2D, "fit") + _pressure_probes({"floor": [0.05, 0.0]}, "mean"),
+        {"time.end": 0.02},
+    )
     _check_hydrostatic(sim, POINTS_2D, H)
     assert sim.probe_series("dry_fit")[-1] == 0.0  # no particle in its window
 
@@ -77,14 +86,24 @@ def test_pressure_and_level_probes_in_3d():
     points["wall_y"] = [0.03, 0.0, 0.1]
     points["under_surface"] = [0.05, 0.025, 0.19]
     points["dry"] = [0.05, 0.025, 0.23]
-    gauges = {"middle": ([0.05, 0.025, 0.0], depth), "between": ([0.031, 0.017, 0.0], depth),
-              "wall": ([0.1, 0.01, 0.0], depth), "corner": ([0.0, 0.0, 0.0], depth),
-              "raised": ([0.04, 0.03, 0.1], depth - 0.1), "above": ([0.04, 0.03, 0.25], 0.0)}
-    probes = (_pressure_probes(points, "fit")
-              + _pressure_probes({"floor": points["floor"]}, "mean")
-              + [{"name": k, "quantity": "level", "position": p} for k, (p, _) in gauges.items()])
-    sim = _run("hydrostatic_3d.toml", probes,
-               {"time.end": 0.02, "grid.spacing": 0.025, "bodies.0.max": [0.1, 0.05, depth]})
+    gauges = {
+        "middle": ([0.05, 0.025, 0.0], depth),
+        "between": ([0.031, 0.017, 0.0], depth),
+        "wall": ([0.1, 0.01, 0.0], depth),
+        "corner": ([0.0, 0.0, 0.0], depth),
+        "raised": ([0.04, 0.03, 0.1], depth - 0.1),
+        "above": ([0.04, 0.03, 0.25], 0.0),
+    }
+    probes = (
+        _pressure_probes(points, "fit")
+        + _pressure_probes({"floor": points["floor"]}, "mean")
+        + [{"name": k, "quantity": "level", "position": p} for k, (p, _) in gauges.items()]
+    )
+    sim = _run(
+        "hydrostatic_3d.toml",
+        probes,
+        {"time.end": 0.02, "grid.spacing": 0.025, "bodies.0.max": [0.1, 0.05, depth]},
+    )
     _check_hydrostatic(sim, points, depth)
     for name, (_, level) in gauges.items():
         np.testing.assert_allclose(sim.probe_series(name), level, atol=1e-9, err_msg=name)
@@ -93,10 +112,17 @@ def test_pressure_and_level_probes_in_3d():
 def test_level_probes_2d_on_the_column_whose_surface_is_half_a_cell_off_a_grid_line():
     """Depth 0.195 m on the 0.01 m mesh: the cell under the surface is half full, and the
     f = 1/2 rule puts the level at the depth; a foot in the water reads the depth above it."""
-    gauges = {"wall": [0.0, 0.0], "between": [0.033, 0.0], "raised": [0.07, 0.1],
-              "above": [0.07, 0.25]}
-    sim = _run("hydrostatic.toml", [{"name": k, "quantity": "level", "position": p}
-                                    for k, p in gauges.items()], {"time.end": 0.02})
+    gauges = {
+        "wall": [0.0, 0.0],
+        "between": [0.033, 0.0],
+        "raised": [0.07, 0.1],
+        "above": [0.07, 0.25],
+    }
+    sim = _run(
+        "hydrostatic.toml",
+        [{"name": k, "quantity": "level", "position": p} for k, p in gauges.items()],
+        {"time.end": 0.02},
+    )
     for name, level in (("wall", H), ("between", H), ("raised", H - 0.1), ("above", 0.0)):
         np.testing.assert_allclose(sim.probe_series(name), level, atol=1e-9, err_msg=name)
 
@@ -105,7 +131,7 @@ def _columns(grid, depths):
     """Cell volume fractions of columns filled to whole numbers of cells (depths[i][j])."""
     f = np.zeros(grid.cells)
     for index in np.ndindex(*grid.cells[:-1]):
-        f[index][:depths[index]] = 1.0
+        f[index][: depths[index]] = 1.0
     return f
 
 
@@ -133,7 +159,8 @@ def test_level_in_3d_interpolates_the_four_cell_columns_around_the_gauge_bilinea
     assert level_at(grid2, f2, [at, 0.0], gauge=FIRST) == pytest.approx((7.5 + 0.25 / 0.75) * h)
     f3 = _columns(grid, np.array([[4, 4], [8, 8]]))
     assert level_at(grid, f3, [at, 0.3 * h, 0.0], gauge=FIRST) == pytest.approx(
-        level_at(grid2, f2, [at, 0], gauge=FIRST))
+        level_at(grid2, f2, [at, 0], gauge=FIRST)
+    )
 
 
 def test_the_integral_gauge_reads_the_water_on_its_line_gathered_into_one_layer():
@@ -198,8 +225,10 @@ def test_the_window_lies_on_the_water_side_of_a_wall_and_of_an_obstacle_face():
 
 
 def test_probes_csv_names_each_column_with_its_unit(tmp_path):
-    probes = [{"name": "wall_p", "quantity": "pressure", "position": [0.1, 0.05]},
-              {"name": "gauge.1", "quantity": "level", "position": [0.03, 0.0]}]
+    probes = [
+        {"name": "wall_p", "quantity": "pressure", "position": [0.1, 0.05]},
+        {"name": "gauge.1", "quantity": "level", "position": [0.03, 0.0]},
+    ]
     _run("hydrostatic.toml", probes, {"time.end": 0.02}, out=tmp_path)
     lines = (tmp_path / "probes.csv").read_text().splitlines()
     assert lines[0] == "time [s],wall_p [Pa],gauge.1 [m]"
@@ -209,9 +238,13 @@ def test_probes_csv_names_each_column_with_its_unit(tmp_path):
     np.testing.assert_allclose(run.probes["time"], [0.0, 0.01, 0.02])
     np.testing.assert_allclose(run.probes["wall_p"][1:], RHO * G * (H - 0.05), rtol=1e-9)
     assert run.units["wall_p"] == "Pa" and run.units["gauge.1"] == "m"
-    assert run.summary["probes"]["wall_p"] == {"quantity": "pressure", "position": [0.1, 0.05],
-                                               "unit": "Pa", "window": 0.01,
-                                               "estimate": "fit"}
+    assert run.summary["probes"]["wall_p"] == {
+        "quantity": "pressure",
+        "position": [0.1, 0.05],
+        "unit": "Pa",
+        "window": 0.01,
+        "estimate": "fit",
+    }
 
 
 DATA = "time [s],P1 [Pa],H1 [m]\n0.0,0.0,0.195\n0.05,1400.0,0.195\n0.1,1430.0,0.195\n"
@@ -221,8 +254,9 @@ def _case_with_data(folder, data):
     (folder / "measured.csv").write_text(DATA)
     text = (EXAMPLES / "hydrostatic.toml").read_text()
     text = text.replace("end = 1.0 ", "end = 0.1 ")
-    text += ("\n[[probes]]\nname = \"P1\"\nquantity = \"pressure\"\nposition = [0.1, 0.05]\n"
-             f"data = {data}\n")
+    text += (
+        f'\n[[probes]]\nname = "P1"\nquantity = "pressure"\nposition = [0.1, 0.05]\ndata = {data}\n'
+    )
     path = folder / "case.toml"
     path.write_text(text)
     return path
@@ -239,15 +273,24 @@ def test_probe_data_is_found_beside_the_case_file(tmp_path, monkeypatch):
     assert validate_case(case).model_dump() == case.model_dump()  # found from anywhere
 
 
-@pytest.mark.parametrize("data, words", [
-    ('{path = "nowhere.csv", column = "P1 [Pa]"}',
-     "probes.0.data.path = 'nowhere.csv': the file"),
-    ('{path = "measured.csv", column = "P2 [Pa]"}',
-     "probes.0.data.column = 'P2 [Pa]' is not a column of measured.csv, whose header names "
-     "'time [s]', 'P1 [Pa]', 'H1 [m]'; set probes.0.data.column to one of them"),
-    ('{path = "measured.csv", column = "P1 [Pa]", time_column = "t"}',
-     "probes.0.data.time_column = 't' is not a column of measured.csv"),
-])
+@pytest.mark.parametrize(
+    "data, words",
+    [
+        (
+            '{path = "nowhere.csv", column = "P1 [Pa]"}',
+            "probes.0.data.path = 'nowhere.csv': the file",
+        ),
+        (
+            '{path = "measured.csv", column = "P2 [Pa]"}',
+            "probes.0.data.column = 'P2 [Pa]' is not a column of measured.csv, whose header names "
+            "'time [s]', 'P1 [Pa]', 'H1 [m]'; set probes.0.data.column to one of them",
+        ),
+        (
+            '{path = "measured.csv", column = "P1 [Pa]", time_column = "t"}',
+            "probes.0.data.time_column = 't' is not a column of measured.csv",
+        ),
+    ],
+)
 def test_a_missing_data_file_or_column_is_one_clear_error(tmp_path, data, words):
     path = _case_with_data(tmp_path, data)
     with pytest.raises(CaseError) as err:
@@ -262,11 +305,25 @@ def test_the_spheric_test2_file_names_its_columns_for_probes(tmp_path):
     from mpmflow.reference import data_dir
 
     path = data_dir() / "validation" / "spheric_test2_kleefsman2005_marin_exp_P1-P8_H1-H4.csv"
-    case = load_case(EXAMPLES / "hydrostatic_3d.toml", {"probes": [
-        {"name": "P1", "quantity": "pressure", "position": [0.1, 0.025, 0.021],
-         "data": {"path": str(path), "column": "P1 [Pa]"}},
-        {"name": "H3", "quantity": "level", "position": [0.05, 0.025, 0.0],
-         "data": {"path": str(path), "column": "H3 as labelled in source [m]"}}]})
+    case = load_case(
+        EXAMPLES / "hydrostatic_3d.toml",
+        {
+            "probes": [
+                {
+                    "name": "P1",
+                    "quantity": "pressure",
+                    "position": [0.1, 0.025, 0.021],
+                    "data": {"path": str(path), "column": "P1 [Pa]"},
+                },
+                {
+                    "name": "H3",
+                    "quantity": "level",
+                    "position": [0.05, 0.025, 0.0],
+                    "data": {"path": str(path), "column": "H3 as labelled in source [m]"},
+                },
+            ]
+        },
+    )
     assert [p.data.column for p in case.probes] == ["P1 [Pa]", "H3 as labelled in source [m]"]
 
 
@@ -274,11 +331,23 @@ def test_the_spheric_test2_file_names_its_columns_for_probes(tmp_path):
 def test_plot_draws_the_probes_over_their_measured_series(tmp_path, capsys):
     path = _case_with_data(tmp_path, '{path = "measured.csv", column = "P1 [Pa]"}')
     run = tmp_path / "run"
-    assert main(["run", str(path), "--out", str(run), "-q", "--set",
-                 'probes=[{name = "P1", quantity = "pressure", position = [0.1, 0.05], '
-                 'data = {path = "measured.csv", column = "P1 [Pa]"}}, '
-                 '{name = "gauge", quantity = "level", position = [0.05, 0.0], '
-                 'data = {path = "measured.csv", column = "H1 [m]"}}]']) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(path),
+                "--out",
+                str(run),
+                "-q",
+                "--set",
+                'probes=[{name = "P1", quantity = "pressure", position = [0.1, 0.05], '
+                'data = {path = "measured.csv", column = "P1 [Pa]"}}, '
+                '{name = "gauge", quantity = "level", position = [0.05, 0.0], '
+                'data = {path = "measured.csv", column = "H1 [m]"}}]',
+            ]
+        )
+        == 0
+    )
     assert main(["plot", str(run)]) == 0
     figure = run / "plots" / "probes.png"
     with Image.open(figure) as im:  # two panels: pressures, levels
@@ -294,8 +363,22 @@ def test_plot_draws_the_probes_over_their_measured_series(tmp_path, capsys):
 
 def test_plot_without_probes_draws_no_probe_figure(tmp_path):
     run = tmp_path / "run"
-    assert main(["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(run), "-q",
-                 "--set", "time.end=0.02", "--set", "output.snapshots=false"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(EXAMPLES / "hydrostatic.toml"),
+                "--out",
+                str(run),
+                "-q",
+                "--set",
+                "time.end=0.02",
+                "--set",
+                "output.snapshots=false",
+            ]
+        )
+        == 0
+    )
     assert main(["plot", str(run)]) == 0
     assert (run / "plots" / "timeseries.png").is_file()
     assert not (run / "plots" / "probes.png").exists()
@@ -331,23 +414,40 @@ def test_sensors_at_the_default_density_read_rho_g_h_on_the_floor_walls_and_an_o
     now holds a fit's particles, so the floor, a side wall and the faces of a block standing
     in the water read rho g (H - z) to 1e-6."""
     depth = 0.15
-    points = {"floor": [0.05, 0.0], "wall": [0.0, 0.07], "right_wall": [0.1, 0.03],
-              "block_top": [0.075, 0.04], "block_side": [0.06, 0.02]}
-    sim = _column_with_block("hydrostatic.toml", ([0.06, 0.0], [0.09, 0.04]), depth,
-                             points, {"time.end": 0.02, "bodies.0.max": [0.1, depth]})
+    points = {
+        "floor": [0.05, 0.0],
+        "wall": [0.0, 0.07],
+        "right_wall": [0.1, 0.03],
+        "block_top": [0.075, 0.04],
+        "block_side": [0.06, 0.02],
+    }
+    sim = _column_with_block(
+        "hydrostatic.toml",
+        ([0.06, 0.0], [0.09, 0.04]),
+        depth,
+        points,
+        {"time.end": 0.02, "bodies.0.max": [0.1, depth]},
+    )
     assert sim.fallbacks.rows() == []
     assert probes.window(sim.case.probes[0], sim.grid, sim.case) == 2 * sim.grid.spacing
 
 
 def test_sensors_at_the_default_density_read_rho_g_h_in_3d():
     depth = 0.2
-    points = {"floor": [0.05, 0.025, 0.0], "wall": [0.0, 0.025, 0.1],
-              "wall_y": [0.03, 0.0, 0.1], "block_top": [0.075, 0.025, 0.05],
-              "block_side": [0.05, 0.025, 0.025]}
-    sim = _column_with_block("hydrostatic_3d.toml",
-                             ([0.05, 0.0, 0.0], [0.1, 0.05, 0.05]), depth, points,
-                             {"time.end": 0.02, "grid.spacing": 0.025,
-                              "bodies.0.max": [0.1, 0.05, depth]})
+    points = {
+        "floor": [0.05, 0.025, 0.0],
+        "wall": [0.0, 0.025, 0.1],
+        "wall_y": [0.03, 0.0, 0.1],
+        "block_top": [0.075, 0.025, 0.05],
+        "block_side": [0.05, 0.025, 0.025],
+    }
+    sim = _column_with_block(
+        "hydrostatic_3d.toml",
+        ([0.05, 0.0, 0.0], [0.1, 0.05, 0.05]),
+        depth,
+        points,
+        {"time.end": 0.02, "grid.spacing": 0.025, "bodies.0.max": [0.1, 0.05, depth]},
+    )
     assert sim.fallbacks.rows() == []
 
 
@@ -355,14 +455,14 @@ def test_a_window_too_sparse_for_a_fit_reads_the_mean_and_says_so():
     """A floor window set to 0.004 m holds one layer of particles (at 0.0025 m, 4 per
     cell axis on the 0.01 m mesh): the probe reads their mean, the pressure of that layer,
     and the summary counts it at every output."""
-    sim = _run("hydrostatic.toml", [{"name": "floor", "quantity": "pressure",
-                                     "position": [0.05, 0.0], "window": 0.004}],
-               {"time.end": 0.02})
-    np.testing.assert_allclose(sim.probe_series("floor")[-1], RHO * G * (H - 0.0025),
-                               rtol=1e-7)
+    sim = _run(
+        "hydrostatic.toml",
+        [{"name": "floor", "quantity": "pressure", "position": [0.05, 0.0], "window": 0.004}],
+        {"time.end": 0.02},
+    )
+    np.testing.assert_allclose(sim.probe_series("floor")[-1], RHO * G * (H - 0.0025), rtol=1e-7)
     (row,) = sim.fallbacks.rows()
-    assert (row["what"], row["where"]) == ("probe fit fell back to the window mean",
-                                           "probe floor")
+    assert (row["what"], row["where"]) == ("probe fit fell back to the window mean", "probe floor")
     assert row["count"] == len(sim.probe_series("floor"))
 
 
@@ -372,10 +472,18 @@ def test_fallbacks_are_in_the_summary_on_the_last_line_and_survive_a_restart(tmp
     import json
     import signal
 
-    args = ["run", str(EXAMPLES / "hydrostatic.toml"), "--set", "time.end=0.04",
-            "--set", "output.snapshots=false", "--set", "checkpoint.interval=0.01",
-            "--set", "probes=[{name='floor', quantity='pressure', position=[0.05, 0.0], "
-            "window=0.004}]"]
+    args = [
+        "run",
+        str(EXAMPLES / "hydrostatic.toml"),
+        "--set",
+        "time.end=0.04",
+        "--set",
+        "output.snapshots=false",
+        "--set",
+        "checkpoint.interval=0.01",
+        "--set",
+        "probes=[{name='floor', quantity='pressure', position=[0.05, 0.0], window=0.004}]",
+    ]
     assert main(args + ["--out", str(tmp_path / "whole")]) == 0
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert "probe fit fell back to the window mean (probe floor: 5 outputs)" in last, last
@@ -388,6 +496,7 @@ def test_fallbacks_are_in_the_summary_on_the_last_line_and_survive_a_restart(tmp
     def stop(sim):
         if sim.time >= 0.02 - 1e-12:
             sim.stop_signal = signal.SIGINT
+
     first.on_output = stop
     assert first.run()["status"] == "interrupted"
     rest = Simulation.resume(case, tmp_path / "parts")

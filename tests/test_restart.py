@@ -15,13 +15,21 @@ from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.particles import Particles
 
-COMMON = ["grid.spacing=0.01", "time.end=0.1", "checkpoint.interval=0.03",
-          "output.snapshot_interval=0.02"]
+COMMON = [
+    "grid.spacing=0.01",
+    "time.end=0.1",
+    "checkpoint.interval=0.03",
+    "output.snapshot_interval=0.02",
+]
 SCHEMES = {
     "projection": [],
     "apic": ["solver.transfer=apic"],  # the particles' affine matrices are in the checkpoint
-    "explicit": ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5",
-                 "bodies.0.initial_pressure=hydrostatic"],
+    "explicit": [
+        "solver.scheme=explicit",
+        "time.dt=auto",
+        "material.bulk_modulus=4e5",
+        "bodies.0.initial_pressure=hydrostatic",
+    ],
 }
 
 
@@ -39,9 +47,11 @@ def uninterrupted(request, tmp_path_factory):
 
 def _stop_at(sim, t):
     """Ask ``sim`` to stop at its output time t, as the SIGINT handler does."""
+
     def hook(s):
         if s.time >= t - 1e-12:
             s.stop_signal = signal.SIGINT
+
     sim.on_output = hook
 
 
@@ -107,8 +117,9 @@ def test_a_later_end_extends_a_finished_run(uninterrupted, tmp_path):
     rest = Simulation.resume(longer, out, checkpoints(out)[-1])
     rest.run()
     rows = (out / "timeseries.csv").read_text().split()[1:]
-    assert [round(float(r.split(",")[0]), 9) for r in rows] == \
-        [round(0.01 * k, 9) for k in range(13)]  # no duplicate row at 0.1 s
+    assert [round(float(r.split(",")[0]), 9) for r in rows] == [
+        round(0.01 * k, 9) for k in range(13)
+    ]  # no duplicate row at 0.1 s
     assert rest.steps > whole.steps
 
 
@@ -116,8 +127,7 @@ def test_a_later_end_extends_a_finished_run(uninterrupted, tmp_path):
 def test_restart_refuses_other_settings_naming_the_key(uninterrupted):
     scheme, _, whole_out = uninterrupted
     with pytest.raises(CaseError) as err:
-        Simulation.resume(_case(scheme, "solver.flip=0.5"), whole_out,
-                          checkpoints(whole_out)[-1])
+        Simulation.resume(_case(scheme, "solver.flip=0.5"), whole_out, checkpoints(whole_out)[-1])
     msg = str(err.value)
     assert "`solver.flip` = 0.5 now" in msg and "in the checkpoint" in msg
     assert "--set solver.flip=" in msg
@@ -130,8 +140,9 @@ def test_cli_restart_without_checkpoint_and_with_overwrite(tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     assert main(["run", str(case), "--out", str(tmp_path / "empty"), "--restart"]) == 2
     assert "holds no checkpoint" in capsys.readouterr().err
-    assert main(["run", str(case), "--out", str(tmp_path / "empty"), "--restart",
-                 "--overwrite"]) == 2
+    assert (
+        main(["run", str(case), "--out", str(tmp_path / "empty"), "--restart", "--overwrite"]) == 2
+    )
     assert "give one of them" in capsys.readouterr().err
 
 
@@ -152,8 +163,9 @@ def _cli_args(scheme, out):
 
 @pytest.mark.parametrize("damage", [b"", b"not a zip file", "truncated"])
 @pytest.mark.slow
-def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(uninterrupted, tmp_path,
-                                                                  capsys, damage):
+def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(
+    uninterrupted, tmp_path, capsys, damage
+):
     """An empty or cut-short checkpoint (a crash before its data reached the disk) is passed
     over with a notice; the run continues from the one before and ends as the whole run."""
     scheme, whole, whole_out = uninterrupted
@@ -161,7 +173,7 @@ def test_a_damaged_latest_checkpoint_falls_back_to_the_one_before(uninterrupted,
     shutil.copytree(whole_out, out)
     older, final = checkpoints(out)  # at 0.09 s and at the end (0.1 s)
     data = final.read_bytes()
-    final.write_bytes(data[:len(data) // 2] if damage == "truncated" else damage)
+    final.write_bytes(data[: len(data) // 2] if damage == "truncated" else damage)
     assert main(_cli_args(scheme, out)) == 0
     err = capsys.readouterr().err
     assert "Traceback" not in err
@@ -233,8 +245,9 @@ def test_extending_a_run_whose_end_is_not_an_output_time(tmp_path):
     Simulation(_case("projection", "time.end=0.105"), out).run()
     rest = Simulation.resume(_case("projection", "time.end=0.12"), out, checkpoints(out)[-1])
     rest.run()
-    times = [round(float(r.split(",")[0]), 9) for r in
-             (out / "timeseries.csv").read_text().split()[1:]]
+    times = [
+        round(float(r.split(",")[0]), 9) for r in (out / "timeseries.csv").read_text().split()[1:]
+    ]
     assert times == [round(0.01 * k, 9) for k in range(11)] + [0.105, 0.11, 0.12]
     whole = Simulation(_case("projection", "time.end=0.12"))
     whole.run()
@@ -249,10 +262,16 @@ def test_extending_a_run_whose_end_is_not_an_output_time(tmp_path):
 
 
 def _probe_case(data, *more):
-    return load_case(EXAMPLES / "dam_break.toml", COMMON + [
-        "time.end=0.06",
-        f"probes=[{{name='p', quantity='pressure', position=[0.05, 0.0], "
-        f"data={{path='{data}', column='p [Pa]'}}}}]", *more])
+    return load_case(
+        EXAMPLES / "dam_break.toml",
+        COMMON
+        + [
+            "time.end=0.06",
+            f"probes=[{{name='p', quantity='pressure', position=[0.05, 0.0], "
+            f"data={{path='{data}', column='p [Pa]'}}}}]",
+            *more,
+        ],
+    )
 
 
 @pytest.mark.slow
@@ -266,7 +285,9 @@ def test_restart_refuses_a_case_file_whose_content_changed(tmp_path):
     out = tmp_path / "run"
     Simulation(_probe_case(data), out).run()
     saved = read(checkpoints(out)[-1])[1]["files"]
-    assert list(saved) == ["probes.0.data.path"] and len(saved["probes.0.data.path"]["sha256"]) == 64
+    assert (
+        list(saved) == ["probes.0.data.path"] and len(saved["probes.0.data.path"]["sha256"]) == 64
+    )
     later = _probe_case(data, "time.end=0.09")
     Simulation.resume(later, out).close()  # same file: accepted
     data.write_text("time [s],p [Pa]\n0.0,0.0\n1.0,200.0\n")  # the same size, other values
@@ -282,13 +303,21 @@ def test_restart_refuses_a_moved_mesh(tmp_path):
     import trimesh
 
     stl = tmp_path / "cube.stl"
-    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).apply_translation([0.3, 0.02, 0.01]).export(stl)
-    args = ["time.end=0.02", "time.dt=1e-3", "grid.spacing=0.008", "checkpoint.interval=0.01",
-            "output.snapshots=false",
-            f"obstacles=[{{type='mesh', path='{stl}'}}]"]
+    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).apply_translation([0.3, 0.02, 0.01]).export(
+        stl
+    )
+    args = [
+        "time.end=0.02",
+        "time.dt=1e-3",
+        "grid.spacing=0.008",
+        "checkpoint.interval=0.01",
+        "output.snapshots=false",
+        f"obstacles=[{{type='mesh', path='{stl}'}}]",
+    ]
     out = tmp_path / "run"
     Simulation(load_case(EXAMPLES / "dam_break_3d.toml", args), out).run()
-    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).apply_translation([0.35, 0.02, 0.01]).export(stl)
+    trimesh.creation.box(extents=[0.02, 0.02, 0.02]).apply_translation([0.35, 0.02, 0.01]).export(
+        stl
+    )
     with pytest.raises(CaseError, match=r"`obstacles\.0\.path`"):
-        Simulation.resume(load_case(EXAMPLES / "dam_break_3d.toml", [*args, "time.end=0.04"]),
-                          out)
+        Simulation.resume(load_case(EXAMPLES / "dam_break_3d.toml", [*args, "time.end=0.04"]), out)

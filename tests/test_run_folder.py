@@ -22,15 +22,34 @@ from mpmflow.output.snapshots import read_index
 
 CASE = EXAMPLES / "dam_break.toml"
 # two distinguishable runs: other meshes (particle counts), snapshot times and titles
-RUN_A = ["--set", "grid.spacing=0.008", "--set", "time.end=0.4", "--set",
-         "output.snapshot_interval=0.1", "--set", "title=A"]
-RUN_B = ["--set", "grid.spacing=0.01", "--set", "time.end=0.3", "--set",
-         "output.snapshot_interval=0.05", "--set", "title=B"]
+RUN_A = [
+    "--set",
+    "grid.spacing=0.008",
+    "--set",
+    "time.end=0.4",
+    "--set",
+    "output.snapshot_interval=0.1",
+    "--set",
+    "title=A",
+]
+RUN_B = [
+    "--set",
+    "grid.spacing=0.01",
+    "--set",
+    "time.end=0.3",
+    "--set",
+    "output.snapshot_interval=0.05",
+    "--set",
+    "title=B",
+]
 
 
 def _start(out, *args):
-    return subprocess.Popen([sys.executable, "-m", "mpmflow.cli", "run", str(CASE), "--out",
-                             str(out), "-q", *args], stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "mpmflow.cli", "run", str(CASE), "--out", str(out), "-q", *args],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def _assert_outputs_of_one_run(out, title):
@@ -80,19 +99,36 @@ def test_a_run_or_restart_into_a_busy_folder_is_refused(tmp_path):
     out = tmp_path / "o"
     # seconds of stepping (0.004 m, 2,000 steps), so that it is still going when the
     # others try
-    first = _start(out, "--set", "time.end=2.0", "--set", "output.snapshot_interval=0.5",
-                   "--set", "title=A")
+    first = _start(
+        out, "--set", "time.end=2.0", "--set", "output.snapshot_interval=0.5", "--set", "title=A"
+    )
     t0 = time.monotonic()
-    while not (out / "timeseries.csv").exists() or \
-            len((out / "timeseries.csv").read_text().splitlines()) < 3:
+    while (
+        not (out / "timeseries.csv").exists()
+        or len((out / "timeseries.csv").read_text().splitlines()) < 3
+    ):
         assert first.poll() is None, first.stderr.read()
         assert time.monotonic() - t0 < 120
         time.sleep(0.01)
     for extra in (["--overwrite"], ["--restart"], []):
         assert first.poll() is None, "the first run ended before the test could try"
-        res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run", str(CASE), "--out",
-                              str(out), "-q", *RUN_A, *extra], capture_output=True, text=True,
-                             timeout=120)
+        res = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "mpmflow.cli",
+                "run",
+                str(CASE),
+                "--out",
+                str(out),
+                "-q",
+                *RUN_A,
+                *extra,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert res.returncode == 2, (extra, res.stderr)
         assert f"PID {first.pid}" in res.stderr and "Traceback" not in res.stderr
         assert "kill -TERM" in res.stderr
@@ -139,8 +175,17 @@ def test_leftovers_of_a_killed_write_are_removed(tmp_path, capsys):
     """A checkpoint write killed half-way leaves .checkpoint_*.tmp: --restart and
     --overwrite remove it (with a note), as nothing else can be writing there."""
     out = tmp_path / "o"
-    args = ["run", str(CASE), "--out", str(out), "-q", "--set", "grid.spacing=0.02",
-            "--set", "time.end=0.1"]
+    args = [
+        "run",
+        str(CASE),
+        "--out",
+        str(out),
+        "-q",
+        "--set",
+        "grid.spacing=0.02",
+        "--set",
+        "time.end=0.1",
+    ]
     assert main(args) == 0
     stale = [out / ".checkpoint_000000200.npz.x8k2_q.tmp", out / ".timeseries.csv.abc.tmp"]
     for path in stale:

@@ -53,8 +53,12 @@ def test_iteration_and_wall_time_intervals():
     assert w.due(sim)  # an hour and a bit of wall time since the run started
     sim.run_seconds = lambda: 0.1
     assert not WallTimeInterval(3600).due(sim)
-    for bad in (lambda: TimeInterval(0), lambda: IterationInterval(0),
-                lambda: IterationInterval(2.5), lambda: WallTimeInterval(-1)):
+    for bad in (
+        lambda: TimeInterval(0),
+        lambda: IterationInterval(0),
+        lambda: IterationInterval(2.5),
+        lambda: WallTimeInterval(-1),
+    ):
         with pytest.raises(ValueError):
             bad()
 
@@ -70,9 +74,16 @@ def test_a_shared_schedule_lets_every_action_on_it_act():
 
 
 def _case(*more):
-    return load_case(EXAMPLES / "dam_break.toml",
-                     ["grid.spacing=0.01", "time.end=0.1", "checkpoint.interval=0.03",
-                      "output.snapshot_interval=0.02", *more])
+    return load_case(
+        EXAMPLES / "dam_break.toml",
+        [
+            "grid.spacing=0.01",
+            "time.end=0.1",
+            "checkpoint.interval=0.03",
+            "output.snapshot_interval=0.02",
+            *more,
+        ],
+    )
 
 
 class Recorder:
@@ -95,10 +106,14 @@ def _add(sim, seen):
     """The same writer and callbacks, for a run and for its restart."""
     writer = seen.setdefault("writer", Recorder())
     sim.add_writer(writer, TimeInterval(0.04), name="every_40ms")
-    sim.add_callback(lambda s: seen.setdefault("steps", []).append(s.steps),
-                     IterationInterval(25), name="every_25_steps")
-    sim.add_callback(lambda s: seen.setdefault("chunks", []).append(round(s.time, 9)),
-                     name="each_chunk")
+    sim.add_callback(
+        lambda s: seen.setdefault("steps", []).append(s.steps),
+        IterationInterval(25),
+        name="every_25_steps",
+    )
+    sim.add_callback(
+        lambda s: seen.setdefault("chunks", []).append(round(s.time, 9)), name="each_chunk"
+    )
     return writer
 
 
@@ -116,8 +131,11 @@ def test_added_writers_and_callbacks_act_on_their_schedules(tmp_path):
     assert writer.closed and writer.opened is None
     # the phases of added schedules are in the checkpoints, under their names
     meta = read(checkpoints(tmp_path / "o")[-1])[1]
-    assert meta["schedules"] == {"every_40ms": {"k": 3}, "every_25_steps": {"k": 5},
-                                 "each_chunk": {"k": 101}}
+    assert meta["schedules"] == {
+        "every_40ms": {"k": 3},
+        "every_25_steps": {"k": 5},
+        "each_chunk": {"k": 101},
+    }
     with pytest.raises(ValueError, match="named 'every_40ms'"):
         sim.add_writer(Recorder(), name="every_40ms")
     with pytest.raises(TypeError, match="not callable"):
@@ -148,6 +166,7 @@ def test_restart_keeps_every_schedules_phase(tmp_path):
     def stop(s):
         if s.time >= 0.05 - 1e-12:
             s.stop_signal = signal.SIGINT
+
     first.on_output = stop
     assert first.run()["status"] == "interrupted"
     rest = Simulation.resume(_case(), tmp_path)
@@ -166,7 +185,8 @@ def _documented_example():
 
 
 def test_the_documented_callback_stops_the_run_when_the_front_reaches_the_wall(
-        tmp_path, monkeypatch):
+    tmp_path, monkeypatch
+):
     """docs/getting-started.md's example, run as written: the summary says that the run
     stopped and why, the outputs go up to that time, and a checkpoint of it is written."""
     (tmp_path / "examples").symlink_to(EXAMPLES)
@@ -188,6 +208,7 @@ def test_the_documented_callback_stops_the_run_when_the_front_reaches_the_wall(
     assert (out / summary["last_checkpoint"]).is_file()
     # the added writer at its own times up to the stop (a stop is not time.end, so the
     # writers are not made to write there)
-    assert [round(t, 9) for t, _ in names["energy"]] == \
-        [round(0.05 * k, 9) for k in range(int(summary["time"] / 0.05 + 1e-9) + 1)]
+    assert [round(t, 9) for t, _ in names["energy"]] == [
+        round(0.05 * k, 9) for k in range(int(summary["time"] / 0.05 + 1e-9) + 1)
+    ]
     assert isinstance(mpmflow.TimeInterval(0.1), TimeInterval)

@@ -24,17 +24,29 @@ RNG = np.random.default_rng(15)
 
 # --------------------------------------------------------------------------- primitives
 
+
 def test_box_in_2d_and_3d():
     box = shapes.Box([0.0, 0.0, 0.0], [1.0, 2.0, 3.0])
-    x = np.array([[0.5, 1.0, 1.5], [0.0, 1.0, 1.5], [1.0, 2.0, 3.0], [1.0 + 1e-13, 1, 1],
-                  [1.1, 1.0, 1.5], [2.0, 3.0, 3.0], [0.1, 1.0, 1.5]])
+    x = np.array(
+        [
+            [0.5, 1.0, 1.5],
+            [0.0, 1.0, 1.5],
+            [1.0, 2.0, 3.0],
+            [1.0 + 1e-13, 1, 1],
+            [1.1, 1.0, 1.5],
+            [2.0, 3.0, 3.0],
+            [0.1, 1.0, 1.5],
+        ]
+    )
     assert box.contains(x).tolist() == [True, True, True, True, False, False, True]
-    np.testing.assert_allclose(box.signed_distance(x),
-                               [-0.5, 0.0, 0.0, 1e-13, 0.1, np.sqrt(2.0), -0.1], atol=1e-15)
+    np.testing.assert_allclose(
+        box.signed_distance(x), [-0.5, 0.0, 0.0, 1e-13, 0.1, np.sqrt(2.0), -0.1], atol=1e-15
+    )
     assert box.volume() == 6.0
     square = shapes.Box([0, 0], [1, 1])
-    np.testing.assert_allclose(square.signed_distance([[2.0, 2.0], [0.5, 0.25]]),
-                               [np.sqrt(2.0), -0.25])
+    np.testing.assert_allclose(
+        square.signed_distance([[2.0, 2.0], [0.5, 0.25]]), [np.sqrt(2.0), -0.25]
+    )
     lo, hi = square.bounds()
     assert lo.tolist() == [0, 0] and hi.tolist() == [1, 1]
 
@@ -55,12 +67,16 @@ def test_cylinder_any_axis_exact_distance():
     axis = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
     cyl = shapes.Cylinder([0.0, 0.0, 0.0], [2.0, 2.0, 0.0], 0.5, 2.0)
     side = np.cross(axis, [0, 0, 1])
-    x = np.array([axis * 1.0,                       # on the axis, halfway: 0.5 to the side
-                  axis * 1.0 + side * 0.8,          # 0.3 outside the side
-                  -axis * 0.25,                     # 0.25 below the base
-                  axis * 2.25 + side * 0.9,         # beyond the top rim: corner distance
-                  axis * 1.9,                       # 0.1 below the top face
-                  side * 0.5])                      # on the base's rim
+    x = np.array(
+        [
+            axis * 1.0,  # on the axis, halfway: 0.5 to the side
+            axis * 1.0 + side * 0.8,  # 0.3 outside the side
+            -axis * 0.25,  # 0.25 below the base
+            axis * 2.25 + side * 0.9,  # beyond the top rim: corner distance
+            axis * 1.9,  # 0.1 below the top face
+            side * 0.5,
+        ]
+    )  # on the base's rim
     expected = [-0.5, 0.3, 0.25, np.hypot(0.25, 0.4), -0.1, 0.0]
     np.testing.assert_allclose(cyl.signed_distance(x), expected, atol=1e-14)
     assert cyl.contains(x).tolist() == [True, False, False, False, True, True]
@@ -76,13 +92,23 @@ def test_cylinder_any_axis_exact_distance():
 def test_non_convex_polygon():
     # an L: the notch [1, 2] x [1, 2] is outside
     ell = shapes.Polygon([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]])
-    x = np.array([[0.5, 0.5], [1.5, 1.5], [1.5, 0.5], [0.5, 1.5], [1.0, 1.5], [2.0, 0.0],
-                  [3.0, 0.5], [1.2, 1.1], [0.5, 0.0]])
-    assert ell.contains(x).tolist() == [True, False, True, True, True, True, False, False,
-                                        True]
-    np.testing.assert_allclose(ell.signed_distance(x),
-                               [-0.5, 0.5, -0.5, -0.5, 0.0, 0.0, 1.0, 0.1, 0.0],
-                               atol=1e-15)
+    x = np.array(
+        [
+            [0.5, 0.5],
+            [1.5, 1.5],
+            [1.5, 0.5],
+            [0.5, 1.5],
+            [1.0, 1.5],
+            [2.0, 0.0],
+            [3.0, 0.5],
+            [1.2, 1.1],
+            [0.5, 0.0],
+        ]
+    )
+    assert ell.contains(x).tolist() == [True, False, True, True, True, True, False, False, True]
+    np.testing.assert_allclose(
+        ell.signed_distance(x), [-0.5, 0.5, -0.5, -0.5, 0.0, 0.0, 1.0, 0.1, 0.0], atol=1e-15
+    )
     assert ell.volume() == 3.0
     # a ray through vertices (y = 1 passes the corners (2, 1) and (1, 1)) counts right
     assert ell.contains([[0.5, 1.0], [-1.0, 1.0], [1.5, 1.0]]).tolist() == [True, False, True]
@@ -97,9 +123,11 @@ def test_only_simple_polygons_are_accepted():
     assert "edges 1 (corners 1 to 2) and 4 (corners 4 to 0) touch" in crossing
     # a bow tie's two loops enclose areas that cancel: it was said to "enclose no area"
     bow_tie = shapes.polygon_problem([[0.2, 0.0], [0.25, 0.05], [0.25, 0.0], [0.2, 0.05]])
-    assert bow_tie == ("vertices: the polygon's edges 0 (corners 0 to 1) and 2 (corners 2 to "
-                       "3) cross, so it is not a simple polygon; list its corners in order "
-                       "around the boundary")
+    assert bow_tie == (
+        "vertices: the polygon's edges 0 (corners 0 to 1) and 2 (corners 2 to "
+        "3) cross, so it is not a simple polygon; list its corners in order "
+        "around the boundary"
+    )
     assert "lie on one line" in shapes.polygon_problem([[0, 0], [1, 0], [2, 0], [3, 0]])
 
 
@@ -112,6 +140,7 @@ def test_polygon_against_a_box_on_random_points():
 
 
 # --------------------------------------------------------------------------- meshes
+
 
 def _write(mesh, path):
     mesh.export(path)
@@ -160,8 +189,11 @@ def test_meshes_that_are_open_empty_missing_or_unreadable_are_refused(tmp_path):
     ico = trimesh.creation.icosphere(subdivisions=1)
     open_mesh = trimesh.Trimesh(ico.vertices, ico.faces[1:])
     _write(open_mesh, tmp_path / "open.stl")
-    with pytest.raises(ValueError, match=r"bodies.1.path = 'open.stl' is not a closed surface: "
-                                         r"3 boundary edges.*trimesh.repair.fill_holes"):
+    with pytest.raises(
+        ValueError,
+        match=r"bodies.1.path = 'open.stl' is not a closed surface: "
+        r"3 boundary edges.*trimesh.repair.fill_holes",
+    ):
         meshes.load_mesh(tmp_path / "open.stl", key="bodies.1", shown="open.stl")
     (tmp_path / "empty.stl").write_bytes(b"")
     with pytest.raises(ValueError, match="empty.stl.*(holds no triangles|cannot be read)"):
@@ -182,8 +214,7 @@ def _cube_triangles():
 def binary_stl(triangles, count=None, header=b"binary"):
     """A binary STL's bytes: 80-byte header, triangle count (``count``: the header's, by
     default the true one), then each triangle (normal, 3 corners, attribute)."""
-    out = [header.ljust(80, b" "), struct.pack("<I", len(triangles) if count is None
-                                                else count)]
+    out = [header.ljust(80, b" "), struct.pack("<I", len(triangles) if count is None else count)]
     out += [struct.pack("<12fH", 0.0, 0.0, 0.0, *np.ravel(t), 0) for t in triangles]
     return b"".join(out)
 
@@ -206,10 +237,11 @@ def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
     files = {
         "latin1.stl": ascii_stl(tri, "Würfel").encode("latin-1"),
         "utf8.stl": ascii_stl(tri, "Würfel").encode("utf-8"),
-        "latin1.obj": ("o Würfel\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in
-                                               tri.reshape(-1, 3))
-                       + "".join(f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}\n"
-                                 for k in range(12))).encode("latin-1"),
+        "latin1.obj": (
+            "o Würfel\n"
+            + "".join(f"v {x} {y} {z}\n" for x, y, z in tri.reshape(-1, 3))
+            + "".join(f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}\n" for k in range(12))
+        ).encode("latin-1"),
         "right.stl": binary_stl(tri, header=b"solid but binary"),
         "too_many.stl": binary_stl(tri, count=15),
         "too_few.stl": binary_stl(tri, count=3),
@@ -221,9 +253,14 @@ def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
         assert mesh.volume() == pytest.approx(1.0) and len(mesh.faces) == 12, name
         assert mesh.contains([[0.5, 0.5, 0.5], [1.5, 0.5, 0.5]]).tolist() == [True, False]
         counted = {"too_many.stl": 15, "too_few.stl": 3, "zero.stl": 0}.get(name)
-        assert mesh.notes == ([] if counted is None else [
-            f"bodies.1.path = '{name}': the binary STL's header counts {counted} triangles "
-            "but its 684 bytes hold 12; the 12 triangles of the file were read"])
+        assert mesh.notes == (
+            []
+            if counted is None
+            else [
+                f"bodies.1.path = '{name}': the binary STL's header counts {counted} triangles "
+                "but its 684 bytes hold 12; the 12 triangles of the file were read"
+            ]
+        )
     (tmp_path / "cut.stl").write_bytes(binary_stl(tri)[:-7])
     with pytest.raises(ValueError) as err:
         meshes.load_mesh(tmp_path / "cut.stl", key="obstacles.0", shown="cut.stl")
@@ -231,26 +268,37 @@ def test_valid_stl_files_trimesh_alone_refuses_are_read(tmp_path):
         "obstacles.0.path = 'cut.stl' is a binary STL whose header counts 12 triangles (684 "
         "bytes), but the file has 677 bytes: 11 whole triangles and 43 bytes more, so it is "
         "cut short inside a triangle or has bytes appended, and which triangles it holds is "
-        "unclear; export it again from your CAD tool.")
+        "unclear; export it again from your CAD tool."
+    )
     # cut at a triangle's end: the 11 triangles are read, and the open surface refused
     # with the count's note
     (tmp_path / "short.stl").write_bytes(binary_stl(tri)[:-50])
-    with pytest.raises(ValueError, match=r"'short.stl' is not a closed surface \(the binary "
-                       r"STL's header counts 12 triangles but its 634 bytes hold 11; the 11 "
-                       r"triangles of the file were read\): 3 boundary edges"):
+    with pytest.raises(
+        ValueError,
+        match=r"'short.stl' is not a closed surface \(the binary "
+        r"STL's header counts 12 triangles but its 634 bytes hold 11; the 11 "
+        r"triangles of the file were read\): 3 boundary edges",
+    ):
         meshes.load_mesh(tmp_path / "short.stl", key="obstacles.0", shown="short.stl")
 
 
 def test_a_wrong_count_is_a_notice_of_the_run(tmp_path):
     (tmp_path / "cube.stl").write_bytes(binary_stl(_cube_triangles() * 0.06, count=0))
-    case = _case(BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]},
-                         {"type": "mesh", "path": "cube.stl", "translate": [0.07, 0.07, 0.2]}],
-                 base_dir=tmp_path)
+    case = _case(
+        BASE3,
+        [
+            {"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]},
+            {"type": "mesh", "path": "cube.stl", "translate": [0.07, 0.07, 0.2]},
+        ],
+        base_dir=tmp_path,
+    )
     from mpmflow import Simulation
+
     notices = Simulation(case).notices
     assert [n for n in notices if "cube.stl" in n] == [
         f"bodies.1.path = '{tmp_path / 'cube.stl'}': the binary STL's header counts 0 "
-        "triangles but its 684 bytes hold 12; the 12 triangles of the file were read"]
+        "triangles but its 684 bytes hold 12; the 12 triangles of the file were read"
+    ]
 
 
 def test_a_folder_as_the_mesh_path_is_named_a_folder(tmp_path):
@@ -260,7 +308,8 @@ def test_a_folder_as_the_mesh_path_is_named_a_folder(tmp_path):
         meshes.load_mesh(tmp_path / "parts.stl", key="obstacles.0", shown="parts.stl")
     assert str(err.value) == (
         "obstacles.0.path = 'parts.stl' is a folder, not a file; give the path of an STL or "
-        "OBJ file (relative paths are taken from the case file's folder).")
+        "OBJ file (relative paths are taken from the case file's folder)."
+    )
 
 
 def test_a_mesh_enclosing_no_volume_is_refused_without_a_library_warning(tmp_path):
@@ -274,15 +323,28 @@ def test_a_mesh_enclosing_no_volume_is_refused_without_a_library_warning(tmp_pat
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # any library warning fails the test
         with pytest.raises(CaseError) as err:
-            _case(BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
-                  [{"type": "mesh", "path": "flat.stl", "scale": 0.1,
-                    "translate": [0.05, 0.05, 0.15]}], base_dir=tmp_path)
-        assert "obstacles.0.path = 'flat.stl' encloses no volume: its corners span 1 x 1 x 0 " \
-            "(file units), flat or a single point, so it has no inside; export the closed " \
+            _case(
+                BASE3,
+                [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
+                [
+                    {
+                        "type": "mesh",
+                        "path": "flat.stl",
+                        "scale": 0.1,
+                        "translate": [0.05, 0.05, 0.15],
+                    }
+                ],
+                base_dir=tmp_path,
+            )
+        assert (
+            "obstacles.0.path = 'flat.stl' encloses no volume: its corners span 1 x 1 x 0 "
+            "(file units), flat or a single point, so it has no inside; export the closed "
             "surface of the solid." in str(err.value)
+        )
         assert "at most 0 m" not in str(err.value)
-        with pytest.raises(ValueError, match="'point.stl' holds no triangles .*only triangles "
-                           "with no area"):
+        with pytest.raises(
+            ValueError, match="'point.stl' holds no triangles .*only triangles with no area"
+        ):
             meshes.load_mesh(tmp_path / "point.stl", key="obstacles.0", shown="point.stl")
 
 
@@ -295,10 +357,18 @@ def test_an_inside_out_mesh_is_turned_outwards(tmp_path):
 
 # --------------------------------------------------------------------------- cases
 
-BASE2 = {"domain": {"size": [0.42, 0.44]}, "grid": {"spacing": 0.01},
-         "time": {"dt": 1e-3, "end": 0.01}, "output": {"snapshots": False}}
-BASE3 = {"domain": {"size": [0.2, 0.2, 0.3]}, "grid": {"spacing": 0.02},
-         "time": {"dt": 1e-3, "end": 0.01}, "output": {"snapshots": False}}
+BASE2 = {
+    "domain": {"size": [0.42, 0.44]},
+    "grid": {"spacing": 0.01},
+    "time": {"dt": 1e-3, "end": 0.01},
+    "output": {"snapshots": False},
+}
+BASE3 = {
+    "domain": {"size": [0.2, 0.2, 0.3]},
+    "grid": {"spacing": 0.02},
+    "time": {"dt": 1e-3, "end": 0.01},
+    "output": {"snapshots": False},
+}
 
 
 def _case(base, bodies, obstacles=(), probes=(), base_dir=None):
@@ -314,36 +384,72 @@ def _seeded(case):
 def test_every_shape_seeds_the_count_it_was_sized_with(tmp_path):
     _write(trimesh.creation.icosphere(subdivisions=2, radius=0.05), tmp_path / "ball.stl")
     cases = [
-        _case(BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1,
-                       "particles_per_cell": 3}]),
-        _case(BASE2, [{"type": "polygon", "vertices": [[0, 0], [0.3, 0], [0.3, 0.1], [0.1, 0.1],
-                                                       [0.1, 0.3], [0, 0.3]]}]),
-        _case(BASE2, [{"min": [0, 0], "max": [0.42, 0.2], "particles_per_cell": 4,
-                       "around_obstacles": True}],
-              [{"type": "disc", "centre": [0.21, 0.1], "radius": 0.05}]),
+        _case(
+            BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1, "particles_per_cell": 3}]
+        ),
+        _case(
+            BASE2,
+            [
+                {
+                    "type": "polygon",
+                    "vertices": [[0, 0], [0.3, 0], [0.3, 0.1], [0.1, 0.1], [0.1, 0.3], [0, 0.3]],
+                }
+            ],
+        ),
+        _case(
+            BASE2,
+            [
+                {
+                    "min": [0, 0],
+                    "max": [0.42, 0.2],
+                    "particles_per_cell": 4,
+                    "around_obstacles": True,
+                }
+            ],
+            [{"type": "disc", "centre": [0.21, 0.1], "radius": 0.05}],
+        ),
         _case(BASE3, [{"type": "sphere", "centre": [0.1, 0.1, 0.1], "radius": 0.07}]),
-        _case(BASE3, [{"type": "cylinder", "centre": [0.1, 0.1, 0.0], "axis": [0, 0, 1],
-                       "radius": 0.06, "length": 0.1}]),
-        _case(BASE3, [{"type": "mesh", "path": "ball.stl", "translate": [0.1, 0.1, 0.1]}],
-              base_dir=tmp_path),
-        _case(BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.15], "around_obstacles": True}],
-              [{"type": "mesh", "path": "ball.stl", "translate": [0.1, 0.1, 0.08]}],
-              base_dir=tmp_path),
+        _case(
+            BASE3,
+            [
+                {
+                    "type": "cylinder",
+                    "centre": [0.1, 0.1, 0.0],
+                    "axis": [0, 0, 1],
+                    "radius": 0.06,
+                    "length": 0.1,
+                }
+            ],
+        ),
+        _case(
+            BASE3,
+            [{"type": "mesh", "path": "ball.stl", "translate": [0.1, 0.1, 0.1]}],
+            base_dir=tmp_path,
+        ),
+        _case(
+            BASE3,
+            [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.15], "around_obstacles": True}],
+            [{"type": "mesh", "path": "ball.stl", "translate": [0.1, 0.1, 0.08]}],
+            base_dir=tmp_path,
+        ),
     ]
     for case in cases:
         particles = _seeded(case)
         assert particles.count == sum(case.particle_counts()) > 0
         vol = particles.volume.sum()
         expected = sum(case.body_shape(k).volume() for k in range(len(case.bodies))) - sum(
-            case.obstacle_shape(k).volume() for k in range(len(case.obstacles)))
+            case.obstacle_shape(k).volume() for k in range(len(case.obstacles))
+        )
         assert vol == pytest.approx(expected, rel=0.1)
         for k in range(len(case.obstacles)):  # nothing starts inside an obstacle
             assert not case.obstacle_shape(k).contains(particles.x).any()
 
 
 def test_hydrostatic_pressure_below_the_highest_point():
-    case = _case(BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1,
-                          "initial_pressure": "hydrostatic"}])
+    case = _case(
+        BASE2,
+        [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1, "initial_pressure": "hydrostatic"}],
+    )
     p = _seeded(case)
     np.testing.assert_allclose(p.pressure, 1000 * 9.81 * (0.3 - p.x[:, 1]))
 
@@ -354,9 +460,10 @@ def test_relative_mesh_paths_start_at_the_case_file(tmp_path, monkeypatch):
     (tmp_path / "geo").mkdir()
     _write(trimesh.creation.box(extents=[0.06, 0.06, 0.06]), tmp_path / "geo" / "block.stl")
     (tmp_path / "case.toml").write_text(
-        '[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n'
-        'end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n'
-        '[[obstacles]]\ntype = "mesh"\npath = "geo/block.stl"\ntranslate = [0.1, 0.1, 0.2]\n')
+        "[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n"
+        "end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n"
+        '[[obstacles]]\ntype = "mesh"\npath = "geo/block.stl"\ntranslate = [0.1, 0.1, 0.2]\n'
+    )
     monkeypatch.chdir("/")
     case = load_case(tmp_path / "case.toml", ["obstacles.0.translate=[0.1, 0.1, 0.15]"])
     assert case.obstacle_shape(0).bounds()[0][2] == pytest.approx(0.12)
@@ -364,45 +471,99 @@ def test_relative_mesh_paths_start_at_the_case_file(tmp_path, monkeypatch):
 
 
 BAD = [
-    (BASE2, [{"type": "sphere", "centre": [0.1, 0.1, 0.1], "radius": 0.05}], [], [],
-     "bodies.0.type = 'sphere' is a shape of 3D cases"),
-    (BASE3, [{"type": "disc", "centre": [0.1, 0.1], "radius": 0.05}], [], [],
-     "bodies.0.type = 'disc' is a shape of 2D cases"),
-    (BASE2, [{"type": "disc", "centre": [0.4, 0.2], "radius": 0.05}], [], [],
-     "bodies.0 \\(a disc\\) spans .* outside the domain .* move it inside \\(bodies.0.centre\\)"),
-    (BASE2, [{"max": [0.1, 0.1], "min": [0, 0]}],
-     [{"type": "disc", "centre": [0.6, 0.2], "radius": 0.05}], [],
-     "obstacles.0 \\(a disc\\) spans .* beyond the domain"),
-    (BASE2, [{"max": [0.1, 0.1], "min": [0, 0]}],
-     [{"type": "disc", "centre": [0.3, 0.2], "radius": 0.008}], [],
-     "obstacles.0 \\(a disc\\) is 0.016 m thin .* refine grid.spacing"),
-    (BASE2, [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05},
-             {"min": [0, 0], "max": [0.42, 0.08]}], [], [],
-     "bodies.0 \\(a disc\\) and bodies.1 \\(a box\\) overlap: \\d+ lattice points"),
-    (BASE2, [{"min": [0.15, 0.05], "max": [0.25, 0.15]}],
-     [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.1}], [],
-     "bodies.0 \\(a box\\) lies wholly inside obstacles: all 400 of its lattice points"),
-    (BASE2, [{"min": [0, 0], "max": [0.42, 0.2]}],
-     [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05}], [],
-     "bodies.0 \\(a box\\) overlaps obstacles.0 \\(a disc\\): \\d+ of its \\d+ lattice points .* "
-     "set bodies.0.around_obstacles = true"),
-    (BASE2, [{"min": [0, 0], "max": [0.42, 0.2], "around_obstacles": True}],
-     [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05}],
-     [{"name": "p", "quantity": "pressure", "position": [0.2, 0.12]}],
-     "probes.0.position = .* lies 0.03 m inside obstacles.0"),
-    (BASE2, [{"type": "polygon", "vertices": [[0, 0], [0.2, 0], [0, 0.2], [0.2, 0.2]]}], [], [],
-     "vertices: the polygon's"),
-    (BASE3, [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
-     [{"type": "mesh", "path": "missing.stl"}], [],
-     "obstacles.0.path = 'missing.stl' does not exist .*case file's folder"),
-    (BASE2, [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1, "min": [0, 0]}], [], [],
-     "`bodies.0.min` is not a key of a \"disc\""),
+    (
+        BASE2,
+        [{"type": "sphere", "centre": [0.1, 0.1, 0.1], "radius": 0.05}],
+        [],
+        [],
+        "bodies.0.type = 'sphere' is a shape of 3D cases",
+    ),
+    (
+        BASE3,
+        [{"type": "disc", "centre": [0.1, 0.1], "radius": 0.05}],
+        [],
+        [],
+        "bodies.0.type = 'disc' is a shape of 2D cases",
+    ),
+    (
+        BASE2,
+        [{"type": "disc", "centre": [0.4, 0.2], "radius": 0.05}],
+        [],
+        [],
+        "bodies.0 \\(a disc\\) spans .* outside the domain .* move it inside \\(bodies.0.centre\\)",
+    ),
+    (
+        BASE2,
+        [{"max": [0.1, 0.1], "min": [0, 0]}],
+        [{"type": "disc", "centre": [0.6, 0.2], "radius": 0.05}],
+        [],
+        "obstacles.0 \\(a disc\\) spans .* beyond the domain",
+    ),
+    (
+        BASE2,
+        [{"max": [0.1, 0.1], "min": [0, 0]}],
+        [{"type": "disc", "centre": [0.3, 0.2], "radius": 0.008}],
+        [],
+        "obstacles.0 \\(a disc\\) is 0.016 m thin .* refine grid.spacing",
+    ),
+    (
+        BASE2,
+        [
+            {"type": "disc", "centre": [0.2, 0.1], "radius": 0.05},
+            {"min": [0, 0], "max": [0.42, 0.08]},
+        ],
+        [],
+        [],
+        "bodies.0 \\(a disc\\) and bodies.1 \\(a box\\) overlap: \\d+ lattice points",
+    ),
+    (
+        BASE2,
+        [{"min": [0.15, 0.05], "max": [0.25, 0.15]}],
+        [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.1}],
+        [],
+        "bodies.0 \\(a box\\) lies wholly inside obstacles: all 400 of its lattice points",
+    ),
+    (
+        BASE2,
+        [{"min": [0, 0], "max": [0.42, 0.2]}],
+        [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05}],
+        [],
+        "bodies.0 \\(a box\\) overlaps obstacles.0 \\(a disc\\): \\d+ of its \\d+ lattice points .* "
+        "set bodies.0.around_obstacles = true",
+    ),
+    (
+        BASE2,
+        [{"min": [0, 0], "max": [0.42, 0.2], "around_obstacles": True}],
+        [{"type": "disc", "centre": [0.2, 0.1], "radius": 0.05}],
+        [{"name": "p", "quantity": "pressure", "position": [0.2, 0.12]}],
+        "probes.0.position = .* lies 0.03 m inside obstacles.0",
+    ),
+    (
+        BASE2,
+        [{"type": "polygon", "vertices": [[0, 0], [0.2, 0], [0, 0.2], [0.2, 0.2]]}],
+        [],
+        [],
+        "vertices: the polygon's",
+    ),
+    (
+        BASE3,
+        [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
+        [{"type": "mesh", "path": "missing.stl"}],
+        [],
+        "obstacles.0.path = 'missing.stl' does not exist .*case file's folder",
+    ),
+    (
+        BASE2,
+        [{"type": "disc", "centre": [0.2, 0.2], "radius": 0.1, "min": [0, 0]}],
+        [],
+        [],
+        '`bodies.0.min` is not a key of a "disc"',
+    ),
 ]
 
 
 @pytest.mark.parametrize("base, bodies, obstacles, probes, words", BAD)
-def test_bad_geometry_is_refused_with_the_key_and_the_fix(base, bodies, obstacles, probes,
-                                                          words):
+def test_bad_geometry_is_refused_with_the_key_and_the_fix(base, bodies, obstacles, probes, words):
     with pytest.raises(CaseError, match=words):
         _case(base, bodies, obstacles, probes)
 
@@ -412,13 +573,19 @@ def test_the_cli_refuses_an_open_mesh_in_one_paragraph(tmp_path):
     ico = trimesh.creation.icosphere(subdivisions=1, radius=0.03)
     _write(trimesh.Trimesh(ico.vertices, ico.faces[2:]), tmp_path / "open.stl")
     (tmp_path / "case.toml").write_text(
-        '[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n'
-        'end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n'
-        '[[obstacles]]\ntype = "mesh"\npath = "open.stl"\ntranslate = [0.1, 0.1, 0.2]\n')
+        "[domain]\nsize = [0.2, 0.2, 0.3]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\n"
+        "end = 0.01\n[[bodies]]\nmin = [0, 0, 0]\nmax = [0.2, 0.2, 0.1]\n"
+        '[[obstacles]]\ntype = "mesh"\npath = "open.stl"\ntranslate = [0.1, 0.1, 0.2]\n'
+    )
     env = {**os.environ, "PYTHONPATH": str(Path(shapes.__file__).parents[2])}
-    res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "run", "case.toml", "--out",
-                          "o"], capture_output=True, text=True, cwd=tmp_path, timeout=300,
-                         env=env)
+    res = subprocess.run(
+        [sys.executable, "-m", "mpmflow.cli", "run", "case.toml", "--out", "o"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=300,
+        env=env,
+    )
     assert res.returncode == 2 and "Traceback" not in res.stderr
     assert "obstacles.0.path = 'open.stl' is not a closed surface" in res.stderr
     assert "fill_holes" in res.stderr and res.stderr.count("\n") == 1

@@ -16,25 +16,30 @@ from mpmflow.errors import CaseError
 
 
 def run(threads, settings):
-    case = load_case(EXAMPLES / "dam_break.toml",
-                     [*settings, "output.snapshots=false", f"execution.threads={threads}"])
+    case = load_case(
+        EXAMPLES / "dam_break.toml",
+        [*settings, "output.snapshots=false", f"execution.threads={threads}"],
+    )
     sim = Simulation(case)
     summary = sim.run()
     assert [c["threads"] for c in summary["threads"]["changes"]] == [threads]
     return sim.particles
 
 
-@pytest.mark.parametrize("settings", [
-    ["grid.spacing=0.01", "time.end=0.15"],  # through the wall impact
-    # 7k pressure unknowns: above multigrid.PARALLEL_ROWS, so the solve's parallel loops
-    # and the parallel Galerkin products run too
-    ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005"],
-    # APIC's transfers (100k particles: parallel strips and chunks)
-    ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005", "solver.transfer=apic"],
-    # x periodic (the tank is 0.576 m = 144 cells of 0.004 m: the folds, the wrapped
-    # stencils and the multigrid's periodic levels on both thread counts)
-    ["domain.size=[0.576, 0.44]", "domain.periodic=[true, false]", "time.end=0.05"],
-])
+@pytest.mark.parametrize(
+    "settings",
+    [
+        ["grid.spacing=0.01", "time.end=0.15"],  # through the wall impact
+        # 7k pressure unknowns: above multigrid.PARALLEL_ROWS, so the solve's parallel loops
+        # and the parallel Galerkin products run too
+        ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005"],
+        # APIC's transfers (100k particles: parallel strips and chunks)
+        ["grid.spacing=0.002", "time.dt=5e-4", "time.end=0.005", "solver.transfer=apic"],
+        # x periodic (the tank is 0.576 m = 144 cells of 0.004 m: the folds, the wrapped
+        # stencils and the multigrid's periodic levels on both thread counts)
+        ["domain.size=[0.576, 0.44]", "domain.periodic=[true, false]", "time.end=0.05"],
+    ],
+)
 @pytest.mark.slow
 def test_dam_break_is_bit_identical_on_one_and_two_threads(settings):
     if state.POOL < 2:
@@ -53,8 +58,9 @@ def test_the_cores_threads_are_given_back_after_a_run():
 def test_the_setting_and_the_environment_variable(monkeypatch):
     monkeypatch.setenv(threads_module.ENV, "1")
     assert threads_module.setting_from("auto") == ("fixed", 1)
-    assert threads_module.setting_from(2 if state.POOL >= 2 else 1)[0] \
-        == "fixed"  # a number in the case wins over the variable
+    assert (
+        threads_module.setting_from(2 if state.POOL >= 2 else 1)[0] == "fixed"
+    )  # a number in the case wins over the variable
     monkeypatch.setenv(threads_module.ENV, "many")
     with pytest.raises(CaseError, match="MPMFLOW_THREADS = 'many' is not a number"):
         threads_module.setting_from("auto")
@@ -75,16 +81,17 @@ def test_auto_counts_the_cores_others_keep_busy(monkeypatch):
     gov.stop()
 
 
-@pytest.mark.skipif(not os.path.exists("/proc/stat") or len(os.sched_getaffinity(0)) < 2
-                    or state.POOL < 2, reason="needs Linux and 2 cores")
+@pytest.mark.skipif(
+    not os.path.exists("/proc/stat") or len(os.sched_getaffinity(0)) < 2 or state.POOL < 2,
+    reason="needs Linux and 2 cores",
+)
 @pytest.mark.slow
 def test_auto_runs_on_fewer_threads_beside_busy_programs():
     """With a busy process on every core but one, "auto" starts on one thread, whatever
     else the machine is doing (the other engineer's tests may add load: fewer free cores
     only lower the choice)."""
     cores = min(len(os.sched_getaffinity(0)), state.POOL)
-    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
-            for _ in range(cores - 1)]
+    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(cores - 1)]
     try:
         time.sleep(0.3)
         gov = threads_module.ThreadGovernor("auto")

@@ -38,8 +38,17 @@ def test_report_has_the_summary_table_first_and_a_csv_row_per_row(quick):
     text = (out / "README.md").read_text()
     assert text.index("## Summary") < text.index("## Hydrostatic column")
     assert "| case | quantity | error measure | value | tolerance | result |" in text
-    for png in ("hydrostatic.png", "sloshing.png", "dam_break_ar2.png", "dam_break_ar1.png",
-                "lobovsky.png", "volume.png", "long_run.png", "spheric.png", "spheric_3d.png"):
+    for png in (
+        "hydrostatic.png",
+        "sloshing.png",
+        "dam_break_ar2.png",
+        "dam_break_ar1.png",
+        "lobovsky.png",
+        "volume.png",
+        "long_run.png",
+        "spheric.png",
+        "spheric_3d.png",
+    ):
         assert (out / png).stat().st_size > 1000
         assert f"]({png})" in text
     with open(out / "summary.csv") as f:
@@ -93,8 +102,13 @@ def test_sloshing_period_within_two_percent_at_20_cells_over_the_depth(quick):
 @pytest.mark.slow
 def test_dam_break_against_martin_moyce_and_vof_at_0008(quick):
     _, rows, _ = quick
-    for q in ("height, h = 0.008 m", "front vs M&M", "front vs K&O", "front vs VOF",
-              "height vs VOF"):
+    for q in (
+        "height, h = 0.008 m",
+        "front vs M&M",
+        "front vs K&O",
+        "front vs VOF",
+        "height vs VOF",
+    ):
         assert row(rows, "dam break AR2", q).status == "pass", q
     assert row(rows, "dam break AR2", "height, h = 0.008 m").value <= 0.08
     assert row(rows, "dam break AR1", "height vs M&M").status == "pass"
@@ -106,8 +120,7 @@ def test_time_step_differences_stay_below_the_data_tolerance(quick):
     """Known miss of the quarter-tolerance rows (see the report); the differences must stay
     below the 0.08 a used against the experiments."""
     _, rows, _ = quick
-    for q in ("front, dt = 0.001", "height, dt = 0.001", "front, dt = 0.002",
-              "height, dt = 0.002"):
+    for q in ("front, dt = 0.001", "height, dt = 0.001", "front, dt = 0.002", "height, dt = 0.002"):
         assert row(rows, "time step", q).value < 0.08
 
 
@@ -141,10 +154,13 @@ def test_long_runs_keep_volume_energy_and_period(quick):
     6 s) with the issue's tolerances: wetted region and settled level of the dam break, the
     sloshing energy and period, and no packing by the hat measure."""
     _, rows, _ = quick
-    for q in ("dam break, h = 0.008 m, 6 s: wetted region",
-              "dam break, h = 0.008 m, 6 s: settled level",
-              "sloshing, h = 0.01 m, 10 s: energy rise", "sloshing, h = 0.01 m, 10 s: period",
-              "sloshing, h = 0.01 m, 10 s: packed share, hat measure"):
+    for q in (
+        "dam break, h = 0.008 m, 6 s: wetted region",
+        "dam break, h = 0.008 m, 6 s: settled level",
+        "sloshing, h = 0.01 m, 10 s: energy rise",
+        "sloshing, h = 0.01 m, 10 s: period",
+        "sloshing, h = 0.01 m, 10 s: packed share, hat measure",
+    ):
         assert row(rows, "long_run", q).status == "pass", q
 
 
@@ -153,10 +169,12 @@ def test_3d_rows_the_quick_meshes_decide(quick):
     """The 3D column at rest is exact; the 3D dam break carries the 2D run's energy per
     metre of width (its front and height rows are in the report, pass or miss)."""
     _, rows, _ = quick
-    for q in ("column at rest, surface half a cell off the grid: pressure",
-              "column at rest, surface half a cell off the grid: speed",
-              "column at rest, surface on a grid line: pressure",
-              "dam break 0.008 m: peak kinetic energy per width against 2D"):
+    for q in (
+        "column at rest, surface half a cell off the grid: pressure",
+        "column at rest, surface half a cell off the grid: speed",
+        "column at rest, surface on a grid line: pressure",
+        "dam break 0.008 m: peak kinetic energy per width against 2D",
+    ):
         assert row(rows, "3D", q).status == "pass", q
 
 
@@ -165,15 +183,17 @@ def test_channel_flow_rows_the_quick_meshes_decide(quick):
     """The finer of each flow's two quick meshes meets the issue's criteria (the coarser
     ones are in the report, pass or miss); each error falls at least at first order."""
     out, rows, _ = quick
-    for case, q in (("poiseuille", "start-up profile at 0.1 T_visc, h = 0.0025 m"),
-                    ("poiseuille", "steady profile, h = 0.0025 m"),
-                    ("poiseuille", "start-up profile, observed order"),
-                    ("poiseuille", "steady profile, observed order"),
-                    ("bingham_plug", "plug width, h = 0.005 m"),
-                    ("bingham_plug", "plug speed, h = 0.005 m"),
-                    ("bingham_plug", "profile, observed order"),
-                    ("mu_i_layer", "surface velocity, h = 0.002 m"),
-                    ("mu_i_layer", "surface velocity, observed order")):
+    for case, q in (
+        ("poiseuille", "start-up profile at 0.1 T_visc, h = 0.0025 m"),
+        ("poiseuille", "steady profile, h = 0.0025 m"),
+        ("poiseuille", "start-up profile, observed order"),
+        ("poiseuille", "steady profile, observed order"),
+        ("bingham_plug", "plug width, h = 0.005 m"),
+        ("bingham_plug", "plug speed, h = 0.005 m"),
+        ("bingham_plug", "profile, observed order"),
+        ("mu_i_layer", "surface velocity, h = 0.002 m"),
+        ("mu_i_layer", "surface velocity, observed order"),
+    ):
         assert row(rows, case, q).status == "pass", (case, q)
     for png in ("poiseuille.png", "bingham_plug.png", "mu_i_layer.png"):
         assert (out / png).stat().st_size > 1000
@@ -190,17 +210,27 @@ def test_validate_command_rejects_bad_input(tmp_path):
     afile = tmp_path / "file"
     afile.write_text("x")
     for args in (["--out", str(afile)], ["--out", str(tmp_path / "r"), "--case", "nosuch"]):
-        res = subprocess.run([sys.executable, "-m", "mpmflow.cli", "validate", *args],
-                             capture_output=True, text=True, timeout=120)
+        res = subprocess.run(
+            [sys.executable, "-m", "mpmflow.cli", "validate", *args],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert res.returncode == 2, res.stderr
         assert "error:" in res.stderr
 
 
 def _case(amplitude, top=0.2, height=0.3):
-    return validate(dict(domain=dict(size=[0.4, height]), grid=dict(spacing=0.01),
-                         bodies=[dict(min=[0, 0], max=[0.4, top], particles_per_cell=4,
-                                      surface_amplitude=amplitude)],
-                         time=dict(dt=1e-3, end=0.01)))
+    return validate(
+        dict(
+            domain=dict(size=[0.4, height]),
+            grid=dict(spacing=0.01),
+            bodies=[
+                dict(min=[0, 0], max=[0.4, top], particles_per_cell=4, surface_amplitude=amplitude)
+            ],
+            time=dict(dt=1e-3, end=0.01),
+        )
+    )
 
 
 def test_cosine_surface_body_holds_the_mean_depth_and_its_shape():
@@ -214,10 +244,13 @@ def test_cosine_surface_body_holds_the_mean_depth_and_its_shape():
     assert np.all(P.x[:, 1] < 0.2 + 0.008 * np.cos(np.pi * P.x[:, 0] / 0.4))
 
 
-@pytest.mark.parametrize("amplitude, top, height, words", [
-    (0.25, 0.2, 0.5, "smaller than the box's height"),
-    (0.05, 0.28, 0.3, "above the domain's top"),
-])
+@pytest.mark.parametrize(
+    "amplitude, top, height, words",
+    [
+        (0.25, 0.2, 0.5, "smaller than the box's height"),
+        (0.05, 0.28, 0.3, "above the domain's top"),
+    ],
+)
 def test_cosine_surface_bad_values_are_clear_errors(amplitude, top, height, words):
     with pytest.raises(CaseError, match=words):
         _case(amplitude, top, height)
@@ -236,8 +269,7 @@ def test_validate_refuses_a_readme_it_did_not_write(tmp_path, capsys):
     check_report_folder(out)  # an earlier report may be replaced
 
 
-def test_validate_checks_matplotlib_and_the_examples_before_running(tmp_path, capsys,
-                                                                    monkeypatch):
+def test_validate_checks_matplotlib_and_the_examples_before_running(tmp_path, capsys, monkeypatch):
     """Both used to fail only after the runs (a traceback, or a CaseError per case)."""
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib fails
     assert main(["validate", "--out", str(tmp_path / "a"), "--quick"]) == 2
@@ -259,8 +291,10 @@ def test_validate_checks_scikit_image_before_running_spheric(tmp_path, capsys, m
     monkeypatch.setitem(sys.modules, "skimage", None)
     assert main(["validate", "--out", str(tmp_path / "a"), "--quick", "--case", "spheric"]) == 2
     err = capsys.readouterr().err
-    assert ("mpmflow validate (the SPHERIC case's 3D pictures) needs scikit-image for the 3D "
-            "water surface: pip install 'mpmflow[plot]'") in err
+    assert (
+        "mpmflow validate (the SPHERIC case's 3D pictures) needs scikit-image for the 3D "
+        "water surface: pip install 'mpmflow[plot]'"
+    ) in err
     assert "Traceback" not in err and not (tmp_path / "a").exists()
     monkeypatch.setattr(validation, "EXAMPLES", tmp_path / "no_examples")
     assert main(["validate", "--out", str(tmp_path / "b"), "--quick", "--case", "volume"]) == 2
@@ -276,8 +310,10 @@ def test_spheric_test2_first_impact_on_the_box_at_the_coarse_mesh(quick):
     assert row(rows, "SPHERIC 2", "0.05 m: first impact at P1").passed
     assert row(rows, "SPHERIC 2", "0.05 m: impulse of the first impact at P1").passed
     # the 3D pictures at the photograph times the quick run reaches (it ends at 0.75 s)
-    assert "![The water at 0.05 m at 0.4, 0.6 s (the experiment's photograph" in (
-        out / "README.md").read_text()
+    assert (
+        "![The water at 0.05 m at 0.4, 0.6 s (the experiment's photograph"
+        in (out / "README.md").read_text()
+    )
 
 
 @pytest.mark.parametrize("k", [1.0, 1.5])
@@ -291,8 +327,11 @@ def test_the_slump_measure_reads_a_deposit_of_known_shape(k, jitter):
     from mpmflow.validation.materials import arrest_ratios
 
     s, L, c, a = 50.0 / 9810.0, 0.28, 0.4, 0.0025
-    pts = [(xv, y) for xv in np.arange(c - L + a / 2, c + L, a)
-           for y in np.arange(a / 2, np.sqrt(max(2 * k * s * (L - abs(xv - c)), 0.0)), a)]
+    pts = [
+        (xv, y)
+        for xv in np.arange(c - L + a / 2, c + L, a)
+        for y in np.arange(a / 2, np.sqrt(max(2 * k * s * (L - abs(xv - c)), 0.0)), a)
+    ]
     x = np.array(pts) + np.random.default_rng(1).normal(0.0, jitter * a, (len(pts), 2))
     values = arrest_ratios(x, c, a, s)
     assert np.all(np.abs(np.array(values) / k - 1) < 0.05), values

@@ -53,8 +53,14 @@ def test_dual_density_sees_a_strained_lattice_as_its_volume_not_its_rows():
 def _block(spacing_factor, end=0.3):
     """A square of water, particles spaced by spacing_factor times the normal spacing, at
     rest in zero gravity in the middle of a box."""
-    case = make_case(size=(0.4, 0.4), spacing=0.01, body=((0.14, 0.14), (0.26, 0.26)), end=end,
-                     physics={"gravity": [0.0, 0.0]}, output={"snapshots": False})
+    case = make_case(
+        size=(0.4, 0.4),
+        spacing=0.01,
+        body=((0.14, 0.14), (0.26, 0.26)),
+        end=end,
+        physics={"gravity": [0.0, 0.0]},
+        output={"snapshots": False},
+    )
     sim = Simulation(case)
     P = sim.particles
     c = P.x.mean(axis=0)
@@ -86,9 +92,15 @@ def test_packed_and_loosened_blocks_return_to_their_volume_without_moving(factor
 def test_correction_off_leaves_the_loosened_block_loose():
     """The same loosened block with solver.volume_correction = 0 stays loose: the previous
     test measures the correction, not something else."""
-    case = make_case(size=(0.4, 0.4), spacing=0.01, body=((0.14, 0.14), (0.26, 0.26)), end=0.3,
-                     physics={"gravity": [0.0, 0.0]}, output={"snapshots": False},
-                     solver={"volume_correction": 0.0})
+    case = make_case(
+        size=(0.4, 0.4),
+        spacing=0.01,
+        body=((0.14, 0.14), (0.26, 0.26)),
+        end=0.3,
+        physics={"gravity": [0.0, 0.0]},
+        output={"snapshots": False},
+        solver={"volume_correction": 0.0},
+    )
     sim = Simulation(case)
     P = sim.particles
     c = P.x.mean(axis=0)
@@ -109,8 +121,13 @@ def test_nothing_is_pushed_into_a_wall_and_the_column_at_rest_does_not_move():
 def test_packed_layer_on_the_floor_spreads_up_not_into_the_floor():
     """A layer packed against the floor (0.8 of its spacing vertically) under gravity: the
     correction lifts it to its volume and puts no particle through the floor."""
-    data = make_case(size=(0.2, 0.2), spacing=0.01, body=((0.0, 0.0), (0.2, 0.06)), end=0.3,
-                     output={"snapshots": False}).model_dump()
+    data = make_case(
+        size=(0.2, 0.2),
+        spacing=0.01,
+        body=((0.0, 0.0), (0.2, 0.06)),
+        end=0.3,
+        output={"snapshots": False},
+    ).model_dump()
     sim = Simulation(validate(data))
     sim.particles.x[:, 1] *= 0.8
     sim.run()

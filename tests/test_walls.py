@@ -13,8 +13,13 @@ from mpmflow.errors import CaseError
 
 def test_water_does_not_hang_from_the_ceiling():
     # a block touching the ceiling of a closed box falls freely under gravity
-    case = make_case(size=(0.1, 0.2), spacing=0.01, body=((0.0, 0.12), (0.1, 0.2)), end=0.1,
-                     output={"snapshots": False})
+    case = make_case(
+        size=(0.1, 0.2),
+        spacing=0.01,
+        body=((0.0, 0.12), (0.1, 0.2)),
+        end=0.1,
+        output={"snapshots": False},
+    )
     sim = Simulation(case)
     top0 = sim.particles.x[:, 1].max()
     sim.run()
@@ -23,8 +28,14 @@ def test_water_does_not_hang_from_the_ceiling():
 
 
 def test_material_leaves_a_wall_it_moves_away_from():
-    case = make_case(size=(0.3, 0.1), spacing=0.01, body=((0.0, 0.0), (0.05, 0.05)), end=0.05,
-                     physics={"gravity": [0.0, 0.0]}, output={"snapshots": False})
+    case = make_case(
+        size=(0.3, 0.1),
+        spacing=0.01,
+        body=((0.0, 0.0), (0.05, 0.05)),
+        end=0.05,
+        physics={"gravity": [0.0, 0.0]},
+        output={"snapshots": False},
+    )
     data = case.model_dump()
     data["bodies"][0]["velocity"] = [1.0, 0.0]
     from mpmflow.case import validate
@@ -48,12 +59,22 @@ def _film_3d(walls, end=0.75):
     largest |v_y| and |v_z|, the band centres and the slope's g sin(theta)."""
     theta = math.radians(10.0)
     h, H, W = 0.005, 0.05, 0.04
-    case = load_case(EXAMPLES / "poiseuille_film.toml", [
-        "domain.size=[0.04, 0.04, 0.08]", "domain.periodic=[true, false, false]",
-        f"domain.walls={walls}", "bodies.0.min=[0.0, 0.0, 0.0]",
-        f"bodies.0.max=[0.04, {W}, {H}]", "bodies.0.particles_per_cell=2",
-        f"physics.gravity=[{G * math.sin(theta)}, 0.0, {-G * math.cos(theta)}]",
-        f"time.end={end}", "time.dt=2e-3", "output.snapshots=false", "output.interval=0.05"])
+    case = load_case(
+        EXAMPLES / "poiseuille_film.toml",
+        [
+            "domain.size=[0.04, 0.04, 0.08]",
+            "domain.periodic=[true, false, false]",
+            f"domain.walls={walls}",
+            "bodies.0.min=[0.0, 0.0, 0.0]",
+            f"bodies.0.max=[0.04, {W}, {H}]",
+            "bodies.0.particles_per_cell=2",
+            f"physics.gravity=[{G * math.sin(theta)}, 0.0, {-G * math.cos(theta)}]",
+            f"time.end={end}",
+            "time.dt=2e-3",
+            "output.snapshots=false",
+            "output.interval=0.05",
+        ],
+    )
     sim = Simulation(case)
     sim.run()
     x, v = sim.particles.x, sim.particles.v
@@ -62,8 +83,14 @@ def _film_3d(walls, end=0.75):
     iz = np.minimum((x[:, 2] / h).astype(int), nz - 1)
     U = np.array([[v[(iy == j) & (iz == k), 0].mean() for k in range(nz)] for j in range(ny)])
     centres = lambda n: (np.arange(n) + 0.5) * h  # noqa: E731
-    return (U, np.abs(v[:, 1]).max(), np.abs(v[:, 2]).max(), centres(ny), centres(nz),
-            G * math.sin(theta))
+    return (
+        U,
+        np.abs(v[:, 1]).max(),
+        np.abs(v[:, 2]).max(),
+        centres(ny),
+        centres(nz),
+        G * math.sin(theta),
+    )
 
 
 @pytest.mark.slow
@@ -108,9 +135,15 @@ def test_each_side_keeps_its_own_condition(scheme):
     slip floor gives the run of all-slip walls bit for bit, and a no-slip floor that of
     all-no-slip walls, braking the block to a mean 0.33 m/s; the string form is the table
     that names every wall."""
-    more = ["domain.size=[0.4, 0.1]", "grid.spacing=0.01", "bodies.0.min=[0.1, 0.0]",
-            "bodies.0.max=[0.15, 0.03]", "bodies.0.velocity=[0.5, 0.0]", "time.end=0.05",
-            "output.snapshots=false"]
+    more = [
+        "domain.size=[0.4, 0.1]",
+        "grid.spacing=0.01",
+        "bodies.0.min=[0.1, 0.0]",
+        "bodies.0.max=[0.15, 0.03]",
+        "bodies.0.velocity=[0.5, 0.0]",
+        "time.end=0.05",
+        "output.snapshots=false",
+    ]
     if scheme == "explicit":
         more += ["solver.scheme=explicit", "time.dt=auto", "material.bulk_modulus=4e5"]
 
@@ -129,23 +162,38 @@ def test_each_side_keeps_its_own_condition(scheme):
     assert np.array_equal(x_table, x_rough)
 
 
-@pytest.mark.parametrize("override, message", [
-    (["domain.walls={z_min='no_slip'}"], r"'z_min' is not a side of a 2D domain \(did you "
-     r"mean y_min\?\); the keys are the axes x, y \(both walls\) and the sides x_min, x_max, "
-     r"y_min, y_max"),
-    (["domain.walls={floor='no_slip'}"], r"'floor' is not a side of a 2D domain"),
-    (["domain.walls={y_min='rough'}"], r"y_min = 'rough' is not a wall condition: give "
-     r"\"slip\" or \"no_slip\""),
-    (["domain.walls=rough"], r"'rough' is not a wall condition"),
-    (["domain.walls={}"], r"the table of sides is empty"),
-    (["domain.periodic=[true, false]", "domain.walls={x_max='no_slip', y='no_slip'}"],
-     r"domain.walls names x_max, but x is periodic \(domain.periodic\), so it has no walls"),
-    (["domain.walls.y_min=no_slip",
-      "obstacles.0={type='box', min=[0.03, 0.22], max=[0.06, 0.25]}"],
-     r'obstacles.0.walls = "domain" \(the default\) takes the condition of domain.walls, but '
-     r'domain.walls gives its walls different ones \(\{x = "slip", y = "slip", y_min = '
-     r'"no_slip"\}\); set obstacles.0.walls = "slip" or "no_slip"'),
-])
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        (
+            ["domain.walls={z_min='no_slip'}"],
+            r"'z_min' is not a side of a 2D domain \(did you "
+            r"mean y_min\?\); the keys are the axes x, y \(both walls\) and the sides x_min, x_max, "
+            r"y_min, y_max",
+        ),
+        (["domain.walls={floor='no_slip'}"], r"'floor' is not a side of a 2D domain"),
+        (
+            ["domain.walls={y_min='rough'}"],
+            r"y_min = 'rough' is not a wall condition: give "
+            r"\"slip\" or \"no_slip\"",
+        ),
+        (["domain.walls=rough"], r"'rough' is not a wall condition"),
+        (["domain.walls={}"], r"the table of sides is empty"),
+        (
+            ["domain.periodic=[true, false]", "domain.walls={x_max='no_slip', y='no_slip'}"],
+            r"domain.walls names x_max, but x is periodic \(domain.periodic\), so it has no walls",
+        ),
+        (
+            [
+                "domain.walls.y_min=no_slip",
+                "obstacles.0={type='box', min=[0.03, 0.22], max=[0.06, 0.25]}",
+            ],
+            r'obstacles.0.walls = "domain" \(the default\) takes the condition of domain.walls, but '
+            r'domain.walls gives its walls different ones \(\{x = "slip", y = "slip", y_min = '
+            r'"no_slip"\}\); set obstacles.0.walls = "slip" or "no_slip"',
+        ),
+    ],
+)
 def test_bad_wall_sides_are_refused_with_the_fix(override, message):
     with pytest.raises(CaseError, match=message):
         load_case(EXAMPLES / "hydrostatic.toml", override)
@@ -161,7 +209,11 @@ def test_one_side_set_on_the_command_line_keeps_the_others():
     case = load_case(EXAMPLES / "dam_break_3d.toml", ["domain.walls={z_min='no_slip'}"])
     assert case.domain.no_slip_sides() == [False, False, False, False, True, False]
     # an obstacle may take the domain's condition where every wall has the same one
-    case = load_case(EXAMPLES / "hydrostatic.toml", [
-        "domain.walls={x='no_slip', y='no_slip'}",
-        "obstacles.0={type='box', min=[0.03, 0.22], max=[0.06, 0.25]}"])
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        [
+            "domain.walls={x='no_slip', y='no_slip'}",
+            "obstacles.0={type='box', min=[0.03, 0.22], max=[0.06, 0.25]}",
+        ],
+    )
     assert case.domain.uniform_walls() == "no_slip"

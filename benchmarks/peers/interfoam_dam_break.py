@@ -193,8 +193,9 @@ def run_interfoam(case, prefix):
     t0 = time.perf_counter()
     for app in ("blockMesh", "setFields", "interFoam"):
         with open(case / f"log.{app}", "w") as log:
-            done = subprocess.run([*prefix, app, "-case", str(case)], stdout=log,
-                                  stderr=subprocess.STDOUT)
+            done = subprocess.run(
+                [*prefix, app, "-case", str(case)], stdout=log, stderr=subprocess.STDOUT
+            )
         if done.returncode:
             raise SystemExit(f"{app} failed (exit {done.returncode}); see {case}/log.{app}")
     return time.perf_counter() - t0
@@ -228,8 +229,9 @@ def interfoam_series(case):
         if not path.exists():
             continue
         text = path.read_text()
-        m = re.search(r"internalField\s+nonuniform\s+List<scalar>\s*(\d+)\s*\((.*?)\)\s*;",
-                      text, re.S)
+        m = re.search(
+            r"internalField\s+nonuniform\s+List<scalar>\s*(\d+)\s*\((.*?)\)\s*;", text, re.S
+        )
         if m is None:
             continue
         alpha = np.array(m.group(2).split(), dtype=float).reshape(ny, nx)  # x fastest
@@ -259,9 +261,20 @@ def deviations(series):
 
 def run_mpmflow(out):
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "mpmflow.cli", "run",
-                    str(ROOT / "examples" / "dam_break.toml"), "--out", str(out), "--quiet",
-                    "--overwrite"], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            str(ROOT / "examples" / "dam_break.toml"),
+            "--out",
+            str(out),
+            "--quiet",
+            "--overwrite",
+        ],
+        check=True,
+    )
     return time.perf_counter() - t0
 
 
@@ -272,8 +285,10 @@ def main():
     args = ap.parse_args()
     prefix = openfoam_command()
     if prefix is None:
-        raise SystemExit("OpenFOAM is not installed (no interFoam on the PATH and no "
-                         "/usr/bin/openfoamNNNN launcher). On Debian: apt install openfoam.")
+        raise SystemExit(
+            "OpenFOAM is not installed (no interFoam on the PATH and no "
+            "/usr/bin/openfoamNNNN launcher). On Debian: apt install openfoam."
+        )
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="peers_"))
     base.mkdir(parents=True, exist_ok=True)
     run_mpmflow(base / "mpmflow_warmup")  # the page cache, as any first run fills it
@@ -284,26 +299,45 @@ def main():
         shutil.rmtree(case, ignore_errors=True)
         write_case(case)
         theirs.append(run_interfoam(case, prefix))
-        print(f"pair {k + 1}: mpmflow {ours[-1]:.2f} s, interFoam {theirs[-1]:.2f} s, "
-              f"ratio {theirs[-1] / ours[-1]:.1f}", flush=True)
+        print(
+            f"pair {k + 1}: mpmflow {ours[-1]:.2f} s, interFoam {theirs[-1]:.2f} s, "
+            f"ratio {theirs[-1] / ours[-1]:.1f}",
+            flush=True,
+        )
     dev_ours = deviations(mpmflow_series(base / "mpmflow"))
     dev_theirs = deviations(interfoam_series(base / f"interfoam_{args.pairs - 1}"))
     ratios = [b / a for a, b in zip(ours, theirs)]
     print()
-    print("| code | whole process (median) | front vs VOF, t <= 0.2 s | height vs VOF, "
-          "t <= 0.4 s |")
+    print(
+        "| code | whole process (median) | front vs VOF, t <= 0.2 s | height vs VOF, t <= 0.4 s |"
+    )
     print("|---|---|---|---|")
-    print(f"| mpmflow (2 threads) | {statistics.median(ours):.2f} s | "
-          f"{dev_ours['front']:.3f} a | {dev_ours['height']:.3f} a |")
-    print(f"| interFoam (serial) | {statistics.median(theirs):.2f} s | "
-          f"{dev_theirs['front']:.3f} a | {dev_theirs['height']:.3f} a |")
-    print(f"\ninterFoam / mpmflow: median of {args.pairs} pairs {statistics.median(ratios):.1f}x "
-          f"(pairs: {', '.join(f'{r:.1f}' for r in ratios)})")
-    save({"label": "peers/interfoam", "pairs": args.pairs, "mpmflow_s": ours,
-          "interfoam_s": theirs, "ratio_median": statistics.median(ratios),
-          "deviation_mpmflow": dev_ours, "deviation_interfoam": dev_theirs,
-          "machine": machine(), "openfoam": shutil.which("interFoam"),
-          "date": time.strftime("%Y-%m-%d")})
+    print(
+        f"| mpmflow (2 threads) | {statistics.median(ours):.2f} s | "
+        f"{dev_ours['front']:.3f} a | {dev_ours['height']:.3f} a |"
+    )
+    print(
+        f"| interFoam (serial) | {statistics.median(theirs):.2f} s | "
+        f"{dev_theirs['front']:.3f} a | {dev_theirs['height']:.3f} a |"
+    )
+    print(
+        f"\ninterFoam / mpmflow: median of {args.pairs} pairs {statistics.median(ratios):.1f}x "
+        f"(pairs: {', '.join(f'{r:.1f}' for r in ratios)})"
+    )
+    save(
+        {
+            "label": "peers/interfoam",
+            "pairs": args.pairs,
+            "mpmflow_s": ours,
+            "interfoam_s": theirs,
+            "ratio_median": statistics.median(ratios),
+            "deviation_mpmflow": dev_ours,
+            "deviation_interfoam": dev_theirs,
+            "machine": machine(),
+            "openfoam": shutil.which("interFoam"),
+            "date": time.strftime("%Y-%m-%d"),
+        }
+    )
     if not args.keep:
         shutil.rmtree(base, ignore_errors=True)
 

@@ -77,12 +77,22 @@ WATER = ((1.992, 0.0, 0.0), (3.22, 1.0, 0.55))  # m
 BOX = ((0.6635, 0.2955, 0.0), (0.8245, 0.6985, 0.161))  # m
 # MARIN's sensors (as examples/spheric_test2.toml's [[probes]]) and the side of the box each
 # pressure sensor sits on: +x is the face the water hits, +z the top
-PRESSURE = {"P1": ((0.8245, 0.471, 0.021), 0), "P2": ((0.8245, 0.471, 0.061), 0),
-            "P3": ((0.8245, 0.471, 0.101), 0), "P4": ((0.8245, 0.471, 0.141), 0),
-            "P5": ((0.8035, 0.471, 0.161), 2), "P6": ((0.7635, 0.471, 0.161), 2),
-            "P7": ((0.7235, 0.471, 0.161), 2), "P8": ((0.6835, 0.471, 0.161), 2)}
-LEVEL = {"H1": (0.496, 0.5, 0.0), "H2": (0.992, 0.5, 0.0), "H3": (1.488, 0.5, 0.0),
-         "H4": (2.638, 0.5, 0.0)}
+PRESSURE = {
+    "P1": ((0.8245, 0.471, 0.021), 0),
+    "P2": ((0.8245, 0.471, 0.061), 0),
+    "P3": ((0.8245, 0.471, 0.101), 0),
+    "P4": ((0.8245, 0.471, 0.141), 0),
+    "P5": ((0.8035, 0.471, 0.161), 2),
+    "P6": ((0.7635, 0.471, 0.161), 2),
+    "P7": ((0.7235, 0.471, 0.161), 2),
+    "P8": ((0.6835, 0.471, 0.161), 2),
+}
+LEVEL = {
+    "H1": (0.496, 0.5, 0.0),
+    "H2": (0.992, 0.5, 0.0),
+    "H3": (1.488, 0.5, 0.0),
+    "H4": (2.638, 0.5, 0.0),
+}
 NUMBER = r"([-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)"
 APPS = ("blockMesh", "topoSet", "subsetMesh", "setFields", "interFoam")
 
@@ -116,24 +126,31 @@ def files(spacing, end, solver):
     for x0, x1, fx in runs(WATER[0][0], WATER[1][0], n[0], lx):
         for y0, y1, fy in runs(WATER[0][1], WATER[1][1], n[1], ly):
             for z0, z1, fz in runs(WATER[0][2], WATER[1][2], n[2], lz):
-                regions.append(f"    boxToCell {{ box ({x0:.9g} {y0:.9g} {z0:.9g}) "
-                               f"({x1:.9g} {y1:.9g} {z1:.9g}); fieldValues "
-                               f"( volScalarFieldValue alpha.water {fx * fy * fz:.12g} ); }}")
+                regions.append(
+                    f"    boxToCell {{ box ({x0:.9g} {y0:.9g} {z0:.9g}) "
+                    f"({x1:.9g} {y1:.9g} {z1:.9g}); fieldValues "
+                    f"( volScalarFieldValue alpha.water {fx * fy * fz:.12g} ); }}"
+                )
     probes = []
     for (x, y, z), axis in PRESSURE.values():
         p = [x, y, z]
         p[axis] += h[axis] / 2
         probes.append(f"({p[0]:.9g} {p[1]:.9g} {p[2]:.9g})")
     # the level gauges: alpha along the vertical line through each, at the cell centres
-    columns = [f"({x} {y} {(k + 0.5) * h[2]:.9g})" for x, y, _ in LEVEL.values()
-               for k in range(n[2])]
+    columns = [
+        f"({x} {y} {(k + 0.5) * h[2]:.9g})" for x, y, _ in LEVEL.values() for k in range(n[2])
+    ]
     (bx0, by0, bz0), (bx1, by1, bz1) = BOX
-    linear = ("p_rgh { solver PCG; preconditioner DIC; tolerance 1e-07; relTol 0.05; }"
-              if solver == "pcg" else
-              "p_rgh { solver GAMG; smoother DIC; tolerance 1e-07; relTol 0.05; }")
-    pcorr = ('"pcorr.*" { solver PCG; preconditioner DIC; tolerance 1e-5; relTol 0; }'
-             if solver == "pcg" else
-             '"pcorr.*" { solver GAMG; smoother DIC; tolerance 1e-5; relTol 0; }')
+    linear = (
+        "p_rgh { solver PCG; preconditioner DIC; tolerance 1e-07; relTol 0.05; }"
+        if solver == "pcg"
+        else "p_rgh { solver GAMG; smoother DIC; tolerance 1e-07; relTol 0.05; }"
+    )
+    pcorr = (
+        '"pcorr.*" { solver PCG; preconditioner DIC; tolerance 1e-5; relTol 0; }'
+        if solver == "pcg"
+        else '"pcorr.*" { solver GAMG; smoother DIC; tolerance 1e-5; relTol 0; }'
+    )
     walls = "walls { type %s; } box { type %s; }"
     return {
         ("system", "controlDict", "dictionary"): f"""
@@ -165,7 +182,7 @@ functions
         writeControl runTime;
         writeInterval 0.005;
         fields (p);
-        probeLocations ( {' '.join(probes)} );
+        probeLocations ( {" ".join(probes)} );
     }}
     level
     {{
@@ -174,7 +191,7 @@ functions
         writeControl runTime;
         writeInterval 0.005;
         fields (alpha.water);
-        probeLocations ( {' '.join(columns)} );
+        probeLocations ( {" ".join(columns)} );
     }}
 }}
 """,
@@ -206,7 +223,9 @@ actions
 defaultFieldValues ( volScalarFieldValue alpha.water 0 );
 regions
 (
-""" + "\n".join(regions) + "\n);\n",
+"""
+        + "\n".join(regions)
+        + "\n);\n",
         ("system", "fvSchemes", "dictionary"): FV_SCHEMES,
         ("system", "fvSolution", "dictionary"): f"""
 solvers
@@ -240,12 +259,12 @@ value (0 0 -9.81);
         ("0", "alpha.water", "volScalarField"): f"""
 dimensions [0 0 0 0 0 0 0];
 internalField uniform 0;
-boundaryField {{ {walls % ('zeroGradient', 'zeroGradient')} }}
+boundaryField {{ {walls % ("zeroGradient", "zeroGradient")} }}
 """,
         ("0", "U", "volVectorField"): f"""
 dimensions [0 1 -1 0 0 0 0];
 internalField uniform (0 0 0);
-boundaryField {{ {walls % ('noSlip', 'noSlip')} }}
+boundaryField {{ {walls % ("noSlip", "noSlip")} }}
 """,
         ("0", "p_rgh", "volScalarField"): """
 dimensions [1 -1 -2 0 0 0 0];
@@ -284,8 +303,9 @@ def run_apps(case, prefix, apps, args=None):
     for app in apps:
         extra = (args or {}).get(app, [])
         with open(case / f"log.{app}", "w") as log:
-            done = subprocess.run([*prefix, app, "-case", str(case), *extra], stdout=log,
-                                  stderr=subprocess.STDOUT)
+            done = subprocess.run(
+                [*prefix, app, "-case", str(case), *extra], stdout=log, stderr=subprocess.STDOUT
+            )
         if done.returncode:
             raise SystemExit(f"{app} failed (exit {done.returncode}); see {case}/log.{app}")
 
@@ -302,9 +322,11 @@ def interfoam_facts(case, prefix):
     run_apps(case, prefix, ("checkMesh",))
     check = (case / "log.checkMesh").read_text()
     log = (case / "log.interFoam").read_text()
-    facts = {"cells": int(re.search(r"^\s*cells:\s+(\d+)", check, re.M).group(1)),
-             "mesh_ok": "Mesh OK." in check,
-             "steps": len(re.findall(r"^Time = ", log, re.M))}
+    facts = {
+        "cells": int(re.search(r"^\s*cells:\s+(\d+)", check, re.M).group(1)),
+        "mesh_ok": "Mesh OK." in check,
+        "steps": len(re.findall(r"^Time = ", log, re.M)),
+    }
     volume = float(re.search(r"Total volume = " + NUMBER, check).group(1))
     box = re.search(r"^\s*box\s+(\d+)\s+\d+", check, re.M)
     facts["box_faces"] = int(box.group(1)) if box else None
@@ -320,8 +342,11 @@ def interfoam_facts(case, prefix):
 
 def read_probes(path):
     """(times, rows of values) from a probes function object's file of a scalar field."""
-    rows = [line.split() for line in path.read_text().splitlines()
-            if line.strip() and not line.lstrip().startswith("#")]
+    rows = [
+        line.split()
+        for line in path.read_text().splitlines()
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     return [float(r[0]) for r in rows], [[float(v) for v in r[1:]] for r in rows]
 
 
@@ -336,8 +361,10 @@ def write_probes_csv(case, spacing):
     dz = TANK[2] / nz
     tp, p = read_probes(pressure)
     ta, a = read_probes(alpha)
-    levels = {round(t, 9): [sum(r[g * nz:(g + 1) * nz]) * dz for g in range(len(LEVEL))]
-              for t, r in zip(ta, a)}
+    levels = {
+        round(t, 9): [sum(r[g * nz : (g + 1) * nz]) * dz for g in range(len(LEVEL))]
+        for t, r in zip(ta, a)
+    }
     lines = ["time," + ",".join([*PRESSURE, *LEVEL])]
     for t, r in zip(tp, p):
         h = levels.get(round(t, 9))
@@ -350,9 +377,24 @@ def write_probes_csv(case, spacing):
 def run_mpmflow(out, spacing, end):
     """The example as a whole process: (wall s, CPU s of the child)."""
     c0, t0 = children_cpu(), time.perf_counter()
-    subprocess.run([sys.executable, "-m", "mpmflow.cli", "run", str(EXAMPLE), "--out", str(out),
-                    "--quiet", "--overwrite", "--set", f"grid.spacing={spacing}",
-                    "--set", f"time.end={end}"], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mpmflow.cli",
+            "run",
+            str(EXAMPLE),
+            "--out",
+            str(out),
+            "--quiet",
+            "--overwrite",
+            "--set",
+            f"grid.spacing={spacing}",
+            "--set",
+            f"time.end={end}",
+        ],
+        check=True,
+    )
     return time.perf_counter() - t0, children_cpu() - c0
 
 
@@ -371,23 +413,36 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--spacing", type=float, default=0.04, help="mesh spacing, m (0.04)")
     ap.add_argument("--end", type=float, default=6.0, help="seconds of flow (6)")
-    ap.add_argument("--pairs", type=int, default=0,
-                    help="also run mpmflow, alternating with interFoam, N times each (0)")
-    ap.add_argument("--solver", choices=("gamg", "pcg"), default="gamg",
-                    help="interFoam's p_rgh solver (GAMG, as 3D cases use; or PCG-DIC)")
+    ap.add_argument(
+        "--pairs",
+        type=int,
+        default=0,
+        help="also run mpmflow, alternating with interFoam, N times each (0)",
+    )
+    ap.add_argument(
+        "--solver",
+        choices=("gamg", "pcg"),
+        default="gamg",
+        help="interFoam's p_rgh solver (GAMG, as 3D cases use; or PCG-DIC)",
+    )
     ap.add_argument("--keep", metavar="DIR", help="keep the cases and runs in DIR")
     args = ap.parse_args()
     prefix = openfoam_command()
     if prefix is None:
-        raise SystemExit("OpenFOAM is not installed (no interFoam on the PATH and no "
-                         "/usr/bin/openfoamNNNN launcher). On Debian: apt install openfoam.")
+        raise SystemExit(
+            "OpenFOAM is not installed (no interFoam on the PATH and no "
+            "/usr/bin/openfoamNNNN launcher). On Debian: apt install openfoam."
+        )
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="peers_spheric_"))
     base.mkdir(parents=True, exist_ok=True)
     n = cells(args.spacing)
     h = [side / k for side, k in zip(TANK, n)]
-    print(f"interFoam mesh: {n[0]} x {n[1]} x {n[2]} cells of "
-          f"{h[0]:.5g} x {h[1]:.5g} x {h[2]:.5g} m (the nearest whole numbers to the sides "
-          f"over {args.spacing} m), less the box's", flush=True)
+    print(
+        f"interFoam mesh: {n[0]} x {n[1]} x {n[2]} cells of "
+        f"{h[0]:.5g} x {h[1]:.5g} x {h[2]:.5g} m (the nearest whole numbers to the sides "
+        f"over {args.spacing} m), less the box's",
+        flush=True,
+    )
     if args.pairs:
         run_mpmflow(base / "mpmflow_warmup", args.spacing, min(args.end, 0.01))
     ours, theirs, facts = [], [], None
@@ -400,38 +455,66 @@ def main():
             facts = interfoam_facts(case, prefix)
             facts["probe_rows"] = write_probes_csv(case, args.spacing)
             water = (WATER[1][0] - WATER[0][0]) * (WATER[1][1] - WATER[0][1]) * WATER[1][2]
-            print(f"interFoam: {facts['cells']} cells (checkMesh: "
-                  f"{'Mesh OK' if facts['mesh_ok'] else 'FAILED, see log.checkMesh'}; "
-                  f"box patch {facts['box_faces']} faces; volume {facts['mesh_volume']:.6g} "
-                  f"m^3), water {facts.get('water_volume', float('nan')):.6g} m^3 "
-                  f"(column {water:.6g} m^3), {facts['steps']} time steps to {args.end} s; "
-                  f"probes.csv {facts['probe_rows']} rows",
-                  flush=True)
+            print(
+                f"interFoam: {facts['cells']} cells (checkMesh: "
+                f"{'Mesh OK' if facts['mesh_ok'] else 'FAILED, see log.checkMesh'}; "
+                f"box patch {facts['box_faces']} faces; volume {facts['mesh_volume']:.6g} "
+                f"m^3), water {facts.get('water_volume', float('nan')):.6g} m^3 "
+                f"(column {water:.6g} m^3), {facts['steps']} time steps to {args.end} s; "
+                f"probes.csv {facts['probe_rows']} rows",
+                flush=True,
+            )
         line = f"interFoam {theirs[-1][0]:.2f} s wall, {theirs[-1][1]:.2f} s CPU"
         if args.pairs:
             ours.append(run_mpmflow(base / "mpmflow", args.spacing, args.end))
-            line = (f"pair {k + 1}: {line}; mpmflow {ours[-1][0]:.2f} s wall, "
-                    f"{ours[-1][1]:.2f} s CPU; ratio {theirs[-1][0] / ours[-1][0]:.2f}")
+            line = (
+                f"pair {k + 1}: {line}; mpmflow {ours[-1][0]:.2f} s wall, "
+                f"{ours[-1][1]:.2f} s CPU; ratio {theirs[-1][0] / ours[-1][0]:.2f}"
+            )
         print(line, flush=True)
-    record = {"label": "peers/interfoam_spheric", "spacing": args.spacing, "end": args.end,
-              "cells": n, "solver": args.solver, "interfoam": facts,
-              "interfoam_s": [w for w, _ in theirs], "interfoam_cpu_s": [c for _, c in theirs]}
+    record = {
+        "label": "peers/interfoam_spheric",
+        "spacing": args.spacing,
+        "end": args.end,
+        "cells": n,
+        "solver": args.solver,
+        "interfoam": facts,
+        "interfoam_s": [w for w, _ in theirs],
+        "interfoam_cpu_s": [c for _, c in theirs],
+    }
     print()
-    print(f"interFoam (serial): median {statistics.median(w for w, _ in theirs):.2f} s wall, "
-          f"{statistics.median(c for _, c in theirs):.2f} s CPU")
+    print(
+        f"interFoam (serial): median {statistics.median(w for w, _ in theirs):.2f} s wall, "
+        f"{statistics.median(c for _, c in theirs):.2f} s CPU"
+    )
     if args.pairs:
         ratios = [b[0] / a[0] for a, b in zip(ours, theirs)]
         steps = mpmflow_steps(base / "mpmflow")
-        print(f"mpmflow: median {statistics.median(w for w, _ in ours):.2f} s wall, "
-              f"{statistics.median(c for _, c in ours):.2f} s CPU"
-              + (f", {steps} time steps" if steps is not None else ""))
-        print(f"interFoam / mpmflow (wall): median of {args.pairs} pairs "
-              f"{statistics.median(ratios):.2f}x (pairs: {', '.join(f'{r:.2f}' for r in ratios)})")
-        record.update({"pairs": args.pairs, "mpmflow_s": [w for w, _ in ours],
-                       "mpmflow_cpu_s": [c for _, c in ours], "mpmflow_steps": steps,
-                       "ratio_median": statistics.median(ratios)})
-    record.update({"machine": machine(), "openfoam": shutil.which("interFoam"),
-                   "date": time.strftime("%Y-%m-%d")})
+        print(
+            f"mpmflow: median {statistics.median(w for w, _ in ours):.2f} s wall, "
+            f"{statistics.median(c for _, c in ours):.2f} s CPU"
+            + (f", {steps} time steps" if steps is not None else "")
+        )
+        print(
+            f"interFoam / mpmflow (wall): median of {args.pairs} pairs "
+            f"{statistics.median(ratios):.2f}x (pairs: {', '.join(f'{r:.2f}' for r in ratios)})"
+        )
+        record.update(
+            {
+                "pairs": args.pairs,
+                "mpmflow_s": [w for w, _ in ours],
+                "mpmflow_cpu_s": [c for _, c in ours],
+                "mpmflow_steps": steps,
+                "ratio_median": statistics.median(ratios),
+            }
+        )
+    record.update(
+        {
+            "machine": machine(),
+            "openfoam": shutil.which("interFoam"),
+            "date": time.strftime("%Y-%m-%d"),
+        }
+    )
     save(record)
     if not args.keep:
         shutil.rmtree(base, ignore_errors=True)

@@ -12,9 +12,18 @@ The README's "Python API" section says more.
 
 from ._version import __version__
 
-__all__ = ["load_case", "validate_case", "Simulation", "open_run", "CaseError",
-           "SimulationError", "TimeInterval", "IterationInterval", "WallTimeInterval",
-           "__version__"]
+__all__ = [
+    "load_case",
+    "validate_case",
+    "Simulation",
+    "open_run",
+    "CaseError",
+    "SimulationError",
+    "TimeInterval",
+    "IterationInterval",
+    "WallTimeInterval",
+    "__version__",
+]
 
 
 def __getattr__(name):

@@ -35,8 +35,9 @@ def bin_particles(grid, particles, bins=None, open_=None):
     state.counting_sort(bins.cell, grid.ncells, bins.start, bins.order)
     if open_ is None:
         open_ = np.ones(grid.ncells)
-    state.cell_volume_fraction(bins.order, bins.start, particles.volume, grid.cell_volume,
-                               open_, bins.theta)
+    state.cell_volume_fraction(
+        bins.order, bins.start, particles.volume, grid.cell_volume, open_, bins.theta
+    )
     if (open_ < 1.0).any():
         state.sliver_fractions(grid.cells, open_, bins.theta)
     return bins

@@ -37,7 +37,8 @@ class CheckpointError(CaseError):
         super().__init__(
             f"Checkpoint {path} cannot be read ({why}); it is damaged, e.g. cut short by a "
             "crash. Delete it to restart from the checkpoint before it, or start the run "
-            "again with --overwrite instead of --restart.")
+            "again with --overwrite instead of --restart."
+        )
 
 
 def path_for(folder, step):
@@ -46,8 +47,11 @@ def path_for(folder, step):
 
 def checkpoints(folder):
     """The checkpoint files in ``folder``, oldest first (by step)."""
-    found = [(int(m.group(1)), p) for p in Path(folder).glob("checkpoint_*.npz")
-             if (m := _NAME.match(p.name))]
+    found = [
+        (int(m.group(1)), p)
+        for p in Path(folder).glob("checkpoint_*.npz")
+        if (m := _NAME.match(p.name))
+    ]
     return [p for _, p in sorted(found)]
 
 
@@ -75,14 +79,17 @@ def read(path):
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         # an empty file gives EOFError, a truncated one BadZipFile (a crash before the data
         # reached the disk)
-        raise CheckpointError(path, f"{type(err).__name__}: {err}" if str(err)
-                              else type(err).__name__) from None
+        raise CheckpointError(
+            path, f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
+        ) from None
     if not isinstance(meta, dict):
         raise CheckpointError(path, "its meta entry is not a JSON object")
     if meta.get("format") != FORMAT:
-        raise CaseError(f"Checkpoint {path} has format {meta.get('format')}, this mpmflow reads "
-                        f"format {FORMAT}; start the run again with --overwrite instead of "
-                        "--restart.")
+        raise CaseError(
+            f"Checkpoint {path} has format {meta.get('format')}, this mpmflow reads "
+            f"format {FORMAT}; start the run again with --overwrite instead of "
+            "--restart."
+        )
     return arrays, meta
 
 
@@ -90,8 +97,10 @@ def latest(folder):
     """The path of the latest checkpoint in ``folder``; CaseError if there is none."""
     found = checkpoints(folder)
     if not found:
-        raise CaseError(f"--restart: {folder} holds no checkpoint (checkpoint_*.npz) to "
-                        "continue from. Run without --restart to start the run.")
+        raise CaseError(
+            f"--restart: {folder} holds no checkpoint (checkpoint_*.npz) to "
+            "continue from. Run without --restart to start the run."
+        )
     return found[-1]
 
 
@@ -123,7 +132,8 @@ def check_same_case(saved, current, path, may_change=("time.end", "execution.thr
             f"{json.dumps(saved_value)} in the checkpoint. A restart must use the same "
             f"settings except time.end (which may be later, to extend the run) and "
             f"execution.threads. Use "
-            f"--set {key}={json.dumps(saved_value)}, or start a new run in another folder.")
+            f"--set {key}={json.dumps(saved_value)}, or start a new run in another folder."
+        )
 
 
 def case_files(case):
@@ -170,4 +180,5 @@ def check_same_files(saved, current, path):
             f"{new['sha256'][:12] + '...' if new is not None else 'no such entry'} now). The "
             "particles moved in the old geometry and data; continuing with the new would mix "
             "the two without a word. Put the original file back, or start a new run in "
-            "another folder (or with --overwrite).")
+            "another folder (or with --overwrite)."
+        )

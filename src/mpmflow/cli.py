@@ -65,46 +65,91 @@ without one), 141 the output pipe was closed (mpmflow keys | head)."""
 
 # mpmflow.validation.CASES, named here so that --help does not import the suite (a test
 # checks that the two agree)
-VALIDATION_CASES = ("hydrostatic", "sloshing", "dam_break", "dam_break_ar1", "lobovsky",
-                    "volume", "long_run", "three_d", "spheric", "viscous_wave",
-                    "granular_collapse", "bingham_slump", "poiseuille", "bingham_plug",
-                    "mu_i_layer")
+VALIDATION_CASES = (
+    "hydrostatic",
+    "sloshing",
+    "dam_break",
+    "dam_break_ar1",
+    "lobovsky",
+    "volume",
+    "long_run",
+    "three_d",
+    "spheric",
+    "viscous_wave",
+    "granular_collapse",
+    "bingham_slump",
+    "poiseuille",
+    "bingham_plug",
+    "mu_i_layer",
+)
 
 
 def _parser():
-    p = argparse.ArgumentParser(prog="mpmflow", description=DESCRIPTION, epilog=EPILOG,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog="mpmflow",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("--version", action="version", version=f"mpmflow {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
-    r = sub.add_parser("run", help="run a case file", description=RUN_HELP, epilog=EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    r = sub.add_parser(
+        "run",
+        help="run a case file",
+        description=RUN_HELP,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     r.add_argument("case", metavar="CASE.toml", help="case file (TOML)")
-    r.add_argument("--out", "-o", metavar="DIR", required=True,
-                   help="output folder (created if needed)")
-    r.add_argument("--set", "-s", metavar="KEY=VALUE", action="append", default=[],
-                   dest="overrides", help="override a case key (repeatable)")
-    r.add_argument("--overwrite", action="store_true",
-                   help="replace the results of an earlier run in DIR")
-    r.add_argument("--restart", action="store_true",
-                   help="continue the run in DIR from its latest checkpoint (same settings; "
-                   "a later time.end extends it)")
+    r.add_argument(
+        "--out", "-o", metavar="DIR", required=True, help="output folder (created if needed)"
+    )
+    r.add_argument(
+        "--set",
+        "-s",
+        metavar="KEY=VALUE",
+        action="append",
+        default=[],
+        dest="overrides",
+        help="override a case key (repeatable)",
+    )
+    r.add_argument(
+        "--overwrite", action="store_true", help="replace the results of an earlier run in DIR"
+    )
+    r.add_argument(
+        "--restart",
+        action="store_true",
+        help="continue the run in DIR from its latest checkpoint (same settings; "
+        "a later time.end extends it)",
+    )
     r.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     st = sub.add_parser(
-        "study", help="run the paper's study (Table 1, Figs. 2-4) with both schemes",
+        "study",
+        help="run the paper's study (Table 1, Figs. 2-4) with both schemes",
         description="Run the study of Kularathna & Soga (2017): the dam break at the paper's "
         "three meshes with the projection scheme, the explicit scheme at K = 2.2 GPa (for as "
         "long as --budget allows per run) and the explicit scheme at a reduced K, for the "
         "aspect-ratio-2 and aspect-ratio-1 columns. Writes study.md, study.csv, the figures "
-        "and each run's outputs (DIR/runs/).")
+        "and each run's outputs (DIR/runs/).",
+    )
     st.add_argument("name", choices=["paper"], help="the study to run")
     st.add_argument("--out", "-o", metavar="DIR", required=True, help="output folder")
-    st.add_argument("--budget", type=float, default=240.0, metavar="S",
-                    help="wall seconds per explicit run at the real K (default 240: the "
-                    "whole study then takes about 15 minutes on 2 cores)")
-    st.add_argument("--quick", action="store_true",
-                    help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)")
+    st.add_argument(
+        "--budget",
+        type=float,
+        default=240.0,
+        metavar="S",
+        help="wall seconds per explicit run at the real K (default 240: the "
+        "whole study then takes about 15 minutes on 2 cores)",
+    )
+    st.add_argument(
+        "--quick",
+        action="store_true",
+        help="coarsest mesh, aspect ratio 2 only, to 0.3 s (a smoke test)",
+    )
     pl = sub.add_parser(
-        "plot", help="plot a run's time series, probes, particle snapshots and an animation",
+        "plot",
+        help="plot a run's time series, probes, particle snapshots and an animation",
         description="Plot the outputs of a run (needs matplotlib, and scikit-image for 3D: "
         "pip install 'mpmflow[plot]'): timeseries.png (front and height, energies, largest speed and "
         "pressure, pressure noise, volume ratio), probes.png (with [[probes]]: pressures and "
@@ -113,12 +158,19 @@ def _parser():
         "snapshots.png (particles coloured by pressure; in 3D the mid-width slice), "
         "animation.gif (the snapshots; set output.snapshot_interval for more frames) and, in "
         "3D, snapshots/surface_NNNNNN.png and surfaces.png (the water's surface, where the "
-        "volume fraction is 1/2, and the obstacles).")
+        "volume fraction is 1/2, and the obstacles).",
+    )
     pl.add_argument("run_dir", metavar="DIR", help="the --out folder of a run")
-    pl.add_argument("--out", "-o", metavar="DIR2", default=None,
-                    help="folder for the figures (default: DIR/plots)")
+    pl.add_argument(
+        "--out",
+        "-o",
+        metavar="DIR2",
+        default=None,
+        help="folder for the figures (default: DIR/plots)",
+    )
     v = sub.add_parser(
-        "validate", help="run the validation suite and write its report",
+        "validate",
+        help="run the validation suite and write its report",
         description="Run the validation cases (hydrostatic column, standing-wave sloshing, "
         "dam breaks of aspect ratio 2 and 1 at the paper's meshes, time-step independence, "
         "Lobovsky et al. 2014, volume and particle distribution, long runs: 20 s of sloshing and "
@@ -127,17 +179,29 @@ def _parser():
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
         "plots) and DIR/summary.csv; a README.md in DIR that it did not write is never replaced. "
         "Needs matplotlib. The full run takes about 6 minutes on 2 cores.",
-        epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).")
+        epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).",
+    )
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
-    v.add_argument("--quick", action="store_true",
-                   help="the small versions the test suite runs (about 20 s)")
-    v.add_argument("--case", action="append", default=[], metavar="NAME", dest="cases",
-                   help="run only this case (repeatable): " + ", ".join(VALIDATION_CASES))
-    k = sub.add_parser("keys", help="list every case key with its meaning and default",
-                       description="List every case-file key (dotted name), its default and "
-                       "its meaning.")
+    v.add_argument(
+        "--quick", action="store_true", help="the small versions the test suite runs (about 20 s)"
+    )
+    v.add_argument(
+        "--case",
+        action="append",
+        default=[],
+        metavar="NAME",
+        dest="cases",
+        help="run only this case (repeatable): " + ", ".join(VALIDATION_CASES),
+    )
+    k = sub.add_parser(
+        "keys",
+        help="list every case key with its meaning and default",
+        description="List every case-file key (dotted name), its default and its meaning.",
+    )
     k.add_argument("--json", action="store_true", help="machine-readable output")
-    k.add_argument("--markdown", action="store_true", help="the reference table of docs/reference.md")
+    k.add_argument(
+        "--markdown", action="store_true", help="the reference table of docs/reference.md"
+    )
     return p
 
 
@@ -148,9 +212,16 @@ def _progress_bar(end, quiet, start=0.0, step=0):
         return None, None
     from tqdm import tqdm
 
-    bar = tqdm(total=end, initial=start, unit="s", unit_scale=False, dynamic_ncols=True, file=sys.stderr,
-               bar_format="{l_bar}{bar}| t = {n:.3f}/{total:.3f} s [{elapsed}<{remaining}]"
-                          "{postfix}", postfix=f"step {step}")
+    bar = tqdm(
+        total=end,
+        initial=start,
+        unit="s",
+        unit_scale=False,
+        dynamic_ncols=True,
+        file=sys.stderr,
+        bar_format="{l_bar}{bar}| t = {n:.3f}/{total:.3f} s [{elapsed}<{remaining}]{postfix}",
+        postfix=f"step {step}",
+    )
     last = [start]
 
     def update(t, step, end_):
@@ -184,11 +255,15 @@ def _run(args):
     _check_out_dir(out, create=False)
     if args.restart:
         if args.overwrite:
-            raise CaseError("--restart continues the run in --out and --overwrite replaces it; "
-                            "give one of them.")
+            raise CaseError(
+                "--restart continues the run in --out and --overwrite replaces it; "
+                "give one of them."
+            )
         if not out.is_dir():
-            raise CaseError(f"--restart: --out {out} does not exist; give the folder of the "
-                            "run to continue, or run without --restart.")
+            raise CaseError(
+                f"--restart: --out {out} does not exist; give the folder of the "
+                "run to continue, or run without --restart."
+            )
         sim = Simulation.resume(case, out, hints=CLI_HINTS)
     else:
         sim = Simulation(case, out, overwrite=args.overwrite)
@@ -196,16 +271,18 @@ def _run(args):
         sim.claim(CLI_HINTS)
     with sim:  # releases the folder if anything below fails before the run
         if args.restart:
-            print(f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
-                  f"{sim.steps})", file=sys.stderr)
+            print(
+                f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
+                f"{sim.steps})",
+                file=sys.stderr,
+            )
         if not args.quiet:
             for line in sim.describe():
                 print(f"mpmflow: {line}", file=sys.stderr)
         for note in sim.notices:
             print(f"mpmflow: note: {note}", file=sys.stderr)
         early.check()
-        bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time,
-                                    step=sim.steps)
+        bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time, step=sim.steps)
         sim.progress = update
         try:
             with stop_on_signals(sim):
@@ -215,13 +292,19 @@ def _run(args):
                 bar.close()
             early.phase = "after"
     if summary["status"] == "interrupted":
-        print(f"mpmflow: interrupted at t = {summary['time']:.6g} s (step {summary['steps']}); "
-              f"checkpoint {out / summary['last_checkpoint']}. Resume with: "
-              f"{_resume_command(args)}", file=sys.stderr)
+        print(
+            f"mpmflow: interrupted at t = {summary['time']:.6g} s (step {summary['steps']}); "
+            f"checkpoint {out / summary['last_checkpoint']}. Resume with: "
+            f"{_resume_command(args)}",
+            file=sys.stderr,
+        )
         return exit_code(sim.stop_signal)
     if not args.quiet:
-        print(f"mpmflow: {summary['steps']} steps, {summary['particles']} particles, "
-              f"{summary['wall_seconds']:.2f} s wall; results in {out}", file=sys.stderr)
+        print(
+            f"mpmflow: {summary['steps']} steps, {summary['particles']} particles, "
+            f"{summary['wall_seconds']:.2f} s wall; results in {out}",
+            file=sys.stderr,
+        )
     if sim.fallbacks:
         print(f"mpmflow: note: {sim.fallbacks.line()}", file=sys.stderr)
     return 0
@@ -231,18 +314,23 @@ def _study(args):
     from .study import run_study
 
     if not args.budget > 0:
-        raise CaseError(f"--budget {args.budget:g}: give a positive number of seconds, e.g. "
-                        "--budget 240.")
+        raise CaseError(
+            f"--budget {args.budget:g}: give a positive number of seconds, e.g. --budget 240."
+        )
     out = Path(args.out)
     _check_out_dir(out)
 
     def report(row):
-        print(f"mpmflow: {row['label']} (aspect ratio {row['ar']}): {row['steps']} steps to "
-              f"t = {row['time_reached_s']:.3g} s in {row['wall_s']:.1f} s wall "
-              f"[{row['status']}]", file=sys.stderr)
+        print(
+            f"mpmflow: {row['label']} (aspect ratio {row['ar']}): {row['steps']} steps to "
+            f"t = {row['time_reached_s']:.3g} s in {row['wall_s']:.1f} s wall "
+            f"[{row['status']}]",
+            file=sys.stderr,
+        )
 
-    run_study(out, budget=args.budget, quick=args.quick, end=0.3 if args.quick else 1.0,
-              progress=report)
+    run_study(
+        out, budget=args.budget, quick=args.quick, end=0.3 if args.quick else 1.0, progress=report
+    )
     print(f"mpmflow: study written to {out}/study.md", file=sys.stderr)
     return 0
 
@@ -264,8 +352,11 @@ def _validate(args):
 
     unknown = [c for c in args.cases if c not in VALIDATION_CASES]
     if unknown:
-        raise CaseError(f"--case {unknown[0]}: unknown validation case; choose from "
-                        + ", ".join(VALIDATION_CASES) + ".")
+        raise CaseError(
+            f"--case {unknown[0]}: unknown validation case; choose from "
+            + ", ".join(VALIDATION_CASES)
+            + "."
+        )
     out = Path(args.out)
     _check_out_dir(out, create=False)
     # everything the cases need, checked before minutes of runs: matplotlib (the plots),
@@ -290,13 +381,18 @@ def _validate(args):
 
     def report(res):
         misses = sum(r.status == "miss" for r in res.rows)
-        print(f"mpmflow: {res.title}: {len(res.rows)} rows, {misses} missed, "
-              f"{res.wall_s:.0f} s", file=sys.stderr)
+        print(
+            f"mpmflow: {res.title}: {len(res.rows)} rows, {misses} missed, {res.wall_s:.0f} s",
+            file=sys.stderr,
+        )
 
     _, counts = run_validation(out, quick=args.quick, cases=args.cases, progress=report)
-    print(f"mpmflow: {counts['pass']} rows pass, {counts['miss']} miss"
-          + (f", {counts['n/a']} not measurable" if counts["n/a"] else "")
-          + f"; report in {out}/README.md", file=sys.stderr)
+    print(
+        f"mpmflow: {counts['pass']} rows pass, {counts['miss']} miss"
+        + (f", {counts['n/a']} not measurable" if counts["n/a"] else "")
+        + f"; report in {out}/README.md",
+        file=sys.stderr,
+    )
     return 0
 
 
@@ -351,8 +447,11 @@ def _main(argv):
         print(f"mpmflow: error: {err}", file=sys.stderr)
         return err.exit_code
     except StopNow as err:
-        print(f"mpmflow: stopped at once by a second {err.name}, without a new checkpoint "
-              "(the last one written is kept: --restart continues from it).", file=sys.stderr)
+        print(
+            f"mpmflow: stopped at once by a second {err.name}, without a new checkpoint "
+            "(the last one written is kept: --restart continues from it).",
+            file=sys.stderr,
+        )
         return exit_code(err.signum)
     except EarlyStop as err:
         print(f"mpmflow: stopped by {err.name} {early.when()}.", file=sys.stderr)

@@ -48,8 +48,9 @@ def front_and_height(grid, theta):
     fronts = last_crossings(f.reshape(f.shape[0], -1), grid.cell_centres(0), grid.size[0])
     front = np.nanmax(fronts) if np.isfinite(fronts).any() else np.nan
     wall = np.moveaxis(f[0], -1, 0)  # the cells against x = 0, vertical axis first
-    heights = last_crossings(wall.reshape(wall.shape[0], -1), grid.cell_centres(grid.dim - 1),
-                             grid.size[-1])
+    heights = last_crossings(
+        wall.reshape(wall.shape[0], -1), grid.cell_centres(grid.dim - 1), grid.size[-1]
+    )
     height = np.nanmean(heights) if np.isfinite(heights).any() else np.nan
     return float(front), float(height)
 
@@ -66,8 +67,10 @@ def volume_measures(theta, cell_volume, material_volume, open_=None):
     holding = np.count_nonzero(theta > 0.0)
     wet = theta >= WET
     wetted = np.count_nonzero(wet) if open_ is None else float(open_[wet].sum())
-    return {"volume_ratio": float(wetted * cell_volume / material_volume),
-            "packed_share": float(np.count_nonzero(theta > PACKED) / max(holding, 1))}
+    return {
+        "volume_ratio": float(wetted * cell_volume / material_volume),
+        "packed_share": float(np.count_nonzero(theta > PACKED) / max(holding, 1)),
+    }
 
 
 def kinetic_energy(particles):

@@ -36,9 +36,17 @@ class Fallbacks:
             return
         if what not in WHAT:
             raise KeyError(f"unknown fallback {what!r}")
-        row = self._rows.setdefault((what, where), {"what": what, "where": where, "count": 0,
-                                                    "unit": WHAT[what], "first_time": time,
-                                                    "last_time": time})
+        row = self._rows.setdefault(
+            (what, where),
+            {
+                "what": what,
+                "where": where,
+                "count": 0,
+                "unit": WHAT[what],
+                "first_time": time,
+                "last_time": time,
+            },
+        )
         row["count"] += int(n)
         if time is not None:
             if row["first_time"] is None:
@@ -58,6 +66,9 @@ class Fallbacks:
         if not self._rows:
             return None
         parts = [f"{r['what']} ({r['where']}: {r['count']} {r['unit']})" for r in self.rows()]
-        return (f"{len(parts)} cap{'s' if len(parts) > 1 else ''} or fallback"
-                f"{'s' if len(parts) > 1 else ''} acted during the run: " + "; ".join(parts)
-                + " (summary.json, caps_and_fallbacks)")
+        return (
+            f"{len(parts)} cap{'s' if len(parts) > 1 else ''} or fallback"
+            f"{'s' if len(parts) > 1 else ''} acted during the run: "
+            + "; ".join(parts)
+            + " (summary.json, caps_and_fallbacks)"
+        )

@@ -32,8 +32,9 @@ class Grid:
         counts = []
         for length in size:
             n = length / spacing
-            counts.append(max(1, int(round(n)) if abs(n - round(n)) <= rtol * n else
-                          int(np.ceil(n))))
+            counts.append(
+                max(1, int(round(n)) if abs(n - round(n)) <= rtol * n else int(np.ceil(n)))
+            )
         flags = tuple(bool(p) for p in periodic) if periodic and any(periodic) else ()
         return cls(float(spacing), tuple(counts), flags)
 

@@ -55,8 +55,10 @@ def stop_on_signals(sim):
             sim.stop_now = signum  # the run loop raises StopNow too, should this one be lost
             raise StopNow(signum)
         sim.stop_signal = signum
-        _say(f"\nmpmflow: {signal.Signals(signum).name} received: stopping at the next output "
-             "time with a checkpoint (send it again to stop at once, without one).\n")
+        _say(
+            f"\nmpmflow: {signal.Signals(signum).name} received: stopping at the next output "
+            "time with a checkpoint (send it again to stop at once, without one).\n"
+        )
 
     def unraisable(info):
         # a handler that runs inside a __del__ (a library freeing objects while it loads)

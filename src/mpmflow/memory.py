@@ -59,24 +59,42 @@ class Estimate:
 
     @property
     def total(self):
-        return (self.program + self.particle_bytes + self.grid_bytes + self.solver_bytes
-                + self.rows_bytes + self.passing_bytes)
+        return (
+            self.program
+            + self.particle_bytes
+            + self.grid_bytes
+            + self.solver_bytes
+            + self.rows_bytes
+            + self.passing_bytes
+        )
 
     def text(self):
         """One line: the total and its parts."""
-        return (f"about {size(self.total)} (particles {size(self.particle_bytes)}, grid "
-                f"{size(self.grid_bytes)}, pressure solver {size(self.solver_bytes)}, "
-                f"{self.passing_what} {size(self.passing_bytes)}, time series "
-                f"{size(self.rows_bytes)}, program {size(self.program)})")
+        return (
+            f"about {size(self.total)} (particles {size(self.particle_bytes)}, grid "
+            f"{size(self.grid_bytes)}, pressure solver {size(self.solver_bytes)}, "
+            f"{self.passing_what} {size(self.passing_bytes)}, time series "
+            f"{size(self.rows_bytes)}, program {size(self.program)})"
+        )
 
     def as_dict(self):
-        return {"total": self.total, "program": self.program,
-                "particles": self.particle_bytes, "grid": self.grid_bytes,
-                "pressure_solver": self.solver_bytes, "time_series": self.rows_bytes,
-                "passing": self.passing_bytes, "passing_what": self.passing_what,
-                "counts": {"particles": self.particles, "nodes": self.nodes,
-                           "unknowns": self.unknowns, "rows": self.rows},
-                "disk": self.disk_bytes}
+        return {
+            "total": self.total,
+            "program": self.program,
+            "particles": self.particle_bytes,
+            "grid": self.grid_bytes,
+            "pressure_solver": self.solver_bytes,
+            "time_series": self.rows_bytes,
+            "passing": self.passing_bytes,
+            "passing_what": self.passing_what,
+            "counts": {
+                "particles": self.particles,
+                "nodes": self.nodes,
+                "unknowns": self.unknowns,
+                "rows": self.rows,
+            },
+            "disk": self.disk_bytes,
+        }
 
 
 def size(nbytes):
@@ -117,22 +135,50 @@ def estimate(case):
     else:
         passing, what = MEASURE[0] * particles + MEASURE[1] * nodes, "measuring a row"
     program = PROGRAM
-    snaps = (case.time.end / (case.output.snapshot_interval or case.output.interval) + 2
-             if case.output.snapshots else 0)
+    snaps = (
+        case.time.end / (case.output.snapshot_interval or case.output.interval) + 2
+        if case.output.snapshots
+        else 0
+    )
     # APIC's affine matrices: in memory and in each checkpoint
     affine = AFFINE * len(case.domain.size) ** 2 if case.solver.transfer == "apic" else 0
-    disk = (rows * (170 + 12 * len(case.probes)) + snaps * (120 * particles + 200)
-            + 2 * ((56 + affine) * particles + 16 * nodes))
-    return Estimate(particles=count if count < 10**15 else particles, nodes=int(nodes) if math.isfinite(nodes) else nodes,
-                    unknowns=unknowns, rows=rows, program=program,
-                    particle_bytes=(PER_PARTICLE + affine) * particles, grid_bytes=PER_NODE * nodes,
-                    solver_bytes=PER_UNKNOWN * unknowns, rows_bytes=PER_ROW * values * rows,
-                    passing_bytes=passing, passing_what=what, disk_bytes=disk)
+    disk = (
+        rows * (170 + 12 * len(case.probes))
+        + snaps * (120 * particles + 200)
+        + 2 * ((56 + affine) * particles + 16 * nodes)
+    )
+    return Estimate(
+        particles=count if count < 10**15 else particles,
+        nodes=int(nodes) if math.isfinite(nodes) else nodes,
+        unknowns=unknowns,
+        rows=rows,
+        program=program,
+        particle_bytes=(PER_PARTICLE + affine) * particles,
+        grid_bytes=PER_NODE * nodes,
+        solver_bytes=PER_UNKNOWN * unknowns,
+        rows_bytes=PER_ROW * values * rows,
+        passing_bytes=passing,
+        passing_what=what,
+        disk_bytes=disk,
+    )
 
 
-_UNITS = {"": 1, "B": 1, "K": 2**10, "KB": 2**10, "KIB": 2**10, "M": MB, "MB": MB,
-          "MIB": MB, "G": 2**30, "GB": 2**30, "GIB": 2**30, "T": 2**40, "TB": 2**40,
-          "TIB": 2**40}
+_UNITS = {
+    "": 1,
+    "B": 1,
+    "K": 2**10,
+    "KB": 2**10,
+    "KIB": 2**10,
+    "M": MB,
+    "MB": MB,
+    "MIB": MB,
+    "G": 2**30,
+    "GB": 2**30,
+    "GIB": 2**30,
+    "T": 2**40,
+    "TB": 2**40,
+    "TIB": 2**40,
+}
 
 
 def parse_size(text, name):
@@ -143,8 +189,10 @@ def parse_size(text, name):
     except ValueError:
         value = None
     if value is None or not value > 0 or not math.isfinite(value):
-        raise CaseError(f"{name} = {text!r} is not a memory size; give bytes or a number with "
-                        "a unit, e.g. 8G or 512M, or unset it to use the memory available.")
+        raise CaseError(
+            f"{name} = {text!r} is not a memory size; give bytes or a number with "
+            "a unit, e.g. 8G or 512M, or unset it to use the memory available."
+        )
     return value
 
 
@@ -178,9 +226,13 @@ def available():
     except (OSError, ValueError):
         pass
     # a container's or batch job's limit (cgroup v2, then v1)
-    for limit_path, usage_path in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
-                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
-                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+    for limit_path, usage_path in (
+        ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+        (
+            "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+            "/sys/fs/cgroup/memory/memory.usage_in_bytes",
+        ),
+    ):
         cap, used = _read_int(limit_path), _read_int(usage_path)
         if cap is not None and used is not None and cap < 2**60:
             left = max(cap - used, 0)
@@ -204,19 +256,23 @@ def check(case, est=None):
         return est
     # the particles and the nodes go as (1 / grid.spacing)^D: the square in 2D, the cube in 3D
     power = {2: "square", 3: "cube"}[len(case.domain.size)]
-    settings = (f"grid.spacing (memory grows as its inverse {power}), "
-                "bodies.N.particles_per_cell")
+    settings = f"grid.spacing (memory grows as its inverse {power}), bodies.N.particles_per_cell"
     if case.output.snapshots and math.isfinite(est.passing_bytes):
-        settings += ", output.snapshots = false (a snapshot needs "  \
-                    f"{size(est.passing_bytes)} while it is written)"
-    count = (f"{est.particles:.3g}" if isinstance(est.particles, float)
-             else f"{est.particles:,}")
+        settings += (
+            ", output.snapshots = false (a snapshot needs "
+            f"{size(est.passing_bytes)} while it is written)"
+        )
+    count = f"{est.particles:.3g}" if isinstance(est.particles, float) else f"{est.particles:,}"
     raise CaseError(
-        (f"This case needs {est.text()} of memory: {count} particles, {est.nodes:.3g} grid "
-         "nodes." if math.isfinite(est.total) else
-         "This case needs more memory than any machine has: its particles and grid nodes "
-         "are too many to count.")
+        (
+            f"This case needs {est.text()} of memory: {count} particles, {est.nodes:.3g} grid "
+            "nodes."
+            if math.isfinite(est.total)
+            else "This case needs more memory than any machine has: its particles and grid nodes "
+            "are too many to count."
+        )
         + f" This machine can give the run {size(budget)} ({source}), so it would be "
         f"killed by the system when it runs out. Make the case smaller: {settings}; or run "
         "it on a machine with more memory. (MPMFLOW_MEMORY_LIMIT sets the memory a run may "
-        "use, if the available memory is measured wrong here.)")
+        "use, if the available memory is measured wrong here.)"
+    )

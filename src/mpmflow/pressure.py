@@ -21,13 +21,16 @@ def singular(where):
     return SolverError(
         f"The pressure system is singular{where}: the material touches no free surface "
         "(it fills a closed container), so the pressure is defined only up to a "
-        "constant. mpmflow needs a free surface; leave some empty space in the domain.")
+        "constant. mpmflow needs a free surface; leave some empty space in the domain."
+    )
 
 
 def setup_failed(where, err, unknowns):
-    return SolverError(f"The pressure solver could not be set up{where}: {err}. "
-                       f"{unknowns} unknowns. Try solver.linear_solver = \"direct\" or "
-                       "a smaller time.dt.")
+    return SolverError(
+        f"The pressure solver could not be set up{where}: {err}. "
+        f'{unknowns} unknowns. Try solver.linear_solver = "direct" or '
+        "a smaller time.dt."
+    )
 
 
 def not_converged(where, residual, iterations, settings, unknowns, xyz):
@@ -36,8 +39,9 @@ def not_converged(where, residual, iterations, settings, unknowns, xyz):
         f"{residual:.3e} after {iterations} iterations (solver.tolerance = "
         f"{settings.tolerance:g}, solver.max_iterations = {settings.max_iterations}); "
         f"{unknowns} unknowns, largest residual at node "
-        f"({', '.join(f'{c:.4g}' for c in xyz)}) m. Try solver.linear_solver = \"direct\", "
-        "a smaller time.dt, or a larger solver.max_iterations.")
+        f'({", ".join(f"{c:.4g}" for c in xyz)}) m. Try solver.linear_solver = "direct", '
+        "a smaller time.dt, or a larger solver.max_iterations."
+    )
 
 
 class PythonPressure:
@@ -47,8 +51,9 @@ class PythonPressure:
     def __init__(self, grid, settings):
         self.grid = grid
         self.settings = settings
-        self.solver = LinearSolver(settings.linear_solver, settings.tolerance,
-                                   settings.max_iterations)
+        self.solver = LinearSolver(
+            settings.linear_solver, settings.tolerance, settings.max_iterations
+        )
 
     def solve(self, core, O, report, where):
         core.warm_start()
@@ -61,8 +66,11 @@ class PythonPressure:
         if not anchored:
             raise singular(where)
         try:
-            self.solver.prepare(PressureMatrix(core.matrix_cols.copy(), core.matrix_vals.copy(),
-                                               rows, self.grid.nodes))
+            self.solver.prepare(
+                PressureMatrix(
+                    core.matrix_cols.copy(), core.matrix_vals.copy(), rows, self.grid.nodes
+                )
+            )
         except SETUP_ERRORS as err:
             raise setup_failed(where, err, n) from None
         iterations = 0
@@ -77,8 +85,14 @@ class PythonPressure:
             if not result.converged:
                 r = self.solver.residual_vector(rhs, result.x)
                 worst = rows[int(np.nanargmax(np.abs(r)))]
-                raise not_converged(where, result.residual, result.iterations, self.settings,
-                                    n, self.grid.node_coordinates()[worst])
+                raise not_converged(
+                    where,
+                    result.residual,
+                    result.iterations,
+                    self.settings,
+                    n,
+                    self.grid.node_coordinates()[worst],
+                )
             x = result.x
             released = core.release_walls(np.ascontiguousarray(x))
             if not released:

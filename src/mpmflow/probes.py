@@ -58,7 +58,7 @@ from .diagnostics import volume_fraction_field
 
 UNITS = {"pressure": "Pa", "level": "m"}
 ON_WALL = 1e-6  # a point within this share of the window from a wall lies on the wall
-FLAT = 0.05     # a fit needs the particles spread over at least this share of the window
+FLAT = 0.05  # a fit needs the particles spread over at least this share of the window
 
 
 def columns(case):
@@ -102,7 +102,7 @@ def window_box(point, side, size, solid_distance=None, periodic=()):
     lo, hi = centre - 0.5 * side, centre + 0.5 * side
     tol = ON_WALL * side
     wraps = np.zeros(point.size, dtype=bool)
-    wraps[:len(periodic)] = periodic
+    wraps[: len(periodic)] = periodic
     for k in range(point.size):
         if wraps[k]:
             continue
@@ -121,8 +121,10 @@ def _off_solid(centre, side, solid_distance):
         return centre
     eps = 1e-3 * side
     steps = np.eye(centre.size) * eps
-    grad = (np.asarray(solid_distance(centre + steps)).ravel()
-            - np.asarray(solid_distance(centre - steps)).ravel()) / (2 * eps)
+    grad = (
+        np.asarray(solid_distance(centre + steps)).ravel()
+        - np.asarray(solid_distance(centre - steps)).ravel()
+    ) / (2 * eps)
     norm = float(np.linalg.norm(grad))
     if norm == 0.0:
         return centre
@@ -164,7 +166,7 @@ def _box_particles(grid, particles, bins, lo, hi):
     # along x (stride 1) the cells of the box are consecutive in the flat cell order
     for rest in itertools.product(*[range(a, b + 1) for a, b in zip(first[1:], last[1:])]):
         base = int(np.dot(rest, strides[1:])) if rest else 0
-        runs.append(bins.order[bins.start[base + first[0]]:bins.start[base + last[0] + 1]])
+        runs.append(bins.order[bins.start[base + first[0]] : bins.start[base + last[0] + 1]])
     idx = np.concatenate(runs) if runs else np.empty(0, dtype=np.int64)
     x = particles.x[idx]
     inside = np.all((x >= lo) & (x <= hi), axis=1)
@@ -226,7 +228,7 @@ def _integral(grid, col, z0):
     h = grid.spacing
     k0 = int(np.clip(np.floor(z0 / h), 0, grid.cells[-1] - 1))
     part = (k0 + 1) * h - z0  # the foot's cell above the foot
-    return float(max(col[k0] * part + h * np.sum(col[k0 + 1:]), 0.0))
+    return float(max(col[k0] * part + h * np.sum(col[k0 + 1 :]), 0.0))
 
 
 def _column(grid, f, foot):
@@ -276,12 +278,13 @@ def measure(case, grid, particles, bins, time, solid_distance=None, fallbacks=No
     row = {"time": time}
     f = None
     for probe in case.probes:
+
         def note(what, name=probe.name):
             if fallbacks is not None:
                 fallbacks.count(what, f"probe {name}", time=time)
+
         if probe.quantity == "pressure":
-            row[probe.name] = pressure_at(grid, particles, bins, probe, case, solid_distance,
-                                          note)
+            row[probe.name] = pressure_at(grid, particles, bins, probe, case, solid_distance, note)
         else:
             if f is None:
                 f = volume_fraction_field(grid, bins.theta)

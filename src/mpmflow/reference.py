@@ -20,7 +20,8 @@ def data_dir():
     if not path.is_dir():
         raise FileNotFoundError(
             f"Reference data not found at {path}. Put the project's shared/ folder beside the "
-            "repository, or set MPMFLOW_DATA to its data/ folder.")
+            "repository, or set MPMFLOW_DATA to its data/ folder."
+        )
     return path
 
 
@@ -36,8 +37,10 @@ def errors_against_vof(t, front, height, a, front_until, height_until):
     ref = load(VOF_AR2)
     tr = ref[:, 0]
     out = {}
-    for name, sim, col, until in (("front", front, 1, front_until),
-                                  ("height", height, 2, height_until)):
+    for name, sim, col, until in (
+        ("front", front, 1, front_until),
+        ("height", height, 2, height_until),
+    ):
         sel = tr <= until + 1e-9
         diff = np.interp(tr[sel], t, sim) - ref[sel, col]
         out[name] = float(np.max(np.abs(diff)) / a)

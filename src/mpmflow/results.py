@@ -40,28 +40,37 @@ class Snapshot:
         from meshio import vtu
 
         if not self.path.is_file():
-            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
-                            "index particles.pvd lists it, but the file was deleted or "
-                            "moved.")
+            raise CaseError(
+                f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
+                "index particles.pvd lists it, but the file was deleted or "
+                "moved."
+            )
         try:
             # the VTU reader itself: meshio.read prints a damaged file's error and calls
             # sys.exit(1) (mpmflow plot exited 1 on a truncated snapshot)
             mesh = vtu.read(self.path)
-            data = {"x": np.asarray(mesh.points[:, :self.dim]),
-                    "velocity": np.asarray(mesh.point_data["velocity"][:, :self.dim]),
-                    "pressure": np.asarray(mesh.point_data["pressure"]),
-                    "mass": np.asarray(mesh.point_data["mass"])}
+            data = {
+                "x": np.asarray(mesh.points[:, : self.dim]),
+                "velocity": np.asarray(mesh.point_data["velocity"][:, : self.dim]),
+                "pressure": np.asarray(mesh.point_data["pressure"]),
+                "mass": np.asarray(mesh.point_data["mass"]),
+            }
         except FileNotFoundError:
-            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
-                            "index particles.pvd lists it, but the file was deleted or "
-                            "moved.") from None
+            raise CaseError(
+                f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
+                "index particles.pvd lists it, but the file was deleted or "
+                "moved."
+            ) from None
         except Exception as err:  # meshio raises many types for a damaged file
-            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) cannot be read "
-                            f"({type(err).__name__}: {err}); it is damaged, e.g. cut short."
-                            ) from None
+            raise CaseError(
+                f"snapshot {self.path} (t = {self.time:g} s) cannot be read "
+                f"({type(err).__name__}: {err}); it is damaged, e.g. cut short."
+            ) from None
         if data["pressure"].shape[0] != data["x"].shape[0]:
-            raise CaseError(f"snapshot {self.path} (t = {self.time:g} s) is damaged: its "
-                            "arrays have different lengths.")
+            raise CaseError(
+                f"snapshot {self.path} (t = {self.time:g} s) is damaged: its "
+                "arrays have different lengths."
+            )
         return data
 
 
@@ -74,8 +83,10 @@ class RunResults:
             raise CaseError(f"{self.folder} is not a folder; give the --out folder of a run.")
         csv = self.folder / "timeseries.csv"
         if not csv.is_file():
-            raise CaseError(f"{self.folder} holds no timeseries.csv; give the --out folder of a "
-                            "run (mpmflow run CASE --out DIR).")
+            raise CaseError(
+                f"{self.folder} holds no timeseries.csv; give the --out folder of a "
+                "run (mpmflow run CASE --out DIR)."
+            )
         self.notes = []
         self.timeseries, notes = read_table(csv, required=tuple(COLUMNS)[:3])
         self.notes += notes
@@ -101,8 +112,7 @@ class RunResults:
         try:
             summary = json.loads(path.read_text())
         except (OSError, ValueError, UnicodeDecodeError) as err:
-            self.notes.append(f"summary.json cannot be read ({type(err).__name__}); it is "
-                              "left out")
+            self.notes.append(f"summary.json cannot be read ({type(err).__name__}); it is left out")
             return {}
         if not isinstance(summary, dict):
             self.notes.append("summary.json is not a JSON object; it is left out")
@@ -129,8 +139,10 @@ class RunResults:
 
     def __repr__(self):
         n = len(self.timeseries.get("time", []))
-        return (f"<mpmflow run {self.folder}: {self.status}, {n} rows, "
-                f"{len(self.snapshots)} snapshots, {max(len(self.probes) - 1, 0)} probes>")
+        return (
+            f"<mpmflow run {self.folder}: {self.status}, {n} rows, "
+            f"{len(self.snapshots)} snapshots, {max(len(self.probes) - 1, 0)} probes>"
+        )
 
 
 def open_run(folder):

@@ -24,8 +24,9 @@ def initial_speed(case):
 
 def case_stable_time_step(case):
     """The stable explicit step of a case at its initial speeds (s)."""
-    return stable_time_step(case.grid.spacing, case.material.bulk_modulus,
-                            case.material.density, initial_speed(case))
+    return stable_time_step(
+        case.grid.spacing, case.material.bulk_modulus, case.material.density, initial_speed(case)
+    )
 
 
 def time_step(case):

@@ -32,16 +32,26 @@ MESHES = [(0.0114, 1e-2), (0.008, 1e-3), (0.004, 1e-3)]
 REAL_K = 2.2e9
 SOUND_FACTOR = 10.0  # reduced K: sound speed = this times the free-fall speed sqrt(2 g H)
 CRUCHAGA_AR1 = "validation/cruchaga_2007_water_AR1_front_coarse_points_ethersph.csv"
-COLUMNS = {"ar": "aspect ratio of the column", "scheme": "scheme", "label": "run",
-           "spacing_m": "grid spacing (m)", "bulk_modulus_pa": "K (Pa)", "dt_s": "dt (s)",
-           "mean_dt_s": "mean step (s)",
-           "steps": "steps", "time_reached_s": "simulated time reached (s)",
-           "wall_s": "wall time (s)", "wall_per_sim_s": "wall s per simulated s",
-           "front_err_a": "front error / a", "height_err_a": "height error / a",
-           "height_mm_err_a": "height error vs Martin & Moyce / a",
-           "front_vs_projection_a": "front difference from projection / a",
-           "height_vs_projection_a": "height difference from projection / a",
-           "pressure_noise_pa": "mean pressure noise (Pa)", "status": "status"}
+COLUMNS = {
+    "ar": "aspect ratio of the column",
+    "scheme": "scheme",
+    "label": "run",
+    "spacing_m": "grid spacing (m)",
+    "bulk_modulus_pa": "K (Pa)",
+    "dt_s": "dt (s)",
+    "mean_dt_s": "mean step (s)",
+    "steps": "steps",
+    "time_reached_s": "simulated time reached (s)",
+    "wall_s": "wall time (s)",
+    "wall_per_sim_s": "wall s per simulated s",
+    "front_err_a": "front error / a",
+    "height_err_a": "height error / a",
+    "height_mm_err_a": "height error vs Martin & Moyce / a",
+    "front_vs_projection_a": "front difference from projection / a",
+    "height_vs_projection_a": "height difference from projection / a",
+    "pressure_noise_pa": "mean pressure noise (Pa)",
+    "status": "status",
+}
 
 
 @dataclass
@@ -70,17 +80,46 @@ def plan(quick=False):
         base = load_case(ROOT / example)
         k_reduced = reduced_bulk_modulus(base)
         for spacing, dt in meshes:
-            common = [f"grid.spacing={spacing}", "output.snapshot_interval=0.1",
-                      f"output.snapshots={'true' if spacing == meshes[-1][0] else 'false'}"]
-            runs.append((ar, example, f"projection {spacing} m", "projection",
-                         common + [f"time.dt={dt}"], False))
-            explicit = common + ["solver.scheme=explicit", "time.dt=auto",
-                                 "bodies.0.initial_pressure=hydrostatic"]
-            runs.append((ar, example, f"explicit K = 2.2 GPa {spacing} m", "explicit",
-                         explicit + [f"material.bulk_modulus={REAL_K}"], True))
-            runs.append((ar, example, f"explicit K = {k_reduced:.3g} Pa {spacing} m",
-                         "explicit", explicit + [f"material.bulk_modulus={k_reduced:.6g}"],
-                         False))
+            common = [
+                f"grid.spacing={spacing}",
+                "output.snapshot_interval=0.1",
+                f"output.snapshots={'true' if spacing == meshes[-1][0] else 'false'}",
+            ]
+            runs.append(
+                (
+                    ar,
+                    example,
+                    f"projection {spacing} m",
+                    "projection",
+                    common + [f"time.dt={dt}"],
+                    False,
+                )
+            )
+            explicit = common + [
+                "solver.scheme=explicit",
+                "time.dt=auto",
+                "bodies.0.initial_pressure=hydrostatic",
+            ]
+            runs.append(
+                (
+                    ar,
+                    example,
+                    f"explicit K = 2.2 GPa {spacing} m",
+                    "explicit",
+                    explicit + [f"material.bulk_modulus={REAL_K}"],
+                    True,
+                )
+            )
+            runs.append(
+                (
+                    ar,
+                    example,
+                    f"explicit K = {k_reduced:.3g} Pa {spacing} m",
+                    "explicit",
+                    explicit + [f"material.bulk_modulus={k_reduced:.6g}"],
+                    False,
+                )
+            )
     return runs
 
 
@@ -117,15 +156,24 @@ def run_one(ar, example, label, scheme, overrides, budgeted, out, budget, end, p
     a = case.bodies[0].max[0] - case.bodies[0].min[0]
     t, front, height = sim.series("time"), sim.series("front"), sim.series("height")
     fe, he, mm = _errors(ar, t, front, height, a, sim.time)
-    row = {"ar": ar, "scheme": scheme, "label": label, "spacing_m": case.grid.spacing,
-           "bulk_modulus_pa": case.material.bulk_modulus if scheme == "explicit" else None,
-           "dt_s": sim.dt,
-           "mean_dt_s": sim.time / sim.steps if sim.steps else float("nan"),
-           "steps": sim.steps, "time_reached_s": sim.time, "wall_s": wall,
-           "wall_per_sim_s": wall / sim.time if sim.time > 0 else float("nan"), "front_err_a": fe, "height_err_a": he,
-           "height_mm_err_a": mm,
-           "pressure_noise_pa": float(np.mean(sim.series("pressure_noise")[1:])),
-           "status": status}
+    row = {
+        "ar": ar,
+        "scheme": scheme,
+        "label": label,
+        "spacing_m": case.grid.spacing,
+        "bulk_modulus_pa": case.material.bulk_modulus if scheme == "explicit" else None,
+        "dt_s": sim.dt,
+        "mean_dt_s": sim.time / sim.steps if sim.steps else float("nan"),
+        "steps": sim.steps,
+        "time_reached_s": sim.time,
+        "wall_s": wall,
+        "wall_per_sim_s": wall / sim.time if sim.time > 0 else float("nan"),
+        "front_err_a": fe,
+        "height_err_a": he,
+        "height_mm_err_a": mm,
+        "pressure_noise_pa": float(np.mean(sim.series("pressure_noise")[1:])),
+        "status": status,
+    }
     if progress:
         progress(row)
     return RunResult(row, t, front, height, fields)
@@ -147,17 +195,23 @@ def compare_with_projection(results, a=0.114):
         r.row.setdefault("height_vs_projection_a", None)
         if r.row["scheme"] != "explicit":
             continue
-        proj = [p for p in results if p.row["scheme"] == "projection"
-                and p.row["ar"] == r.row["ar"] and p.row["spacing_m"] == r.row["spacing_m"]]
+        proj = [
+            p
+            for p in results
+            if p.row["scheme"] == "projection"
+            and p.row["ar"] == r.row["ar"]
+            and p.row["spacing_m"] == r.row["spacing_m"]
+        ]
         if not proj:
             continue
         p = proj[0]
         n = min(len(p.t), len(r.t))
-        for key, mine, theirs, until in (("front", r.front, p.front, 0.2),
-                                         ("height", r.height, p.height, 0.4)):
+        for key, mine, theirs, until in (
+            ("front", r.front, p.front, 0.2),
+            ("height", r.height, p.height, 0.4),
+        ):
             sel = p.t[:n] <= until + 1e-9
-            r.row[f"{key}_vs_projection_a"] = float(
-                np.max(np.abs(mine[:n] - theirs[:n])[sel]) / a)
+            r.row[f"{key}_vs_projection_a"] = float(np.max(np.abs(mine[:n] - theirs[:n])[sel]) / a)
 
 
 def tables(results, end=1.0):
@@ -170,8 +224,10 @@ def tables(results, end=1.0):
     w.writerow(COLUMNS)
     for row in rows:
         w.writerow([_fmt(row[c]) for c in COLUMNS])
-    md = ["| " + " | ".join(COLUMNS[c] for c in list(COLUMNS)[1:]) + " |",
-          "|" + "---|" * (len(COLUMNS) - 1)]
+    md = [
+        "| " + " | ".join(COLUMNS[c] for c in list(COLUMNS)[1:]) + " |",
+        "|" + "---|" * (len(COLUMNS) - 1),
+    ]
     for ar in ("2", "1"):
         sel = [row for row in rows if row["ar"] == ar]
         if not sel:
@@ -195,7 +251,8 @@ def wall_to_end(row, end=1.0):
     if row["time_reached_s"] >= end - 1e-9:
         return row["wall_s"], "measured"
     return row["wall_per_sim_s"] * end, (
-        f"extrapolated from the {row['time_reached_s']:.3g} s reached ({row['status']})")
+        f"extrapolated from the {row['time_reached_s']:.3g} s reached ({row['status']})"
+    )
 
 
 def headline(rows, end=1.0):
@@ -216,16 +273,19 @@ def headline(rows, end=1.0):
         lines.append(
             f"- Aspect ratio {ar}, {finest:g} m mesh, projection: dt = {p['dt_s']:.3g} s, wall "
             f"time to {end:g} s {p_wall:.4g} s ({p_how}), mean pressure noise "
-            f"{p['pressure_noise_pa']:.3g} Pa.")
-        for e in sorted((r for r in here if r["scheme"] == "explicit"),
-                        key=lambda r: -r["bulk_modulus_pa"]):
+            f"{p['pressure_noise_pa']:.3g} Pa."
+        )
+        for e in sorted(
+            (r for r in here if r["scheme"] == "explicit"), key=lambda r: -r["bulk_modulus_pa"]
+        ):
             e_dt = mean_step(e)
             e_wall, e_how = wall_to_end(e, end)
             lines.append(
                 f"  - explicit, K = {e['bulk_modulus_pa']:.3g} Pa: mean step {e_dt:.3g} s, "
                 f"time-step ratio projection / explicit {p['dt_s'] / e_dt:.0f}; wall time to "
                 f"{end:g} s {e_wall:.4g} s ({e_how}), ratio to the projection "
-                f"{e_wall / p_wall:.3g}; mean pressure noise {e['pressure_noise_pa']:.3g} Pa.")
+                f"{e_wall / p_wall:.3g}; mean pressure noise {e['pressure_noise_pa']:.3g} Pa."
+            )
     return lines
 
 
@@ -236,8 +296,9 @@ def run_study(out, budget=480.0, quick=False, end=1.0, progress=None):
     results = []
     for k, (ar, example, label, scheme, overrides, budgeted) in enumerate(plan(quick)):
         folder = out / "runs" / f"ar{ar}_{k:02d}_{label.replace(' ', '_').replace('=', '')}"
-        results.append(run_one(ar, example, label, scheme, overrides, budgeted, folder,
-                               budget, end, progress))
+        results.append(
+            run_one(ar, example, label, scheme, overrides, budgeted, folder, budget, end, progress)
+        )
         csv_text, md_text = tables(results, end)
         write_text(out / "study.csv", csv_text)
         write_text(out / "study.md", md_text)

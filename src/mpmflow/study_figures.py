@@ -33,25 +33,40 @@ def fig2(results, ar, path):
         vof, mm_h, mm_f = load(VOF_AR2), load(MM_HEIGHT_AR2), load(MM_FRONT)
         ax_h.plot(vof[:, 0] * tau, vof[:, 2] / (2 * A), "k-", lw=3, alpha=0.3, label="VOF")
         ax_h.plot(mm_h[:, 0], mm_h[:, 1], "ks", mfc="none", label="Martin & Moyce, Table 6")
-        ax_f.plot(vof[:, 0] * tau * np.sqrt(2), vof[:, 1] / A, "k-", lw=3, alpha=0.3,
-                  label="VOF")
+        ax_f.plot(vof[:, 0] * tau * np.sqrt(2), vof[:, 1] / A, "k-", lw=3, alpha=0.3, label="VOF")
         ax_f.plot(mm_f[:, 0], mm_f[:, 1], "ks", mfc="none", label="Martin & Moyce, Table 2")
     else:
         cr = load(CRUCHAGA)
-        ax_f.plot(cr[:, 0] * tau * np.sqrt(2), cr[:, 1], "k^", mfc="none",
-                  label="Cruchaga et al. (coarse points)")
+        ax_f.plot(
+            cr[:, 0] * tau * np.sqrt(2),
+            cr[:, 1],
+            "k^",
+            mfc="none",
+            label="Cruchaga et al. (coarse points)",
+        )
     height0 = 2 * A if ar == "2" else A
     for r in results:
         if r.row["ar"] != ar:
             continue
-        style = dict(color=COLOURS.get(r.row["spacing_m"], "k"), ls=STYLES[_kind(r.row)],
-                     label=r.row["label"], lw=1.3)
+        style = dict(
+            color=COLOURS.get(r.row["spacing_m"], "k"),
+            ls=STYLES[_kind(r.row)],
+            label=r.row["label"],
+            lw=1.3,
+        )
         ax_h.plot(r.t * tau, r.height / height0, **style)
         ax_f.plot(r.t * tau * np.sqrt(2), r.front / A, **style)
-    ax_h.set(xlabel="t sqrt(g/a)", ylabel="column height at the left wall / initial height",
-             title=f"(a) column height, aspect ratio {ar}")
-    ax_f.set(xlabel="t sqrt(2g/a)", ylabel="surge front / a", ylim=(0.9, 4.0),
-             title=f"(b) surge front, aspect ratio {ar}")
+    ax_h.set(
+        xlabel="t sqrt(g/a)",
+        ylabel="column height at the left wall / initial height",
+        title=f"(a) column height, aspect ratio {ar}",
+    )
+    ax_f.set(
+        xlabel="t sqrt(2g/a)",
+        ylabel="surge front / a",
+        ylim=(0.9, 4.0),
+        title=f"(b) surge front, aspect ratio {ar}",
+    )
     ax_f.legend(fontsize=7, loc="lower right")
     ax_h.legend(fontsize=7, loc="lower left")
     fig.savefig(path, dpi=110)
@@ -69,14 +84,24 @@ def fig3(results, ar, path, vmax):
     plt = _plt()
     runs = _finest(results, ar)
     times = [round(0.1 * k, 1) for k in range(1, 11)]
-    fig, axes = plt.subplots(len(times), len(runs), figsize=(4.2 * len(runs), 1.9 * len(times)),
-                             constrained_layout=True, squeeze=False)
+    fig, axes = plt.subplots(
+        len(times),
+        len(runs),
+        figsize=(4.2 * len(runs), 1.9 * len(times)),
+        constrained_layout=True,
+        squeeze=False,
+    )
     sc = None
     for j, r in enumerate(runs):
         for i, t in enumerate(times):
             ax = axes[i, j]
-            ax.set(xlim=(0, 0.42), ylim=(0, 0.24 if ar == "2" else 0.14), aspect="equal",
-                   xticks=[], yticks=[])
+            ax.set(
+                xlim=(0, 0.42),
+                ylim=(0, 0.24 if ar == "2" else 0.14),
+                aspect="equal",
+                xticks=[],
+                yticks=[],
+            )
             if i == 0:
                 ax.set_title(r.row["label"], fontsize=9)
             if j == 0:
@@ -85,8 +110,9 @@ def fig3(results, ar, path, vmax):
                 ax.text(0.21, 0.06, "not reached\nin the budget", ha="center", fontsize=8)
                 continue
             x, p = r.fields[t]
-            sc = ax.scatter(x[:, 0], x[:, 1], c=p, s=0.15, cmap="viridis", vmin=0, vmax=vmax,
-                            rasterized=True)
+            sc = ax.scatter(
+                x[:, 0], x[:, 1], c=p, s=0.15, cmap="viridis", vmin=0, vmax=vmax, rasterized=True
+            )
     if sc is not None:
         fig.colorbar(sc, ax=axes, label="particle pressure (Pa)", shrink=0.4)
     fig.savefig(path, dpi=90)

@@ -80,15 +80,19 @@ def setting_from(value):
             except ValueError:
                 value = None
             if value is None or value < 1:
-                raise CaseError(f"{ENV} = {env!r} is not a number of threads; give a whole "
-                                "number of at least 1, or \"auto\", or unset it.")
+                raise CaseError(
+                    f"{ENV} = {env!r} is not a number of threads; give a whole "
+                    'number of at least 1, or "auto", or unset it.'
+                )
     if value == "auto":
         return "auto", None
     pool = pool_size()
     if value > pool:
-        raise CaseError(f"{source} = {value} is more threads than the core runs here ({pool}: "
-                        "OMP_NUM_THREADS, or the number of cores); give at most "
-                        f"{pool}, or \"auto\".")
+        raise CaseError(
+            f"{source} = {value} is more threads than the core runs here ({pool}: "
+            "OMP_NUM_THREADS, or the number of cores); give at most "
+            f'{pool}, or "auto".'
+        )
     return "fixed", int(value)
 
 
@@ -137,7 +141,7 @@ def _own_running():
             stat = (task / "stat").read_text()
         except OSError:
             continue
-        if stat[stat.rindex(")") + 2:].startswith("R"):
+        if stat[stat.rindex(")") + 2 :].startswith("R"):
             n += 1
     return n
 
@@ -224,7 +228,11 @@ class ThreadGovernor:
 
     def record(self):
         """For summary.json."""
-        return {"setting": self.mode if self.mode == "auto" else self.fixed,
-                "cores": self.cores, "pool": pool_size(),
-                "changes": [{"time": t, "threads": n, "others_busy_cores": o}
-                            for t, n, o in self.changes]}
+        return {
+            "setting": self.mode if self.mode == "auto" else self.fixed,
+            "cores": self.cores,
+            "pool": pool_size(),
+            "changes": [
+                {"time": t, "threads": n, "others_busy_cores": o} for t, n, o in self.changes
+            ],
+        }

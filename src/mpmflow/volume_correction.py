@@ -42,4 +42,5 @@ def not_converged(where, residual, iterations, cells):
     return SolverError(
         f"The volume correction's solve did not converge{where}: relative residual "
         f"{residual:.3e} after {iterations} iterations on {cells} cells. Try a smaller "
-        "time.dt, or switch the correction off with solver.volume_correction = 0.")
+        "time.dt, or switch the correction off with solver.volume_correction = 0."
+    )

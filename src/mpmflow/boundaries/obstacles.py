@@ -71,9 +71,19 @@ def build(grid, phi=None, no_slip_of=None):
     open_ = np.ones(nc)
     static_slot = np.zeros(nc, dtype=np.int64)
     if phi is None:
-        return Tables(np.zeros(0), open_, static_slot, K0[None], C0[None], V0[None],
-                      np.zeros((1, NC, NC, D)), W0[None], np.zeros(0, dtype=np.int64),
-                      np.zeros((0, D)), np.zeros(0, dtype=np.bool_))
+        return Tables(
+            np.zeros(0),
+            open_,
+            static_slot,
+            K0[None],
+            C0[None],
+            V0[None],
+            np.zeros((1, NC, NC, D)),
+            W0[None],
+            np.zeros(0, dtype=np.int64),
+            np.zeros((0, D)),
+            np.zeros(0, dtype=np.bool_),
+        )
     phi = np.ascontiguousarray(phi, dtype=float)
     corners = _cell_corner_phi(grid, phi)  # (ncells, 2^D)
     lo, hi = corners.min(axis=1), corners.max(axis=1)
@@ -94,8 +104,9 @@ def build(grid, phi=None, no_slip_of=None):
     F = np.zeros((m, NC, NC, D))
     Wf = np.zeros((m, 2 * D, NC, NC))
     parts = np.zeros(m, dtype=np.int64)
-    state.cut_cell_tensors(phi, float(grid.spacing), cells, candidates, SUBCELLS, K, C, V, F,
-                           Wf, parts)
+    state.cut_cell_tensors(
+        phi, float(grid.spacing), cells, candidates, SUBCELLS, K, C, V, F, Wf, parts
+    )
     # a candidate without a fluid sub-cell is solid on the staircase (a sliver of positive
     # phi at a corner, narrower than a sub-cell): left out like the cells inside
     empty = V.sum(axis=1) <= 0.0
@@ -116,13 +127,20 @@ def build(grid, phi=None, no_slip_of=None):
     size = np.linalg.norm(nvec, axis=1)
     node = np.flatnonzero(size > 1e-9 * grid.spacing ** (D - 1))
     normal = nvec[node] / size[node, None]
-    no_slip = (no_slip_of(node) if no_slip_of is not None
-               else np.zeros(node.size, dtype=np.bool_))
-    return Tables(phi, open_, static_slot, np.concatenate([K0[None], K[cut]]),
-                  np.concatenate([C0[None], C[cut]]), np.concatenate([V0[None], V[cut]]),
-                  np.concatenate([np.zeros((1, NC, NC, D)), F[cut]]),
-                  np.concatenate([W0[None], Wf[cut]]), node.astype(np.int64), normal,
-                  np.asarray(no_slip, dtype=np.bool_))
+    no_slip = no_slip_of(node) if no_slip_of is not None else np.zeros(node.size, dtype=np.bool_)
+    return Tables(
+        phi,
+        open_,
+        static_slot,
+        np.concatenate([K0[None], K[cut]]),
+        np.concatenate([C0[None], C[cut]]),
+        np.concatenate([V0[None], V[cut]]),
+        np.concatenate([np.zeros((1, NC, NC, D)), F[cut]]),
+        np.concatenate([W0[None], Wf[cut]]),
+        node.astype(np.int64),
+        normal,
+        np.asarray(no_slip, dtype=np.bool_),
+    )
 
 
 def _node_strides(cells):
@@ -133,8 +151,10 @@ def _node_strides(cells):
 def _corner_offsets(ns):
     """Flat offset of each of the 2^D corners of a cell from its first node (corner a is
     offset (a >> k) & 1 along axis k)."""
-    return np.array([sum(int(s) for k, s in enumerate(ns) if (a >> k) & 1)
-                     for a in range(1 << len(ns))], dtype=np.int64)
+    return np.array(
+        [sum(int(s) for k, s in enumerate(ns) if (a >> k) & 1) for a in range(1 << len(ns))],
+        dtype=np.int64,
+    )
 
 
 def _first_nodes(cells_flat, cells, ns):
@@ -175,8 +195,6 @@ def _not_last(shape, axis):
     return m
 
 
-
-
 def in_solid_cells(tables, grid, x):
     """Which of the points ``x`` (n, D) lie in cells the grid takes as wholly solid (fluid
     fraction 0). Where an obstacle touches two or three walls, the wall shift
@@ -202,8 +220,10 @@ def of_case(case, grid):
     dist = np.array([node_distance(grid, s, x) for s in solids])  # (nobstacles, nnodes)
     phi = dist.min(axis=0)
     nearest = dist.argmin(axis=0)
-    walls = [case.domain.uniform_walls() if getattr(o, "walls", "domain") == "domain"
-             else o.walls for o in specs]
+    walls = [
+        case.domain.uniform_walls() if getattr(o, "walls", "domain") == "domain" else o.walls
+        for o in specs
+    ]
     no_slip = np.array([w == "no_slip" for w in walls], dtype=bool)
     tables = build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
     tables.solids = solids

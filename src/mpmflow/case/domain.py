@@ -24,29 +24,37 @@ class Domain(Section):
         "a 2D case (x, y; y up), 3 for a 3D case (x, y, z; z up). The domain is [0, size]; "
         "its boundaries are walls. Every other vector of the case (bodies' min, max and "
         "velocity, gravity, probe positions) has as many entries.",
-        examples=[[0.42, 0.44]], min_length=2, max_length=3)
+        examples=[[0.42, 0.44]],
+        min_length=2,
+        max_length=3,
+    )
     walls: Literal["slip", "no_slip"] | dict[str, Literal["slip", "no_slip"]] = Field(
-        "slip", description="Wall condition of the domain boundaries, \"slip\" or "
-        "\"no_slip\": one for every wall (walls = \"no_slip\"), or a table by axis and "
+        "slip",
+        description='Wall condition of the domain boundaries, "slip" or '
+        '"no_slip": one for every wall (walls = "no_slip"), or a table by axis and '
         "side: keys x, y (and z in 3D) set both walls across that axis, x_min, x_max, y_min, "
         "... one wall (min: at 0, max: at domain.size); a side's key overrides its axis's, "
         "and a wall left out is slip. E.g. a rough floor between smooth side walls in 3D: "
-        "walls = {z_min = \"no_slip\"}; a flume with glass sides and a rough bed: "
-        "walls = {y = \"slip\", z_min = \"no_slip\", x = \"no_slip\"}; one key on the "
+        'walls = {z_min = "no_slip"}; a flume with glass sides and a rough bed: '
+        'walls = {y = "slip", z_min = "no_slip", x = "no_slip"}; one key on the '
         "command line: --set domain.walls.z_min=no_slip (over a single condition, it "
         "keeps that condition for the other walls). A periodic axis has no walls and "
         "takes no key. Walls are contact conditions: a wall holds the material where it "
         "presses against it and lets go where holding it would need suction while it "
         "moves away, so water falls from a ceiling and leaves a wall freely. no_slip also "
         "stops tangential motion where the wall holds (at an edge between a no-slip and a "
-        "slip wall, the no-slip wall's hold).")
+        "slip wall, the no-slip wall's hold).",
+    )
     periodic: list[bool] | None = Field(
-        None, description="Periodic axes, one flag per axis (e.g. [true, false]: x wraps "
+        None,
+        description="Periodic axes, one flag per axis (e.g. [true, false]: x wraps "
         "round): material leaving through one end of a periodic axis comes back through the "
         "other, and that axis has no walls. For channel and layer flows that are uniform "
         "along the axis. Along a periodic axis domain.size must be a whole, even number of "
         "grid cells, at least 4 (a power of two times a small number solves fastest); the "
-        "projection scheme only.", examples=[[True, False]])
+        "projection scheme only.",
+        examples=[[True, False]],
+    )
 
     @field_validator("walls", mode="before")
     @classmethod
@@ -56,26 +64,35 @@ class Domain(Section):
         example = '{z_min = "no_slip"}' if dim == 3 else '{y_min = "no_slip"}'
         if isinstance(walls, str):
             if walls not in WALL_CONDITIONS:
-                raise ValueError(f"{walls!r} is not a wall condition: give \"slip\" or "
-                                 "\"no_slip\" for every wall, or a table of sides, e.g. "
-                                 f"walls = {example}")
+                raise ValueError(
+                    f'{walls!r} is not a wall condition: give "slip" or '
+                    '"no_slip" for every wall, or a table of sides, e.g. '
+                    f"walls = {example}"
+                )
             return walls
         if not isinstance(walls, dict):
-            raise ValueError("give \"slip\" or \"no_slip\" for every wall, or a table of "
-                             f"sides, e.g. walls = {example}")
+            raise ValueError(
+                'give "slip" or "no_slip" for every wall, or a table of '
+                f"sides, e.g. walls = {example}"
+            )
         if not walls:
-            raise ValueError("the table of sides is empty; give at least one side, e.g. "
-                             f"walls = {example}, or \"slip\" for every wall")
+            raise ValueError(
+                "the table of sides is empty; give at least one side, e.g. "
+                f'walls = {example}, or "slip" for every wall'
+            )
         for key, value in walls.items():
             if key not in keys:
                 near = difflib.get_close_matches(str(key), keys, n=1, cutoff=0.5)
                 hint = f" (did you mean {near[0]}?)" if near else ""
-                raise ValueError(f"{key!r} is not a side of a {dim}D domain{hint}; the keys are "
-                                 "the axes " + ", ".join(keys[:dim]) + " (both walls) and the "
-                                 "sides " + ", ".join(keys[dim:]))
+                raise ValueError(
+                    f"{key!r} is not a side of a {dim}D domain{hint}; the keys are "
+                    "the axes " + ", ".join(keys[:dim]) + " (both walls) and the "
+                    "sides " + ", ".join(keys[dim:])
+                )
             if value not in WALL_CONDITIONS:
-                raise ValueError(f"{key} = {value!r} is not a wall condition: give \"slip\" "
-                                 "or \"no_slip\"")
+                raise ValueError(
+                    f'{key} = {value!r} is not a wall condition: give "slip" or "no_slip"'
+                )
         return walls
 
     @model_validator(mode="after")
@@ -83,9 +100,11 @@ class Domain(Section):
         if any(s <= 0 for s in self.size):
             raise ValueError("every entry of domain.size must be positive (metres)")
         if self.periodic is not None and len(self.periodic) != len(self.size):
-            raise ValueError(f"domain.periodic has {len(self.periodic)} entries and "
-                             f"domain.size {len(self.size)}; give one flag per axis, e.g. "
-                             f"periodic = {[True] + [False] * (len(self.size) - 1)}")
+            raise ValueError(
+                f"domain.periodic has {len(self.periodic)} entries and "
+                f"domain.size {len(self.size)}; give one flag per axis, e.g. "
+                f"periodic = {[True] + [False] * (len(self.size) - 1)}"
+            )
         if isinstance(self.walls, dict):
             for k, flag in enumerate(self.periodic or []):
                 named = [key for key in self.walls if key.split("_")[0] == AXES[k]]
@@ -94,7 +113,8 @@ class Domain(Section):
                         f"domain.walls names {', '.join(named)}, but {AXES[k]} is periodic "
                         f"(domain.periodic), so it has no walls; remove "
                         f"{' and '.join(named)} from domain.walls, or make {AXES[k]} a wall "
-                        "axis (domain.periodic)")
+                        "axis (domain.periodic)"
+                    )
         return self
 
     def wall_conditions(self):
@@ -125,8 +145,9 @@ class Domain(Section):
         """The one condition of every wall (periodic axes aside), or None where walls
         differ."""
         periodic = self.periodic or [False] * len(self.size)
-        found = {c for k, pair in enumerate(self.wall_conditions()) if not periodic[k]
-                 for c in pair}
+        found = {
+            c for k, pair in enumerate(self.wall_conditions()) if not periodic[k] for c in pair
+        }
         if not found:  # every axis periodic: no walls at all
             return self.walls if isinstance(self.walls, str) else "slip"
         return found.pop() if len(found) == 1 else None

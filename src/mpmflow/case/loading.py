@@ -20,8 +20,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
-
 # --------------------------------------------------------------------------- loading
+
 
 def _read_toml(path):
     path = Path(path)
@@ -29,30 +29,41 @@ def _read_toml(path):
         with open(path, "rb") as f:  # any file: also a pipe, e.g. <(sed ... case.toml)
             raw = f.read(MAX_CASE_BYTES + 1)
     except FileNotFoundError:
-        raise CaseError(f"Case file {path} does not exist. Give the path of a .toml case file, "
-                        "e.g. examples/dam_break.toml.") from None
+        raise CaseError(
+            f"Case file {path} does not exist. Give the path of a .toml case file, "
+            "e.g. examples/dam_break.toml."
+        ) from None
     except IsADirectoryError:
-        raise CaseError(f"Case file {path} is a folder; give the path of a .toml case "
-                        "file.") from None
+        raise CaseError(
+            f"Case file {path} is a folder; give the path of a .toml case file."
+        ) from None
     except OSError as err:
         raise CaseError(f"Case file {path} cannot be read: {err.strerror}.") from None
     if len(raw) > MAX_CASE_BYTES:
-        raise CaseError(f"Case file {path} is larger than {MAX_CASE_BYTES // 2**20} MiB, so it "
-                        "is not a case file (a case is a page of TOML text); give the path of "
-                        "a .toml case file, e.g. examples/dam_break.toml.")
+        raise CaseError(
+            f"Case file {path} is larger than {MAX_CASE_BYTES // 2**20} MiB, so it "
+            "is not a case file (a case is a page of TOML text); give the path of "
+            "a .toml case file, e.g. examples/dam_break.toml."
+        )
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
-        raise CaseError(f"Case file {path} is not a UTF-8 text file; give a TOML case file, "
-                        "e.g. examples/dam_break.toml.") from None
+        raise CaseError(
+            f"Case file {path} is not a UTF-8 text file; give a TOML case file, "
+            "e.g. examples/dam_break.toml."
+        ) from None
     if "\0" in text:
-        raise CaseError(f"Case file {path} holds NUL bytes, so it is not a text file; give a "
-                        "TOML case file, e.g. examples/dam_break.toml.")
+        raise CaseError(
+            f"Case file {path} holds NUL bytes, so it is not a text file; give a "
+            "TOML case file, e.g. examples/dam_break.toml."
+        )
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise CaseError(f"Case file {path} is not valid TOML: {err}. Fix the syntax there "
-                        "(strings in quotes, lists in [ ], one key = value per line).") from None
+        raise CaseError(
+            f"Case file {path} is not valid TOML: {err}. Fix the syntax there "
+            "(strings in quotes, lists in [ ], one key = value per line)."
+        ) from None
 
 
 def _parse_value(text):
@@ -61,7 +72,6 @@ def _parse_value(text):
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
-
 
 
 # lists of tables an override may replace whole, e.g. {"probes": [{"name": ..., ...}]} or
@@ -74,7 +84,6 @@ def _generic(dotted):
     return ".".join("N" if part.isdigit() else part for part in dotted.split("."))
 
 
-
 def _suggest(dotted):
     parts = dotted.split(".")
     if parts[0] not in Case.model_fields:
@@ -83,8 +92,7 @@ def _suggest(dotted):
         top = difflib.get_close_matches(parts[0], list(Case.model_fields), n=1, cutoff=0.6)
         fixed = ".".join(top + parts[1:])
         if top and (len(parts) == 1 or _generic(fixed) in KNOWN_KEYS):
-            tables = f" ([[{top[0]}]] tables)" if len(parts) == 1 and top[0] in LIST_KEYS \
-                else ""
+            tables = f" ([[{top[0]}]] tables)" if len(parts) == 1 and top[0] in LIST_KEYS else ""
             return f" Did you mean `{fixed}`{tables}?"
     match = difflib.get_close_matches(_generic(dotted), KNOWN_KEYS, n=1, cutoff=0.6)
     if not match:
@@ -103,14 +111,18 @@ def apply_overrides(data, overrides):
     if isinstance(overrides, dict):
         items = [(str(k), v, False) for k, v in overrides.items()]
     elif isinstance(overrides, str):
-        raise CaseError(f"overrides = {overrides!r}: give a list of \"key=value\" strings or "
-                        "a dict {\"dotted.key\": value}, e.g. {\"grid.spacing\": 0.008}.")
+        raise CaseError(
+            f'overrides = {overrides!r}: give a list of "key=value" strings or '
+            'a dict {"dotted.key": value}, e.g. {"grid.spacing": 0.008}.'
+        )
     else:
         items = []
         for item in overrides:
             if not isinstance(item, str) or "=" not in item:
-                raise CaseError(f"--set {item!r} is not of the form dotted.key=value, e.g. "
-                                "--set grid.spacing=0.008.")
+                raise CaseError(
+                    f"--set {item!r} is not of the form dotted.key=value, e.g. "
+                    "--set grid.spacing=0.008."
+                )
             key, text = item.split("=", 1)
             items.append((key, text, True))
     for key, value, parse in items:
@@ -123,20 +135,25 @@ def apply_overrides(data, overrides):
                 _check_index(label, key, parts, depth, node, value)
                 node = node[int(part)]
             else:  # a list of tables the case file leaves out starts empty
-                if parts[:depth + 1] == ["domain", "walls"] and isinstance(node.get(part), str):
+                if parts[: depth + 1] == ["domain", "walls"] and isinstance(node.get(part), str):
                     node[part] = _walls_by_axis(node)  # one side set, the others kept
                 node = node.setdefault(part, [] if depth == 0 and part in LIST_KEYS else {})
             if not isinstance(node, (dict, list)):
-                raise CaseError(f"{label} {key}: `{'.'.join(parts[:depth + 1])}` is a value, not a "
-                                "section." + _suggest(key))
+                raise CaseError(
+                    f"{label} {key}: `{'.'.join(parts[: depth + 1])}` is a value, not a "
+                    "section." + _suggest(key)
+                )
         if isinstance(node, list) and len(parts) == 2:  # a whole table: obstacles.0={...}
             _check_index(label, key, parts, 1, node, value, append=True)
-            node[int(parts[1]):int(parts[1]) + 1] = [_parse_value(value.strip()) if parse
-                                                     else value]
+            node[int(parts[1]) : int(parts[1]) + 1] = [
+                _parse_value(value.strip()) if parse else value
+            ]
             continue
         if _generic(key) not in KNOWN_KEYS and key not in LIST_KEYS:
-            raise CaseError(f"{label} {key}: unknown case key `{key}`.{_suggest(key)} "
-                            "Run `mpmflow keys` for the list of keys.")
+            raise CaseError(
+                f"{label} {key}: unknown case key `{key}`.{_suggest(key)} "
+                "Run `mpmflow keys` for the list of keys."
+            )
         node[parts[-1]] = _parse_value(value.strip()) if parse else value
 
 
@@ -146,8 +163,11 @@ def _walls_by_axis(domain):
     size, periodic = domain.get("size"), domain.get("periodic")
     dim = len(size) if isinstance(size, list) and len(size) in (2, 3) else 3
     periodic = periodic if isinstance(periodic, list) else []
-    return {AXES[k]: domain["walls"] for k in range(dim)
-            if not (k < len(periodic) and periodic[k] is True)}
+    return {
+        AXES[k]: domain["walls"]
+        for k in range(dim)
+        if not (k < len(periodic) and periodic[k] is True)
+    }
 
 
 def _check_index(label, key, parts, depth, entries, value, append=False):
@@ -157,22 +177,27 @@ def _check_index(label, key, parts, depth, entries, value, append=False):
     n = len(entries)
     if part.isdigit() and (int(part) < n or append and int(part) == n):
         return
-    after = ".".join(parts[depth + 1:])
+    after = ".".join(parts[depth + 1 :])
     shown = value.strip() if isinstance(value, str) else "..."
     table = _TABLE_EXAMPLES.get(name, "{...}")
     if n == 0:
-        raise CaseError(f"{label} {key}: `{name}` has no entries; add one first, e.g. --set "
-                        f"'{name}.0={table}', or a [[{name}]] table in the case file.")
+        raise CaseError(
+            f"{label} {key}: `{name}` has no entries; add one first, e.g. --set "
+            f"'{name}.0={table}', or a [[{name}]] table in the case file."
+        )
     example = f"{name}.{n - 1}" + (f".{after}" if after else "")
     more = "" if after else f", or --set '{name}.{n}={table}' to add one"
-    raise CaseError(f"{label} {key}: `{name}` has {n} entr{'y' if n == 1 else 'ies'}; use an "
-                    f"index from 0 to {n - 1}, e.g. --set {example}={shown}{more}.")
+    raise CaseError(
+        f"{label} {key}: `{name}` has {n} entr{'y' if n == 1 else 'ies'}; use an "
+        f"index from 0 to {n - 1}, e.g. --set {example}={shown}{more}."
+    )
 
 
 _TABLE_EXAMPLES = {  # a table of each list, for messages
     "bodies": '{type = "box", min = [...], max = [...]}',
     "obstacles": '{type = "box", min = [...], max = [...]}',
-    "probes": '{name = "p1", quantity = "pressure", position = [...]}'}
+    "probes": '{name = "p1", quantity = "pressure", position = [...]}',
+}
 
 
 def _shape_loc(parts):
@@ -199,17 +224,25 @@ def _format_error(err, source):
         loc, kind = _shape_loc(e["loc"])
         if e["type"] == "union_tag_invalid":
             given = e.get("input", {}).get("type") if isinstance(e.get("input"), dict) else None
-            lines.append(f"`{loc}.type` = {given!r} is not a shape: give {loc}.type one of "
-                         + ", ".join(f'"{t}"' for t in SHAPE_TYPES) + " (\"box\" when left "
-                         "out); `mpmflow keys` lists each shape's keys.")
+            lines.append(
+                f"`{loc}.type` = {given!r} is not a shape: give {loc}.type one of "
+                + ", ".join(f'"{t}"' for t in SHAPE_TYPES)
+                + ' ("box" when left '
+                "out); `mpmflow keys` lists each shape's keys."
+            )
             continue
         if e["type"] == "extra_forbidden":
             table = loc.split(".")[0]
-            if kind is not None and table in ("bodies", "obstacles") \
-                    and _generic(loc) in KNOWN_KEYS:
-                lines.append(f"`{loc}` is not a key of a \"{kind}\" ({table} of type "
-                             f"\"{kind}\" take {_shape_keys(kind, table)}): remove it, or "
-                             "set the type of shape it belongs to.")
+            if (
+                kind is not None
+                and table in ("bodies", "obstacles")
+                and _generic(loc) in KNOWN_KEYS
+            ):
+                lines.append(
+                    f'`{loc}` is not a key of a "{kind}" ({table} of type '
+                    f'"{kind}" take {_shape_keys(kind, table)}): remove it, or '
+                    "set the type of shape it belongs to."
+                )
                 continue
             lines.append(f"unknown key `{loc}`.{_suggest(loc)}")
             continue
@@ -221,20 +254,26 @@ def _format_error(err, source):
         key, entry = loc, ""
         while _generic(key) not in _REFERENCE and key.rsplit(".", 1)[-1].isdigit():
             key = key.rsplit(".", 1)[0]  # an entry of a list value: name the key
-            entry = f" (entry {loc[len(key) + 1:]} of {key})"
+            entry = f" (entry {loc[len(key) + 1 :]} of {key})"
         row = _REFERENCE.get(_generic(key))
         if row is not None:
             fix = f" Set a valid value, e.g. {key} = {_example(row)}." if _example(row) else ""
-            lines.append(f"`{loc}`{entry} = {e.get('input')!r} is not allowed: {msg}. {key}: "
-                         f"{row['description']}{fix}")
+            lines.append(
+                f"`{loc}`{entry} = {e.get('input')!r} is not allowed: {msg}. {key}: "
+                f"{row['description']}{fix}"
+            )
         elif _is_section(loc) and e["type"] == "model_type":
-            lines.append(f"`{loc}` = {e.get('input')!r} is not allowed: {loc} is a section; "
-                         f"write it as a [{loc}] table of keys (`mpmflow keys` lists them).")
+            lines.append(
+                f"`{loc}` = {e.get('input')!r} is not allowed: {loc} is a section; "
+                f"write it as a [{loc}] table of keys (`mpmflow keys` lists them)."
+            )
         else:
             lines.append(f"{loc}: {msg}." if loc else f"{msg}.")
     head = f"Invalid case {source}: " if source else "Invalid case: "
-    return CaseError(head + " ".join(lines) + " See the case-file reference, docs/reference.md "
-                     "(or `mpmflow keys`).")
+    return CaseError(
+        head + " ".join(lines) + " See the case-file reference, docs/reference.md "
+        "(or `mpmflow keys`)."
+    )
 
 
 def _is_section(loc):
@@ -259,9 +298,13 @@ def _example(row):
     value = row["example"] if row["example"] is not None else row["default"]
     if value is None:
         return ""
-    return f'"{value}"' if isinstance(value, str) else str(value).lower() \
-        if isinstance(value, bool) else str(value)
-
+    return (
+        f'"{value}"'
+        if isinstance(value, str)
+        else str(value).lower()
+        if isinstance(value, bool)
+        else str(value)
+    )
 
 
 def validate(data, source="", base_dir=None):
@@ -309,10 +352,11 @@ def revalidate(case):
     apart, time step against end, ...) for a case whose fields were changed after loading
     (an assignment checks only its own section). CaseError when it no longer holds."""
     if not isinstance(case, Case):
-        raise CaseError(f"expected a case (mpmflow.load_case(...)), got {type(case).__name__}; "
-                        "load one with mpmflow.load_case(path, overrides).")
-    return validate(case.model_dump(), source="(changed after loading)",
-                    base_dir=case._base_dir)
+        raise CaseError(
+            f"expected a case (mpmflow.load_case(...)), got {type(case).__name__}; "
+            "load one with mpmflow.load_case(path, overrides)."
+        )
+    return validate(case.model_dump(), source="(changed after loading)", base_dir=case._base_dir)
 
 
 def resolved(case):

@@ -23,11 +23,11 @@ from .sections import (
     Physics,
     Probe,
     Section,
-    Solver,
     Time,
 )
 from .shapes import Body, Obstacle
 from .shapes import Box as BoxBody
+from .solver import Solver
 
 # A periodic axis is halved by the multigrid while its period stays a multiple of 4
 # (src/core/multigrid.cpp); the points left on the coarsest level enter a dense solve at
@@ -48,12 +48,15 @@ class Case(Section):
     grid: GridSettings
     bodies: list[Body] = Field(
         description="Bodies of material ([[bodies]] tables), each of a shape (bodies.N.type).",
-        min_length=1)
+        min_length=1,
+    )
     obstacles: list[Obstacle] = Field(
-        [], description="Fixed rigid obstacles ([[obstacles]] tables): structures the "
+        [],
+        description="Fixed rigid obstacles ([[obstacles]] tables): structures the "
         "material flows round, of the same shapes and shape keys as bodies (obstacles.N.type; "
         "at least two grid cells thick). Bodies may surround them: the lattice points inside "
-        "an obstacle are not seeded.")
+        "an obstacle are not seeded.",
+    )
     material: Material = Material()
     physics: Physics = Physics()
     time: Time
@@ -61,9 +64,11 @@ class Case(Section):
     solver: Solver = Solver()
     checkpoint: Checkpoint = Checkpoint()
     probes: list[Probe] = Field(
-        [], description="Probes ([[probes]] tables): pressure sensors and water-level gauges "
+        [],
+        description="Probes ([[probes]] tables): pressure sensors and water-level gauges "
         "sampled at every output time into probes.csv (a column per probe, named by "
-        "probes.N.name; time in s).")
+        "probes.N.name; time in s).",
+    )
     execution: Execution = Execution()
 
     _base_dir: Path | None = PrivateAttr(None)  # the case file's folder
@@ -87,25 +92,29 @@ class Case(Section):
         spec = getattr(self, kind)[k]
         key = (kind, k, spec.model_dump_json(), str(self.base_dir))
         if key not in self._shapes:
-            self._shapes[key] = from_spec(spec, len(self.domain.size), self.base_dir,
-                                                 key=f"{kind}.{k}")
+            self._shapes[key] = from_spec(
+                spec, len(self.domain.size), self.base_dir, key=f"{kind}.{k}"
+            )
         return self._shapes[key]
 
     def _unsupported(self):
         """The message for a feature the case uses that its scheme does not support (each
         scheme declares its own, ``schemes.SUPPORTS``); None when there is none."""
-        used = {"obstacles": (bool(self.obstacles), "remove the [[obstacles]]"),
-                "materials": (self.material.model != "water",
-                              "set material.model = \"water\""),
-                "periodic": (any(self.domain.periodic or []), "remove domain.periodic"),
-                "apic": (self.solver.transfer == "apic", "set solver.transfer = \"flip\"")}
+        used = {
+            "obstacles": (bool(self.obstacles), "remove the [[obstacles]]"),
+            "materials": (self.material.model != "water", 'set material.model = "water"'),
+            "periodic": (any(self.domain.periodic or []), "remove domain.periodic"),
+            "apic": (self.solver.transfer == "apic", 'set solver.transfer = "flip"'),
+        }
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():
             if uses and not schemes.supports(name, feature):
-                others = " or ".join(f"\"{n}\"" for n in schemes.supporting(feature))
-                return (f"solver.scheme = \"{name}\" does not support "
-                        f"{schemes.FEATURES[feature]}; set solver.scheme = {others}, or "
-                        f"{instead}")
+                others = " or ".join(f'"{n}"' for n in schemes.supporting(feature))
+                return (
+                    f'solver.scheme = "{name}" does not support '
+                    f"{schemes.FEATURES[feature]}; set solver.scheme = {others}, or "
+                    f"{instead}"
+                )
         return None
 
     def _periodic_problem(self, size, obstacle_shapes):
@@ -123,29 +132,35 @@ class Case(Section):
             whole = round(n)
             if abs(n - whole) > 1e-6 * n or whole % 2 or whole < 4:
                 even = max(4, 2 * round(n / 2))
-                return (f"domain.periodic: along {axes[k]} domain.size = {size[k]:g} m is "
-                        f"{n:.6g} cells of grid.spacing = {h:g} m; a periodic axis needs a "
-                        f"whole, even number of cells, at least 4: make domain.size[{k}] = "
-                        f"{even * h:.6g} m ({even} cells) or change grid.spacing")
+                return (
+                    f"domain.periodic: along {axes[k]} domain.size = {size[k]:g} m is "
+                    f"{n:.6g} cells of grid.spacing = {h:g} m; a periodic axis needs a "
+                    f"whole, even number of cells, at least 4: make domain.size[{k}] = "
+                    f"{even * h:.6g} m ({even} cells) or change grid.spacing"
+                )
             unit = np.zeros(len(size))
             unit[k] = 1.0
             left = _coarsest_period(whole)
             coarsest *= left
             if coarsest > MAX_COARSEST_PERIOD:
                 better = max(8, round(whole / 8) * 8)
-                return (f"domain.periodic: along {axes[k]} the {whole} cells halve down to "
-                        f"no fewer than {left} points on the pressure solver's coarsest level "
-                        "(a periodic axis halves while its period stays a multiple of 4), "
-                        f"{coarsest} with the other periodic axes, too many for its dense "
-                        f"solve at every step; make domain.size[{k}] a multiple of 8 cells, "
-                        f"e.g. {better * h:.6g} m ({better} cells)")
+                return (
+                    f"domain.periodic: along {axes[k]} the {whole} cells halve down to "
+                    f"no fewer than {left} points on the pressure solver's coarsest level "
+                    "(a periodic axis halves while its period stays a multiple of 4), "
+                    f"{coarsest} with the other periodic axes, too many for its dense "
+                    f"solve at every step; make domain.size[{k}] a multiple of 8 cells, "
+                    f"e.g. {better * h:.6g} m ({better} cells)"
+                )
             for j, shape in enumerate(obstacle_shapes):
                 lo, hi = -shape.support(-unit), shape.support(unit)
                 if lo < h or hi > size[k] - h:
-                    return (f"obstacles.{j} spans {lo:.6g} to {hi:.6g} m along the periodic "
-                            f"axis {axes[k]} of [0, {size[k]:g}] m; an obstacle must stay a "
-                            f"grid cell ({h:g} m) inside a periodic axis's ends: move or "
-                            "shrink it, or make the axis a wall (domain.periodic)")
+                    return (
+                        f"obstacles.{j} spans {lo:.6g} to {hi:.6g} m along the periodic "
+                        f"axis {axes[k]} of [0, {size[k]:g}] m; an obstacle must stay a "
+                        f"grid cell ({h:g} m) inside a periodic axis's ends: move or "
+                        "shrink it, or make the axis a wall (domain.periodic)"
+                    )
         return None
 
     def body_shape(self, k):
@@ -158,13 +173,16 @@ class Case(Section):
 
     def particle_counts(self):
         """The exact number of particles each body is seeded with (obstacles left out)."""
-        key = (self.model_dump_json(include={"bodies", "obstacles", "grid", "domain"}),
-               str(self.base_dir))
+        key = (
+            self.model_dump_json(include={"bodies", "obstacles", "grid", "domain"}),
+            str(self.base_dir),
+        )
         if key not in self._counts:
             obstacles = [self.obstacle_shape(j) for j in range(len(self.obstacles))]
             self._counts[key] = [
                 bodies.particle_count(b, self.grid.spacing, self.body_shape(k), obstacles)
-                for k, b in enumerate(self.bodies)]
+                for k, b in enumerate(self.bodies)
+            ]
         return self._counts[key]
 
     def _same_dimension(self):
@@ -185,9 +203,13 @@ class Case(Section):
                         f"{kind}.{k}.type = {spec.type!r} is a shape of "
                         f"{DIM_OF[spec.type][0]}D cases, but domain.size = "
                         f"{self.domain.size} makes this case {D}D; give {kind}.{k} one of the "
-                        f"{D}D shapes ({', '.join(repr(t) for t in other)})")
-                vectors += [(f"{kind}.{k}.{name}", getattr(spec, name)) for name in spec.VECTORS
-                            if name != "translate" and name != "axis"]
+                        f"{D}D shapes ({', '.join(repr(t) for t in other)})"
+                    )
+                vectors += [
+                    (f"{kind}.{k}.{name}", getattr(spec, name))
+                    for name in spec.VECTORS
+                    if name != "translate" and name != "axis"
+                ]
         for k, body in enumerate(self.bodies):
             vectors.append((f"bodies.{k}.velocity", body.velocity))
         vectors += [(f"probes.{k}.position", p.position) for k, p in enumerate(self.probes)]
@@ -196,14 +218,16 @@ class Case(Section):
                 raise ValueError(
                     f"{name} = {value} has {len(value)} entries but domain.size = "
                     f"{self.domain.size} has {D}: a {D}D case needs {D} entries in every "
-                    f"vector; give {name} {D} entries, or domain.size {len(value)}")
+                    f"vector; give {name} {D} entries, or domain.size {len(value)}"
+                )
         if D == 3:
             for k, body in enumerate(self.bodies):
                 if getattr(body, "surface_amplitude", 0.0):
                     raise ValueError(
                         f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
                         "cosine top surface is defined for 2D cases only so far; use a flat "
-                        "box in 3D (surface_amplitude = 0)")
+                        "box in 3D (surface_amplitude = 0)"
+                    )
 
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo):
@@ -218,10 +242,11 @@ class Case(Section):
             for k, obstacle in enumerate(self.obstacles):
                 if obstacle.walls == "domain":
                     raise ValueError(
-                        f"obstacles.{k}.walls = \"domain\" (the default) takes the condition "
+                        f'obstacles.{k}.walls = "domain" (the default) takes the condition '
                         "of domain.walls, but domain.walls gives its walls different ones "
-                        f"({self.domain.walls_text()}); set obstacles.{k}.walls = \"slip\" or "
-                        "\"no_slip\"")
+                        f'({self.domain.walls_text()}); set obstacles.{k}.walls = "slip" or '
+                        '"no_slip"'
+                    )
         folder = (info.context or {}).get("folder") if info is not None else None
         for k, probe in enumerate(self.probes):
             if probe.data is not None:
@@ -229,13 +254,15 @@ class Case(Section):
         if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
-                f"({size} m); the grid needs at least two cells per side")
+                f"({size} m); the grid needs at least two cells per side"
+            )
         most = max(s / self.grid.spacing for s in size)
         if not np.isfinite(most):  # a huge finite count is the memory check's to refuse
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m makes {most:.3g} cells along a side "
                 f"of the domain ({size} m), beyond what any computer holds; give a larger "
-                "grid.spacing (the paper's dam break uses 0.004 m)")
+                "grid.spacing (the paper's dam break uses 0.004 m)"
+            )
         D = len(size)
         for k, body in enumerate(self.bodies):
             volume = (self.grid.spacing / body.particles_per_cell) ** D
@@ -246,7 +273,8 @@ class Case(Section):
                     f"material.density = {self.material.density:g} kg/m^3 gives the particles "
                     f"of bodies.{k} a mass of {mass:g} kg, too small for a floating-point "
                     "number to hold (masses and energies would be zero); give the density "
-                    "in kg/m^3 (water: 1000)")
+                    "in kg/m^3 (water: 1000)"
+                )
         for k, body in enumerate(self.bodies):
             if not isinstance(body, BoxBody):
                 continue  # placement.check
@@ -255,13 +283,15 @@ class Case(Section):
                 raise ValueError(
                     f"bodies.{k}: the cosine surface reaches max[1] + |surface_amplitude| = "
                     f"{crest:g} m, above the domain's top at {size[1]:g} m; lower "
-                    f"bodies.{k}.max or surface_amplitude, or enlarge domain.size")
+                    f"bodies.{k}.max or surface_amplitude, or enlarge domain.size"
+                )
             for lo, hi, s in zip(body.min, body.max, size):
                 if lo < -1e-12 or hi > s * (1 + 1e-12):
                     box = " x ".join(f"[0, {s:g}]" for s in size)
                     raise ValueError(
                         f"bodies.{k} spans {body.min} to {body.max} m, outside the domain "
-                        f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size")
+                        f"{box} m; move it inside (bodies.{k}.min/max) or enlarge domain.size"
+                    )
         overlap = bodies.overlap_message(self.bodies, self.grid.spacing)
         if overlap:
             raise ValueError(overlap)
@@ -270,14 +300,17 @@ class Case(Section):
         placement.check(self, body_shapes, obstacle_shapes)
         if obstacle_shapes:
             for k, count in enumerate(self.particle_counts()):
-                message = (placement.empty_body_message(self, k, body_shapes[k],
-                                                        obstacle_shapes)
-                           if count == 0 else None)
+                message = (
+                    placement.empty_body_message(self, k, body_shapes[k], obstacle_shapes)
+                    if count == 0
+                    else None
+                )
                 if message:
                     raise ValueError(message)
                 if not self.bodies[k].around_obstacles:
-                    message = placement.overlap_message(self, k, count, body_shapes[k],
-                                                        obstacle_shapes)
+                    message = placement.overlap_message(
+                        self, k, count, body_shapes[k], obstacle_shapes
+                    )
                     if message:
                         raise ValueError(message)
         if self.solver.scheme == "projection":
@@ -289,54 +322,68 @@ class Case(Section):
                     "free surface: the projection scheme's incompressible material then has "
                     "no pressure level (the pressure system is singular). Leave empty space "
                     "above the material, at least one grid cell: lower the top of the bodies "
-                    "(bodies.N.max) or enlarge domain.size")
+                    "(bodies.N.max) or enlarge domain.size"
+                )
         message = self._periodic_problem(size, obstacle_shapes)
         if message:
             raise ValueError(message)
         names = set()
         for k, probe in enumerate(self.probes):
             if probe.name in names:
-                raise ValueError(f"probes.{k}.name = {probe.name!r} is the name of an earlier "
-                                 "probe; give each probe its own name (its column in "
-                                 "probes.csv)")
+                raise ValueError(
+                    f"probes.{k}.name = {probe.name!r} is the name of an earlier "
+                    "probe; give each probe its own name (its column in "
+                    "probes.csv)"
+                )
             names.add(probe.name)
             if any(not 0 <= p <= s * (1 + 1e-12) for p, s in zip(probe.position, size)):
                 box = " x ".join(f"[0, {s:g}]" for s in size)
-                raise ValueError(f"probes.{k}.position = {probe.position} m lies outside the "
-                                 f"domain {box} m; move it inside")
+                raise ValueError(
+                    f"probes.{k}.position = {probe.position} m lies outside the "
+                    f"domain {box} m; move it inside"
+                )
             if probe.window is not None and probe.window > max(size):
-                raise ValueError(f"probes.{k}.window = {probe.window:g} m is wider than the "
-                                 f"domain (largest side {max(size):g} m), so it would read "
-                                 "particles anywhere; give a window of a few grid cells "
-                                 f"(grid.spacing = {self.grid.spacing:g} m), or none for "
-                                 "the default")
+                raise ValueError(
+                    f"probes.{k}.window = {probe.window:g} m is wider than the "
+                    f"domain (largest side {max(size):g} m), so it would read "
+                    "particles anywhere; give a window of a few grid cells "
+                    f"(grid.spacing = {self.grid.spacing:g} m), or none for "
+                    "the default"
+                )
         for k, body in enumerate(self.bodies):
             speed = float(np.linalg.norm(body.velocity))
             if not speed <= self.solver.max_speed:
                 raise ValueError(
                     f"bodies.{k}.velocity = {body.velocity} m/s is {speed:.4g} m/s fast, above "
                     f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
-                    f"stop at once; give a slower velocity or raise solver.max_speed")
-        if (self.time.dt == "auto" and self.solver.scheme == "projection"
-                and self.solver.linear_solver != "multigrid"):
+                    f"stop at once; give a slower velocity or raise solver.max_speed"
+                )
+        if (
+            self.time.dt == "auto"
+            and self.solver.scheme == "projection"
+            and self.solver.linear_solver != "multigrid"
+        ):
             raise ValueError(
-                "time.dt = \"auto\" runs the projection scheme's steps inside the compiled "
+                'time.dt = "auto" runs the projection scheme\'s steps inside the compiled '
                 f"core, with the multigrid solver; solver.linear_solver = "
                 f"{self.solver.linear_solver!r} solves from Python one fixed step at a time: "
-                "set solver.linear_solver = \"multigrid\", or give time.dt a number")
+                'set solver.linear_solver = "multigrid", or give time.dt a number'
+            )
         dt = time_step(self)
         if self.time.end < dt * (1 - 1e-9):
             raise ValueError(
                 f"time.end = {self.time.end:g} s is shorter than one time step of {dt:.3g} s "
                 f"(time.dt = {self.time.dt!r}); a run takes at least one step: give a later "
-                "time.end, or a smaller time.dt")
+                "time.end, or a smaller time.dt"
+            )
         steps = self.time.end / dt
         if not steps <= MAX_STEPS:
             raise ValueError(
                 f"time.end = {self.time.end:g} s is {steps:.3g} steps of {dt:.3g} s, more than "
                 f"the {MAX_STEPS:,} a run can take (checkpoints are numbered by step with 9 "
                 "digits; at a few milliseconds per step that many steps take weeks): give a "
-                "shorter time.end, or a larger time.dt")
+                "shorter time.end, or a larger time.dt"
+            )
         if self.time.dt != "auto" and self.solver.scheme == "explicit":
             limit = case_stable_time_step(self)
             if self.time.dt > limit:
@@ -345,13 +392,15 @@ class Case(Section):
                     f"time.dt = {self.time.dt:g} s is above the stable step of the explicit "
                     f"scheme, {limit:.4g} s = grid.spacing / (sound speed + initial speed) = "
                     f"{self.grid.spacing:g} / ({c:.4g} + {initial_speed(self):.3g}) m/s; set "
-                    f"time.dt to at most {limit:.4g} s, or time.dt = \"auto\" (which uses "
+                    f'time.dt to at most {limit:.4g} s, or time.dt = "auto" (which uses '
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
-                    "material.bulk_modulus")
+                    "material.bulk_modulus"
+                )
         if self.time.dt != "auto" and self.output.interval < self.time.dt * (1 - 1e-9):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "
-                f"{self.time.dt:g} s; make it at least one time step")
+                f"{self.time.dt:g} s; make it at least one time step"
+            )
         # once checked: mesh files by absolute path, so that the resolved case
         # (summary.json) finds them from anywhere (as probes' data)
         for spec in [*self.bodies, *self.obstacles]:
@@ -360,6 +409,7 @@ class Case(Section):
                 if path.is_file():
                     object.__setattr__(spec, "path", str(path))
         return self
+
 
 def _check_probe_data(k, probe, folder):
     """probes.k.data: its file exists and names its columns (ValueError otherwise); the path
@@ -377,16 +427,21 @@ def _check_probe_data(k, probe, folder):
     except OSError as err:
         raise ValueError(
             f"{key}.path = {data.path!r}: the file {path} cannot be read ({err.strerror}); give "
-            "the path of the measured series' CSV file, relative to the case file's folder") from None
+            "the path of the measured series' CSV file, relative to the case file's folder"
+        ) from None
     except UnicodeDecodeError:
-        raise ValueError(f"{key}.path = {data.path!r}: {path} is not a text file; give the "
-                         "path of the measured series' CSV file (a header line, then numbers)") from None
+        raise ValueError(
+            f"{key}.path = {data.path!r}: {path} is not a text file; give the "
+            "path of the measured series' CSV file (a header line, then numbers)"
+        ) from None
     names = [c.strip().strip('"') for c in first.rstrip("\r\n").split(",")]
     for field in ("time_column", "column"):
         name = getattr(data, field)
         if name not in names:
             raise ValueError(
                 f"{key}.{field} = {name!r} is not a column of {path.name}, whose header names "
-                + ", ".join(repr(n) for n in names[:20]) + (" ..." if len(names) > 20 else "")
-                + f"; set {key}.{field} to one of them, exactly as written")
+                + ", ".join(repr(n) for n in names[:20])
+                + (" ..." if len(names) > 20 else "")
+                + f"; set {key}.{field} to one of them, exactly as written"
+            )
     object.__setattr__(data, "path", str(path))

@@ -9,7 +9,7 @@ from pydantic import BaseModel
 
 from .domain import wall_keys
 from .model import Case
-from .sections import FORMULATIONS, Solver
+from .solver import FORMULATIONS, Solver
 
 
 def _model_for(section):
@@ -57,9 +57,15 @@ def key_reference():
             default = None if required else field.get_default()
             if model is Solver and name in FORMULATIONS["mpmflow"]:
                 default = FORMULATIONS["mpmflow"][name]
-            rows.append({"key": f"{prefix}{name}", "required": required, "default": default,
-                         "example": (field.examples or [None])[0],
-                         "description": field.description or ""})
+            rows.append(
+                {
+                    "key": f"{prefix}{name}",
+                    "required": required,
+                    "default": default,
+                    "example": (field.examples or [None])[0],
+                    "description": field.description or "",
+                }
+            )
 
     walk(Case, "")
     return rows
@@ -68,6 +74,7 @@ def key_reference():
 _REFERENCE = {row["key"]: row for row in key_reference()}
 # and the sides of a per-side domain.walls (--set domain.walls.z_min=no_slip)
 KNOWN_KEYS = list(_REFERENCE) + [f"domain.walls.{k}" for k in wall_keys(3)]
+
 
 def reference_markdown():
     """The case-file reference as a Markdown table (generated into the README)."""
@@ -101,4 +108,6 @@ def reference_page():
         "this list. Unknown keys "
         "are errors (with a suggestion), and a bad value stops with a message naming the "
         "key, the value, the allowed range and the fix (exit code 2).\n\n"
-        + reference_markdown() + "\n")
+        + reference_markdown()
+        + "\n"
+    )

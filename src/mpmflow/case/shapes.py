@@ -16,10 +16,11 @@ from .sections import Section
 
 SHAPE_TYPES = ("box", "cylinder", "sphere", "disc", "polygon", "mesh")
 _TYPE_DOC = (
-    "Shape: \"box\" (the default; min, max), \"disc\" (2D; centre, radius), \"polygon\" "
-    "(2D; vertices), \"sphere\" (3D; centre, radius), \"cylinder\" (3D; centre, axis, "
-    "radius, length) or \"mesh\" (3D; a closed triangle surface from an STL or OBJ file: "
-    "path, scale, translate). Each type takes only its own shape keys.")
+    'Shape: "box" (the default; min, max), "disc" (2D; centre, radius), "polygon" '
+    '(2D; vertices), "sphere" (3D; centre, radius), "cylinder" (3D; centre, axis, '
+    'radius, length) or "mesh" (3D; a closed triangle surface from an STL or OBJ file: '
+    "path, scale, translate). Each type takes only its own shape keys."
+)
 
 
 def _type_field(kind):
@@ -27,23 +28,31 @@ def _type_field(kind):
 
 
 def _centre():
-    return Field(description="Centre (m) of a disc or sphere; of a cylinder, the centre of "
-                 "its base, where its axis starts.", min_length=2, max_length=3,
-                 examples=[[0.2, 0.1]])
+    return Field(
+        description="Centre (m) of a disc or sphere; of a cylinder, the centre of "
+        "its base, where its axis starts.",
+        min_length=2,
+        max_length=3,
+        examples=[[0.2, 0.1]],
+    )
 
 
 def _radius():
-    return Field(description="Radius (m) of a disc, sphere or cylinder.", gt=0,
-                 examples=[0.05])
+    return Field(description="Radius (m) of a disc, sphere or cylinder.", gt=0, examples=[0.05])
 
 
 class _BoxShape(Section):
     VECTORS: ClassVar = ("min", "max")
     type: Literal["box"] = _type_field("box")
-    min: list[float] = Field(description="Lower corner of a box (m).", examples=[[0.0, 0.0]],
-                             min_length=2, max_length=3)
-    max: list[float] = Field(description="Upper corner of a box (m).",
-                             examples=[[0.114, 0.228]], min_length=2, max_length=3)
+    min: list[float] = Field(
+        description="Lower corner of a box (m).", examples=[[0.0, 0.0]], min_length=2, max_length=3
+    )
+    max: list[float] = Field(
+        description="Upper corner of a box (m).",
+        examples=[[0.114, 0.228]],
+        min_length=2,
+        max_length=3,
+    )
 
     @model_validator(mode="after")
     def _ordered(self):
@@ -58,16 +67,23 @@ class _CylinderShape(Section):
     centre: list[float] = _centre()
     axis: list[float] = Field(
         description="Direction of a cylinder's axis from the centre of its base (any length; "
-        "[0, 0, 1] stands it upright).", min_length=3, max_length=3, examples=[[0, 0, 1]])
+        "[0, 0, 1] stands it upright).",
+        min_length=3,
+        max_length=3,
+        examples=[[0, 0, 1]],
+    )
     radius: float = _radius()
-    length: float = Field(description="Length (m) of a cylinder along its axis.", gt=0,
-                          examples=[0.2])
+    length: float = Field(
+        description="Length (m) of a cylinder along its axis.", gt=0, examples=[0.2]
+    )
 
     @model_validator(mode="after")
     def _axis(self):
         if not any(self.axis):
-            raise ValueError("the cylinder's axis must not be [0, 0, 0]; give its direction, "
-                             "e.g. axis = [0, 0, 1]")
+            raise ValueError(
+                "the cylinder's axis must not be [0, 0, 0]; give its direction, "
+                "e.g. axis = [0, 0, 1]"
+            )
         return self
 
 
@@ -90,8 +106,10 @@ class _PolygonShape(Section):
     type: Literal["polygon"] = _type_field("polygon")
     vertices: list[Annotated[list[float], Field(min_length=2, max_length=2)]] = Field(
         description="Corners of a polygon (2D) in order, [[x, y], ...] (m); the last joins the "
-        "first. Any simple polygon (convex or not; its edges must not cross).", min_length=3,
-        examples=[[[0.2, 0.0], [0.3, 0.0], [0.25, 0.05]]])
+        "first. Any simple polygon (convex or not; its edges must not cross).",
+        min_length=3,
+        examples=[[[0.2, 0.0], [0.3, 0.0], [0.25, 0.05]]],
+    )
 
     @model_validator(mode="after")
     def _simple(self):
@@ -107,51 +125,77 @@ class _MeshShape(Section):
     path: str = Field(
         description="A mesh's file (STL or OBJ, read with trimesh): the closed surface of a "
         "solid, relative to the case file's folder. Its coordinates are taken in metres "
-        "(times scale).", min_length=1, examples=["geometry/pier.stl"])
-    scale: float = Field(1.0, gt=0, description="Factor from a mesh file's units to metres "
-                         "(1: the file is in metres; 0.001: in millimetres).")
-    translate: list[float] = Field([0.0, 0.0, 0.0], description="Shift (m) applied to a mesh "
-                                   "after scaling.", min_length=3, max_length=3)
+        "(times scale).",
+        min_length=1,
+        examples=["geometry/pier.stl"],
+    )
+    scale: float = Field(
+        1.0,
+        gt=0,
+        description="Factor from a mesh file's units to metres "
+        "(1: the file is in metres; 0.001: in millimetres).",
+    )
+    translate: list[float] = Field(
+        [0.0, 0.0, 0.0],
+        description="Shift (m) applied to a mesh after scaling.",
+        min_length=3,
+        max_length=3,
+    )
 
 
 class _BodyFields(Section):
     particles_per_cell: int = Field(
-        2, ge=1, le=16, description="Material points per cell along each axis (4 gives 16 per "
+        2,
+        ge=1,
+        le=16,
+        description="Material points per cell along each axis (4 gives 16 per "
         "cell in 2D, 64 in 3D). Points sit on a lattice aligned with the grid; a body of any "
-        "shape keeps the lattice points inside it (and outside every obstacle).")
-    velocity: list[float] = Field([0.0, 0.0], description="Initial velocity of the body (m/s); "
-                                  "at rest by default, in 2D and 3D.",
-                                  min_length=2, max_length=3)
+        "shape keeps the lattice points inside it (and outside every obstacle).",
+    )
+    velocity: list[float] = Field(
+        [0.0, 0.0],
+        description="Initial velocity of the body (m/s); at rest by default, in 2D and 3D.",
+        min_length=2,
+        max_length=3,
+    )
     around_obstacles: bool = Field(
-        False, description="true = fill the body's shape except where obstacles are (water "
+        False,
+        description="true = fill the body's shape except where obstacles are (water "
         "in a tank round a pier: the lattice points inside obstacles are not seeded). false "
         "(default) = a body that overlaps an obstacle is refused, as a likely mistake of "
-        "position.")
+        "position.",
+    )
     initial_pressure: Literal["zero", "hydrostatic"] = Field(
-        "zero", description="Initial particle pressure: \"zero\", or \"hydrostatic\" = "
+        "zero",
+        description='Initial particle pressure: "zero", or "hydrostatic" = '
         "density * |g| * depth below the body's highest point against gravity (for a box its "
         "highest corner). The "
         "explicit scheme starts from the matching compression (volume (1 - p/K) m/density), "
         "which spares it the acoustic transient of a column released without pressure; the "
-        "projection scheme computes the pressure anew in its first step.")
+        "projection scheme computes the pressure anew in its first step.",
+    )
 
 
 class Box(_BodyFields, _BoxShape):
     surface_amplitude: float = Field(
-        0.0, description="Amplitude A (m) of a cosine top surface (type = \"box\" only), for "
+        0.0,
+        description='Amplitude A (m) of a cosine top surface (type = "box" only), for '
         "standing-wave "
         "sloshing: particles are kept where y < max[1] + A cos(pi (x - min[0]) / (max[0] - "
         "min[0])), half a wavelength across the box (the first sloshing mode of a tank as "
         "wide as the box); the box is seeded up to max[1] + |A|. 0 = flat top. |A| must be "
-        "smaller than the box's height. With initial_pressure = \"hydrostatic\" the depth is "
-        "measured from this surface.", examples=[0.01])
+        'smaller than the box\'s height. With initial_pressure = "hydrostatic" the depth is '
+        "measured from this surface.",
+        examples=[0.01],
+    )
 
     @model_validator(mode="after")
     def _amplitude(self):
         if abs(self.surface_amplitude) >= self.max[1] - self.min[1]:
             raise ValueError(
                 f"|surface_amplitude| = {abs(self.surface_amplitude):g} m must be smaller than "
-                f"the box's height max[1] - min[1] = {self.max[1] - self.min[1]:g} m")
+                f"the box's height max[1] - min[1] = {self.max[1] - self.min[1]:g} m"
+            )
         return self
 
 
@@ -177,12 +221,18 @@ class MeshBody(_BodyFields, _MeshShape):
 
 class _ObstacleFields(Section):
     name: str | None = Field(
-        None, description="Name of the obstacle, for messages and outputs (letters, digits, "
-        "_ . + -); optional.", pattern=r"^[A-Za-z0-9_.+-]{1,64}$", examples=["pier"])
+        None,
+        description="Name of the obstacle, for messages and outputs (letters, digits, "
+        "_ . + -); optional.",
+        pattern=r"^[A-Za-z0-9_.+-]{1,64}$",
+        examples=["pier"],
+    )
     walls: Literal["slip", "no_slip", "domain"] = Field(
-        "domain", description="Wall condition on the obstacle's surface: \"slip\", "
-        "\"no_slip\", or \"domain\" = the same as domain.walls (which must then be one "
-        "condition for every wall).")
+        "domain",
+        description='Wall condition on the obstacle\'s surface: "slip", '
+        '"no_slip", or "domain" = the same as domain.walls (which must then be one '
+        "condition for every wall).",
+    )
 
 
 class BoxObstacle(_ObstacleFields, _BoxShape):

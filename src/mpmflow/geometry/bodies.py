@@ -29,8 +29,9 @@ def cosine_top(body, x):
     if body.surface_amplitude == 0.0:
         return np.full(np.shape(x), body.max[1], dtype=float)
     width = body.max[0] - body.min[0]
-    return body.max[1] + body.surface_amplitude * np.cos(np.pi * (np.asarray(x) - body.min[0])
-                                                         / width)
+    return body.max[1] + body.surface_amplitude * np.cos(
+        np.pi * (np.asarray(x) - body.min[0]) / width
+    )
 
 
 # a containment pass over more lattice points than this is not made to count a body: such a
@@ -137,8 +138,7 @@ def seeds_any(body, grid_spacing, shape=None):
         lo, hi = seed_region(body, shape, s)
         if lattice_count(lo, hi, s) > MAX_PASS:
             return True
-        return any(in_body(body, shape, points, s).any()
-                   for points in lattice_chunks(lo, hi, s))
+        return any(in_body(body, shape, points, s).any() for points in lattice_chunks(lo, hi, s))
     except OverflowError:
         return True
 
@@ -220,8 +220,11 @@ def _trims(j, body, other, tol):
         return out
     D = len(body.min)
     for axis in range(D):
-        spans = all(other.min[k] <= body.min[k] + tol and other.max[k] >= body.max[k] - tol
-                    for k in range(D) if k != axis)
+        spans = all(
+            other.min[k] <= body.min[k] + tol and other.max[k] >= body.max[k] - tol
+            for k in range(D)
+            if k != axis
+        )
         if not spans:
             continue
         if other.min[axis] <= body.min[axis] + tol and other.max[axis] < body.max[axis] - tol:
@@ -237,9 +240,13 @@ def _trims(j, body, other, tol):
 
 def _inside(a, b, tol):
     """Body a lies inside body b (flat boxes)."""
-    return (not a.surface_amplitude and not b.surface_amplitude
-            and all(bl <= al + tol and ah <= bh + tol
-                    for al, ah, bl, bh in zip(a.min, a.max, b.min, b.max)))
+    return (
+        not a.surface_amplitude
+        and not b.surface_amplitude
+        and all(
+            bl <= al + tol and ah <= bh + tol for al, ah, bl, bh in zip(a.min, a.max, b.min, b.max)
+        )
+    )
 
 
 def overlap_message(bodies, spacing):
@@ -255,12 +262,15 @@ def overlap_message(bodies, spacing):
             if box is None:
                 continue
             where = "they share the region " + ", ".join(
-                f"{name} = {lo:.6g} to {hi:.6g} m" for name, lo, hi in zip("xyz", *box))
-            head = (f"bodies.{i} (min {_fmt(a.min)}, max {_fmt(a.max)} m) and bodies.{j} (min "
-                    f"{_fmt(b.min)}, max {_fmt(b.max)} m) overlap: {where}. Bodies are "
-                    "filled with particles one by one, so an overlap would be filled twice, "
-                    "adding mass that is not there and packing the particles twice as close. "
-                    "Bodies may touch but not overlap. ")
+                f"{name} = {lo:.6g} to {hi:.6g} m" for name, lo, hi in zip("xyz", *box)
+            )
+            head = (
+                f"bodies.{i} (min {_fmt(a.min)}, max {_fmt(a.max)} m) and bodies.{j} (min "
+                f"{_fmt(b.min)}, max {_fmt(b.max)} m) overlap: {where}. Bodies are "
+                "filled with particles one by one, so an overlap would be filled twice, "
+                "adding mass that is not there and packing the particles twice as close. "
+                "Bodies may touch but not overlap. "
+            )
             if _inside(b, a, tol) and _inside(a, b, tol):
                 return head + f"The two are the same box: remove bodies.{j}."
             if _inside(b, a, tol):
@@ -269,10 +279,13 @@ def overlap_message(bodies, spacing):
                 return head + f"bodies.{i} lies inside bodies.{j}: remove it."
             trims = _trims(i, a, b, tol) + _trims(j, b, a, tol)
             if trims:
-                return head + ("To keep the same material, set " + trims[0]
-                               + "".join(f" (or {t})" for t in trims[1:]) + ".")
-            return head + (f"Split bodies.{i} or bodies.{j} into boxes that only touch the "
-                           "other.")
+                return head + (
+                    "To keep the same material, set "
+                    + trims[0]
+                    + "".join(f" (or {t})" for t in trims[1:])
+                    + "."
+                )
+            return head + (f"Split bodies.{i} or bodies.{j} into boxes that only touch the other.")
     return None
 
 
@@ -302,8 +315,13 @@ def fills_grid(bodies, spacing, grid_size):
     cuts = []
     for k in range(D):
         edges = sorted({0.0, float(grid_size[k])} | {v for r in rects for v in r[k]})
-        cuts.append([0.5 * (p + q) for p, q in zip(edges, edges[1:])
-                     if q - p > tol and p < grid_size[k] - tol])
+        cuts.append(
+            [
+                0.5 * (p + q)
+                for p, q in zip(edges, edges[1:])
+                if q - p > tol and p < grid_size[k] - tol
+            ]
+        )
     for mid in itertools.product(*cuts):
         if not any(all(r[k][0] <= mid[k] <= r[k][1] for k in range(D)) for r in rects):
             return False

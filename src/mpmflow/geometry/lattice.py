@@ -44,7 +44,7 @@ def lattice_chunks(lo, hi, spacing, chunk=CHUNK):
     per_slab = math.prod(len(a) for a in axes[:-1])
     step = max(1, chunk // per_slab)
     for j in range(0, len(axes[-1]), step):
-        mesh = np.meshgrid(*axes[:-1], axes[-1][j:j + step], indexing="ij")
+        mesh = np.meshgrid(*axes[:-1], axes[-1][j : j + step], indexing="ij")
         yield np.stack([m.ravel(order="F") for m in mesh], axis=1)
 
 

@@ -55,8 +55,7 @@ class Mesh(Shape):
         w = igl.fast_winding_number(self.vertices, self.faces, x)
         close = np.flatnonzero(d <= self._band)
         if close.size:
-            w[close] = igl.winding_number(self.vertices, self.faces,
-                                          np.ascontiguousarray(x[close]))
+            w[close] = igl.winding_number(self.vertices, self.faces, np.ascontiguousarray(x[close]))
         return w
 
     def winding_number(self, points):
@@ -112,6 +111,7 @@ class Mesh(Shape):
 
 # --------------------------------------------------------------------------- mesh files
 
+
 def _refuse(key, text):
     raise ValueError(f"{key}.path = {text}")
 
@@ -140,11 +140,15 @@ def _stl_bytes(raw):
     if _is_ascii_stl(raw):
         return raw, None
     if b"\0" not in raw:  # text (no binary STL is without a NUL byte) that is not an STL
-        raise MeshFileError("is text, but not an ASCII STL (which starts with \"solid\"); "
-                            "export the surface again as STL (binary or ASCII) or OBJ.")
+        raise MeshFileError(
+            'is text, but not an ASCII STL (which starts with "solid"); '
+            "export the surface again as STL (binary or ASCII) or OBJ."
+        )
     if len(raw) < STL_HEADER:
-        raise MeshFileError(f"has {len(raw)} bytes, fewer than the {STL_HEADER}-byte header of "
-                            "a binary STL, and is not an ASCII STL; export it again.")
+        raise MeshFileError(
+            f"has {len(raw)} bytes, fewer than the {STL_HEADER}-byte header of "
+            "a binary STL, and is not an ASCII STL; export it again."
+        )
     count = int.from_bytes(raw[80:84], "little")
     body = len(raw) - STL_HEADER
     if count * STL_TRIANGLE == body:
@@ -156,9 +160,12 @@ def _stl_bytes(raw):
             f"({STL_HEADER + STL_TRIANGLE * count:,} bytes), but the file has {len(raw):,} "
             f"bytes: {held:,} whole triangles and {rest} bytes more, so it is cut short "
             "inside a triangle or has bytes appended, and which triangles it holds is "
-            "unclear; export it again from your CAD tool.")
-    note = (f"the binary STL's header counts {count:,} triangles but its {len(raw):,} bytes "
-            f"hold {held:,}; the {held:,} triangles of the file were read")
+            "unclear; export it again from your CAD tool."
+        )
+    note = (
+        f"the binary STL's header counts {count:,} triangles but its {len(raw):,} bytes "
+        f"hold {held:,}; the {held:,} triangles of the file were read"
+    )
     return raw[:80] + held.to_bytes(4, "little") + raw[STL_HEADER:], note
 
 
@@ -187,9 +194,11 @@ def _text_bytes(raw):
             try:
                 return raw.decode(encoding).encode("utf-8")
             except UnicodeDecodeError:
-                raise MeshFileError(f"starts with a {encoding.upper()} byte-order mark but "
-                                    f"is not {encoding.upper()} text; save it as plain "
-                                    "(ASCII) text, or export it again.") from None
+                raise MeshFileError(
+                    f"starts with a {encoding.upper()} byte-order mark but "
+                    f"is not {encoding.upper()} text; save it as plain "
+                    "(ASCII) text, or export it again."
+                ) from None
     try:
         raw.decode("utf-8")
         return raw
@@ -216,8 +225,10 @@ def _read_mesh(path, stamp):
     kind = Path(path).suffix.lower()[1:]
     note = None
     if not raw.strip():
-        raise MeshFileError("holds no triangles: the file is empty; export the closed "
-                            "surface of the solid as STL or OBJ.")
+        raise MeshFileError(
+            "holds no triangles: the file is empty; export the closed "
+            "surface of the solid as STL or OBJ."
+        )
     if kind == "obj" or _has_bom(raw):
         raw = _text_bytes(raw)
     if kind == "stl":
@@ -235,14 +246,16 @@ def _read_mesh(path, stamp):
     # equal ones (writers repeat a corner's coordinates bit for bit), not trimesh's
     # merge_vertices, which rounds the coordinates to integers of 1e-8 units and so breaks
     # (int64 overflow) beyond about 1e10 file units
-    vertices, shared = np.unique(np.asarray(mesh.vertices, dtype=float), axis=0,
-                                 return_inverse=True)
+    vertices, shared = np.unique(
+        np.asarray(mesh.vertices, dtype=float), axis=0, return_inverse=True
+    )
     faces = shared.reshape(-1)[np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)]
     # a triangle with a repeated corner (after merging equal vertices) has no area and
     # no solid angle: it is no part of the surface, and its edge from a corner to itself
     # would count as an open edge
-    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
-                  & (faces[:, 0] != faces[:, 2])]
+    faces = faces[
+        (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    ]
     if len(faces) == 0:
         return vertices, faces, 0, 0, note
     mesh = trimesh.Trimesh(vertices, faces, process=False)
@@ -257,25 +270,40 @@ def _read_mesh(path, stamp):
 def _read(path, key, shown):
     """_read_mesh, with what the file system and trimesh raise as the user's message."""
     if path.is_dir():
-        _refuse(key, f"{shown} is a folder, not a file; give the path of an STL or OBJ file "
-                "(relative paths are taken from the case file's folder).")
+        _refuse(
+            key,
+            f"{shown} is a folder, not a file; give the path of an STL or OBJ file "
+            "(relative paths are taken from the case file's folder).",
+        )
     if not path.exists():
-        _refuse(key, f"{shown} does not exist (relative paths are taken from the case file's "
-                "folder); give the path of an STL or OBJ file.")
+        _refuse(
+            key,
+            f"{shown} does not exist (relative paths are taken from the case file's "
+            "folder); give the path of an STL or OBJ file.",
+        )
     if path.suffix.lower() not in (".stl", ".obj"):
-        _refuse(key, f"{shown} is not an STL or OBJ file (its name ends in "
-                f"{path.suffix or 'nothing'!r}); export the surface as .stl or .obj.")
+        _refuse(
+            key,
+            f"{shown} is not an STL or OBJ file (its name ends in "
+            f"{path.suffix or 'nothing'!r}); export the surface as .stl or .obj.",
+        )
     try:
         stat = path.stat()
         return _read_mesh(str(path.resolve()), (stat.st_size, stat.st_mtime_ns))
     except MeshFileError as err:
         _refuse(key, f"{shown} {err}")
     except OSError as err:
-        _refuse(key, f"{shown} cannot be read ({err.strerror or err}); check the file's "
-                "permissions, or give another path.")
+        _refuse(
+            key,
+            f"{shown} cannot be read ({err.strerror or err}); check the file's "
+            "permissions, or give another path.",
+        )
     except Exception as err:  # trimesh raises many kinds on a bad file
-        _refuse(key, f"{shown} cannot be read as a triangle mesh ({type(err).__name__}: "
-                f"{err}); export it again from your CAD tool as STL or OBJ.")
+        _refuse(
+            key,
+            f"{shown} cannot be read as a triangle mesh ({type(err).__name__}: "
+            f"{err}); export it again from your CAD tool as STL or OBJ.",
+        )
 
 
 def load_mesh(path, scale=1.0, translate=(0.0, 0.0, 0.0), key="mesh", shown=None):
@@ -293,21 +321,33 @@ def load_mesh(path, scale=1.0, translate=(0.0, 0.0, 0.0), key="mesh", shown=None
     vertices, faces, boundary, unmatched, note = _read(path, key, shown)
     said = f" ({note})" if note else ""
     if len(faces) == 0:
-        _refuse(key, f"{shown} holds no triangles{said} (an empty or non-triangle file, or "
-                "only triangles with no area); export the closed surface of the solid as "
-                "STL or OBJ.")
+        _refuse(
+            key,
+            f"{shown} holds no triangles{said} (an empty or non-triangle file, or "
+            "only triangles with no area); export the closed surface of the solid as "
+            "STL or OBJ.",
+        )
     if not np.isfinite(vertices).all():
-        _refuse(key, f"{shown} holds coordinates that are not numbers (nan or inf){said}; "
-                "export it again from your CAD tool.")
+        _refuse(
+            key,
+            f"{shown} holds coordinates that are not numbers (nan or inf){said}; "
+            "export it again from your CAD tool.",
+        )
     if boundary:
-        _refuse(key, f"{shown} is not a closed surface{said}: {boundary} boundary edges "
-                "(edges of only one triangle), so its inside is not defined; close the mesh "
-                "in your CAD tool or with trimesh.repair.fill_holes, and check it with "
-                "trimesh.load(path).is_watertight.")
+        _refuse(
+            key,
+            f"{shown} is not a closed surface{said}: {boundary} boundary edges "
+            "(edges of only one triangle), so its inside is not defined; close the mesh "
+            "in your CAD tool or with trimesh.repair.fill_holes, and check it with "
+            "trimesh.load(path).is_watertight.",
+        )
     if unmatched:
-        _refuse(key, f"{shown} is closed but its triangles are not consistently oriented"
-                f"{said} (neighbours list their shared edge in the same direction); fix the "
-                "normals in your CAD tool or with trimesh.repair.fix_normals.")
+        _refuse(
+            key,
+            f"{shown} is closed but its triangles are not consistently oriented"
+            f"{said} (neighbours list their shared edge in the same direction); fix the "
+            "normals in your CAD tool or with trimesh.repair.fix_normals.",
+        )
     v = vertices * float(scale) + np.asarray(translate, dtype=float)
     _check_extent(key, shown, scale, vertices, v, faces)
     mesh = Mesh(v, faces)
@@ -324,18 +364,23 @@ def _check_extent(key, shown, scale, vertices, v, faces):
     volume = abs(_signed_volume(vertices, faces))
     if not (np.all(extent > 0) and volume > 1e-12 * float(extent.max()) ** 3):
         size = " x ".join(f"{e:.4g}" for e in extent)
-        _refuse(key, f"{shown} encloses no volume: its corners span {size} (file units), "
-                "flat or a single point, so it has no inside; export the closed surface of "
-                "the solid.")
+        _refuse(
+            key,
+            f"{shown} encloses no volume: its corners span {size} (file units), "
+            "flat or a single point, so it has no inside; export the closed surface of "
+            "the solid.",
+        )
     scaled = vertices * float(scale)
     if not (np.isfinite(scaled).all() and np.all(scaled.max(axis=0) > scaled.min(axis=0))):
         raise ValueError(
             f"{key}.scale = {scale:g} takes the coordinates of {shown} (up to "
             f"{np.abs(vertices).max():.4g} file units) beyond what a floating-point number "
             "holds; give the factor from the file's units to metres (1: metres, 0.001: "
-            "millimetres).")
+            "millimetres)."
+        )
     if not (np.isfinite(v).all() and np.all(v.max(axis=0) > v.min(axis=0))):
         raise ValueError(
             f"{key}.translate moves {shown} (up to {np.abs(scaled).max():.4g} m across) so "
             "far that its coordinates lose its shape; give the shift (m) that places it in "
-            "the domain.")
+            "the domain."
+        )

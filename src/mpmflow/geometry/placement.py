@@ -40,8 +40,14 @@ def _box_text(size):
 
 
 def _move_keys(kind, k, spec):
-    keys = {"box": "min/max", "cylinder": "centre", "sphere": "centre", "disc": "centre",
-            "polygon": "vertices", "mesh": "translate or scale"}[getattr(spec, "type", "box")]
+    keys = {
+        "box": "min/max",
+        "cylinder": "centre",
+        "sphere": "centre",
+        "disc": "centre",
+        "polygon": "vertices",
+        "mesh": "translate or scale",
+    }[getattr(spec, "type", "box")]
     return f"{kind}.{k}.{keys}"
 
 
@@ -74,20 +80,29 @@ def check(case, body_shapes, obstacle_shapes):
             raise ValueError(
                 f"{_what('bodies', k, body)} spans {_v(lo)} to {_v(hi)} m, outside the domain "
                 f"{_box_text(size)} m; move it inside ({_move_keys('bodies', k, body)}) or "
-                "enlarge domain.size")
+                "enlarge domain.size"
+            )
     names = {}
     for k, (obstacle, shape) in enumerate(zip(case.obstacles, obstacle_shapes)):
         lo, hi = shape.bounds()
-        if np.any(lo < -h - tol) or np.any(hi > size + h + tol) or np.any(hi < 0) \
-                or np.any(lo > size):
+        if (
+            np.any(lo < -h - tol)
+            or np.any(hi > size + h + tol)
+            or np.any(hi < 0)
+            or np.any(lo > size)
+        ):
             raise ValueError(
                 f"{_what('obstacles', k, obstacle)} spans {_v(lo)} to {_v(hi)} m, more than "
                 f"one grid cell (grid.spacing = {h:g} m) beyond the domain {_box_text(size)} m "
                 "(the part outside would be wall anyway, so this is a mistake of position"
-                + (" or of units: scale converts the file's units to metres" if
-                   getattr(obstacle, "type", "") == "mesh" else "")
+                + (
+                    " or of units: scale converts the file's units to metres"
+                    if getattr(obstacle, "type", "") == "mesh"
+                    else ""
+                )
                 + f"); move it inside ({_move_keys('obstacles', k, obstacle)}) or enlarge "
-                "domain.size")
+                "domain.size"
+            )
         width, measure = thickness(obstacle, shape)
         if width < THIN * h * (1 - 1e-9):
             raise ValueError(
@@ -96,14 +111,19 @@ def check(case, body_shapes, obstacle_shapes):
                 "row of nodes inside it, so water would leak through or round it; make it at "
                 f"least {THIN * h:.4g} m thick, or refine grid.spacing to at most "
                 f"{width / THIN:.4g} m"
-                + (f" (or, if the file is not in metres, check obstacles.{k}.scale = "
-                   f"{obstacle.scale:g}, the factor from its units to metres)"
-                   if getattr(obstacle, "type", "") == "mesh" else ""))
+                + (
+                    f" (or, if the file is not in metres, check obstacles.{k}.scale = "
+                    f"{obstacle.scale:g}, the factor from its units to metres)"
+                    if getattr(obstacle, "type", "") == "mesh"
+                    else ""
+                )
+            )
         if obstacle.name is not None:
             if obstacle.name in names:
                 raise ValueError(
                     f"obstacles.{k}.name = {obstacle.name!r} is the name of obstacles."
-                    f"{names[obstacle.name]}; give each obstacle its own name")
+                    f"{names[obstacle.name]}; give each obstacle its own name"
+                )
             names[obstacle.name] = k
     _bodies_apart(case, body_shapes)
     _bodies_seeded(case, body_shapes)
@@ -115,7 +135,8 @@ def check(case, body_shapes, obstacle_shapes):
                     f"probes.{k}.position = {probe.position} m lies {depth:.4g} m inside "
                     f"{_what('obstacles', j, obstacle)}, where there is never water; move "
                     "it out, e.g. onto the obstacle's surface facing the flow (a sensor on a "
-                    "structure's face)")
+                    "structure's face)"
+                )
 
 
 def _bodies_apart(case, body_shapes):
@@ -128,8 +149,7 @@ def _bodies_apart(case, body_shapes):
             if bodies.is_box(a) and bodies.is_box(b):
                 continue  # bodies.overlap_message
             for (p, P), (q, Q) in (((i, a), (j, b)), ((j, b), (i, a))):
-                n, lo, hi = _shared(P, body_shapes[p], Q, body_shapes[q],
-                                    h / P.particles_per_cell)
+                n, lo, hi = _shared(P, body_shapes[p], Q, body_shapes[q], h / P.particles_per_cell)
                 if n:
                     raise ValueError(
                         f"{_what('bodies', i, a)} and {_what('bodies', j, b)} overlap: {n} "
@@ -138,7 +158,8 @@ def _bodies_apart(case, body_shapes):
                         "with particles one by one, so an overlap would be filled twice, "
                         "adding mass that is not there. Bodies may touch but not overlap: "
                         f"move or shrink one of them ({_move_keys('bodies', i, a)} or "
-                        f"{_move_keys('bodies', j, b)})")
+                        f"{_move_keys('bodies', j, b)})"
+                    )
 
 
 def _bodies_seeded(case, body_shapes):
@@ -151,8 +172,14 @@ def _bodies_seeded(case, body_shapes):
             raise ValueError(_too_small_message(case, k, body, shape))
 
 
-_SIZE_KEYS = {"box": "min/max", "cylinder": "radius/length", "sphere": "radius",
-              "disc": "radius", "polygon": "vertices", "mesh": "scale"}
+_SIZE_KEYS = {
+    "box": "min/max",
+    "cylinder": "radius/length",
+    "sphere": "radius",
+    "disc": "radius",
+    "polygon": "vertices",
+    "mesh": "scale",
+}
 
 
 def _too_small_message(case, k, body, shape):
@@ -160,17 +187,23 @@ def _too_small_message(case, k, body, shape):
     kind = getattr(body, "type", "box")
     lo, hi = (body.min, body.max) if kind == "box" else shape.bounds()
     size = " x ".join(f"{b - a:.4g}" for a, b in zip(lo, hi))
-    head = (f"{_what('bodies', k, body)} seeds no particle: it spans {size} m (from {_v(lo)} "
-            f"to {_v(hi)} m), and no point of its particle lattice, spaced grid.spacing / "
-            f"bodies.{k}.particles_per_cell = {h:g} / {ppc} = {h / ppc:.4g} m, lies inside "
-            "it, so the run would leave it out. ")
-    resize = (f"make it larger than one particle spacing (bodies.{k}.{_SIZE_KEYS[kind]}), "
-              f"raise bodies.{k}.particles_per_cell (at most 16) or refine grid.spacing, or "
-              f"remove bodies.{k}")
+    head = (
+        f"{_what('bodies', k, body)} seeds no particle: it spans {size} m (from {_v(lo)} "
+        f"to {_v(hi)} m), and no point of its particle lattice, spaced grid.spacing / "
+        f"bodies.{k}.particles_per_cell = {h:g} / {ppc} = {h / ppc:.4g} m, lies inside "
+        "it, so the run would leave it out. "
+    )
+    resize = (
+        f"make it larger than one particle spacing (bodies.{k}.{_SIZE_KEYS[kind]}), "
+        f"raise bodies.{k}.particles_per_cell (at most 16) or refine grid.spacing, or "
+        f"remove bodies.{k}"
+    )
     if kind == "mesh":
-        return head + (f"Check bodies.{k}.scale = {body.scale:g}: it converts the file's "
-                       "units to metres (1 for a file in metres, 0.001 for millimetres). "
-                       f"If it is right, {resize}.")
+        return head + (
+            f"Check bodies.{k}.scale = {body.scale:g}: it converts the file's "
+            "units to metres (1 for a file in metres, 0.001 for millimetres). "
+            f"If it is right, {resize}."
+        )
     return head + resize[0].upper() + resize[1:] + "."
 
 
@@ -200,10 +233,12 @@ def empty_body_message(case, k, body_shape, obstacle_shapes):
     alone = bodies.particle_count(body, case.grid.spacing, body_shape)
     if not alone:
         return None
-    return (f"{_what('bodies', k, body)} lies wholly inside obstacles: all {alone} of its "
-            "lattice points are inside an obstacle, where the material cannot start, so it "
-            f"would hold no particles; remove bodies.{k} or move it out of the obstacles "
-            f"({_move_keys('bodies', k, body)})")
+    return (
+        f"{_what('bodies', k, body)} lies wholly inside obstacles: all {alone} of its "
+        "lattice points are inside an obstacle, where the material cannot start, so it "
+        f"would hold no particles; remove bodies.{k} or move it out of the obstacles "
+        f"({_move_keys('bodies', k, body)})"
+    )
 
 
 def overlap_message(case, k, count, body_shape, obstacle_shapes):
@@ -218,10 +253,12 @@ def overlap_message(case, k, count, body_shape, obstacle_shapes):
         taken = alone - bodies.particle_count(body, h, body_shape, [shape])
         if taken:
             obstacle = case.obstacles[j]
-            return (f"{_what('bodies', k, body)} overlaps {_what('obstacles', j, obstacle)}: "
-                    f"{taken} of its {alone} lattice points lie inside the obstacle, where "
-                    "the material cannot start. Move them apart "
-                    f"({_move_keys('bodies', k, body)} or {_move_keys('obstacles', j, obstacle)})"
-                    f", or, to fill the body's shape round the obstacle (water in a tank round "
-                    f"a pier), set bodies.{k}.around_obstacles = true")
+            return (
+                f"{_what('bodies', k, body)} overlaps {_what('obstacles', j, obstacle)}: "
+                f"{taken} of its {alone} lattice points lie inside the obstacle, where "
+                "the material cannot start. Move them apart "
+                f"({_move_keys('bodies', k, body)} or {_move_keys('obstacles', j, obstacle)})"
+                f", or, to fill the body's shape round the obstacle (water in a tank round "
+                f"a pier), set bodies.{k}.around_obstacles = true"
+            )
     return None

@@ -57,9 +57,14 @@ def seed_shape(body, shape, spacing, density, obstacles=()):
     x = lattice_in_box(lo, hi, spacing)
     x = x[seeded(body, shape, x, spacing, obstacles)]
     n, dim = x.shape
-    vol = np.full(n, spacing ** dim)
-    return Particles(x=x, v=np.tile(np.asarray(body.velocity, dtype=float), (n, 1)),
-                     pressure=np.zeros(n), mass=vol * density, volume=vol)
+    vol = np.full(n, spacing**dim)
+    return Particles(
+        x=x,
+        v=np.tile(np.asarray(body.velocity, dtype=float), (n, 1)),
+        pressure=np.zeros(n),
+        mass=vol * density,
+        volume=vol,
+    )
 
 
 def check_packing(case, grid, particles, counts):
@@ -73,28 +78,30 @@ def check_packing(case, grid, particles, counts):
     dim = grid.dim
     asked = np.zeros(grid.ncells, dtype=np.int64)  # the largest ppc^dim of the bodies there
     body = np.repeat(np.arange(len(counts)), counts)
-    ppc = np.array([b.particles_per_cell ** dim for b in case.bodies], dtype=np.int64)
+    ppc = np.array([b.particles_per_cell**dim for b in case.bodies], dtype=np.int64)
     np.maximum.at(asked, bins.cell, ppc[body])
     count = bins.counts()
     over = (count > asked) | (bins.theta > 1.0 + 1e-9)
     if not over.any():
         return
     c = int(np.argmax(np.where(over, bins.theta, -1.0)))
-    here = bins.order[bins.start[c]:bins.start[c + 1]]
+    here = bins.order[bins.start[c] : bins.start[c + 1]]
     names = sorted(set(body[here].tolist()))
     centre, r = [], c
     for n in grid.cells:
         centre.append((r % n + 0.5) * grid.spacing)
         r //= n
-    listed = " and ".join(f"bodies.{k} (particles_per_cell = {case.bodies[k].particles_per_cell})"
-                          for k in names)
+    listed = " and ".join(
+        f"bodies.{k} (particles_per_cell = {case.bodies[k].particles_per_cell})" for k in names
+    )
     raise CaseError(
         f"The cell at ({', '.join(f'{v:.6g}' for v in centre)}) m would start with {int(count[c])} "
         f"particles filling {bins.theta[c]:.3g} of its volume, more than one body packs into a "
         f"cell ({int(asked[c])} particles, filling it once): {listed} meet inside this cell "
         "and their particle lattices overlap there. Give bodies that touch the same "
         "particles_per_cell, or let them meet on a grid line (a multiple of grid.spacing = "
-        f"{grid.spacing:g} m).")
+        f"{grid.spacing:g} m)."
+    )
 
 
 def seed_box(lo, hi, spacing, density, velocity):

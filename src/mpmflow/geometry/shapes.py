@@ -24,8 +24,14 @@ import numpy as np
 
 ON_SURFACE = 1e-12  # m: a point this close to the surface counts as inside
 
-DIM_OF = {"box": (2, 3), "disc": (2,), "polygon": (2,), "sphere": (3,), "cylinder": (3,),
-          "mesh": (3,)}
+DIM_OF = {
+    "box": (2, 3),
+    "disc": (2,),
+    "polygon": (2,),
+    "sphere": (3,),
+    "cylinder": (3,),
+    "mesh": (3,),
+}
 
 
 def as_points(points, dim):
@@ -33,8 +39,9 @@ def as_points(points, dim):
     if x.ndim == 1 and x.shape[0] == dim:
         x = x[None, :]
     if x.ndim != 2 or x.shape[1] != dim:
-        raise ValueError(f"points must be an (n, {dim}) array of coordinates (m), got shape "
-                         f"{x.shape}")
+        raise ValueError(
+            f"points must be an (n, {dim}) array of coordinates (m), got shape {x.shape}"
+        )
     return x
 
 
@@ -106,7 +113,7 @@ class Ball(Shape):
 
     def volume(self):
         r = self.radius
-        return math.pi * r * r if self.dim == 2 else 4.0 / 3.0 * math.pi * r ** 3
+        return math.pi * r * r if self.dim == 2 else 4.0 / 3.0 * math.pi * r**3
 
     def support(self, direction):
         d = np.asarray(direction, dtype=float)
@@ -138,16 +145,17 @@ class Cylinder(Shape):
         rho = np.linalg.norm(x - t[:, None] * self.axis, axis=1)
         dr = rho - self.radius
         da = np.abs(t - 0.5 * self.length) - 0.5 * self.length
-        return (np.minimum(np.maximum(dr, da), 0.0)
-                + np.hypot(np.maximum(dr, 0.0), np.maximum(da, 0.0)))
+        return np.minimum(np.maximum(dr, da), 0.0) + np.hypot(
+            np.maximum(dr, 0.0), np.maximum(da, 0.0)
+        )
 
     def bounds(self):
         top = self.base + self.length * self.axis
-        reach = self.radius * np.sqrt(np.clip(1.0 - self.axis ** 2, 0.0, 1.0))
+        reach = self.radius * np.sqrt(np.clip(1.0 - self.axis**2, 0.0, 1.0))
         return np.minimum(self.base, top) - reach, np.maximum(self.base, top) + reach
 
     def volume(self):
-        return math.pi * self.radius ** 2 * self.length
+        return math.pi * self.radius**2 * self.length
 
     def support(self, direction):
         d = np.asarray(direction, dtype=float)
@@ -216,15 +224,19 @@ def polygon_problem(vertices):
     d = v - v[0]
     far = d[np.argmax(np.abs(d).sum(axis=1))]
     if not np.any(far[0] * d[:, 1] - far[1] * d[:, 0]):
-        return ("vertices: the polygon's corners lie on one line, so they enclose no area; "
-                "give its corners in order around its boundary")
+        return (
+            "vertices: the polygon's corners lie on one line, so they enclose no area; "
+            "give its corners in order around its boundary"
+        )
     crossing = _crossing_edges(v)
     if crossing:
         return crossing
     area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
     if not abs(area) > 0:
-        return ("vertices: the polygon's corners enclose no area; give its corners in order "
-                "around its boundary")
+        return (
+            "vertices: the polygon's corners enclose no area; give its corners in order "
+            "around its boundary"
+        )
     return None
 
 
@@ -246,9 +258,11 @@ def _crossing_edges(v):
                 continue  # the last edge and the first share a corner
             c, d = v[j], v[(j + 1) % n]
             sides = (cross(c, d, a) * cross(c, d, b), cross(a, b, c) * cross(a, b, d))
-            if (max(sides) <= 0 and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1)):
+            if max(sides) <= 0 and spans_meet(a, b, c, d, 0) and spans_meet(a, b, c, d, 1):
                 how = "cross" if max(sides) < 0 else "touch"
-                return (f"vertices: the polygon's edges {i} (corners {i} to {(i + 1) % n}) and "
-                        f"{j} (corners {j} to {(j + 1) % n}) {how}, so it is not a simple "
-                        "polygon; list its corners in order around the boundary")
+                return (
+                    f"vertices: the polygon's edges {i} (corners {i} to {(i + 1) % n}) and "
+                    f"{j} (corners {j} to {(j + 1) % n}) {how}, so it is not a simple "
+                    "polygon; list its corners in order around the boundary"
+                )
     return None

@@ -15,9 +15,11 @@ def from_spec(spec, dim, base_dir, key=None):
     key = key or kind
     if dim not in DIM_OF[kind]:
         others = ", ".join(k for k, d in DIM_OF.items() if dim in d)
-        raise ValueError(f"{key}.type = {kind!r} is a {DIM_OF[kind][0]}D shape but the case "
-                         f"is {dim}D; use one of {others} (or give domain.size "
-                         f"{DIM_OF[kind][0]} entries)")
+        raise ValueError(
+            f"{key}.type = {kind!r} is a {DIM_OF[kind][0]}D shape but the case "
+            f"is {dim}D; use one of {others} (or give domain.size "
+            f"{DIM_OF[kind][0]} entries)"
+        )
     if kind == "box":
         return Box(spec.min, spec.max)
     if kind in ("disc", "sphere"):

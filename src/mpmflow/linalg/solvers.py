@@ -56,8 +56,9 @@ class LinearSolver:
         self.matrix = matrix
         if self.method == "multigrid":
             # an earlier hierarchy's storage is reused
-            self._setup = state.multigrid(matrix.cols, matrix.vals, matrix.nodes,
-                                          matrix.grid_nodes, hierarchy=self._setup)
+            self._setup = state.multigrid(
+                matrix.cols, matrix.vals, matrix.nodes, matrix.grid_nodes, hierarchy=self._setup
+            )
             return
         self._A = matrix.csr()
         if self.method == "direct":
@@ -68,7 +69,8 @@ class LinearSolver:
             import pyamg
 
             self._setup = pyamg.smoothed_aggregation_solver(
-                self._A, symmetry="symmetric", max_coarse=400, coarse_solver="splu")
+                self._A, symmetry="symmetric", max_coarse=400, coarse_solver="splu"
+            )
 
     def solve(self, b, x0=None, tolerance=None):
         """Solve the prepared system to ``tolerance`` (default: the solver's own)."""
@@ -78,16 +80,16 @@ class LinearSolver:
             return SolveResult(np.zeros_like(b), 0, 0.0, True)
         if self.method == "multigrid":
             x = np.zeros_like(b) if x0 is None else x0.copy()
-            iterations, residual = self._setup.pcg(b, x, tol, self.max_iterations,
-                                                   SMOOTHING_SWEEPS)
+            iterations, residual = self._setup.pcg(b, x, tol, self.max_iterations, SMOOTHING_SWEEPS)
         else:
             if self.method == "direct":
                 x = self._setup.solve(b)
                 iterations = 1
             else:
                 history = []
-                x = self._setup.solve(b, x0=x0, tol=tol, maxiter=self.max_iterations,
-                                      accel="cg", residuals=history)
+                x = self._setup.solve(
+                    b, x0=x0, tol=tol, maxiter=self.max_iterations, accel="cg", residuals=history
+                )
                 iterations = max(len(history) - 1, 0)
             residual = float(np.linalg.norm(b - self._A @ x) / bnorm)
         ok = bool(np.isfinite(residual) and residual <= tol)

@@ -30,14 +30,19 @@ def check(m):
     module = MATERIALS[m.model]
     for key in sorted(m.model_fields_set):
         # a key at its default is not in the way (a resolved case lists every key)
-        if key in COMMON or key in module.KEYS or getattr(m, key) == type(m).model_fields[key].default:
+        if (
+            key in COMMON
+            or key in module.KEYS
+            or getattr(m, key) == type(m).model_fields[key].default
+        ):
             continue
         owners = [n for n, mod in MATERIALS.items() if key in mod.KEYS]
         takes = ", ".join(module.KEYS) if module.KEYS else "no parameters besides density"
         raise ValueError(
             f"material.{key} is a parameter of material.model = "
             f"{' or '.join(repr(o) for o in owners)}, not of {m.model!r} (which takes "
-            f"{takes}): remove it, or set material.model to the model it belongs to")
+            f"{takes}): remove it, or set material.model to the model it belongs to"
+        )
     module.check(m)
 
 
@@ -49,4 +54,3 @@ def parameters(m):
 
 def is_viscous(m):
     return MATERIALS[m.model].MODEL != state.WATER
-

@@ -13,22 +13,29 @@ MODEL = state.HERSCHEL_BULKLEY
 
 def check(m):
     if not m.consistency > 0.0:
-        raise ValueError("material.model = \"herschel_bulkley\" needs material.consistency > 0 "
-                         "(Pa s^n; the plastic viscosity of a Bingham material), e.g. "
-                         "material.consistency = 1.0")
+        raise ValueError(
+            'material.model = "herschel_bulkley" needs material.consistency > 0 '
+            "(Pa s^n; the plastic viscosity of a Bingham material), e.g. "
+            "material.consistency = 1.0"
+        )
     if m.yield_stress < 0.0:
-        raise ValueError(f"material.yield_stress = {m.yield_stress:g} Pa is negative: give "
-                         "the yield stress in Pa, >= 0 (0 is a power-law liquid)")
+        raise ValueError(
+            f"material.yield_stress = {m.yield_stress:g} Pa is negative: give "
+            "the yield stress in Pa, >= 0 (0 is a power-law liquid)"
+        )
     if not m.flow_index > 0.0:
-        raise ValueError(f"material.flow_index = {m.flow_index:g} must be positive (1 is "
-                         "Bingham; < 1 shear-thinning, > 1 shear-thickening)")
+        raise ValueError(
+            f"material.flow_index = {m.flow_index:g} must be positive (1 is "
+            "Bingham; < 1 shear-thinning, > 1 shear-thickening)"
+        )
     if not m.max_viscosity > m.consistency:
-        raise ValueError(f"material.max_viscosity = {m.max_viscosity:g} Pa s must be larger "
-                         f"than material.consistency = {m.consistency:g}: it caps the "
-                         "viscosity of the unyielded material (e.g. 1000 times the "
-                         "consistency)")
+        raise ValueError(
+            f"material.max_viscosity = {m.max_viscosity:g} Pa s must be larger "
+            f"than material.consistency = {m.consistency:g}: it caps the "
+            "viscosity of the unyielded material (e.g. 1000 times the "
+            "consistency)"
+        )
 
 
 def parameters(m):
     return [m.consistency, m.yield_stress, m.flow_index, m.max_viscosity]
-

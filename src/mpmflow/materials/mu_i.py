@@ -8,8 +8,14 @@ strength without pressure (p <= 0: eta = 0)."""
 from .. import state
 
 NAME = "mu_i"
-KEYS = ("friction_static", "friction_limit", "inertial_number_ref", "grain_diameter",
-        "grain_density", "max_viscosity")
+KEYS = (
+    "friction_static",
+    "friction_limit",
+    "inertial_number_ref",
+    "grain_diameter",
+    "grain_density",
+    "max_viscosity",
+)
 MODEL = state.MU_I
 
 
@@ -18,24 +24,31 @@ def check(m):
         raise ValueError(
             f"material.friction_static = {m.friction_static:g} and material.friction_limit "
             f"= {m.friction_limit:g}: mu(I) needs 0 < mu_s < mu_2 (glass beads, Jop et al. "
-            "2006: friction_static = 0.38, friction_limit = 0.64)")
+            "2006: friction_static = 0.38, friction_limit = 0.64)"
+        )
     if not m.inertial_number_ref > 0.0:
-        raise ValueError("material.inertial_number_ref (I0) must be positive (glass beads: "
-                         "0.279)")
+        raise ValueError("material.inertial_number_ref (I0) must be positive (glass beads: 0.279)")
     if not m.grain_diameter > 0.0:
-        raise ValueError("material.grain_diameter must be positive (m; glass beads of Jop "
-                         "et al. 2006: 0.53e-3)")
+        raise ValueError(
+            "material.grain_diameter must be positive (m; glass beads of Jop et al. 2006: 0.53e-3)"
+        )
     if not m.grain_density >= m.density:
         raise ValueError(
             f"material.grain_density = {m.grain_density:g} kg/m^3 is below material.density "
             f"= {m.density:g} kg/m^3: with mu(I), density is the bulk density, solid "
             "fraction x grain density (e.g. 0.6 x 2450 = 1470), so the solid fraction "
-            "density / grain_density must be at most 1")
+            "density / grain_density must be at most 1"
+        )
     if not m.max_viscosity > 0.0:
         raise ValueError("material.max_viscosity must be positive (Pa s)")
 
 
 def parameters(m):
-    return [m.friction_static, m.friction_limit, m.inertial_number_ref, m.grain_diameter,
-            m.grain_density, m.max_viscosity]
-
+    return [
+        m.friction_static,
+        m.friction_limit,
+        m.inertial_number_ref,
+        m.grain_diameter,
+        m.grain_density,
+        m.max_viscosity,
+    ]

@@ -11,10 +11,10 @@ MODEL = state.NEWTONIAN
 def check(m):
     if not m.viscosity > 0.0:
         raise ValueError(
-            "material.model = \"newtonian\" needs material.viscosity > 0 (Pa s; water at "
-            "20 C: 1.0e-3); for inviscid material use material.model = \"water\"")
+            'material.model = "newtonian" needs material.viscosity > 0 (Pa s; water at '
+            '20 C: 1.0e-3); for inviscid material use material.model = "water"'
+        )
 
 
 def parameters(m):
     return [m.viscosity]
-

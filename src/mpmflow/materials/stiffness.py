@@ -60,7 +60,8 @@ def check(case, particles, dt):
             f"{dt:g} s and grid.spacing = {h:g} m makes the viscous system's stiffness "
             f"eta dt / (rho h^2) = {eta * dt / (m.density * h * h):.3g}, beyond "
             f"{CONDITION:g}, where its solve in double precision has no digits left; lower "
-            f"{key} (1e5 Pa s is a usual cap for yield-stress and granular materials)")
+            f"{key} (1e5 Pa s is a usual cap for yield-stress and granular materials)"
+        )
     g = float(np.linalg.norm(case.physics.gravity))
     H = depth(particles, case.physics.gravity)
     if key is None or g == 0.0 or H == 0.0:
@@ -72,8 +73,10 @@ def check(case, particles, dt):
     stokes = m.density * g * H * H / eta
     dt_ok = REFUSE * m.density * H * H / eta
     eta_ok = REFUSE * m.density * H * H / dt
-    numbers = (f"{key} = {eta:g} Pa s at time step {dt:g} s on a material {H:.4g} m deep: "
-               f"split number S = eta dt / (rho H^2) = {S:.3g}")
+    numbers = (
+        f"{key} = {eta:g} Pa s at time step {dt:g} s on a material {H:.4g} m deep: "
+        f"split number S = eta dt / (rho H^2) = {S:.3g}"
+    )
     if m.model == "newtonian" and S > REFUSE:
         raise ValueError(
             f"{numbers}. The viscous and pressure steps are solved one after the other, and "
@@ -83,15 +86,20 @@ def check(case, particles, dt):
             f"error. Bring S below {REFUSE:g}: time.dt below {dt_ok:.3g} s, or "
             f"material.viscosity below {eta_ok:.3g} Pa s (creep speeds are then within "
             f"about {ERROR_PER_S:g} S); a body that should not move at all is an obstacle "
-            "([[obstacles]]). See docs/method.md, \"Viscous materials\".")
+            '([[obstacles]]). See docs/method.md, "Viscous materials".'
+        )
     if m.model == "newtonian":
-        return [f"{numbers}: its creep speeds are off by about {ERROR_PER_S * S:.0%} (the "
-                "split of the viscous and pressure steps, docs/method.md); a smaller "
-                f"time.dt lowers it in proportion"]
+        return [
+            f"{numbers}: its creep speeds are off by about {ERROR_PER_S * S:.0%} (the "
+            "split of the viscous and pressure steps, docs/method.md); a smaller "
+            f"time.dt lowers it in proportion"
+        ]
     if S <= REFUSE:
         return []
-    return [f"{numbers}: where the material is unyielded it creeps at up to about "
-            f"{split:.2g} m/s ({SPLIT_SPEED:g} |g| dt, the split of the viscous and pressure "
-            f"steps) rather than at |tau| / max_viscosity (about {stokes:.2g} m/s); a "
-            f"deposit stops to within that speed. time.dt below {dt_ok:.3g} s brings it to "
-            "the cap's creep (docs/method.md, \"Viscous materials\")"]
+    return [
+        f"{numbers}: where the material is unyielded it creeps at up to about "
+        f"{split:.2g} m/s ({SPLIT_SPEED:g} |g| dt, the split of the viscous and pressure "
+        f"steps) rather than at |tau| / max_viscosity (about {stokes:.2g} m/s); a "
+        f"deposit stops to within that speed. time.dt below {dt_ok:.3g} s brings it to "
+        'the cap\'s creep (docs/method.md, "Viscous materials")'
+    ]

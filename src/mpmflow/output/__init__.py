@@ -19,5 +19,6 @@ def check_out_dir(out, create=True, name="--out"):
         try:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as err:
-            raise CaseError(f"{name} {out} cannot be created: {err.strerror}. Give a folder "
-                            "you can write to.") from None
+            raise CaseError(
+                f"{name} {out} cannot be created: {err.strerror}. Give a folder you can write to."
+            ) from None

@@ -39,19 +39,21 @@ LOCK_NAME = ".mpmflow.lock"
 OUTPUT_NAMES = ("timeseries.csv", "probes.csv", "summary.json", "particles.pvd")
 OUTPUT_PATTERNS = ("particles_*.vtu", "checkpoint_*.npz")
 # a temporary file of output/atomic.py: ".<target name>.<random>.tmp"
-_LEFTOVER = re.compile(r"^\.(timeseries\.csv|probes\.csv|summary\.json|particles\.pvd|"
-                       r"particles_\d+\.vtu|checkpoint_\d+\.npz)\..+\.tmp$")
+_LEFTOVER = re.compile(
+    r"^\.(timeseries\.csv|probes\.csv|summary\.json|particles\.pvd|"
+    r"particles_\d+\.vtu|checkpoint_\d+\.npz)\..+\.tmp$"
+)
 
 CLI_HINTS = {
     "busy": "Wait for it to finish (or stop it: kill -TERM {pid}), or give another --out.",
     "holds": "Choose another folder, add --restart to continue it from its latest checkpoint, "
-             "or add --overwrite to replace it.",
+    "or add --overwrite to replace it.",
     "name": "--out",
 }
 API_HINTS = {
     "busy": "Wait for it to finish (or stop it: kill -TERM {pid}), or give another out_dir.",
     "holds": "Choose another folder, continue it with Simulation.resume(case, out_dir), or "
-             "pass overwrite=True to replace it.",
+    "pass overwrite=True to replace it.",
     "name": "out_dir",
 }
 
@@ -128,8 +130,10 @@ class RunFolder:
         name = hints["name"]
         if mode == "restart":
             if not path.is_dir():
-                raise CaseError(f"{name} {path} does not exist; give the folder of the run to "
-                                "continue, or start a new run.")
+                raise CaseError(
+                    f"{name} {path} does not exist; give the folder of the run to "
+                    "continue, or start a new run."
+                )
             created = False
         else:
             created = not path.exists()
@@ -137,8 +141,10 @@ class RunFolder:
         try:
             fd = os.open(path / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o666)
         except OSError as err:
-            raise CaseError(f"{name} {path} cannot be written: {err.strerror} (creating its "
-                            f"lock file {LOCK_NAME}). Give a folder you can write to.") from None
+            raise CaseError(
+                f"{name} {path} cannot be written: {err.strerror} (creating its "
+                f"lock file {LOCK_NAME}). Give a folder you can write to."
+            ) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as err:
@@ -148,10 +154,14 @@ class RunFolder:
                 raise FolderBusy(
                     f"{name} {path} is in use by another mpmflow run ({_describe(info)}). "
                     "Two runs in one folder would mix their outputs. "
-                    + hints["busy"].format(pid=info.get("pid", "PID")), info.get("pid")) from None
-            raise CaseError(f"{name} {path}: its lock file cannot be locked ({err.strerror}); "
-                            "the file system may not support locks. Give a folder on a local "
-                            "disk.") from None
+                    + hints["busy"].format(pid=info.get("pid", "PID")),
+                    info.get("pid"),
+                ) from None
+            raise CaseError(
+                f"{name} {path}: its lock file cannot be locked ({err.strerror}); "
+                "the file system may not support locks. Give a folder on a local "
+                "disk."
+            ) from None
         folder = cls(path, fd, [], created)
         try:
             folder._write_holder()
@@ -162,17 +172,21 @@ class RunFolder:
         return folder
 
     def _write_holder(self):
-        info = {"pid": os.getpid(), "host": socket.gethostname(),
-                "started": time.strftime("%Y-%m-%d %H:%M:%S"),
-                "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else "python"}
+        info = {
+            "pid": os.getpid(),
+            "host": socket.gethostname(),
+            "started": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else "python",
+        }
         data = (json.dumps(info) + "\n").encode()
         os.ftruncate(self._fd, 0)
         os.pwrite(self._fd, data, 0)
 
     def _prepare(self, mode, hints):
         if mode == "new" and output_files(self.path):
-            raise CaseError(f"{hints['name']} {self.path} already holds the results of a run. "
-                            + hints["holds"])
+            raise CaseError(
+                f"{hints['name']} {self.path} already holds the results of a run. " + hints["holds"]
+            )
         if mode == "overwrite":
             for old in output_files(self.path):
                 old.unlink(missing_ok=True)
@@ -183,7 +197,9 @@ class RunFolder:
             self.notes.append(
                 f"deleted {len(stale)} temporary file(s) left in {self.path} by a run that was "
                 f"killed while writing ({', '.join(p.name for p in stale[:3])}"
-                + (", ..." if len(stale) > 3 else "") + ")")
+                + (", ..." if len(stale) > 3 else "")
+                + ")"
+            )
 
     @property
     def held(self):

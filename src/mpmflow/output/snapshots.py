@@ -18,9 +18,11 @@ import numpy as np
 from ..errors import CaseError
 from .atomic import atomic_path, write_text
 
-HEADER = ('<?xml version="1.0"?>\n'
-          '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
-          "  <Collection>\n")
+HEADER = (
+    '<?xml version="1.0"?>\n'
+    '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+    "  <Collection>\n"
+)
 FOOTER = "  </Collection>\n</VTKFile>\n"
 _ENTRY = re.compile(r'^\s*<DataSet timestep="([^"]*)" part="0" file="([^"]*)"\s*/>\s*$')
 
@@ -48,8 +50,9 @@ def read_index(path):
 
 
 def _unescape(value):
-    return (value.replace("&quot;", '"').replace("&lt;", "<").replace("&gt;", ">")
-            .replace("&amp;", "&"))
+    return (
+        value.replace("&quot;", '"').replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&")
+    )
 
 
 class SnapshotWriter:
@@ -67,8 +70,9 @@ class SnapshotWriter:
                 raise CaseError(
                     f"--restart: {self.index} lists {len(found)} snapshots, the checkpoint was "
                     f"written after {resume}: it was changed or cut short since. Start the run "
-                    "again with --overwrite, or restore the file.")
-            self.entries = found[:int(resume)]
+                    "again with --overwrite, or restore the file."
+                )
+            self.entries = found[: int(resume)]
             keep = {f for _, f in self.entries}
             for old in self.folder.glob(f"{self.stem}_*.vtu"):
                 if old.name not in keep:
@@ -90,8 +94,11 @@ class SnapshotWriter:
         mesh = meshio.Mesh(
             points,
             [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))],
-            point_data={"velocity": velocity, "pressure": particles.pressure.copy(),
-                        "mass": particles.mass.copy()},
+            point_data={
+                "velocity": velocity,
+                "pressure": particles.pressure.copy(),
+                "mass": particles.mass.copy(),
+            },
         )
         with atomic_path(self.folder / name) as tmp:
             # binary, uncompressed: zlib took 55 ms of a 60 ms snapshot of 26k particles
@@ -114,4 +121,3 @@ class SnapshotWriter:
             os.fsync(fd)
         finally:
             os.close(fd)
-

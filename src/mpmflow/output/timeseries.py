@@ -89,17 +89,24 @@ class CsvAppender:
             with open(self.path, "rb") as f:
                 head = f.read(self.bytes)
         except OSError as err:
-            raise CaseError(f"--restart: {self.path} cannot be read ({err.strerror}); the "
-                            "checkpoint needs the rows written before it. Start the run again "
-                            "with --overwrite.") from None
+            raise CaseError(
+                f"--restart: {self.path} cannot be read ({err.strerror}); the "
+                "checkpoint needs the rows written before it. Start the run again "
+                "with --overwrite."
+            ) from None
         lines = head.count(b"\n")
-        if (len(head) < self.bytes or not head.endswith(b"\n") or lines != self.rows + 1
-                or not head.startswith(header.encode())):
+        if (
+            len(head) < self.bytes
+            or not head.endswith(b"\n")
+            or lines != self.rows + 1
+            or not head.startswith(header.encode())
+        ):
             raise CaseError(
                 f"--restart: {name} in {self.path.parent} does not hold the {self.rows} rows "
                 f"the checkpoint was written after (it holds {max(lines - 1, 0)} complete rows "
                 f"in its first {len(head)} bytes, or another header): it was changed or cut "
-                "short since. Start the run again with --overwrite, or restore the file.")
+                "short since. Start the run again with --overwrite, or restore the file."
+            )
 
     def append(self, row):
         """Append one row (a dict with every column)."""
@@ -157,12 +164,12 @@ class SeriesBuffer:
             self.append({c: table[c][k] for c in self.columns})
 
     def column(self, name):
-        return self._data[:self._n, self._index[name]].copy()
+        return self._data[: self._n, self._index[name]].copy()
 
     def rows(self):
         """The rows as dicts (integer columns as int)."""
         out = []
-        for values in self._data[:self._n]:
+        for values in self._data[: self._n]:
             row = {}
             for c, v in zip(self.columns, values):
                 row[c] = int(v) if c in _INTEGER and v == v else float(v)
@@ -186,27 +193,33 @@ def read_table(path, required=("time",)):
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
-        raise CaseError(f"{path} is not a text file (it holds binary data), so it is not an "
-                        "mpmflow table; the run that wrote it may have been damaged. Run the "
-                        "case again.") from None
+        raise CaseError(
+            f"{path} is not a text file (it holds binary data), so it is not an "
+            "mpmflow table; the run that wrote it may have been damaged. Run the "
+            "case again."
+        ) from None
     notes = []
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()  # the newline that ends the last complete row
     elif len(lines) > 1:
-        notes.append(f"the last line of {path.name} is cut short (a crash while writing it); "
-                     "it is left out")
+        notes.append(
+            f"the last line of {path.name} is cut short (a crash while writing it); it is left out"
+        )
         lines.pop()
     elif lines:
         lines = lines[:1]
     header = [_strip_unit(c) for c in lines[0].split(",")] if lines else []
     missing = [c for c in required if c not in header]
     if not header or missing or any(not c.isidentifier() and not _probe_name(c) for c in header):
-        first = (lines[0][:60] + "...") if lines and len(lines[0]) > 60 else \
-            (lines[0] if lines else "")
-        raise CaseError(f"{path} is not an mpmflow table: its first line should name the "
-                        f"columns (time, ...), it reads {first!r}. Give the folder of an "
-                        "mpmflow run, or run the case again.")
+        first = (
+            (lines[0][:60] + "...") if lines and len(lines[0]) > 60 else (lines[0] if lines else "")
+        )
+        raise CaseError(
+            f"{path} is not an mpmflow table: its first line should name the "
+            f"columns (time, ...), it reads {first!r}. Give the folder of an "
+            "mpmflow run, or run the case again."
+        )
     values = np.empty((len(lines) - 1, len(header)))
     for k, line in enumerate(lines[1:]):
         cells = line.split(",")
@@ -215,8 +228,10 @@ def read_table(path, required=("time",)):
                 raise ValueError(f"{len(cells)} values for {len(header)} columns")
             values[k] = [float(c) for c in cells]
         except ValueError as err:
-            raise CaseError(f"{path}, line {k + 2}, is damaged ({err}); the file was changed "
-                            "or damaged after the run wrote it. Run the case again.") from None
+            raise CaseError(
+                f"{path}, line {k + 2}, is damaged ({err}); the file was changed "
+                "or damaged after the run wrote it. Run the case again."
+            ) from None
     return {c: values[:, j].copy() for j, c in enumerate(header)}, notes
 
 
@@ -233,7 +248,7 @@ def header_units(path):
     for label in first.split(","):
         name = _strip_unit(label)
         if name != label:
-            out[name] = label[len(name) + 2:-1]
+            out[name] = label[len(name) + 2 : -1]
     return out
 
 

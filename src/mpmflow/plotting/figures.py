@@ -87,7 +87,6 @@ def plot_timeseries(series, summary, path, plt):
     save(fig, path, DPI)
 
 
-
 QUANTITY = {"Pa": ("pressure", "pressure [Pa]"), "m": ("level", "water level [m]")}
 
 
@@ -101,8 +100,10 @@ def measured_series(data):
         cols = (names.index(data["time_column"]), names.index(data["column"]))
         values = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=cols, ndmin=2)
     except (OSError, UnicodeDecodeError, ValueError) as err:
-        raise CaseError(f"the measured series {path} (column {data['column']!r}) cannot be "
-                        f"read ({type(err).__name__}: {err})") from None
+        raise CaseError(
+            f"the measured series {path} (column {data['column']!r}) cannot be "
+            f"read ({type(err).__name__}: {err})"
+        ) from None
     keep = np.all(np.isfinite(values), axis=1)
     return values[keep, 0], values[keep, 1]
 
@@ -120,13 +121,16 @@ def plot_probes(probes, summary, units, path, plt, notes):
     names = [n for n in probes if n != "time"]
     data = {p.get("name"): p.get("data") for p in summary.get("case", {}).get("probes", [])}
     panels = [u for u in QUANTITY if any(units.get(n) == u for n in names)]
-    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 3.2 * len(panels) + 0.6),
-                             sharex=True, squeeze=False)
+    fig, axes = plt.subplots(
+        len(panels), 1, figsize=(10, 3.2 * len(panels) + 0.6), sharex=True, squeeze=False
+    )
     for ax, unit in zip(axes[:, 0], panels):
         group = [n for n in names if units.get(n) == unit]
         if len(group) <= LEGEND_MAX:
-            colours = [ax.plot(t, probes[n], color=f"C{k}", label=n)[0].get_color()
-                       for k, n in enumerate(group)]
+            colours = [
+                ax.plot(t, probes[n], color=f"C{k}", label=n)[0].get_color()
+                for k, n in enumerate(group)
+            ]
         else:
             colours = _lines_by_position(ax, t, probes, group, summary, plt)
         measured = False
@@ -139,21 +143,31 @@ def plot_probes(probes, summary, units, path, plt, notes):
                     notes.append(f"{err}; probes.png shows {name} without it.")
                     continue
                 measured = True
-                ax.plot(te, ve, "--", color=colour, lw=0.8, alpha=0.8,
-                        label=f"{name}, measured ({ref['column']})")
+                ax.plot(
+                    te,
+                    ve,
+                    "--",
+                    color=colour,
+                    lw=0.8,
+                    alpha=0.8,
+                    label=f"{name}, measured ({ref['column']})",
+                )
         ax.set_ylabel(QUANTITY[unit][1])
         if len(group) <= LEGEND_MAX:
             ax.legend(fontsize=7, loc="best", ncol=2)
         elif measured:  # the line styles only: a probe is told by its colour
             from matplotlib.lines import Line2D
 
-            ax.legend([Line2D([], [], color="0.3"), Line2D([], [], color="0.3", ls="--")],
-                      ["simulated", "measured"], fontsize=7, loc="upper right")
+            ax.legend(
+                [Line2D([], [], color="0.3"), Line2D([], [], color="0.3", ls="--")],
+                ["simulated", "measured"],
+                fontsize=7,
+                loc="upper right",
+            )
         ax.grid(alpha=0.3)
         ax.set_xlim(t[0] if len(t) else 0.0, t[-1] if len(t) > 1 else 1.0)
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle((summary.get("case", {}).get("title") or "mpmflow run") + ": probes",
-                 fontsize=10)
+    fig.suptitle((summary.get("case", {}).get("title") or "mpmflow run") + ": probes", fontsize=10)
     fig.tight_layout()
     save(fig, path, DPI)
 
@@ -180,13 +194,18 @@ def _lines_by_position(ax, t, probes, group, summary, plt):
         value, label = xyz[:, axis], f"probe's {'xyz'[axis]} [m]"
     else:
         value, label = np.arange(1.0, len(group) + 1), "probe's column in probes.csv"
-    lines = LineCollection([np.column_stack([t, probes[n]]) for n in group], cmap="viridis",
-                           linewidths=0.6)
+    lines = LineCollection(
+        [np.column_stack([t, probes[n]]) for n in group], cmap="viridis", linewidths=0.6
+    )
     lines.set_array(value)
     ax.add_collection(lines)
     ax.autoscale_view()
-    ax.set_title(f"{len(group)} probes, coloured by position" if label.endswith("[m]") else
-                 f"{len(group)} probes", fontsize=8)
+    ax.set_title(
+        f"{len(group)} probes, coloured by position"
+        if label.endswith("[m]")
+        else f"{len(group)} probes",
+        fontsize=8,
+    )
     plt.colorbar(lines, ax=ax, label=label, pad=0.01)
     return [lines.cmap(lines.norm(v)) for v in value]
 
@@ -199,8 +218,13 @@ def side_view(x, p, size, spacing):
         return x[:, :2], p, list(size[:2]), ("x", "y"), ""
     mid = 0.5 * size[1]
     keep = np.abs(x[:, 1] - mid) <= 0.5 * spacing
-    return (x[keep][:, [0, 2]], p[keep], [size[0], size[2]], ("x", "z"),
-            f"slice y = {mid:.4g} m +- {0.5 * spacing:.3g} m")
+    return (
+        x[keep][:, [0, 2]],
+        p[keep],
+        [size[0], size[2]],
+        ("x", "z"),
+        f"slice y = {mid:.4g} m +- {0.5 * spacing:.3g} m",
+    )
 
 
 def obstacle_section(summary, plane, notes):
@@ -220,8 +244,9 @@ def obstacle_section(summary, plane, notes):
         notes.append(f"the obstacles cannot be drawn: {err}")
         return None
     n = 400
-    X, Y = np.meshgrid(np.linspace(0, plane[0], n),
-                       np.linspace(0, plane[1], max(2, int(n * plane[1] / plane[0]))))
+    X, Y = np.meshgrid(
+        np.linspace(0, plane[0], n), np.linspace(0, plane[1], max(2, int(n * plane[1] / plane[0])))
+    )
     if len(case.domain.size) == 2:
         pts = np.column_stack([X.ravel(), Y.ravel()])
     else:
@@ -233,10 +258,21 @@ def obstacle_section(summary, plane, notes):
 
 def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
     if solid is not None and (solid[2] < 0).any():
-        ax.contourf(solid[0], solid[1], solid[2], levels=[solid[2].min() - 1.0, 0.0],
-                    colors=["0.55"])
-    art = ax.scatter(xy[:, 0], xy[:, 1], c=p, s=1.0, marker="s", cmap="viridis", vmin=0.0,
-                     vmax=vmax, linewidths=0, rasterized=True)
+        ax.contourf(
+            solid[0], solid[1], solid[2], levels=[solid[2].min() - 1.0, 0.0], colors=["0.55"]
+        )
+    art = ax.scatter(
+        xy[:, 0],
+        xy[:, 1],
+        c=p,
+        s=1.0,
+        marker="s",
+        cmap="viridis",
+        vmin=0.0,
+        vmax=vmax,
+        linewidths=0,
+        rasterized=True,
+    )
     ax.set_xlim(0, size[0])
     ax.set_ylim(0, size[1])
     ax.set_aspect("equal")
@@ -297,8 +333,9 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         save(fig, out, DPI)
         written.append(out)
     pick = overview(len(data))
-    fig, axes = plt.subplots(1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(
+        1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False, layout="constrained"
+    )
     for j, (ax, k) in enumerate(zip(axes[0], pick)):
         art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt, solid)
         _name_axes(ax, names, y=j == 0)
@@ -397,9 +434,11 @@ def plot_run(run_dir, out_dir=None, notes=None):
     run = open_run(run_dir)
     notes += run.notes
     if len(run.timeseries["time"]) == 0:
-        raise CaseError(f"{run.folder}/timeseries.csv holds no rows yet (the run has not "
-                        "written its first output, or was stopped before it); nothing to "
-                        "plot.")
+        raise CaseError(
+            f"{run.folder}/timeseries.csv holds no rows yet (the run has not "
+            "written its first output, or was stopped before it); nothing to "
+            "plot."
+        )
     out = Path(out_dir) if out_dir is not None else Path(run_dir) / "plots"
     check_out_dir(out)
     plot_timeseries(run.timeseries, run.summary, out / "timeseries.png", plt)

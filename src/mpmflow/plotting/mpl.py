@@ -11,8 +11,9 @@ def pyplot(needs="mpmflow plot"):
     try:
         import matplotlib
     except ImportError:
-        raise CaseError(f"{needs} needs matplotlib: pip install 'mpmflow[plot]' (or pip "
-                        "install matplotlib).") from None
+        raise CaseError(
+            f"{needs} needs matplotlib: pip install 'mpmflow[plot]' (or pip install matplotlib)."
+        ) from None
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -42,8 +42,10 @@ def need_skimage(needs="mpmflow plot"):
     try:
         from skimage import measure
     except ImportError:
-        raise CaseError(f"{needs} needs scikit-image for the 3D water surface: pip install "
-                        "'mpmflow[plot]' (or pip install scikit-image).") from None
+        raise CaseError(
+            f"{needs} needs scikit-image for the 3D water surface: pip install "
+            "'mpmflow[plot]' (or pip install scikit-image)."
+        ) from None
     return measure
 
 
@@ -59,8 +61,10 @@ def volume_fraction(x, volume, spacing, cells):
     grid = Grid(float(spacing), tuple(int(c) for c in cells))
     index = np.empty(len(x), dtype=np.int64)
     state.cell_index(np.ascontiguousarray(x, dtype=float), grid.spacing, grid.cells, index)
-    theta = np.bincount(index, weights=np.broadcast_to(volume, (len(x),)),
-                        minlength=grid.ncells) / grid.cell_volume
+    theta = (
+        np.bincount(index, weights=np.broadcast_to(volume, (len(x),)), minlength=grid.ncells)
+        / grid.cell_volume
+    )
     return volume_fraction_field(grid, theta)
 
 
@@ -71,8 +75,9 @@ def water_surface(f, spacing):
     if f.size == 0 or float(f.max()) < LEVEL:
         return np.empty((0, 3)), np.empty((0, 3), dtype=np.int64)
     padded = np.pad(np.asarray(f, dtype=float), 1)
-    verts, faces, _, _ = need_skimage().marching_cubes(padded, LEVEL, spacing=(spacing,) * 3,
-                                                       allow_degenerate=False)
+    verts, faces, _, _ = need_skimage().marching_cubes(
+        padded, LEVEL, spacing=(spacing,) * 3, allow_degenerate=False
+    )
     # the padded field's index i is the cell centred at (i - 1/2) h
     return verts.astype(float) - 0.5 * spacing, faces
 
@@ -82,18 +87,23 @@ def surface_area(verts, faces):
     if len(faces) == 0:
         return 0.0
     v = verts[faces]
-    return float(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]),
-                                      axis=1).sum())
+    return float(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum())
 
 
 def _box_triangles(lo, hi):
     """The 12 triangles of an axis-aligned box's faces, (12, 3, 3) m."""
-    c = np.array([[lo[0] if i & 1 == 0 else hi[0], lo[1] if i & 2 == 0 else hi[1],
-                   lo[2] if i & 4 == 0 else hi[2]] for i in range(8)])
-    quads = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4),
-             (1, 3, 7, 5)]
-    return np.array([c[[a, b, d]] for a, b, _, d in quads] + [c[[b, e, d]] for _, b, e, d in
-                                                               quads])
+    c = np.array(
+        [
+            [
+                lo[0] if i & 1 == 0 else hi[0],
+                lo[1] if i & 2 == 0 else hi[1],
+                lo[2] if i & 4 == 0 else hi[2],
+            ]
+            for i in range(8)
+        ]
+    )
+    quads = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
+    return np.array([c[[a, b, d]] for a, b, _, d in quads] + [c[[b, e, d]] for _, b, e, d in quads])
 
 
 def obstacle_triangles(summary, notes, samples=32):
@@ -156,10 +166,12 @@ def draw_surface(ax, verts, faces, obstacles, size, title=None, labels=True):
 
     water = verts[faces] if len(faces) else np.empty((0, 3, 3))
     tris = np.concatenate([water, obstacles])
-    colours = np.concatenate([_shaded(water, WATER, 1.0),
-                              _shaded(obstacles, OBSTACLE[:3], OBSTACLE[3])])
-    art = Poly3DCollection(tris, facecolors=colours, edgecolors="none", linewidths=0,
-                           antialiased=False)
+    colours = np.concatenate(
+        [_shaded(water, WATER, 1.0), _shaded(obstacles, OBSTACLE[:3], OBSTACLE[3])]
+    )
+    art = Poly3DCollection(
+        tris, facecolors=colours, edgecolors="none", linewidths=0, antialiased=False
+    )
     ax.add_collection3d(art)
     ax.set_xlim(0, size[0])
     ax.set_ylim(0, size[1])

@@ -9,7 +9,7 @@ FEATURES = {
     "obstacles": "fixed obstacles ([[obstacles]])",
     "materials": "materials other than inviscid water (material.model)",
     "periodic": "periodic axes (domain.periodic)",
-    "apic": "APIC transfers (solver.transfer = \"apic\"; it transfers by FLIP/PIC only)",
+    "apic": 'APIC transfers (solver.transfer = "apic"; it transfers by FLIP/PIC only)',
 }
 
 
@@ -33,6 +33,7 @@ def register(name):
     def deco(cls):
         SCHEMES[name] = cls
         return cls
+
     return deco
 
 

@@ -34,7 +34,9 @@ class ExplicitReport(StepReport):
 
 @register("explicit")
 class ExplicitScheme:
-    SUPPORTS: frozenset[str] = frozenset()  # water only, walls only (the weakly compressible comparator)
+    SUPPORTS: frozenset[str] = (
+        frozenset()
+    )  # water only, walls only (the weakly compressible comparator)
 
     def __init__(self, case, grid, particles):
         self.grid = grid
@@ -80,12 +82,36 @@ class ExplicitScheme:
 
     def _pressure(self):
         g, P = self.grid, self.particles
-        state.explicit_cell_state(g, P.x, P.mass, P.volume, self.density, self.bulk,
-                                  self.tension, self.full, self.sparse, self.cell_j,
-                                  self.cell_vol, self.cell_v0, self.cell_xi, self.cell_p)
-        state.explicit_particle_state(g, P.x, P.mass, P.volume, P.pressure, self.density,
-                                      self.smoothing, self.cell_j, self.cell_vol, self.cell_p,
-                                      self.node_w, self.node_p)
+        state.explicit_cell_state(
+            g,
+            P.x,
+            P.mass,
+            P.volume,
+            self.density,
+            self.bulk,
+            self.tension,
+            self.full,
+            self.sparse,
+            self.cell_j,
+            self.cell_vol,
+            self.cell_v0,
+            self.cell_xi,
+            self.cell_p,
+        )
+        state.explicit_particle_state(
+            g,
+            P.x,
+            P.mass,
+            P.volume,
+            P.pressure,
+            self.density,
+            self.smoothing,
+            self.cell_j,
+            self.cell_vol,
+            self.cell_p,
+            self.node_w,
+            self.node_p,
+        )
 
     _STATE = ("cell_j", "cell_vol", "cell_v0", "cell_xi", "cell_p", "clock", "smallest")
 
@@ -119,13 +145,45 @@ class ExplicitScheme:
         steps of dt, whose stability is checked once, after the last step."""
         g, P = self.grid, self.particles
         state.explicit_steps(
-            g, nsteps * dt, nsteps, self.safety if self.auto else 0.0, P.x, P.v, P.pressure,
-            P.mass, P.volume, self.density, self.bulk, self.gravity, self.flip, self.no_slip,
-            self.smoothing, self.full, self.sparse, self.mass_cut, self.q_lin, self.q_quad,
-            self.tension, self.max_speed, self.upper,
-            1e-6 * g.spacing, self.node_mass, self.node_mom, self.v_old, self.v_new,
-            self.contact, self.cell_j, self.cell_vol, self.cell_v0, self.cell_xi, self.cell_p,
-            self.cell_q, self.node_w, self.node_p, self.stats)
+            g,
+            nsteps * dt,
+            nsteps,
+            self.safety if self.auto else 0.0,
+            P.x,
+            P.v,
+            P.pressure,
+            P.mass,
+            P.volume,
+            self.density,
+            self.bulk,
+            self.gravity,
+            self.flip,
+            self.no_slip,
+            self.smoothing,
+            self.full,
+            self.sparse,
+            self.mass_cut,
+            self.q_lin,
+            self.q_quad,
+            self.tension,
+            self.max_speed,
+            self.upper,
+            1e-6 * g.spacing,
+            self.node_mass,
+            self.node_mom,
+            self.v_old,
+            self.v_new,
+            self.contact,
+            self.cell_j,
+            self.cell_vol,
+            self.cell_v0,
+            self.cell_xi,
+            self.cell_p,
+            self.cell_q,
+            self.node_w,
+            self.node_p,
+            self.stats,
+        )
         steps, _, smallest, moved, stopped, vmax = self.stats
         steps = int(steps)
         self.smallest_dt = min(self.smallest_dt, smallest)
@@ -141,7 +199,8 @@ class ExplicitScheme:
                 f"are kept. Try a smaller {step}, a larger solver.explicit_cell_threshold "
                 f"(now {self.sparse:g}) or solver.explicit_bulk_viscosity (now "
                 f"[{self.q_lin:g}, {self.q_quad:g}]), or raise solver.max_speed if such "
-                "speeds are real.")
+                "speeds are real."
+            )
         if not self.auto:
             limit = self.stable_time_step()
             if not dt <= limit:  # also catches NaN speeds
@@ -150,5 +209,6 @@ class ExplicitScheme:
                     f"output interval): the flow reached {vmax:.3g} m/s, so the stable step "
                     f"grid.spacing / (sound speed {self.sound_speed:.4g} m/s + flow speed) is "
                     f"{limit:.3g} s, below time.dt = {dt:.3g} s. Use a smaller time.dt, or "
-                    "time.dt = \"auto\", which re-evaluates the step every step.")
+                    'time.dt = "auto", which re-evaluates the step every step.'
+                )
         return ExplicitReport(moved_inside=int(moved), steps=steps)

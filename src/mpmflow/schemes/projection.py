@@ -36,21 +36,36 @@ class StepReport:
     pockets: int = 0  # pocket-steps: water sealed from the free surface held at 0 at its top
 
     def merge(self, other):
-        return StepReport(max(self.unknowns, other.unknowns), self.solves + other.solves,
-                          self.iterations + other.iterations,
-                          max(self.max_iterations, other.max_iterations),
-                          max(self.residual, other.residual), self.released + other.released,
-                          self.moved_inside + other.moved_inside,
-                          self.viscous_iterations + other.viscous_iterations,
-                          self.capped + other.capped, self.clamped + other.clamped,
-                          self.pockets + other.pockets)
+        return StepReport(
+            max(self.unknowns, other.unknowns),
+            self.solves + other.solves,
+            self.iterations + other.iterations,
+            max(self.max_iterations, other.max_iterations),
+            max(self.residual, other.residual),
+            self.released + other.released,
+            self.moved_inside + other.moved_inside,
+            self.viscous_iterations + other.viscous_iterations,
+            self.capped + other.capped,
+            self.clamped + other.clamped,
+            self.pockets + other.pockets,
+        )
 
     @classmethod
     def of(cls, r):
         """From the compiled step's ``Report``."""
-        return cls(int(r.unknowns), int(r.solves), int(r.iterations), int(r.max_iterations),
-                   float(r.residual), int(r.released), int(r.moved),
-                   int(r.viscous_iterations), int(r.capped), int(r.clamped), int(r.pockets))
+        return cls(
+            int(r.unknowns),
+            int(r.solves),
+            int(r.iterations),
+            int(r.max_iterations),
+            float(r.residual),
+            int(r.released),
+            int(r.moved),
+            int(r.viscous_iterations),
+            int(r.capped),
+            int(r.clamped),
+            int(r.pockets),
+        )
 
 
 @dataclass
@@ -75,13 +90,23 @@ class ProjectionScheme:
         self.solids = obstacles.of_case(case, grid)
         self.viscous = materials.is_viscous(case.material)
         cells = tuple(int(c) for c in grid.cells)
-        T = (state.gauss_gradients(cells, float(grid.spacing)) if self.viscous
-             else np.zeros((0, 0, 0, 0)))
-        self.core = state.step_state(grid, walls.of_case(case, grid).as_tuple(), self.solids, T,
-                                     MARGIN * grid.spacing, s.volume_correction > 0,
-                                     self.viscous)
-        self.python_pressure = (None if s.linear_solver == "multigrid"
-                                else pressure.PythonPressure(grid, s))
+        T = (
+            state.gauss_gradients(cells, float(grid.spacing))
+            if self.viscous
+            else np.zeros((0, 0, 0, 0))
+        )
+        self.core = state.step_state(
+            grid,
+            walls.of_case(case, grid).as_tuple(),
+            self.solids,
+            T,
+            MARGIN * grid.spacing,
+            s.volume_correction > 0,
+            self.viscous,
+        )
+        self.python_pressure = (
+            None if s.linear_solver == "multigrid" else pressure.PythonPressure(grid, s)
+        )
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (advance_span)
@@ -109,41 +134,58 @@ class ProjectionScheme:
     def options(self, dt):
         """The compiled step's settings for steps of dt (``Options2``/``Options3``)."""
         s, m = self.case.solver, self.case.material
-        every = (max(1, round(s.volume_correction_interval / dt))
-                 if s.volume_correction > 0 else 0)
+        every = max(1, round(s.volume_correction_interval / dt)) if s.volume_correction > 0 else 0
         particles = s.partial_cell_quadrature == "particles"
         model, params = materials.parameters(m)
         padded = np.zeros(MODEL_PARAMETERS)
-        padded[:len(params)] = params
+        padded[: len(params)] = params
         return state.step_options(
-            self.grid.dim, dt=float(dt),
+            self.grid.dim,
+            dt=float(dt),
             gravity=[float(g) for g in self.case.physics.gravity],
-            rho=float(m.density), flip=state.flip_per_step(s.flip, dt),
-            full=float(s.full_cell_threshold), sparse=float(s.sparse_cell_threshold),
+            rho=float(m.density),
+            flip=state.flip_per_step(s.flip, dt),
+            full=float(s.full_cell_threshold),
+            sparse=float(s.sparse_cell_threshold),
             partial_particles=particles,
-            surface=(state.SURFACE_QUADRATURE["gauss"] if particles
-                     else state.SURFACE_QUADRATURE[s.surface_quadrature]),
-            subcell=s.free_surface == "subcell", wall_flux=bool(s.wall_flux),
+            surface=(
+                state.SURFACE_QUADRATURE["gauss"]
+                if particles
+                else state.SURFACE_QUADRATURE[s.surface_quadrature]
+            ),
+            subcell=s.free_surface == "subcell",
+            wall_flux=bool(s.wall_flux),
             theta_min=float(s.ghost_theta_min),
-            expansion=float(s.density_correction), tol=float(s.tolerance),
-            max_iterations=int(s.max_iterations), sweeps=SMOOTHING_SWEEPS,
-            volume_rate=float(s.volume_correction), volume_every=int(every),
+            expansion=float(s.density_correction),
+            tol=float(s.tolerance),
+            max_iterations=int(s.max_iterations),
+            sweeps=SMOOTHING_SWEEPS,
+            volume_rate=float(s.volume_correction),
+            volume_every=int(every),
             volume_tol=volume_correction.TOLERANCE,
             volume_max_iterations=volume_correction.MAX_ITERATIONS,
-            volume_dmax=volume_correction.MAX_DISPLACEMENT, viscous=self.viscous,
-            model=int(model), model_params=[float(v) for v in padded],
-            courant=float(self.case.time.courant), dt_max=float(self.case.time.max_dt),
-            flip_rate=float(s.flip), volume_interval=float(s.volume_correction_interval))
+            volume_dmax=volume_correction.MAX_DISPLACEMENT,
+            viscous=self.viscous,
+            model=int(model),
+            model_params=[float(v) for v in padded],
+            courant=float(self.case.time.courant),
+            dt_max=float(self.case.time.max_dt),
+            flip_rate=float(s.flip),
+            volume_interval=float(s.volume_correction_interval),
+        )
 
     def state(self):
         """What the scheme carries from one step to the next beyond the particles: the nodal
         pressure and the volume correction's last solution (the warm starts of the next
         solves), and with APIC the particles' affine matrices. Everything else is rebuilt
         each step."""
-        saved = {"p_node": self.core.p_node.copy(),
-                 "last_unknowns": np.array(self.last_unknowns), "steps": np.array(self.steps),
-                 "since_volume": np.array(self.core.since_volume),
-                 "dt_range": np.array(self.dt_range)}
+        saved = {
+            "p_node": self.core.p_node.copy(),
+            "last_unknowns": np.array(self.last_unknowns),
+            "steps": np.array(self.steps),
+            "since_volume": np.array(self.core.since_volume),
+            "dt_range": np.array(self.dt_range),
+        }
         q = self.core.volume_q
         if q.size:
             saved["volume_q"] = q.copy()
@@ -165,8 +207,10 @@ class ProjectionScheme:
         if self.affine is not None:
             affine = saved["affine"]  # KeyError, or ValueError if its shape differs
             if affine.shape != self.affine.shape:
-                raise ValueError(f"affine matrices of shape {affine.shape}, the particles "
-                                 f"need {self.affine.shape}")
+                raise ValueError(
+                    f"affine matrices of shape {affine.shape}, the particles "
+                    f"need {self.affine.shape}"
+                )
             np.copyto(self.affine, affine)
 
     def _particles(self):
@@ -192,8 +236,9 @@ class ProjectionScheme:
             return self._adaptive(O, dt * nsteps, report, where)
         try:
             if self.python_pressure is None:
-                done = self.core.advance(*self._particles(), O, self.steps + 1, nsteps, report,
-                                         affine=self.affine)
+                done = self.core.advance(
+                    *self._particles(), O, self.steps + 1, nsteps, report, affine=self.affine
+                )
             else:
                 done = self._python_steps(O, nsteps, report, where)
         except pressure.SETUP_ERRORS as err:
@@ -212,14 +257,17 @@ class ProjectionScheme:
         # the most steps the span can need: every particle at solver.max_speed (the run
         # stops beyond it), at the Courant number
         most = int(np.ceil(span * s.max_speed / (O.courant * self.grid.spacing))) + 3
-        covered = self.core.advance_span(*self._particles(), O, span, most, report,
-                                         affine=self.affine)
+        covered = self.core.advance_span(
+            *self._particles(), O, span, most, report, affine=self.affine
+        )
         done = int(report.steps)
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
         if done:
-            self.dt_range = [min(self.dt_range[0], report.dt_min),
-                             max(self.dt_range[1], report.dt_max)]
+            self.dt_range = [
+                min(self.dt_range[0], report.dt_min),
+                max(self.dt_range[1], report.dt_max),
+            ]
         if report.status != state.OK:
             self._fail(report, where(done))
         if covered < span * (1 - 1e-9):
@@ -227,10 +275,12 @@ class ProjectionScheme:
                 f"The adaptive steps{where(done)} took {done} steps without reaching the next "
                 f"output time: the flow is faster than solver.max_speed = {s.max_speed:g} m/s "
                 "allows for. Raise solver.max_speed if such speeds are real, or use a fixed "
-                "time.dt.")
+                "time.dt."
+            )
         r = StepReport.of(report)
-        return AdaptiveReport(**vars(r), steps=done, dt_min=float(report.dt_min),
-                              dt_max=float(report.dt_max))
+        return AdaptiveReport(
+            **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
+        )
 
     def _python_steps(self, O, nsteps, report, where):
         """The steps with the pressure solved in Python (``pressure.PythonPressure``)."""
@@ -246,8 +296,7 @@ class ProjectionScheme:
                 return k
             self.python_pressure.solve(self.core, O, report, where(k))
             report.pockets += self.core.pockets
-            status = self.core.finish(*self._particles(), O, correct, report,
-                                      affine=self.affine)
+            status = self.core.finish(*self._particles(), O, correct, report, affine=self.affine)
             if status != state.OK:
                 report.status = status
                 return k
@@ -262,8 +311,14 @@ class ProjectionScheme:
         if status is state.Status.SINGULAR:
             raise pressure.singular(where)
         if status is state.Status.PRESSURE_NOT_CONVERGED:
-            raise pressure.not_converged(where, residual, iterations, self.case.solver, n,
-                                         self.grid.node_coordinates()[worst])
+            raise pressure.not_converged(
+                where,
+                residual,
+                iterations,
+                self.case.solver,
+                n,
+                self.grid.node_coordinates()[worst],
+            )
         if status is state.Status.VOLUME_NOT_CONVERGED:
             raise volume_correction.not_converged(where, residual, iterations, n)
         if status is state.Status.VISCOUS_NOT_CONVERGED:
@@ -277,6 +332,11 @@ class ProjectionScheme:
                 + ", ".join(f"{c:.4g}" for c in self.grid.node_coordinates()[worst])
                 + ") m. "
                 "Try a smaller time.dt, a larger solver.max_iterations"
-                + (", or a smaller material.max_viscosity" if m.model in
-                   ("herschel_bulkley", "mu_i") else "") + ".")
+                + (
+                    ", or a smaller material.max_viscosity"
+                    if m.model in ("herschel_bulkley", "mu_i")
+                    else ""
+                )
+                + "."
+            )
         raise SolverError(f"The step failed{where} with status {status.name}.")

@@ -15,5 +15,11 @@ from .counters import Counters
 from .loop import Simulation
 from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterval
 
-__all__ = ["Simulation", "Counters", "Schedule", "TimeInterval", "IterationInterval",
-           "WallTimeInterval"]
+__all__ = [
+    "Simulation",
+    "Counters",
+    "Schedule",
+    "TimeInterval",
+    "IterationInterval",
+    "WallTimeInterval",
+]

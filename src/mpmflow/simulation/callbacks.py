@@ -52,15 +52,19 @@ def blow_up_guard(sim):
     """SimulationError when a particle's velocity or position is not finite, or a particle
     is faster than solver.max_speed, after the last chunk (``sim.last_chunk``)."""
     first, n, t0, dt = sim.last_chunk
-    span = (f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
-            if n > 1 else f" at step {first} (t = {t0 + dt:.6g} s)")
+    span = (
+        f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
+        if n > 1
+        else f" at step {first} (t = {t0 + dt:.6g} s)"
+    )
     P = sim.particles
     if not (np.isfinite(P.v).all() and np.isfinite(P.x).all()):
         bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
         raise SimulationError(
             f"The run blew up{span}: {bad.size} particles have non-finite velocity or "
             f"position (first: particle {bad[0]}). The outputs up to t = {t0:.6g} s are "
-            "kept. Try a smaller time.dt.")
+            "kept. Try a smaller time.dt."
+        )
     with np.errstate(over="ignore"):  # a speed beyond 1e154 m/s is inf: still caught
         speed = np.sqrt(np.sum(P.v**2, axis=1))
     fastest = int(np.argmax(speed))
@@ -71,7 +75,8 @@ def blow_up_guard(sim):
             f"The run blew up{span}: particle {fastest} at ({xy}) m moves at "
             f"{speed[fastest]:.4g} m/s, above solver.max_speed = {limit:g} m/s. The outputs "
             f"up to t = {t0:.6g} s are kept. Try a smaller time.dt, or raise "
-            "solver.max_speed if such speeds are real.")
+            "solver.max_speed if such speeds are real."
+        )
 
 
 def progress(sim):
@@ -96,8 +101,10 @@ def stop_on_signal(sim):
         raise StopNow(sim.stop_now)
     if sim.stop_signal is None or sim.time >= sim.case.time.end or sim.stopping is not None:
         return
-    message = (f"interrupted by {signal.Signals(sim.stop_signal).name} at "
-               f"t = {sim.time:.6g} s (step {sim.steps}); ")
+    message = (
+        f"interrupted by {signal.Signals(sim.stop_signal).name} at "
+        f"t = {sim.time:.6g} s (step {sim.steps}); "
+    )
     if sim.out_dir is not None:
         sim.checkpoint()
         message += f"checkpoint {sim.last_checkpoint.name} written"
@@ -108,8 +115,13 @@ def stop_on_signal(sim):
 
 def wall_budget(budget):
     """``run(wall_budget=budget)``: stop at the first chunk end after it is spent."""
+
     def stop_when_spent(sim):
         if sim.time < sim.case.time.end:
-            sim.stop(f"stopped at t = {sim.time:.6g} s when the wall budget of {budget:g} s "
-                     "was spent", status="budget", checkpoint=False)
+            sim.stop(
+                f"stopped at t = {sim.time:.6g} s when the wall budget of {budget:g} s was spent",
+                status="budget",
+                checkpoint=False,
+            )
+
     return stop_when_spent

@@ -22,8 +22,21 @@ from ..fallbacks import Fallbacks
 from ..particles import Particles
 
 # what a checkpoint's meta must hold
-META = ("case", "time", "steps", "dt", "k_out", "k_snap", "k_checkpoint", "counters",
-        "outputs", "mass0", "volume0", "count0", "wall_seconds")
+META = (
+    "case",
+    "time",
+    "steps",
+    "dt",
+    "k_out",
+    "k_snap",
+    "k_checkpoint",
+    "counters",
+    "outputs",
+    "mass0",
+    "volume0",
+    "count0",
+    "wall_seconds",
+)
 
 
 class Checkpointer:
@@ -42,17 +55,29 @@ def write(sim):
         if action.writer and hasattr(action.func, "sync"):
             action.func.sync()
     w = sim.builtin_writers
-    outputs = {"timeseries": w["timeseries"].position(),
-               "probes": w["probes"].position() if "probes" in w else None,
-               "snapshots": w["snapshots"].position()}
-    meta = {"mpmflow_version": __version__, "case": resolved(sim.case),
-            "time": sim.time, "steps": sim.steps, "dt": sim.dt,
-            "k_out": sim.output_times.k, "k_snap": sim.snapshot_times.k,
-            "k_checkpoint": sim.checkpoint_times.k, "counters": asdict(sim.counters),
-            "fallbacks": sim.fallbacks.rows(),
-            "outputs": outputs, "mass0": sim.mass0,
-            "volume0": sim.volume0, "count0": sim.count0,
-            "wall_seconds": sim.wall_seconds(), "files": sim.files}
+    outputs = {
+        "timeseries": w["timeseries"].position(),
+        "probes": w["probes"].position() if "probes" in w else None,
+        "snapshots": w["snapshots"].position(),
+    }
+    meta = {
+        "mpmflow_version": __version__,
+        "case": resolved(sim.case),
+        "time": sim.time,
+        "steps": sim.steps,
+        "dt": sim.dt,
+        "k_out": sim.output_times.k,
+        "k_snap": sim.snapshot_times.k,
+        "k_checkpoint": sim.checkpoint_times.k,
+        "counters": asdict(sim.counters),
+        "fallbacks": sim.fallbacks.rows(),
+        "outputs": outputs,
+        "mass0": sim.mass0,
+        "volume0": sim.volume0,
+        "count0": sim.count0,
+        "wall_seconds": sim.wall_seconds(),
+        "files": sim.files,
+    }
     added = {a.name: a.schedule.state() for a in sim.actions if not a.builtin}
     if added:  # only then: the meta of a run without them is as before
         meta["schedules"] = added
@@ -73,14 +98,17 @@ def resume_latest(cls, case, out_dir, progress):
         sim.notices[:0] = [
             f"checkpoint {err.path} cannot be read ({err.why}); it is damaged, e.g. cut "
             f"short by a crash. Continuing from the one before it, {path.name}."
-            for err in damaged]
+            for err in damaged
+        ]
         return sim
     if len(damaged) == 1:
         raise damaged[0]
-    raise CaseError(f"--restart: no checkpoint in {out_dir} can be read: "
-                    + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
-                    + ". They are damaged, e.g. cut short by a crash. Start the run again "
-                    "with --overwrite instead of --restart.")
+    raise CaseError(
+        f"--restart: no checkpoint in {out_dir} can be read: "
+        + "; ".join(f"{e.path.name} ({e.why})" for e in damaged)
+        + ". They are damaged, e.g. cut short by a crash. Start the run again "
+        "with --overwrite instead of --restart."
+    )
 
 
 def resume_from(cls, case, out_dir, path, progress):
@@ -98,23 +126,28 @@ def resume_from(cls, case, out_dir, path, progress):
         raise CaseError(
             f"--restart: checkpoint {path} is at t = {meta['time']:.6g} s, which already "
             f"reaches time.end = {case.time.end:g} s. To extend the run give a later end, "
-            f"e.g. --set time.end={2 * case.time.end:g}.")
+            f"e.g. --set time.end={2 * case.time.end:g}."
+        )
     sim = cls(case, out_dir, progress)
     P = sim.particles
     for name in Particles.FIELDS:
         saved = arrays[name]
         if saved.shape != getattr(P, name).shape:
-            raise CaseError(f"--restart: checkpoint {path} holds {saved.shape[0]} "
-                            f"particles, the case {P.count}; it belongs to another case.")
+            raise CaseError(
+                f"--restart: checkpoint {path} holds {saved.shape[0]} "
+                f"particles, the case {P.count}; it belongs to another case."
+            )
         np.copyto(getattr(P, name), saved)
     try:
-        sim.scheme.restore({k.removeprefix("scheme."): v for k, v in arrays.items()
-                            if k.startswith("scheme.")})
+        sim.scheme.restore(
+            {k.removeprefix("scheme."): v for k, v in arrays.items() if k.startswith("scheme.")}
+        )
         sim.counters = type(sim.counters)(**meta["counters"])
         sim.fallbacks = Fallbacks(meta.get("fallbacks", ()))
     except (KeyError, TypeError, ValueError) as err:
-        raise checkpoint.CheckpointError(path, f"its scheme state or counters do not fit: "
-                                         f"{type(err).__name__}: {err}") from None
+        raise checkpoint.CheckpointError(
+            path, f"its scheme state or counters do not fit: {type(err).__name__}: {err}"
+        ) from None
     sim.time, sim.steps, sim.dt = meta["time"], meta["steps"], meta["dt"]
     sim.output_times.restore({"k": meta["k_out"]})
     sim.snapshot_times.restore({"k": meta["k_snap"]})

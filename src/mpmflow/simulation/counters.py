@@ -21,14 +21,30 @@ def add_report(c, fallbacks, report, case, time):
     """Add the scheme's ``report`` of a chunk ending at ``time`` to the counters ``c`` and
     to ``fallbacks`` (``mpmflow.fallbacks.Fallbacks``)."""
     c.moved_inside += report.moved_inside
-    fallbacks.count("particles put back inside the domain or out of an obstacle",
-                    "domain walls and obstacles", report.moved_inside, time)
-    fallbacks.count("viscosity held at material.max_viscosity",
-                    f"material ({case.material.model})", getattr(report, "capped", 0), time)
-    fallbacks.count("volume correction displacement clamped at half a cell per step",
-                    "solver.volume_correction", getattr(report, "clamped", 0), time)
-    fallbacks.count("water sealed from the free surface held at p = 0 at its top",
-                    "pressure system", getattr(report, "pockets", 0), time)
+    fallbacks.count(
+        "particles put back inside the domain or out of an obstacle",
+        "domain walls and obstacles",
+        report.moved_inside,
+        time,
+    )
+    fallbacks.count(
+        "viscosity held at material.max_viscosity",
+        f"material ({case.material.model})",
+        getattr(report, "capped", 0),
+        time,
+    )
+    fallbacks.count(
+        "volume correction displacement clamped at half a cell per step",
+        "solver.volume_correction",
+        getattr(report, "clamped", 0),
+        time,
+    )
+    fallbacks.count(
+        "water sealed from the free surface held at p = 0 at its top",
+        "pressure system",
+        getattr(report, "pockets", 0),
+        time,
+    )
     c.solves += report.solves
     c.iterations += report.iterations
     c.iterations_since_output += report.iterations

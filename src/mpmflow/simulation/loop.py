@@ -104,8 +104,7 @@ class Simulation:
         # time at or after each multiple of their interval (a shorter interval: every
         # output; taken as the output interval, so that time / interval stays finite)
         self.output_times = TimeInterval(out.interval)
-        self.snapshot_times = TimeInterval(max(out.snapshot_interval or out.interval,
-                                               out.interval))
+        self.snapshot_times = TimeInterval(max(out.snapshot_interval or out.interval, out.interval))
         self.checkpoint_times = TimeInterval(max(self.case.checkpoint.interval, out.interval))
         chunks = IterationInterval(1)
         self.builtin_writers = {"timeseries": writers.TimeSeries()}
@@ -120,14 +119,24 @@ class Simulation:
         self.actions = [
             builtin("blow_up_guard", callbacks.blow_up_guard, chunks),
             builtin("progress", callbacks.progress, chunks),
-            *[builtin(name, w[name], self.snapshot_times if name == "snapshots"
-                      else self.output_times, at_start=True, at_end=True, writer=True)
-              for name in w],
-            builtin("on_output", callbacks.on_output, self.output_times, at_start=True,
-                    at_end=True),
+            *[
+                builtin(
+                    name,
+                    w[name],
+                    self.snapshot_times if name == "snapshots" else self.output_times,
+                    at_start=True,
+                    at_end=True,
+                    writer=True,
+                )
+                for name in w
+            ],
+            builtin(
+                "on_output", callbacks.on_output, self.output_times, at_start=True, at_end=True
+            ),
             builtin("govern_threads", callbacks.govern_threads, chunks),
-            builtin("checkpointer", checkpointer.Checkpointer(), self.checkpoint_times,
-                    writer=True),
+            builtin(
+                "checkpointer", checkpointer.Checkpointer(), self.checkpoint_times, writer=True
+            ),
             builtin("stop_on_signal", callbacks.stop_on_signal, chunks),
         ]
 
@@ -139,11 +148,11 @@ class Simulation:
         ``sync()`` and ``close()`` (see ``writers``). ``name`` (default: the function's or
         class's name) must be unique: a checkpoint keeps its schedule's phase under it."""
         schedule = TimeInterval(self.case.output.interval) if schedule is None else schedule
-        action = self._action(writer, schedule, name, at_start=True, at_end=True,
-                              writer=True)
+        action = self._action(writer, schedule, name, at_start=True, at_end=True, writer=True)
         # before the callbacks at the output times: the writers added before it come first
-        self.actions.insert(next(k for k, a in enumerate(self.actions) if a.name == "on_output"),
-                            action)
+        self.actions.insert(
+            next(k for k, a in enumerate(self.actions) if a.name == "on_output"), action
+        )
         return action
 
     def add_callback(self, func, schedule=None, name=None):
@@ -154,20 +163,25 @@ class Simulation:
         schedule = IterationInterval(1) if schedule is None else schedule
         action = self._action(func, schedule, name)
         self.actions.insert(
-            next(k for k, a in enumerate(self.actions) if a.name == "checkpointer"), action)
+            next(k for k, a in enumerate(self.actions) if a.name == "checkpointer"), action
+        )
         return action
 
     def _action(self, func, schedule, name, **kw):
         if not callable(func):
-            raise TypeError(f"{func!r} is not callable: a writer or callback is a "
-                            "function of the Simulation")
+            raise TypeError(
+                f"{func!r} is not callable: a writer or callback is a function of the Simulation"
+            )
         if not all(hasattr(schedule, m) for m in ("due", "fired", "state", "restore")):
-            raise TypeError(f"{schedule!r} is not a schedule (mpmflow.simulation.TimeInterval, "
-                            "IterationInterval, WallTimeInterval)")
+            raise TypeError(
+                f"{schedule!r} is not a schedule (mpmflow.simulation.TimeInterval, "
+                "IterationInterval, WallTimeInterval)"
+            )
         name = name or getattr(func, "__name__", type(func).__name__)
         if any(a.name == name for a in self.actions):
-            raise ValueError(f"a writer or callback named {name!r} is in the run already; "
-                             "give another name=")
+            raise ValueError(
+                f"a writer or callback named {name!r} is in the run already; give another name="
+            )
         return Action(name, func, schedule, **kw)
 
     def stop(self, message, status="stopped", checkpoint=True):
@@ -272,16 +286,19 @@ class Simulation:
     def series(self, name):
         """One timeseries column as an array (see ``output.timeseries.COLUMNS``)."""
         if name not in COLUMNS:
-            raise KeyError(f"{name!r} is not a timeseries column; the columns are "
-                           + ", ".join(COLUMNS))
+            raise KeyError(
+                f"{name!r} is not a timeseries column; the columns are " + ", ".join(COLUMNS)
+            )
         return self.builtin_writers["timeseries"].buffer.column(name)
 
     def probe_series(self, name):
         """One probe's values at the output times (``series("time")``)."""
         probes = self.builtin_writers.get("probes")
         if probes is None or name not in probes.buffer.columns:
-            raise KeyError(f"no probe named {name!r}; the case's probes are "
-                           + (", ".join(p.name for p in self.case.probes) or "none"))
+            raise KeyError(
+                f"no probe named {name!r}; the case's probes are "
+                + (", ".join(p.name for p in self.case.probes) or "none")
+            )
         return probes.buffer.column(name)
 
     def measure(self, bins=None):
@@ -339,9 +356,15 @@ class Simulation:
         particles; with BLAS on one thread, 1.5 times faster)."""
         if wall_budget is not None:
             after = next(k for k, a in enumerate(self.actions) if a.name == "stop_on_signal")
-            self.actions.insert(after + 1, Action(
-                "wall_budget", callbacks.wall_budget(wall_budget),
-                WallTimeInterval(wall_budget), builtin=True))
+            self.actions.insert(
+                after + 1,
+                Action(
+                    "wall_budget",
+                    callbacks.wall_budget(wall_budget),
+                    WallTimeInterval(wall_budget),
+                    builtin=True,
+                ),
+            )
         try:
             self.claim()
             self.threads = ThreadGovernor(self.case.execution.threads)
@@ -364,10 +387,15 @@ class Simulation:
             message = str(err)
             raise
         except (KeyboardInterrupt, StopNow) as err:
-            status, message = "interrupted", (
-                f"stopped at once by a second {err.name}, without a checkpoint (the last one "
-                "written is kept)" if isinstance(err, StopNow) else
-                "stopped at once by KeyboardInterrupt (Ctrl-C), without a checkpoint")
+            status, message = (
+                "interrupted",
+                (
+                    f"stopped at once by a second {err.name}, without a checkpoint (the last one "
+                    "written is kept)"
+                    if isinstance(err, StopNow)
+                    else "stopped at once by KeyboardInterrupt (Ctrl-C), without a checkpoint"
+                ),
+            )
             raise
         except OSError as err:
             message = f"Writing the outputs failed: {err}. Check the --out folder and free space."
@@ -399,8 +427,11 @@ class Simulation:
             self.time = t_next
             self._act()
         stop = self._stop or Stop("", "completed", True)  # the end: to extend it later
-        if (stop.checkpoint and self.out_dir is not None
-                and self.last_checkpoint != checkpoint.path_for(self.out_dir, self.steps)):
+        if (
+            stop.checkpoint
+            and self.out_dir is not None
+            and self.last_checkpoint != checkpoint.path_for(self.out_dir, self.steps)
+        ):
             self.checkpoint()
         return stop.status, stop.message
 

@@ -68,8 +68,9 @@ class TimeInterval(Schedule):
 
     def __init__(self, interval: float) -> None:
         if not (isinstance(interval, (int, float)) and math.isfinite(interval) and interval > 0):
-            raise ValueError(f"TimeInterval: the interval must be a positive number of "
-                             f"seconds, not {interval!r}")
+            raise ValueError(
+                f"TimeInterval: the interval must be a positive number of seconds, not {interval!r}"
+            )
         self.interval = float(interval)
         self.k = 1  # the next moment is the k-th multiple
 

@@ -37,9 +37,11 @@ def build(case):
     grid = Grid.of_case(case)
     particles = build_particles(case, grid)
     if particles.count == 0:
-        raise CaseError("The bodies hold no particles: every body is thinner than one "
-                        "particle spacing (grid.spacing / bodies.N.particles_per_cell). "
-                        "Enlarge the bodies or raise particles_per_cell.")
+        raise CaseError(
+            "The bodies hold no particles: every body is thinner than one "
+            "particle spacing (grid.spacing / bodies.N.particles_per_cell). "
+            "Enlarge the bodies or raise particles_per_cell."
+        )
     scheme = make_scheme(case, grid, particles)
     notices = []
     solids = getattr(scheme, "solids", None)
@@ -49,7 +51,8 @@ def build(case):
             raise CaseError(
                 "Every particle lies in cells the grid takes as solid: the bodies fill "
                 "only the space that obstacles touching the walls close off on this grid. "
-                f"Refine grid.spacing (now {case.grid.spacing:g} m) or move the bodies.")
+                f"Refine grid.spacing (now {case.grid.spacing:g} m) or move the bodies."
+            )
         if inside.any():
             particles = subset(particles, ~inside)
             scheme.particles = particles
@@ -57,7 +60,8 @@ def build(case):
                 f"{int(inside.sum())} particle{'s' if inside.sum() > 1 else ''} seeded "
                 "round an obstacle lie in cells the grid takes as solid (where an obstacle touches two or three walls, the "
                 "corner between it and the walls is closed within the first cell) and "
-                "are left out; a finer grid.spacing resolves that corner")
+                "are left out; a finer grid.spacing resolves that corner"
+            )
     if hasattr(scheme, "check_free_surface"):
         try:
             scheme.check_free_surface()
@@ -68,22 +72,25 @@ def build(case):
                 "material), so the projection scheme's pressure has no level to refer to "
                 "and its system is singular. Leave at least one grid cell of empty space "
                 f"(grid.spacing = {case.grid.spacing:g} m) above the material: lower the "
-                "top of the bodies (bodies.N.max) or enlarge domain.size.") from None
+                "top of the bodies (bodies.N.max) or enlarge domain.size."
+            ) from None
     dt = time_step(case)
     try:  # a viscous material too stiff for the time step: refused, or told
         notices += stiffness.check(case, particles, dt)
     except ValueError as err:
         raise CaseError(str(err)) from None
     # what reading the mesh files had to decide (a binary STL's wrong triangle count)
-    for shape in ([case.body_shape(k) for k in range(len(case.bodies))]
-                  + [case.obstacle_shape(k) for k in range(len(case.obstacles))]):
+    for shape in [case.body_shape(k) for k in range(len(case.bodies))] + [
+        case.obstacle_shape(k) for k in range(len(case.obstacles))
+    ]:
         notices += getattr(shape, "notes", [])
     if grid.adjusted(case.domain.size):
         used = " x ".join(f"{s:.6g}" for s in grid.size)
         asked = " x ".join(f"{s:.6g}" for s in case.domain.size)
         notices.append(
             f"domain {asked} m is not a whole number of {case.grid.spacing:g} m cells; the "
-            f"walls are placed on the grid at {used} m")
+            f"walls are placed on the grid at {used} m"
+        )
     return Setup(estimate, files, grid, particles, scheme, dt, notices)
 
 
@@ -92,8 +99,11 @@ def describe(sim):
     case, g, est = sim.case, sim.grid, sim.memory
     steps = max(1, round((case.time.end - sim.time) / sim.dt))
     cells = " x ".join(str(n) for n in g.cells)
-    snaps = (f", a snapshot every {case.output.snapshot_interval or case.output.interval:g}"
-             " s" if case.output.snapshots else ", no snapshots")
+    snaps = (
+        f", a snapshot every {case.output.snapshot_interval or case.output.interval:g} s"
+        if case.output.snapshots
+        else ", no snapshots"
+    )
     title = f"{case.title}: " if case.title else ""
     budget, source = memory.available()
     return [

@@ -13,8 +13,10 @@ def _explicit(sim):
     if sim.case.solver.scheme != "explicit":
         return {}
     m = sim.case.material
-    return {"sound_speed": sound_speed(m.bulk_modulus, m.density),
-            "stable_time_step": case_stable_time_step(sim.case)}
+    return {
+        "sound_speed": sound_speed(m.bulk_modulus, m.density),
+        "stable_time_step": case_stable_time_step(sim.case),
+    }
 
 
 def _adaptive(sim):
@@ -23,10 +25,14 @@ def _adaptive(sim):
     if not getattr(scheme, "auto", False) or not hasattr(scheme, "dt_range"):
         return {}
     shortest, longest = scheme.dt_range
-    return {"adaptive_steps": {"courant": sim.case.time.courant,
-                               "max_dt": sim.case.time.max_dt,
-                               "shortest": shortest if np.isfinite(shortest) else None,
-                               "longest": longest or None}}
+    return {
+        "adaptive_steps": {
+            "courant": sim.case.time.courant,
+            "max_dt": sim.case.time.max_dt,
+            "shortest": shortest if np.isfinite(shortest) else None,
+            "longest": longest or None,
+        }
+    }
 
 
 def summary(sim, status, message):
@@ -54,29 +60,51 @@ def summary(sim, status, message):
         "dt": sim.dt,
         **_explicit(sim),
         **_adaptive(sim),
-        "grid": {"spacing": grid.spacing, "cells": list(grid.cells),
-                 "domain_used": [float(s) for s in grid.size]},
-        "pressure_solver": {"solves": c.solves, "iterations": c.iterations,
-                            "max_iterations_per_step": c.max_iterations,
-                            "max_unknowns": c.max_unknowns,
-                            "worst_relative_residual": c.worst_residual,
-                            "wall_nodes_released": c.released},
-        "viscous_solver": ({"iterations": c.viscous_iterations,
-                            "model": case.material.model}
-                           if case.material.model != "water" else None),
+        "grid": {
+            "spacing": grid.spacing,
+            "cells": list(grid.cells),
+            "domain_used": [float(s) for s in grid.size],
+        },
+        "pressure_solver": {
+            "solves": c.solves,
+            "iterations": c.iterations,
+            "max_iterations_per_step": c.max_iterations,
+            "max_unknowns": c.max_unknowns,
+            "worst_relative_residual": c.worst_residual,
+            "wall_nodes_released": c.released,
+        },
+        "viscous_solver": (
+            {"iterations": c.viscous_iterations, "model": case.material.model}
+            if case.material.model != "water"
+            else None
+        ),
         "notices": sim.notices,
         "caps_and_fallbacks": sim.fallbacks.rows(),
         "threads": sim.threads.record() if sim.threads is not None else None,
         "memory_estimate_bytes": sim.memory.as_dict(),
-        "probes": {p.name: {"quantity": p.quantity, "position": p.position,
-                            "unit": probes.UNITS[p.quantity],
-                            **({"window": probes.window(p, grid, case),
-                                "estimate": p.estimate}
-                               if p.quantity == "pressure" else {})}
-                   for p in case.probes},
-        "units": dict(timeseries_units(grid.dim),
-                      mass="kg/m" if grid.dim == 2 else "kg", wall_seconds="s",
-                      domain_used="m", spacing="m", dt="s", sound_speed="m/s",
-                      stable_time_step="s", memory_estimate_bytes="B"),
+        "probes": {
+            p.name: {
+                "quantity": p.quantity,
+                "position": p.position,
+                "unit": probes.UNITS[p.quantity],
+                **(
+                    {"window": probes.window(p, grid, case), "estimate": p.estimate}
+                    if p.quantity == "pressure"
+                    else {}
+                ),
+            }
+            for p in case.probes
+        },
+        "units": dict(
+            timeseries_units(grid.dim),
+            mass="kg/m" if grid.dim == 2 else "kg",
+            wall_seconds="s",
+            domain_used="m",
+            spacing="m",
+            dt="s",
+            sound_speed="m/s",
+            stable_time_step="s",
+            memory_estimate_bytes="B",
+        ),
         "case": resolved(case),
     }

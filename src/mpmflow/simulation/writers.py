@@ -78,14 +78,23 @@ class Probes(_Rows):
         super().__init__(probes.columns(case))
 
     def _open_file(self, sim, resume):
-        return CsvAppender(sim.out_dir / self.file_name, probes.columns(sim.case), resume,
-                           probes.header(sim.case))
+        return CsvAppender(
+            sim.out_dir / self.file_name, probes.columns(sim.case), resume, probes.header(sim.case)
+        )
 
     def __call__(self, sim):
         solids = getattr(sim.scheme, "solids", None)  # the explicit scheme has none
-        self.append(probes.measure(sim.case, sim.grid, sim.particles, sim.binned(), sim.time,
-                                   solids.distance if solids is not None and solids.solids
-                                   else None, sim.fallbacks))
+        self.append(
+            probes.measure(
+                sim.case,
+                sim.grid,
+                sim.particles,
+                sim.binned(),
+                sim.time,
+                solids.distance if solids is not None and solids.solids else None,
+                sim.fallbacks,
+            )
+        )
 
 
 class Snapshots:

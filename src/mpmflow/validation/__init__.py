@@ -19,6 +19,7 @@ from ..errors import CaseError, SimulationError
 from . import (
     channel_flows,
     dam_break,
+    dam_break_ar1,
     hydrostatic,
     lobovsky,
     long_run,
@@ -34,7 +35,7 @@ CASES = {
     "hydrostatic": hydrostatic.run,
     "sloshing": sloshing.run,
     "dam_break": dam_break.run,
-    "dam_break_ar1": dam_break.run_ar1,
+    "dam_break_ar1": dam_break_ar1.run_ar1,
     "lobovsky": lobovsky.run,
     "volume": volume.run,
     "long_run": long_run.run,
@@ -48,16 +49,22 @@ CASES = {
     "mu_i_layer": channel_flows.run_layer,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
-EXAMPLE_FILES = {"hydrostatic": ("hydrostatic.toml",), "sloshing": ("sloshing.toml",),
-                 "dam_break": ("dam_break.toml",), "dam_break_ar1": ("dam_break_ar1.toml",),
-                 "lobovsky": ("lobovsky.toml",),
-                 "long_run": ("sloshing.toml", "dam_break.toml"),
-                 "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml"),
-                 "spheric": ("spheric_test2.toml",), "viscous_wave": ("sloshing.toml",),
-                 "granular_collapse": ("granular_collapse.toml",),
-                 "bingham_slump": ("bingham_slump.toml",),
-                 "poiseuille": ("poiseuille_film.toml",), "bingham_plug": ("bingham_plug.toml",),
-                 "mu_i_layer": ("mu_i_layer.toml",)}  # the examples/ files each runs
+EXAMPLE_FILES = {
+    "hydrostatic": ("hydrostatic.toml",),
+    "sloshing": ("sloshing.toml",),
+    "dam_break": ("dam_break.toml",),
+    "dam_break_ar1": ("dam_break_ar1.toml",),
+    "lobovsky": ("lobovsky.toml",),
+    "long_run": ("sloshing.toml", "dam_break.toml"),
+    "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml"),
+    "spheric": ("spheric_test2.toml",),
+    "viscous_wave": ("sloshing.toml",),
+    "granular_collapse": ("granular_collapse.toml",),
+    "bingham_slump": ("bingham_slump.toml",),
+    "poiseuille": ("poiseuille_film.toml",),
+    "bingham_plug": ("bingham_plug.toml",),
+    "mu_i_layer": ("mu_i_layer.toml",),
+}  # the examples/ files each runs
 
 
 def case_names(cases=None):
@@ -77,10 +84,12 @@ def missing_examples(cases=None):
 
 
 def _missing_text(missing):
-    return ("mpmflow validate runs the case files in the examples/ folder of a source "
-            f"checkout, and {', '.join(str(p) for p in missing)} "
-            f"{'is' if len(missing) == 1 else 'are'} missing. Run it from a checkout of "
-            "mpmflow installed with `pip install -e .` (as `make setup` does).")
+    return (
+        "mpmflow validate runs the case files in the examples/ folder of a source "
+        f"checkout, and {', '.join(str(p) for p in missing)} "
+        f"{'is' if len(missing) == 1 else 'are'} missing. Run it from a checkout of "
+        "mpmflow installed with `pip install -e .` (as `make setup` does)."
+    )
 
 
 def run_validation(out, quick=False, cases=None, progress=None):
@@ -101,9 +110,22 @@ def run_validation(out, quick=False, cases=None, progress=None):
         try:
             res = CASES[name](out, quick=quick, context=context)
         except SimulationError as err:  # the report says so; the other cases go on
-            res = CaseResult(name, name, rows=[Row(name, "run", "completed", float("nan"), 0,
-                                                   "a validation run must complete",
-                                                   miss=str(err))], text=f"Failed: {err}")
+            res = CaseResult(
+                name,
+                name,
+                rows=[
+                    Row(
+                        name,
+                        "run",
+                        "completed",
+                        float("nan"),
+                        0,
+                        "a validation run must complete",
+                        miss=str(err),
+                    )
+                ],
+                text=f"Failed: {err}",
+            )
         res.wall_s = _time.perf_counter() - t1
         results.append(res)
         if progress is not None:

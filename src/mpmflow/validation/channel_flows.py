@@ -41,28 +41,51 @@ import math
 
 import numpy as np
 
+from .channel_theory import (
+    bagnold,
+    bingham,
+    binned,
+    fit_plug,
+    incline,
+    inertial_number,
+    l2,
+    plug_width,
+    poiseuille,
+)
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
 
 # tolerances, fixed in this module before the validation runs (those of the issue, 26 item 2)
 TOL_STEADY = 0.01
-WHY_STEADY = ("the issue's criterion for the steady Poiseuille profile; 1% of the surface "
-              "speed is 2 mm/s, a third of the split's creep 0.6 |g| dt (materials/stiffness.py)")
+WHY_STEADY = (
+    "the issue's criterion for the steady Poiseuille profile; 1% of the surface "
+    "speed is 2 mm/s, a third of the split's creep 0.6 |g| dt (materials/stiffness.py)"
+)
 TOL_STARTUP = 0.02
-WHY_STARTUP = ("the issue's criterion for the start-up at 0.1 T_visc: after 25 steps of "
-               "backward Euler the time error of the slowest mode alone is about 0.5%")
+WHY_STARTUP = (
+    "the issue's criterion for the start-up at 0.1 T_visc: after 25 steps of "
+    "backward Euler the time error of the slowest mode alone is about 0.5%"
+)
 TOL_PLUG = 0.05
-WHY_PLUG = ("the issue's criterion; 5% of h_p is 1 mm, a fifth of a cell at the coarser "
-            "mesh: the fit must place the yield surface inside a cell")
+WHY_PLUG = (
+    "the issue's criterion; 5% of h_p is 1 mm, a fifth of a cell at the coarser "
+    "mesh: the fit must place the yield surface inside a cell"
+)
 TOL_PLUG_SPEED = 0.05
-WHY_PLUG_SPEED = ("the issue's criterion for a surface velocity (set for the mu(I) layer), "
-                  "taken for the plug; the cap's creep across the plug is 0.2% of its speed")
+WHY_PLUG_SPEED = (
+    "the issue's criterion for a surface velocity (set for the mu(I) layer), "
+    "taken for the plug; the cap's creep across the plug is 0.2% of its speed"
+)
 TOL_SURFACE = 0.05
-WHY_SURFACE = ("the issue's criterion for the surface velocity of the inclined mu(I) layer "
-               "against Bagnold's profile")
+WHY_SURFACE = (
+    "the issue's criterion for the surface velocity of the inclined mu(I) layer "
+    "against Bagnold's profile"
+)
 TOL_ORDER = 1.0
-WHY_ORDER = ("the error must fall at least in proportion to the spacing; linear shape "
-             "functions beside the no-slip bed (the first cell's particles) give no more "
-             "than first order there")
+WHY_ORDER = (
+    "the error must fall at least in proportion to the spacing; linear shape "
+    "functions beside the no-slip bed (the first cell's particles) give no more "
+    "than first order there"
+)
 
 # meshes and run lengths (full, quick); measured before the tolerances were applied
 POISEUILLE = {"spacings": (0.0025, 0.00125), "end": 1.5}
@@ -76,113 +99,8 @@ MISS_STARTUP_ORDER = (
     "the time step stays 1 ms on both meshes, and the start-up's error at the finer one is "
     "partly backward Euler's (first order in dt): at h = 1.25 mm it is 0.62%, 0.46% and 0.41% "
     "at dt = 1, 0.5 and 0.25 ms (at h = 2.5 mm: 1.19%, 1.12%, 1.11%; measured after this row "
-    "missed), so halving dt with h would give order 1.4")
-SERIES_TERMS = 200  # of the start-up series: the tail after N terms is below 1 / (pi^3 N^2)
-
-
-# --- analytic solutions -----------------------------------------------------------------
-
-def poiseuille(y, H, nu, gs, t=None, terms=SERIES_TERMS):
-    """The film's velocity (m/s) at heights ``y`` (m) above the no-slip bed: the steady
-    half-channel profile (t None), or the start-up from rest at time ``t`` (s) as the
-    Fourier series of the half-channel (no slip at y = 0, no shear at y = H). ``gs``: the
-    driving acceleration g sin(theta) (m/s^2); ``nu``: kinematic viscosity (m^2/s)."""
-    e = np.clip(np.asarray(y, float) / H, 0.0, 1.0)
-    u = e - 0.5 * e * e
-    if t is not None:
-        for n in range(terms):
-            lam = (n + 0.5) * math.pi
-            u = u - 2.0 / lam ** 3 * np.sin(lam * e) * math.exp(-lam * lam * nu * t / (H * H))
-    return gs * H * H / nu * u
-
-
-def plug_width(H, rho, tau_y, gs):
-    """The Bingham plug's thickness (m): where the shear stress rho gs (H - y) < tau_y."""
-    return min(H, tau_y / (rho * gs))
-
-
-def bingham(y, H, rho, K, tau_y, gs):
-    """The steady Bingham layer's velocity (m/s): the yielded layer's parabola below
-    Y = H - h_p, the plug's speed rho gs Y^2 / (2 K) above."""
-    Y = H - plug_width(H, rho, tau_y, gs)
-    yy = np.clip(np.asarray(y, float), 0.0, Y)
-    return rho * gs / K * (Y * yy - 0.5 * yy * yy)
-
-
-def inertial_number(theta, mu_s, mu_2, I0):
-    """The inertial number of steady flow at inclination ``theta`` (rad): mu(I) = tan(theta)
-    with mu(I) = mu_s + (mu_2 - mu_s) I / (I0 + I); nan outside mu_s < tan(theta) < mu_2."""
-    t = math.tan(theta)
-    if not mu_s < t < mu_2:
-        return float("nan")
-    return I0 * (t - mu_s) / (mu_2 - t)
-
-
-def bagnold(y, H, theta, mu_s, mu_2, I0, d, phi, g=9.81):
-    """Bagnold's profile (m/s) of a mu(I) layer H deep at inclination ``theta``: grain
-    diameter d (m), solid fraction phi = bulk density / grain density."""
-    It = inertial_number(theta, mu_s, mu_2, I0)
-    depth = np.clip(H - np.asarray(y, float), 0.0, H)
-    return (2.0 / 3.0) * It * math.sqrt(phi * g * math.cos(theta)) / d * (H ** 1.5 - depth ** 1.5)
-
-
-# --- measures -----------------------------------------------------------------------------
-
-def incline(case):
-    """(theta (rad), |g|) of a case's tilted gravity [g sin(theta), -g cos(theta)]."""
-    gx, gy = case.physics.gravity[:2]
-    return math.atan2(gx, -gy), math.hypot(gx, gy)
-
-
-def bins(y, H, h):
-    """Index of each particle's bin (one cell high, 0 < y < H; -1 outside) and their count."""
-    n = int(round(H / h))
-    idx = np.floor(np.asarray(y) / h).astype(int)
-    idx[(idx < 0) | (idx >= n)] = -1
-    return idx, n
-
-
-def binned(y, u, H, h, theory):
-    """(mean height, mean u, mean theory) per bin (arrays; empty bins dropped)."""
-    idx, n = bins(y, H, h)
-    th = theory(y)
-    out = []
-    for b in range(n):
-        s = idx == b
-        if s.any():
-            out.append((y[s].mean(), u[s].mean(), th[s].mean()))
-    return tuple(np.array(c) for c in zip(*out))
-
-
-def l2(um, ut):
-    return float(math.sqrt(np.sum((um - ut) ** 2) / np.sum(ut ** 2)))
-
-
-def fit_plug(y, u, H, h):
-    """The plug width (m): H - Y of the Bingham profile A (Y y - y^2 / 2) (y < Y),
-    A Y^2 / 2 (y > Y) fitted by least squares to the binned velocity (A linear in the
-    fit; Y scanned over [0.05 H, H] then refined by a bounded scalar minimisation)."""
-    from scipy.optimize import minimize_scalar
-
-    idx, n = bins(y, H, h)
-    keep = idx >= 0
-    idx, yk, uk = idx[keep], y[keep], u[keep]
-    count = np.bincount(idx, minlength=n).astype(float)
-    filled = count > 0
-    ub = (np.bincount(idx, uk, minlength=n) / np.maximum(count, 1))[filled]
-
-    def residual(Y):
-        z = np.minimum(yk, Y)
-        f = (np.bincount(idx, Y * z - 0.5 * z * z, minlength=n) / np.maximum(count, 1))[filled]
-        A = float(f @ ub) / float(f @ f)
-        return float(np.sum((A * f - ub) ** 2))
-
-    grid = np.linspace(0.05 * H, H, 200)
-    k = int(np.argmin([residual(Y) for Y in grid]))
-    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-    Y = minimize_scalar(residual, bounds=(lo, hi), method="bounded",
-                        options={"xatol": 1e-7 * H}).x
-    return float(H - Y)
+    "missed), so halving dt with h would give order 1.4"
+)
 
 
 def _depth(case):
@@ -201,15 +119,26 @@ def measure_poiseuille(h, end, example="poiseuille_film.toml"):
             H = _depth(sim.case)
             state.update(T=H * H / nu, nu=nu, H=H)
         if abs(sim.time - STARTUP * state["T"]) < 0.5 * sim.dt:
-            snaps["startup"] = (sim.time, sim.particles.x[:, 1].copy(),
-                                sim.particles.v[:, 0].copy())
+            snaps["startup"] = (
+                sim.time,
+                sim.particles.x[:, 1].copy(),
+                sim.particles.v[:, 0].copy(),
+            )
 
     # the example's output interval is 0.1 T_visc, so the start-up time is an output time
     sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"], on_output=grab)
     theta, g = incline(sim.case)
     gs, H, nu = g * math.sin(theta), state["H"], state["nu"]
-    r = {"h": h, "H": H, "nu": nu, "gs": gs, "T": state["T"], "end": sim.time,
-         "wall": sim.summary["wall_seconds"], "particles": sim.particles.count}
+    r = {
+        "h": h,
+        "H": H,
+        "nu": nu,
+        "gs": gs,
+        "T": state["T"],
+        "end": sim.time,
+        "wall": sim.summary["wall_seconds"],
+        "particles": sim.particles.count,
+    }
     if "startup" not in snaps:
         raise RuntimeError("the start-up time 0.1 T_visc is not an output time of the run")
     t0, y0, u0 = snaps["startup"]
@@ -230,14 +159,24 @@ def measure_plug(h, end, example="bingham_plug.toml"):
     theta, g = incline(sim.case)
     gs, H = g * math.sin(theta), _depth(sim.case)
     y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
-    r = {"h": h, "H": H, "end": sim.time, "wall": sim.summary["wall_seconds"],
-         "particles": sim.particles.count, "rho": m.density, "K": m.consistency,
-         "tau_y": m.yield_stress, "gs": gs, "cap": m.max_viscosity}
+    r = {
+        "h": h,
+        "H": H,
+        "end": sim.time,
+        "wall": sim.summary["wall_seconds"],
+        "particles": sim.particles.count,
+        "rho": m.density,
+        "K": m.consistency,
+        "tau_y": m.yield_stress,
+        "gs": gs,
+        "cap": m.max_viscosity,
+    }
     r["plug_theory"] = plug_width(H, m.density, m.yield_stress, gs)
     r["plug"] = fit_plug(y, u, H, h)
     r["plug_error"] = r["plug"] / r["plug_theory"] - 1.0
-    r["bins"] = binned(y, u, H, h,
-                       lambda yy: bingham(yy, H, m.density, m.consistency, m.yield_stress, gs))
+    r["bins"] = binned(
+        y, u, H, h, lambda yy: bingham(yy, H, m.density, m.consistency, m.yield_stress, gs)
+    )
     r["profile"] = l2(*r["bins"][1:])
     r["speed"], r["speed_theory"] = r["bins"][1][-1], r["bins"][2][-1]
     r["speed_error"] = r["speed"] / r["speed_theory"] - 1.0
@@ -250,12 +189,27 @@ def measure_layer(h, end, example="mu_i_layer.toml"):
     m = sim.case.material
     theta, g = incline(sim.case)
     H = _depth(sim.case)
-    args = (H, theta, m.friction_static, m.friction_limit, m.inertial_number_ref,
-            m.grain_diameter, m.density / m.grain_density, g)
+    args = (
+        H,
+        theta,
+        m.friction_static,
+        m.friction_limit,
+        m.inertial_number_ref,
+        m.grain_diameter,
+        m.density / m.grain_density,
+        g,
+    )
     y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
-    r = {"h": h, "H": H, "end": sim.time, "wall": sim.summary["wall_seconds"],
-         "particles": sim.particles.count, "theta": theta, "args": args,
-         "I": inertial_number(*args[1:5])}
+    r = {
+        "h": h,
+        "H": H,
+        "end": sim.time,
+        "wall": sim.summary["wall_seconds"],
+        "particles": sim.particles.count,
+        "theta": theta,
+        "args": args,
+        "I": inertial_number(*args[1:5]),
+    }
     r["bins"] = binned(y, u, H, h, lambda yy: bagnold(yy, *args))
     r["profile"] = l2(*r["bins"][1:])
     r["surface"], r["surface_theory"] = r["bins"][1][-1], r["bins"][2][-1]
@@ -264,6 +218,7 @@ def measure_layer(h, end, example="mu_i_layer.toml"):
 
 
 # --- the report's cases ------------------------------------------------------------------
+
 
 def _plot(ax, runs, key, curve, yfine, label_theory, title):
     ax.plot(curve, yfine, "k-", label=label_theory)
@@ -276,13 +231,18 @@ def _plot(ax, runs, key, curve, yfine, label_theory, title):
     ax.legend(fontsize=8)
 
 
-def _order_row(case, quantity, error, runs, errors,
-               miss="the error does not fall with the mesh"):
+def _order_row(case, quantity, error, runs, errors, miss="the error does not fall with the mesh"):
     """The row of the observed order of ``errors`` (one per run) over the runs' meshes."""
-    return Row(case, f"{quantity}, observed order",
-               f"least-squares slope of log({error}) against log(h), 2 meshes",
-               observed_order([r["h"] for r in runs], errors), TOL_ORDER, WHY_ORDER,
-               sense=">=", miss=miss)
+    return Row(
+        case,
+        f"{quantity}, observed order",
+        f"least-squares slope of log({error}) against log(h), 2 meshes",
+        observed_order([r["h"] for r in runs], errors),
+        TOL_ORDER,
+        WHY_ORDER,
+        sense=">=",
+        miss=miss,
+    )
 
 
 def _section(n):
@@ -290,43 +250,100 @@ def _section(n):
 
 
 def run_poiseuille(out, quick=False, context=None):
-    res = CaseResult("poiseuille", "Plane Poiseuille flow (film on an incline): start-up and "
-                     "steady profile")
+    res = CaseResult(
+        "poiseuille", "Plane Poiseuille flow (film on an incline): start-up and steady profile"
+    )
     cfg = POISEUILLE_QUICK if quick else POISEUILLE
     runs = [measure_poiseuille(h, cfg["end"]) for h in cfg["spacings"]]
-    miss_mesh = ("too few cells across the film: the particles of the first cell above the "
-                 "no-slip bed lag the grid's velocity (FLIP against a node held at rest); the "
-                 "error falls at about order 1.5 (see the table)")
+    miss_mesh = (
+        "too few cells across the film: the particles of the first cell above the "
+        "no-slip bed lag the grid's velocity (FLIP against a node held at rest); the "
+        "error falls at about order 1.5 (see the table)"
+    )
     for r in runs:
-        res.rows.append(Row("poiseuille", f"start-up profile at 0.1 T_visc, h = {r['h']:g} m",
-                            "L2 of the bin means against the series, relative",
-                            r["startup"], TOL_STARTUP, WHY_STARTUP, miss=miss_mesh))
-        res.rows.append(Row("poiseuille", f"steady profile, h = {r['h']:g} m",
-                            "L2 of the bin means against the parabola, relative", r["steady"],
-                            TOL_STEADY, WHY_STEADY, miss=miss_mesh))
-    for key, name, miss in (("startup", "start-up", MISS_STARTUP_ORDER),
-                            ("steady", "steady", "the error does not fall with the mesh")):
-        res.rows.append(_order_row("poiseuille", f"{name} profile", "L2", runs,
-                                   [r[key] for r in runs], miss))
+        res.rows.append(
+            Row(
+                "poiseuille",
+                f"start-up profile at 0.1 T_visc, h = {r['h']:g} m",
+                "L2 of the bin means against the series, relative",
+                r["startup"],
+                TOL_STARTUP,
+                WHY_STARTUP,
+                miss=miss_mesh,
+            )
+        )
+        res.rows.append(
+            Row(
+                "poiseuille",
+                f"steady profile, h = {r['h']:g} m",
+                "L2 of the bin means against the parabola, relative",
+                r["steady"],
+                TOL_STEADY,
+                WHY_STEADY,
+                miss=miss_mesh,
+            )
+        )
+    for key, name, miss in (
+        ("startup", "start-up", MISS_STARTUP_ORDER),
+        ("steady", "steady", "the error does not fall with the mesh"),
+    ):
+        res.rows.append(
+            _order_row("poiseuille", f"{name} profile", "L2", runs, [r[key] for r in runs], miss)
+        )
     r0 = runs[0]
     H, nu, gs = r0["H"], r0["nu"], r0["gs"]
     yf = np.linspace(0.0, H, 200)
     plt = pyplot()
     fig, ax = plt.subplots(1, 2, figsize=(10, 4.5))
-    _plot(ax[0], runs, "startup_bins", poiseuille(yf, H, nu, gs, r0["t_startup"]), yf,
-          "series (half-channel)", f"start-up, t = {r0['t_startup']:g} s = 0.1 T_visc")
-    _plot(ax[1], runs, "steady_bins", poiseuille(yf, H, nu, gs), yf,
-          "g sin(theta) (H y - y^2/2) / nu", f"steady, t = {r0['end']:g} s")
+    _plot(
+        ax[0],
+        runs,
+        "startup_bins",
+        poiseuille(yf, H, nu, gs, r0["t_startup"]),
+        yf,
+        "series (half-channel)",
+        f"start-up, t = {r0['t_startup']:g} s = 0.1 T_visc",
+    )
+    _plot(
+        ax[1],
+        runs,
+        "steady_bins",
+        poiseuille(yf, H, nu, gs),
+        yf,
+        "g sin(theta) (H y - y^2/2) / nu",
+        f"steady, t = {r0['end']:g} s",
+    )
     fig.tight_layout()
     save(fig, out / "poiseuille.png")
-    res.figures.append(("poiseuille.png", "The film's velocity along the slope: bin means of "
-                        "the particles (one cell high) against theory, at 0.1 T_visc and at "
-                        "the end."))
+    res.figures.append(
+        (
+            "poiseuille.png",
+            "The film's velocity along the slope: bin means of "
+            "the particles (one cell high) against theory, at 0.1 T_visc and at "
+            "the end.",
+        )
+    )
     table = markdown_table(
-        ["h (m)", "particles", "start-up L2", "steady L2", "surface bin, steady (rel.)",
-         "wall (s)"],
-        [[r["h"], r["particles"], fmt(r["startup"]), fmt(r["steady"]), fmt(r["surface"]),
-          fmt(r["wall"])] for r in runs])
+        [
+            "h (m)",
+            "particles",
+            "start-up L2",
+            "steady L2",
+            "surface bin, steady (rel.)",
+            "wall (s)",
+        ],
+        [
+            [
+                r["h"],
+                r["particles"],
+                fmt(r["startup"]),
+                fmt(r["steady"]),
+                fmt(r["surface"]),
+                fmt(r["wall"]),
+            ]
+            for r in runs
+        ],
+    )
     res.text = _section(1) + "\n\n" + _section(4) + "\n\n" + table
     return res
 
@@ -337,32 +354,84 @@ def run_plug(out, quick=False, context=None):
     runs = [measure_plug(h, cfg["end"]) for h in cfg["spacings"]]
     miss_mesh = "too few cells across the plug (see the table)"
     for r in runs:
-        res.rows.append(Row("bingham_plug", f"plug width, h = {r['h']:g} m",
-                            "|fitted H - Y - h_p| / h_p", abs(r["plug_error"]), TOL_PLUG,
-                            WHY_PLUG, miss=miss_mesh))
-        res.rows.append(Row("bingham_plug", f"plug speed, h = {r['h']:g} m",
-                            "|top bin - theory| / theory", abs(r["speed_error"]),
-                            TOL_PLUG_SPEED, WHY_PLUG_SPEED, miss=miss_mesh))
-    res.rows.append(_order_row("bingham_plug", "profile", "L2 of the profile", runs,
-                               [r["profile"] for r in runs]))
+        res.rows.append(
+            Row(
+                "bingham_plug",
+                f"plug width, h = {r['h']:g} m",
+                "|fitted H - Y - h_p| / h_p",
+                abs(r["plug_error"]),
+                TOL_PLUG,
+                WHY_PLUG,
+                miss=miss_mesh,
+            )
+        )
+        res.rows.append(
+            Row(
+                "bingham_plug",
+                f"plug speed, h = {r['h']:g} m",
+                "|top bin - theory| / theory",
+                abs(r["speed_error"]),
+                TOL_PLUG_SPEED,
+                WHY_PLUG_SPEED,
+                miss=miss_mesh,
+            )
+        )
+    res.rows.append(
+        _order_row(
+            "bingham_plug", "profile", "L2 of the profile", runs, [r["profile"] for r in runs]
+        )
+    )
     r0 = runs[0]
     H = r0["H"]
     yf = np.linspace(0.0, H, 200)
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    _plot(ax, runs, "bins", bingham(yf, H, r0["rho"], r0["K"], r0["tau_y"], r0["gs"]), yf,
-          "Bingham: parabola below the plug", f"steady, t = {r0['end']:g} s")
+    _plot(
+        ax,
+        runs,
+        "bins",
+        bingham(yf, H, r0["rho"], r0["K"], r0["tau_y"], r0["gs"]),
+        yf,
+        "Bingham: parabola below the plug",
+        f"steady, t = {r0['end']:g} s",
+    )
     ax.axhline(H - r0["plug_theory"], color="0.6", ls="--", lw=0.8)
     fig.tight_layout()
     save(fig, out / "bingham_plug.png")
-    res.figures.append(("bingham_plug.png", "The Bingham layer's velocity: bin means against "
-                        "theory; the dashed line is the yield surface H - h_p."))
+    res.figures.append(
+        (
+            "bingham_plug.png",
+            "The Bingham layer's velocity: bin means against "
+            "theory; the dashed line is the yield surface H - h_p.",
+        )
+    )
     table = markdown_table(
-        ["h (m)", "particles", "plug width (m)", "h_p (m)", "error", "plug speed (m/s)",
-         "theory (m/s)", "profile L2", "wall (s)"],
-        [[r["h"], r["particles"], fmt(r["plug"], 4), fmt(r["plug_theory"], 4),
-          fmt(r["plug_error"]), fmt(r["speed"], 4), fmt(r["speed_theory"], 4),
-          fmt(r["profile"]), fmt(r["wall"])] for r in runs])
+        [
+            "h (m)",
+            "particles",
+            "plug width (m)",
+            "h_p (m)",
+            "error",
+            "plug speed (m/s)",
+            "theory (m/s)",
+            "profile L2",
+            "wall (s)",
+        ],
+        [
+            [
+                r["h"],
+                r["particles"],
+                fmt(r["plug"], 4),
+                fmt(r["plug_theory"], 4),
+                fmt(r["plug_error"]),
+                fmt(r["speed"], 4),
+                fmt(r["speed_theory"], 4),
+                fmt(r["profile"]),
+                fmt(r["wall"]),
+            ]
+            for r in runs
+        ],
+    )
     res.text = _section(2) + "\n\n" + _section(4) + "\n\n" + table
     return res
 
@@ -372,30 +441,59 @@ def run_layer(out, quick=False, context=None):
     cfg = LAYER_QUICK if quick else LAYER
     runs = [measure_layer(h, cfg["end"]) for h in cfg["spacings"]]
     for r in runs:
-        res.rows.append(Row("mu_i_layer", f"surface velocity, h = {r['h']:g} m",
-                            "|top bin - Bagnold| / Bagnold", abs(r["surface_error"]),
-                            TOL_SURFACE, WHY_SURFACE,
-                            miss=("too few cells across the layer: the first cell above the "
-                                  "no-slip bed, where the shear is largest, lags (see the "
-                                  "table)")))
-    res.rows.append(_order_row("mu_i_layer", "surface velocity", "error", runs,
-                               [abs(r["surface_error"]) for r in runs]))
+        res.rows.append(
+            Row(
+                "mu_i_layer",
+                f"surface velocity, h = {r['h']:g} m",
+                "|top bin - Bagnold| / Bagnold",
+                abs(r["surface_error"]),
+                TOL_SURFACE,
+                WHY_SURFACE,
+                miss=(
+                    "too few cells across the layer: the first cell above the "
+                    "no-slip bed, where the shear is largest, lags (see the "
+                    "table)"
+                ),
+            )
+        )
+    res.rows.append(
+        _order_row(
+            "mu_i_layer", "surface velocity", "error", runs, [abs(r["surface_error"]) for r in runs]
+        )
+    )
     r0 = runs[0]
     H = r0["H"]
     yf = np.linspace(0.0, H, 200)
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    _plot(ax, runs, "bins", bagnold(yf, *r0["args"]), yf, "Bagnold (mu(I))",
-          f"t = {r0['end']:g} s, theta = {math.degrees(r0['theta']):.3g} deg, "
-          f"I = {r0['I']:.3g}")
+    _plot(
+        ax,
+        runs,
+        "bins",
+        bagnold(yf, *r0["args"]),
+        yf,
+        "Bagnold (mu(I))",
+        f"t = {r0['end']:g} s, theta = {math.degrees(r0['theta']):.3g} deg, I = {r0['I']:.3g}",
+    )
     fig.tight_layout()
     save(fig, out / "mu_i_layer.png")
-    res.figures.append(("mu_i_layer.png", "The granular layer's velocity: bin means against "
-                        "Bagnold's profile."))
+    res.figures.append(
+        ("mu_i_layer.png", "The granular layer's velocity: bin means against Bagnold's profile.")
+    )
     table = markdown_table(
-        ["h (m)", "particles", "surface (m/s)", "Bagnold (m/s)", "error", "profile L2",
-         "wall (s)"],
-        [[r["h"], r["particles"], fmt(r["surface"], 4), fmt(r["surface_theory"], 4),
-          fmt(r["surface_error"]), fmt(r["profile"]), fmt(r["wall"])] for r in runs])
+        ["h (m)", "particles", "surface (m/s)", "Bagnold (m/s)", "error", "profile L2", "wall (s)"],
+        [
+            [
+                r["h"],
+                r["particles"],
+                fmt(r["surface"], 4),
+                fmt(r["surface_theory"], 4),
+                fmt(r["surface_error"]),
+                fmt(r["profile"]),
+                fmt(r["wall"]),
+            ]
+            for r in runs
+        ],
+    )
     res.text = _section(3) + "\n\n" + _section(4) + "\n\n" + table
     return res

@@ -37,7 +37,7 @@ class Row:
 
     @property
     def status(self):
-        """"pass", "miss", or "n/a" (nothing to measure, explained in ``miss``)."""
+        """ "pass", "miss", or "n/a" (nothing to measure, explained in ``miss``)."""
         if self.not_measurable and not math.isfinite(self.value):
             return "n/a"
         return "pass" if self.passed else "miss"
@@ -56,9 +56,16 @@ class Row:
         return {"<=": "<= ", ">=": ">= ", "|<=|": "|x| <= "}[self.sense] + f"{self.tolerance:.3g}"
 
     def as_dict(self):
-        return {"case": self.case, "quantity": self.quantity, "measure": self.measure,
-                "value": self.value, "tolerance": self.tolerance_text,
-                "unit": self.unit, "status": self.status, "justification": self.justification}
+        return {
+            "case": self.case,
+            "quantity": self.quantity,
+            "measure": self.measure,
+            "value": self.value,
+            "tolerance": self.tolerance_text,
+            "unit": self.unit,
+            "status": self.status,
+            "justification": self.justification,
+        }
 
 
 @dataclass

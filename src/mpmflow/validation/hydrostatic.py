@@ -37,19 +37,27 @@ SOLVER_FLOOR = 1e-6  # relative errors below this are the pressure solve's toler
 
 # tolerances, fixed before the results were looked at
 TOL_L2 = 0.01
-WHY_L2 = ("1% of rho g H is a 1% error in the wall force rho g H^2/2, the quantity an "
-          "engineer takes from a column at rest")
+WHY_L2 = (
+    "1% of rho g H is a 1% error in the wall force rho g H^2/2, the quantity an "
+    "engineer takes from a column at rest"
+)
 TOL_MAX = 0.02
 WHY_MAX = "2% of rho g H: half a particle layer (spacing/8) of head at the 0.02 m grid is 1.3%"
 TOL_ORDER = 1.0
-WHY_ORDER = ("p = 0 imposed at the node row half a cell above the true surface shifts the "
-             "pressure by rho g h/2: an O(h) error")
+WHY_ORDER = (
+    "p = 0 imposed at the node row half a cell above the true surface shifts the "
+    "pressure by rho g h/2: an O(h) error"
+)
 TOL_SPEED = 1e-3
-WHY_SPEED = ("0.07% of the wave speed sqrt(g H) = 1.4 m/s; a particle this slow moves 2 mm in "
-             "2 s, invisible in any plot")
+WHY_SPEED = (
+    "0.07% of the wave speed sqrt(g H) = 1.4 m/s; a particle this slow moves 2 mm in "
+    "2 s, invisible in any plot"
+)
 TOL_CHECKER = 1e-3
-WHY_CHECKER = ("0.1% of rho g H; the (-1)^(i+j) mode is the signature of an unstable "
-               "equal-order pair, which would grow to O(1) if present")
+WHY_CHECKER = (
+    "0.1% of rho g H; the (-1)^(i+j) mode is the signature of an unstable "
+    "equal-order pair, which would grow to O(1) if present"
+)
 
 
 def checkerboard(sim, H):
@@ -76,8 +84,10 @@ def errors(P, H):
     """(relative L2, max / (rho g H)) of the particle pressure against rho g (H - y)."""
     exact = RHO * G * (H - P.x[:, 1])
     err = P.pressure - exact
-    return (float(np.sqrt(np.sum(err**2) / np.sum(exact**2))),
-            float(np.abs(err).max() / (RHO * G * H)))
+    return (
+        float(np.sqrt(np.sum(err**2) / np.sum(exact**2))),
+        float(np.abs(err).max() / (RHO * G * H)),
+    )
 
 
 def surface(h, top, case):
@@ -87,17 +97,27 @@ def surface(h, top, case):
 
 
 def run_default(h, end):
-    sim = run_example("hydrostatic.toml", [f"grid.spacing={h}", f"bodies.0.max=[0.1, {FILL}]",
-                                           f"time.end={end}"])
+    sim = run_example(
+        "hydrostatic.toml", [f"grid.spacing={h}", f"bodies.0.max=[0.1, {FILL}]", f"time.end={end}"]
+    )
     P = sim.particles
     H = surface(h, FILL, sim.case)
     l2, mx = errors(P, H)
-    return {"h": h, "H": H, "particles": P.count, "l2": l2, "max": mx,
-            "speed": float(np.nanmax(sim.series("max_speed"))),
-            "speed_end": float(sim.series("max_speed")[-1]),
-            "checker": checkerboard(sim, H), "y": P.x[:, 1].copy(),
-            "p": P.pressure.copy(), "t": sim.series("time"),
-            "vt": sim.series("max_speed"), "wall": sim.summary["wall_seconds"]}
+    return {
+        "h": h,
+        "H": H,
+        "particles": P.count,
+        "l2": l2,
+        "max": mx,
+        "speed": float(np.nanmax(sim.series("max_speed"))),
+        "speed_end": float(sim.series("max_speed")[-1]),
+        "checker": checkerboard(sim, H),
+        "y": P.x[:, 1].copy(),
+        "p": P.pressure.copy(),
+        "t": sim.series("time"),
+        "vt": sim.series("max_speed"),
+        "wall": sim.summary["wall_seconds"],
+    }
 
 
 def run_paper(h, end):
@@ -109,21 +129,36 @@ def run_paper(h, end):
         if sim.time > 0:
             rec.append((sim.time, *errors(sim.particles, H)))
 
-    sim = run_example("hydrostatic.toml", ['solver.formulation="paper"', f"grid.spacing={h}",
-                                           f"bodies.0.max=[0.1, {top}]", f"time.end={end}"],
-                      on_output=record)
+    sim = run_example(
+        "hydrostatic.toml",
+        [
+            'solver.formulation="paper"',
+            f"grid.spacing={h}",
+            f"bodies.0.max=[0.1, {top}]",
+            f"time.end={end}",
+        ],
+        on_output=record,
+    )
     H = surface(h, top, sim.case)
     rec = np.array(rec)
     window = rec[:, 0] <= PAPER_WINDOW + 1e-9
-    return {"h": h, "H": H, "particles": sim.particles.count,
-            "l2": float(rec[window, 1].mean()), "max": float(rec[window, 2].mean()),
-            "offset": np.sqrt(3.0) * (PAPER_TOP - H) / H,
-            "spread": float(np.ptp(rec[window, 1]) / rec[window, 1].mean()),
-            "speed_window": float(np.nanmax(sim.series("max_speed")[
-                sim.series("time") <= PAPER_WINDOW + 1e-9])),
-            "speed": float(np.nanmax(sim.series("max_speed"))),
-            "trace": rec, "t": sim.series("time"), "vt": sim.series("max_speed"),
-            "wall": sim.summary["wall_seconds"]}
+    return {
+        "h": h,
+        "H": H,
+        "particles": sim.particles.count,
+        "l2": float(rec[window, 1].mean()),
+        "max": float(rec[window, 2].mean()),
+        "offset": np.sqrt(3.0) * (PAPER_TOP - H) / H,
+        "spread": float(np.ptp(rec[window, 1]) / rec[window, 1].mean()),
+        "speed_window": float(
+            np.nanmax(sim.series("max_speed")[sim.series("time") <= PAPER_WINDOW + 1e-9])
+        ),
+        "speed": float(np.nanmax(sim.series("max_speed"))),
+        "trace": rec,
+        "t": sim.series("time"),
+        "vt": sim.series("max_speed"),
+        "wall": sim.summary["wall_seconds"],
+    }
 
 
 def run(out, quick=False, context=None):
@@ -134,57 +169,131 @@ def run(out, quick=False, context=None):
     paper = [run_paper(h, end_paper) for h in SPACINGS]
     name = "hydrostatic"
     for r in runs:
-        res.rows.append(Row(name, f"default: pressure (L2), h = {r['h']} m", "relative L2 over "
-                            f"particles at t = {end:g} s", r["l2"], TOL_L2, WHY_L2))
-        res.rows.append(Row(name, f"default: pressure (max), h = {r['h']} m", "max |p - rho g "
-                            f"(H - y)| / (rho g H) at t = {end:g} s", r["max"], TOL_MAX,
-                            WHY_MAX))
+        res.rows.append(
+            Row(
+                name,
+                f"default: pressure (L2), h = {r['h']} m",
+                f"relative L2 over particles at t = {end:g} s",
+                r["l2"],
+                TOL_L2,
+                WHY_L2,
+            )
+        )
+        res.rows.append(
+            Row(
+                name,
+                f"default: pressure (max), h = {r['h']} m",
+                f"max |p - rho g (H - y)| / (rho g H) at t = {end:g} s",
+                r["max"],
+                TOL_MAX,
+                WHY_MAX,
+            )
+        )
+
     def node_miss(r, kind):
-        rel = (f"sqrt(3) h / (2 H) = {r['offset']:.3f} in L2" if kind == "L2" else
-               f"h / (2 H) = {(PAPER_TOP - r['H']) / r['H']:.3f} of rho g H")
-        return (f"p = 0 on the node row at {PAPER_TOP:g} m, half a cell above the surface, adds "
-                f"rho g h/2 to the column, {rel}: the paper's O(h) surface error that the "
-                "order row measures (see the section)")
+        rel = (
+            f"sqrt(3) h / (2 H) = {r['offset']:.3f} in L2"
+            if kind == "L2"
+            else f"h / (2 H) = {(PAPER_TOP - r['H']) / r['H']:.3f} of rho g H"
+        )
+        return (
+            f"p = 0 on the node row at {PAPER_TOP:g} m, half a cell above the surface, adds "
+            f"rho g h/2 to the column, {rel}: the paper's O(h) surface error that the "
+            "order row measures (see the section)"
+        )
 
     for r in paper:
-        res.rows.append(Row(name, f"paper: pressure (L2), h = {r['h']} m", "relative L2 over "
-                            f"particles, mean over outputs in 0-{PAPER_WINDOW:g} s", r["l2"],
-                            TOL_L2, WHY_L2, miss=node_miss(r, "L2")))
-        res.rows.append(Row(name, f"paper: pressure (max), h = {r['h']} m", "max |p - rho g "
-                            f"(H - y)| / (rho g H), mean over outputs in 0-{PAPER_WINDOW:g} s",
-                            r["max"], TOL_MAX, WHY_MAX, miss=node_miss(r, "max")))
+        res.rows.append(
+            Row(
+                name,
+                f"paper: pressure (L2), h = {r['h']} m",
+                f"relative L2 over particles, mean over outputs in 0-{PAPER_WINDOW:g} s",
+                r["l2"],
+                TOL_L2,
+                WHY_L2,
+                miss=node_miss(r, "L2"),
+            )
+        )
+        res.rows.append(
+            Row(
+                name,
+                f"paper: pressure (max), h = {r['h']} m",
+                f"max |p - rho g (H - y)| / (rho g H), mean over outputs in 0-{PAPER_WINDOW:g} s",
+                r["max"],
+                TOL_MAX,
+                WHY_MAX,
+                miss=node_miss(r, "max"),
+            )
+        )
     l2_paper = [r["l2"] for r in paper]
     order = observed_order(SPACINGS, l2_paper)
-    res.rows.append(Row(
-        name, "paper: pressure, convergence", "observed order of the L2 error (least-squares "
-        "fit over the 3 spacings)", order, TOL_ORDER, WHY_ORDER, sense=">=",
-        miss="the paper formulation's pressure error does not fall linearly with the spacing "
-        "(see the section)"))
-    res.rows.append(Row(name, "default: spurious velocity", f"largest particle speed over "
-                        f"0-{end:g} s, all spacings", max(r["speed"] for r in runs), TOL_SPEED,
-                        WHY_SPEED, unit="m/s"))
-    res.rows.append(Row(name, "default: checkerboard", "|mean of (-1)^(i+j) nodal pressure "
-                        "error| / (rho g H), full interior nodes, all spacings",
-                        max(r["checker"] for r in runs), TOL_CHECKER, WHY_CHECKER))
+    res.rows.append(
+        Row(
+            name,
+            "paper: pressure, convergence",
+            "observed order of the L2 error (least-squares fit over the 3 spacings)",
+            order,
+            TOL_ORDER,
+            WHY_ORDER,
+            sense=">=",
+            miss="the paper formulation's pressure error does not fall linearly with the spacing "
+            "(see the section)",
+        )
+    )
+    res.rows.append(
+        Row(
+            name,
+            "default: spurious velocity",
+            f"largest particle speed over 0-{end:g} s, all spacings",
+            max(r["speed"] for r in runs),
+            TOL_SPEED,
+            WHY_SPEED,
+            unit="m/s",
+        )
+    )
+    res.rows.append(
+        Row(
+            name,
+            "default: checkerboard",
+            "|mean of (-1)^(i+j) nodal pressure "
+            "error| / (rho g H), full interior nodes, all spacings",
+            max(r["checker"] for r in runs),
+            TOL_CHECKER,
+            WHY_CHECKER,
+        )
+    )
 
     plt = pyplot()
     fig, ax = plt.subplots(2, 2, figsize=(10, 8))
     ax = ax.ravel()
     for r, q in zip(runs, paper):
         o = np.argsort(r["y"])
-        ax[0].plot(np.abs(r["p"] - RHO * G * (r["H"] - r["y"]))[o] / (RHO * G * r["H"]),
-                   r["y"][o], ".", ms=2, label=f"h = {r['h']} m")
-        line, = ax[1].semilogy(r["t"], np.maximum(r["vt"], 1e-16),
-                               label=f"default, h = {r['h']} m")
-        ax[1].semilogy(q["t"], np.maximum(q["vt"], 1e-16), "--", color=line.get_color(),
-                       label=f"paper, h = {q['h']} m")
-        ax[2].semilogy(q["trace"][:, 0], q["trace"][:, 1], color=line.get_color(),
-                       label=f"h = {q['h']} m")
+        ax[0].plot(
+            np.abs(r["p"] - RHO * G * (r["H"] - r["y"]))[o] / (RHO * G * r["H"]),
+            r["y"][o],
+            ".",
+            ms=2,
+            label=f"h = {r['h']} m",
+        )
+        (line,) = ax[1].semilogy(
+            r["t"], np.maximum(r["vt"], 1e-16), label=f"default, h = {r['h']} m"
+        )
+        ax[1].semilogy(
+            q["t"],
+            np.maximum(q["vt"], 1e-16),
+            "--",
+            color=line.get_color(),
+            label=f"paper, h = {q['h']} m",
+        )
+        ax[2].semilogy(
+            q["trace"][:, 0], q["trace"][:, 1], color=line.get_color(), label=f"h = {q['h']} m"
+        )
     ax[2].axvspan(0, PAPER_WINDOW, color="0.85", label="averaging window")
     h = np.array(SPACINGS)
     ax[3].loglog(h, l2_paper, "o-", label=f"paper: measured, order {order:.2f}")
-    ax[3].loglog(h, [r["offset"] for r in paper], "k--",
-                 label="sqrt(3) h / (2 H): p = 0 half a cell high")
+    ax[3].loglog(
+        h, [r["offset"] for r in paper], "k--", label="sqrt(3) h / (2 H): p = 0 half a cell high"
+    )
     ax[0].set_xscale("symlog", linthresh=1e-12)
     ax[0].set_xlabel("|p - rho g (H - y)| / (rho g H) [-]  (default, at the end)")
     ax[0].set_ylabel("y [m]")
@@ -198,35 +307,81 @@ def run(out, quick=False, context=None):
         a.legend(fontsize=7)
     fig.tight_layout()
     save(fig, out / "hydrostatic.png")
-    res.figures.append(("hydrostatic.png", "Top left: default formulation, particle pressure "
-                        "error at the end (round-off); top right: the largest particle speed "
-                        "against time (solid: default, dashed: paper); bottom left: paper "
-                        "formulation, relative L2 pressure error against time, with the "
-                        "averaging window; bottom right: paper formulation, the averaged L2 "
-                        "error against the spacing."))
+    res.figures.append(
+        (
+            "hydrostatic.png",
+            "Top left: default formulation, particle pressure "
+            "error at the end (round-off); top right: the largest particle speed "
+            "against time (solid: default, dashed: paper); bottom left: paper "
+            "formulation, relative L2 pressure error against time, with the "
+            "averaging window; bottom right: paper formulation, the averaged L2 "
+            "error against the spacing.",
+        )
+    )
     table = markdown_table(
-        ["grid spacing h (m)", "surface H (m)", "particles", "L2 error (rel.)",
-         "max error / (rho g H)", "max speed (m/s)", f"speed at {end:g} s (m/s)",
-         "checkerboard / (rho g H)", "wall (s)"],
-        [[r["h"], fmt(r["H"], 4), r["particles"], fmt(r["l2"]), fmt(r["max"]), fmt(r["speed"]),
-          fmt(r["speed_end"]), fmt(r["checker"]), fmt(r["wall"])] for r in runs])
+        [
+            "grid spacing h (m)",
+            "surface H (m)",
+            "particles",
+            "L2 error (rel.)",
+            "max error / (rho g H)",
+            "max speed (m/s)",
+            f"speed at {end:g} s (m/s)",
+            "checkerboard / (rho g H)",
+            "wall (s)",
+        ],
+        [
+            [
+                r["h"],
+                fmt(r["H"], 4),
+                r["particles"],
+                fmt(r["l2"]),
+                fmt(r["max"]),
+                fmt(r["speed"]),
+                fmt(r["speed_end"]),
+                fmt(r["checker"]),
+                fmt(r["wall"]),
+            ]
+            for r in runs
+        ],
+    )
     table_paper = markdown_table(
-        ["grid spacing h (m)", "surface H (m)", "cells below the surface", "particles",
-         f"L2 error (rel.), mean 0-{PAPER_WINDOW:g} s",
-         f"max error / (rho g H), mean 0-{PAPER_WINDOW:g} s", "sqrt(3) h / (2 H)",
-         "L2 spread in the window (rel.)", f"max speed 0-{PAPER_WINDOW:g} s (m/s)"]
+        [
+            "grid spacing h (m)",
+            "surface H (m)",
+            "cells below the surface",
+            "particles",
+            f"L2 error (rel.), mean 0-{PAPER_WINDOW:g} s",
+            f"max error / (rho g H), mean 0-{PAPER_WINDOW:g} s",
+            "sqrt(3) h / (2 H)",
+            "L2 spread in the window (rel.)",
+            f"max speed 0-{PAPER_WINDOW:g} s (m/s)",
+        ]
         + ([f"max speed 0-{end_paper:g} s (m/s)"] if end_paper > PAPER_WINDOW else [])
         + ["wall (s)"],
-        [[r["h"], fmt(r["H"], 4), fmt(r["H"] / r["h"]), r["particles"], fmt(r["l2"]),
-          fmt(r["max"]), fmt(r["offset"]), fmt(r["spread"], 2), fmt(r["speed_window"])]
-         + ([fmt(r["speed"])] if end_paper > PAPER_WINDOW else []) + [fmt(r["wall"])]
-         for r in paper])
+        [
+            [
+                r["h"],
+                fmt(r["H"], 4),
+                fmt(r["H"] / r["h"]),
+                r["particles"],
+                fmt(r["l2"]),
+                fmt(r["max"]),
+                fmt(r["offset"]),
+                fmt(r["spread"], 2),
+                fmt(r["speed_window"]),
+            ]
+            + ([fmt(r["speed"])] if end_paper > PAPER_WINDOW else [])
+            + [fmt(r["wall"])]
+            for r in paper
+        ],
+    )
     at_floor = all(r["l2"] < SOLVER_FLOOR for r in runs)
     res.text = (
         "Water at rest in a tank 0.1 m x 0.3 m (`examples/hydrostatic.toml`), 16 particles "
         "per cell, dt = 1 ms, at three grid spacings, with two formulations; each row of the "
         "summary says which: **`default:`** rows use the default solver settings "
-        "(`solver.formulation = \"mpmflow\"`: sub-cell free surface with ghost-fluid "
+        '(`solver.formulation = "mpmflow"`: sub-cell free surface with ghost-fluid '
         "extrapolation, wall flux), **`paper:`** rows use `--set solver.formulation=paper` "
         "(p = 0 at free-surface nodes, homogeneous Neumann walls, material-point quadrature "
         "in partial cells, pure FLIP). The exact pressure is rho g (H - y).\n\n"
@@ -236,16 +391,20 @@ def run(out, quick=False, context=None):
         "the particle pressures at the end. **Checkerboard**: the nodal pressure error e_i at "
         "the interior nodes whose four cells are full (theta >= 0.9), projected on the "
         "(-1)^(i+j) mode: |mean((-1)^(i+j) e_i)| / (rho g H). A smooth error averages out; an "
-        "odd-even mode of the equal-order velocity-pressure pair would not.\n\n" + table
+        "odd-even mode of the equal-order velocity-pressure pair would not.\n\n"
+        + table
         + "\n\n"
-        + ("The error is at the level of the pressure solve's tolerance (relative residual "
-           "1e-8) at every spacing: the discretisation reproduces the linear hydrostatic field "
-           "exactly (linear fields lie in the bilinear space, the sub-cell free surface places "
-           "p = 0 where the material ends, and the wall term balances gravity), so there is "
-           "no discretisation error whose order could be observed, and the summary has no "
-           "order row for this formulation."
-           if at_floor else "The default formulation's error is above the pressure solve's "
-           "tolerance (see the table).")
+        + (
+            "The error is at the level of the pressure solve's tolerance (relative residual "
+            "1e-8) at every spacing: the discretisation reproduces the linear hydrostatic field "
+            "exactly (linear fields lie in the bilinear space, the sub-cell free surface places "
+            "p = 0 where the material ends, and the wall term balances gravity), so there is "
+            "no discretisation error whose order could be observed, and the summary has no "
+            "order row for this formulation."
+            if at_floor
+            else "The default formulation's error is above the pressure solve's "
+            "tolerance (see the table)."
+        )
         + "\n\n"
         f"**Paper formulation: the convergence study.** Filled to H = {PAPER_TOP:g} m - h/2: "
         "9.5, 19.5 and 39.5 cells deep, so the surface lies on no grid line at any of the "
@@ -264,15 +423,22 @@ def run(out, quick=False, context=None):
         "half of the finest grid's plateau; this window was chosen after seeing that "
         "measurement and before the order was computed. The spread column is (max - min) / "
         "mean of the L2 error over the window's outputs."
-        + ("" if not quick else f" (Quick run: the paper columns run for {PAPER_WINDOW:g} s "
-           "only, the window itself.)") + "\n\n" + table_paper + "\n\n"
+        + (
+            ""
+            if not quick
+            else f" (Quick run: the paper columns run for {PAPER_WINDOW:g} s "
+            "only, the window itself.)"
+        )
+        + "\n\n"
+        + table_paper
+        + "\n\n"
         f"Observed order of the paper formulation's L2 error (least-squares fit of log error "
         f"against log h over the three spacings): **{order:.2f}** (tolerance >= "
         f"{TOL_ORDER:g}, fixed before the runs). The measured L2 error is "
-        + " to ".join(fmt(f(r["l2"] / r["offset"] - 1 for r in paper) * 100, 2)
-                      for f in (min, max))
+        + " to ".join(fmt(f(r["l2"] / r["offset"] - 1 for r in paper) * 100, 2) for f in (min, max))
         + "% above sqrt(3) h / (2 H) at the three spacings: the half-cell surface offset "
         "accounts for nearly all of it. The engineering "
         "tolerances of the pressure rows (1% L2, 2% max) are the same for both formulations; "
-        "the paper formulation misses them where its half-cell offset exceeds them.")
+        "the paper formulation misses them where its half-cell offset exceeds them."
+    )
     return res

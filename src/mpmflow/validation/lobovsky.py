@@ -35,38 +35,51 @@ G = 9.81
 LEVELS = "validation/lobovsky_2014_H300mm_water_levels_fig16.csv"
 PRESSURE = "validation/lobovsky_2014_H300mm_wall_pressure_fig18_event5.csv"
 # the example's [[probes]]: name -> x (m) and data columns; name -> y (m) and data column
-GAUGES = {"H1": (0.300, [1]), "H2": (0.865, [2, 3]), "H3": (1.114, [4, 5]),
-          "H4": (1.3625, [6, 7])}
-SENSORS = {"sensor 1": (0.003, 1), "sensor 2": (0.015, 2), "sensor 3": (0.030, 4),
-           "sensor 4": (0.080, 5)}
+GAUGES = {"H1": (0.300, [1]), "H2": (0.865, [2, 3]), "H3": (1.114, [4, 5]), "H4": (1.3625, [6, 7])}
+SENSORS = {
+    "sensor 1": (0.003, 1),
+    "sensor 2": (0.015, 2),
+    "sensor 3": (0.030, 4),
+    "sensor 4": (0.080, 5),
+}
 
 
 def probe_name(label):
     """The probe of examples/lobovsky.toml behind a gauge's or sensor's label."""
     return label.replace(" ", "_")
+
+
 IMPACT = (2.0, 3.5)  # window of the first impact peak, in t sqrt(g/H)
 SPACING, SPACING_QUICK = 0.01, 0.01
 END, END_QUICK = 1.25, 0.75  # s
 
 # tolerances, fixed before the results were looked at
 TOL_LEVEL = 0.10
-WHY_LEVEL = ("0.1 H = 30 mm: the gauges see a bore and splashes whose repetitions differ by "
-             "several cm, and the release is a gate, not instantaneous")
+WHY_LEVEL = (
+    "0.1 H = 30 mm: the gauges see a bore and splashes whose repetitions differ by "
+    "several cm, and the release is a gate, not instantaneous"
+)
 TOL_PEAK_TIME = 0.2
-WHY_PEAK_TIME = ("0.2 in t sqrt(g/H) = 35 ms: the gate takes ~0.09 s to clear the column, which "
-                 "delays the experiment's surge")
+WHY_PEAK_TIME = (
+    "0.2 in t sqrt(g/H) = 35 ms: the gate takes ~0.09 s to clear the column, which "
+    "delays the experiment's surge"
+)
 TOL_PEAK = 0.5
-WHY_PEAK = ("impact peaks scatter by about a factor of two between Lobovsky's 100 repetitions, "
-            "and this series is one of them (peak event 5)")
+WHY_PEAK = (
+    "impact peaks scatter by about a factor of two between Lobovsky's 100 repetitions, "
+    "and this series is one of them (peak event 5)"
+)
 
 
 def assert_probe(sim, label, quantity, position):
     """The example's probe is where this module's table says (they are kept in step)."""
     probe = next(p for p in sim.case.probes if p.name == probe_name(label))
     if probe.quantity != quantity or not np.allclose(probe.position, position):
-        raise RuntimeError(f"examples/lobovsky.toml: probe {probe.name} is a {probe.quantity} "
-                           f"probe at {probe.position} m; the validation expects a {quantity} "
-                           f"probe at {position} m")
+        raise RuntimeError(
+            f"examples/lobovsky.toml: probe {probe.name} is a {probe.quantity} "
+            f"probe at {probe.position} m; the validation expects a {quantity} "
+            f"probe at {position} m"
+        )
 
 
 def _running_mean(y, n):
@@ -89,10 +102,14 @@ def run(out, quick=False, context=None):
     end = END_QUICK if quick else END
     res = CaseResult("lobovsky", "Lobovsky et al. (2014), H = 0.3 m")
     dt = 1e-3
-    sim = run_example("lobovsky.toml", [f"grid.spacing={h}", f"time.dt={dt}",
-                                        f"time.end={end}", f"output.interval={dt}"])
-    rec = {"t": sim.series("time"),
-           **{k: sim.probe_series(probe_name(k)) for k in [*GAUGES, *SENSORS]}}
+    sim = run_example(
+        "lobovsky.toml",
+        [f"grid.spacing={h}", f"time.dt={dt}", f"time.end={end}", f"output.interval={dt}"],
+    )
+    rec = {
+        "t": sim.series("time"),
+        **{k: sim.probe_series(probe_name(k)) for k in [*GAUGES, *SENSORS]},
+    }
     for k, (x, _) in GAUGES.items():
         assert_probe(sim, k, "level", [x, 0.0])
     for k, (y, _) in SENSORS.items():
@@ -112,20 +129,35 @@ def run(out, quick=False, context=None):
         ref = lev[sel][:, cols].mean(axis=1)
         sim_h = np.interp(te, ts, np.array(rec[k_name]) / H)
         rms = float(np.sqrt(np.mean((sim_h - ref) ** 2)))
-        scatter = (float(np.sqrt(np.mean((lev[sel, cols[0]] - lev[sel, cols[1]]) ** 2)))
-                   if len(cols) == 2 else float("nan"))
-        res.rows.append(Row(name, f"water level {k_name} (x = {xg} m)", "RMS (h - h_exp) / H, "
-                            f"t sqrt(g/H) <= {ts[-1]:.2f}", rms, TOL_LEVEL, WHY_LEVEL,
-                            miss="after the impact the reflected jet plunges back over the "
-                                 "gauge: breaking and splashes that a 2D inviscid run at this "
-                                 "mesh does not reproduce sample by sample"))
+        scatter = (
+            float(np.sqrt(np.mean((lev[sel, cols[0]] - lev[sel, cols[1]]) ** 2)))
+            if len(cols) == 2
+            else float("nan")
+        )
+        res.rows.append(
+            Row(
+                name,
+                f"water level {k_name} (x = {xg} m)",
+                f"RMS (h - h_exp) / H, t sqrt(g/H) <= {ts[-1]:.2f}",
+                rms,
+                TOL_LEVEL,
+                WHY_LEVEL,
+                miss="after the impact the reflected jet plunges back over the "
+                "gauge: breaking and splashes that a 2D inviscid run at this "
+                "mesh does not reproduce sample by sample",
+            )
+        )
         level_lines.append([k_name, xg, fmt(rms), fmt(scatter)])
         a_ = ax[0, k]
         for c in cols:
             a_.plot(lev[:, 0], lev[:, c], "k-", lw=0.8, alpha=0.6)
         a_.plot(ts, np.array(rec[k_name]) / H, "C0-", label=f"MPM h = {h} m")
-        a_.set(title=f"{k_name}, x = {xg} m", xlabel="t sqrt(g/H) [-]", ylabel="h / H [-]",
-               xlim=(0, max(ts[-1], 1)))
+        a_.set(
+            title=f"{k_name}, x = {xg} m",
+            xlabel="t sqrt(g/H) [-]",
+            ylabel="h / H [-]",
+            xlim=(0, max(ts[-1], 1)),
+        )
         a_.legend(fontsize=7)
     n_avg = max(1, int(round(dt * scale / np.median(np.diff(prs[:, 0])))))
     sensor_lines = []
@@ -136,36 +168,83 @@ def run(out, quick=False, context=None):
         t_exp, p_exp = _peak(prs[:, 0], pe)
         dt_err = abs(t_sim - t_exp)
         rel = (p_sim - p_exp) / p_exp
-        res.rows.append(Row(name, f"peak time, {s_name} (y = {ys * 1e3:g} mm)",
-                            "|t_sim - t_exp| sqrt(g/H)", dt_err, TOL_PEAK_TIME, WHY_PEAK_TIME,
-                            miss="an instantaneous release: the simulated surge arrives before "
-                                 "the experiment's, whose gate still holds the water back"))
-        res.rows.append(Row(name, f"peak pressure, {s_name} (y = {ys * 1e3:g} mm)",
-                            "(p_sim - p_exp) / p_exp of the impact peak (signed)", rel, TOL_PEAK,
-                            WHY_PEAK, sense="|<=|",
-                            miss="impact peaks last a few ms: the 1 ms step and the "
-                                 "h-wide sensor window set the simulated value; at 80 mm "
-                                 "the measured series has no sharp impact peak in the window "
-                                 "(its maximum lies at the window's end), and the run overshoots"
-                                 " the 1 ms mean of the run-up pressure there"))
-        sensor_lines.append([s_name, ys * 1e3, fmt(t_exp), fmt(t_sim), fmt(p_exp), fmt(p_sim),
-                             fmt(float(prs[:, col].max()))])
+        res.rows.append(
+            Row(
+                name,
+                f"peak time, {s_name} (y = {ys * 1e3:g} mm)",
+                "|t_sim - t_exp| sqrt(g/H)",
+                dt_err,
+                TOL_PEAK_TIME,
+                WHY_PEAK_TIME,
+                miss="an instantaneous release: the simulated surge arrives before "
+                "the experiment's, whose gate still holds the water back",
+            )
+        )
+        res.rows.append(
+            Row(
+                name,
+                f"peak pressure, {s_name} (y = {ys * 1e3:g} mm)",
+                "(p_sim - p_exp) / p_exp of the impact peak (signed)",
+                rel,
+                TOL_PEAK,
+                WHY_PEAK,
+                sense="|<=|",
+                miss="impact peaks last a few ms: the 1 ms step and the "
+                "h-wide sensor window set the simulated value; at 80 mm "
+                "the measured series has no sharp impact peak in the window "
+                "(its maximum lies at the window's end), and the run overshoots"
+                " the 1 ms mean of the run-up pressure there",
+            )
+        )
+        sensor_lines.append(
+            [
+                s_name,
+                ys * 1e3,
+                fmt(t_exp),
+                fmt(t_sim),
+                fmt(p_exp),
+                fmt(p_sim),
+                fmt(float(prs[:, col].max())),
+            ]
+        )
         a_ = ax[1, k]
         a_.plot(prs[:, 0], prs[:, col], "-", color="0.7", lw=0.5, label="experiment, 20 kHz")
         a_.plot(prs[:, 0], pe, "k-", lw=0.8, label="experiment, 1 ms mean")
         a_.plot(ts, ps, "C0-", label=f"MPM h = {h} m")
-        a_.set(title=f"{s_name}, y = {ys * 1e3:g} mm", xlabel="t sqrt(g/H) [-]",
-               ylabel="p / (rho g H) [-]", xlim=(1.5, max(ts[-1], 2)))
+        a_.set(
+            title=f"{s_name}, y = {ys * 1e3:g} mm",
+            xlabel="t sqrt(g/H) [-]",
+            ylabel="p / (rho g H) [-]",
+            xlim=(1.5, max(ts[-1], 2)),
+        )
         a_.legend(fontsize=7)
     fig.tight_layout()
     save(fig, out / "lobovsky.png")
-    res.figures.append(("lobovsky.png", "Water levels at H1-H4 (top; black: the measured "
-                        "repetitions) and pressure on the downstream wall (bottom)."))
-    res.text = (__doc__.split("\n", 2)[2].strip() + f"\n\nGrid spacing {h} m "
-                f"({sim.particles.count} particles, {sim.summary['wall_seconds']:.0f} s wall).\n\n"
-                + markdown_table(["gauge", "x (m)", "RMS error / H", "scatter of the two "
-                                  "repetitions / H"], level_lines) + "\n\n"
-                + markdown_table(["sensor", "y (mm)", "peak time, exp. (t sqrt(g/H))",
-                                  "peak time, MPM", "peak p/(rho g H), exp. (1 ms mean)",
-                                  "peak, MPM", "raw 20 kHz maximum, exp."], sensor_lines))
+    res.figures.append(
+        (
+            "lobovsky.png",
+            "Water levels at H1-H4 (top; black: the measured "
+            "repetitions) and pressure on the downstream wall (bottom).",
+        )
+    )
+    res.text = (
+        __doc__.split("\n", 2)[2].strip() + f"\n\nGrid spacing {h} m "
+        f"({sim.particles.count} particles, {sim.summary['wall_seconds']:.0f} s wall).\n\n"
+        + markdown_table(
+            ["gauge", "x (m)", "RMS error / H", "scatter of the two repetitions / H"], level_lines
+        )
+        + "\n\n"
+        + markdown_table(
+            [
+                "sensor",
+                "y (mm)",
+                "peak time, exp. (t sqrt(g/H))",
+                "peak time, MPM",
+                "peak p/(rho g H), exp. (1 ms mean)",
+                "peak, MPM",
+                "raw 20 kHz maximum, exp.",
+            ],
+            sensor_lines,
+        )
+    )
     return res

@@ -24,7 +24,6 @@ fractions f (particle volume in the cell over the cell's volume):
   (volume / tank width).
 """
 
-
 import numpy as np
 
 from .. import state
@@ -46,19 +45,21 @@ LAST = 1.0  # s, the settled level is averaged over the last second
 TOL_REGION = {"sloshing": 0.01, "dam break": 0.03}
 WHY_REGION = {
     "sloshing": "1% of the water is 2 mm of depth, a quarter of the wave amplitude: the issue's "
-                "criterion",
+    "criterion",
     "dam break": "3% of the water is 1.9 mm of settled depth, half a cell of the finer mesh: "
-                 "the issue's criterion",
+    "the issue's criterion",
 }
 TOL_PACKED = {"sloshing": 0.01, "dam break": 0.05}
 WHY_PACKED = {
     "sloshing": "the issue's criterion: at most 1 cell in 100 with 4 particles more than 16",
     "dam break": "the volume case's tolerance for the dam break (impact and overturning pack "
-                 "the particles for a moment)",
+    "the particles for a moment)",
 }
 TOL_ENERGY = 0.005
-WHY_ENERGY = ("the issue's criterion: an inviscid flow in closed walls may lose energy but must "
-              "not gain it; 0.5% of the initial energy")
+WHY_ENERGY = (
+    "the issue's criterion: an inviscid flow in closed walls may lose energy but must "
+    "not gain it; 0.5% of the initial energy"
+)
 TOL_PERIOD = 0.02
 WHY_PERIOD = "the issue's criterion; the sloshing case's tolerance at the finest grid"
 TOL_LEVEL = 0.03
@@ -77,15 +78,24 @@ class Record:
         vm = volume_measures(bins.theta, g.cell_volume, sim.volume0)
         rho = np.empty(g.ncells)
         state.cell_volume(g, P.x, P.volume, rho)
-        hat = (np.count_nonzero(rho > 1.2 * g.cell_volume)
-               / max(np.count_nonzero(bins.theta > 0), 1))
+        hat = np.count_nonzero(rho > 1.2 * g.cell_volume) / max(np.count_nonzero(bins.theta > 0), 1)
         f = np.clip(bins.theta, 0, 1).reshape(g.cells[1], g.cells[0])  # [cy, cx]
         levels = last_crossings(f, g.cell_centres(1), g.size[1])
         ke = 0.5 * float(np.sum(P.mass * np.sum(P.v**2, axis=1)))
         pe = -float(np.sum(P.mass * (P.x @ np.asarray(sim.case.physics.gravity))))
         xc = float(np.sum(P.mass * P.x[:, 0]) / np.sum(P.mass))
-        self.rows.append((sim.time, vm["volume_ratio"], vm["packed_share"], hat, ke, pe, xc,
-                          float(np.nanmean(levels))))
+        self.rows.append(
+            (
+                sim.time,
+                vm["volume_ratio"],
+                vm["packed_share"],
+                hat,
+                ke,
+                pe,
+                xc,
+                float(np.nanmean(levels)),
+            )
+        )
 
     def array(self):
         return np.array(self.rows, dtype=float).reshape(-1, 8)
@@ -93,8 +103,9 @@ class Record:
 
 def _run(example, h, end):
     rec = Record()
-    sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}",
-                                "output.interval=0.01"], on_output=rec)
+    sim = run_example(
+        example, [f"grid.spacing={h}", f"time.end={end}", "output.interval=0.01"], on_output=rec
+    )
     return sim, rec.array()
 
 
@@ -118,32 +129,71 @@ def run(out, quick=False, context=None):
         name = f"sloshing, h = {h} m, {t[-1]:g} s"
         change = region - 1
         res.rows += [
-            Row("long_run", f"{name}: wetted region", "largest |V(f >= 1/2) / V_water - 1| "
-                "(signed value shown)", float(change[np.argmax(np.abs(change))]),
-                TOL_REGION["sloshing"], WHY_REGION["sloshing"], sense="|<=|",
+            Row(
+                "long_run",
+                f"{name}: wetted region",
+                "largest |V(f >= 1/2) / V_water - 1| (signed value shown)",
+                float(change[np.argmax(np.abs(change))]),
+                TOL_REGION["sloshing"],
+                WHY_REGION["sloshing"],
+                sense="|<=|",
                 miss="the f = 1/2 count flickers by a few surface cells as the wave passes "
-                     "through them (one cell is 0.125% of the water at 0.01 m)"),
-            Row("long_run", f"{name}: packed share", "largest share of the cells holding "
-                "material with f > 1.2", float(packed.max()), TOL_PACKED["sloshing"],
+                "through them (one cell is 0.125% of the water at 0.01 m)",
+            ),
+            Row(
+                "long_run",
+                f"{name}: packed share",
+                "largest share of the cells holding material with f > 1.2",
+                float(packed.max()),
+                TOL_PACKED["sloshing"],
                 WHY_PACKED["sloshing"],
                 miss="the count steps by a row of particles: the wave strains the lattice of "
-                     "particles by a few percent, and some cells hold 5 rows of 4 (1.25) "
-                     "while their neighbours hold 3 or 4 (see the hat-measure row)"),
-            Row("long_run", f"{name}: packed share, hat measure", "largest share of the "
-                "cells holding material whose hat-kernel density exceeds 1.2", float(hat.max()),
-                TOL_PACKED["sloshing"], WHY_PACKED["sloshing"]),
-            Row("long_run", f"{name}: energy rise", "largest (E - E0) / E0, E = kinetic + "
-                "potential energy of the particles", rise / e[0], TOL_ENERGY, WHY_ENERGY,
+                "particles by a few percent, and some cells hold 5 rows of 4 (1.25) "
+                "while their neighbours hold 3 or 4 (see the hat-measure row)",
+            ),
+            Row(
+                "long_run",
+                f"{name}: packed share, hat measure",
+                "largest share of the cells holding material whose hat-kernel density exceeds 1.2",
+                float(hat.max()),
+                TOL_PACKED["sloshing"],
+                WHY_PACKED["sloshing"],
+            ),
+            Row(
+                "long_run",
+                f"{name}: energy rise",
+                "largest (E - E0) / E0, E = kinetic + potential energy of the particles",
+                rise / e[0],
+                TOL_ENERGY,
+                WHY_ENERGY,
                 miss="energy is created where the sub-cell free surface extrapolates the "
-                     "pressure (docs/method.md, energy)"),
-            Row("long_run", f"{name}: period", "|T - T_linear| / T_linear over the whole run",
-                abs(period - T0) / T0, TOL_PERIOD, WHY_PERIOD,
-                miss="the wave has decayed or grown too far to keep a clean period"),
+                "pressure (docs/method.md, energy)",
+            ),
+            Row(
+                "long_run",
+                f"{name}: period",
+                "|T - T_linear| / T_linear over the whole run",
+                abs(period - T0) / T0,
+                TOL_PERIOD,
+                WHY_PERIOD,
+                miss="the wave has decayed or grown too far to keep a clean period",
+            ),
         ]
-        lines.append([name, len(sim.particles.x), fmt(change.min()), fmt(change.max()),
-                      fmt(packed.max()), fmt(hat.max()), fmt(rise / e[0]),
-                      fmt(rise / wave), fmt(decay), fmt(abs(period - T0) / T0),
-                      fmt(sim.summary["wall_seconds"])])
+        lines.append(
+            [
+                name,
+                len(sim.particles.x),
+                fmt(change.min()),
+                fmt(change.max()),
+                fmt(packed.max()),
+                fmt(hat.max()),
+                fmt(rise / e[0]),
+                fmt(rise / wave),
+                fmt(decay),
+                fmt(abs(period - T0) / T0),
+                fmt(sim.summary["wall_seconds"]),
+            ]
+        )
         ax[0, 0].plot(t, change, label=f"sloshing h = {h} m")
         ax[0, 1].plot(t, (e - e[0]) / wave, label=f"sloshing h = {h} m")
         ax[1, 0].plot(t, packed, label=f"sloshing h = {h} m, count")
@@ -161,25 +211,53 @@ def run(out, quick=False, context=None):
         e = ke + pe
         name = f"dam break, h = {h} m, {t[-1]:g} s"
         res.rows += [
-            Row("long_run", f"{name}: wetted region", f"largest |V(f >= 1/2) / V_water - 1| "
-                f"from {SETTLED_FROM:g} s on (signed value shown)", worst,
-                TOL_REGION["dam break"], WHY_REGION["dam break"], sense="|<=|",
-                miss="splashes and trapped air still count as wetted cells"),
-            Row("long_run", f"{name}: settled level", "|mean f = 1/2 level over the last "
+            Row(
+                "long_run",
+                f"{name}: wetted region",
+                f"largest |V(f >= 1/2) / V_water - 1| "
+                f"from {SETTLED_FROM:g} s on (signed value shown)",
+                worst,
+                TOL_REGION["dam break"],
+                WHY_REGION["dam break"],
+                sense="|<=|",
+                miss="splashes and trapped air still count as wetted cells",
+            ),
+            Row(
+                "long_run",
+                f"{name}: settled level",
+                "|mean f = 1/2 level over the last "
                 "second - V_water / tank width| / (V_water / tank width)",
-                abs(lev - expected) / expected, TOL_LEVEL, WHY_LEVEL,
-                miss="the water has not settled, or its volume has drifted"),
-            Row("long_run", f"{name}: packed share", "largest share of the cells holding "
-                "material with f > 1.2", float(packed.max()), TOL_PACKED["dam break"],
+                abs(lev - expected) / expected,
+                TOL_LEVEL,
+                WHY_LEVEL,
+                miss="the water has not settled, or its volume has drifted",
+            ),
+            Row(
+                "long_run",
+                f"{name}: packed share",
+                "largest share of the cells holding material with f > 1.2",
+                float(packed.max()),
+                TOL_PACKED["dam break"],
                 WHY_PACKED["dam break"],
                 miss="the impact and the overturning jet pack the particles faster than the "
-                     "correction (half the excess per step) spreads them"),
+                "correction (half the excess per step) spreads them",
+            ),
         ]
-        lines.append([name, len(sim.particles.x), fmt(change[settled].min()),
-                      fmt(change[settled].max()), fmt(packed.max()), fmt(hat.max()),
-                      fmt(float(np.max(e[t >= 1.0]) - e[t >= 1.0][0]) / e[0]), "",
-                      f"level {lev:.4f} m (volume: {expected:.4f} m)", "",
-                      fmt(sim.summary["wall_seconds"])])
+        lines.append(
+            [
+                name,
+                len(sim.particles.x),
+                fmt(change[settled].min()),
+                fmt(change[settled].max()),
+                fmt(packed.max()),
+                fmt(hat.max()),
+                fmt(float(np.max(e[t >= 1.0]) - e[t >= 1.0][0]) / e[0]),
+                "",
+                f"level {lev:.4f} m (volume: {expected:.4f} m)",
+                "",
+                fmt(sim.summary["wall_seconds"]),
+            ]
+        )
         ax[0, 0].plot(t, change, label=f"dam break h = {h} m")
         ax[1, 1].plot(t, level, label=f"dam break h = {h} m")
         ax[1, 1].axhline(expected, color="k", lw=0.5)
@@ -193,13 +271,33 @@ def run(out, quick=False, context=None):
             a_.legend(fontsize=7)
     fig.tight_layout()
     save(fig, out / "long_run.png")
-    res.figures.append(("long_run.png", "Wetted region (top left), energy of the sloshing "
-                        "wave (top right), packed share by count and by the hat measure "
-                        "(bottom left) and the dam break's mean surface level with the level "
-                        "its volume gives (bottom right)."))
-    res.text = (__doc__.split("\n", 2)[2].strip() + "\n\n" + markdown_table(
-        ["run", "particles", "wetted region - 1: smallest", "largest", "packed share (count)",
-         "packed share (hat)", "largest energy rise / E0 (dam break: after 1 s)",
-         "largest energy rise / wave energy", "amplitude lost per period / level",
-         "period error", "wall (s)"], lines))
+    res.figures.append(
+        (
+            "long_run.png",
+            "Wetted region (top left), energy of the sloshing "
+            "wave (top right), packed share by count and by the hat measure "
+            "(bottom left) and the dam break's mean surface level with the level "
+            "its volume gives (bottom right).",
+        )
+    )
+    res.text = (
+        __doc__.split("\n", 2)[2].strip()
+        + "\n\n"
+        + markdown_table(
+            [
+                "run",
+                "particles",
+                "wetted region - 1: smallest",
+                "largest",
+                "packed share (count)",
+                "packed share (hat)",
+                "largest energy rise / E0 (dam break: after 1 s)",
+                "largest energy rise / wave energy",
+                "amplitude lost per period / level",
+                "period error",
+                "wall (s)",
+            ],
+            lines,
+        )
+    )
     return res

@@ -46,19 +46,22 @@ WAVE_SPACINGS, WAVE_SPACINGS_QUICK = (0.01, 0.005), (0.02,)
 NU = 1e-3  # m^2/s
 
 TOL_RUNOUT = 0.15
-WHY_RUNOUT = ("the issue's criterion; Lube et al.'s data scatter about their laws by about "
-              "10%")
+WHY_RUNOUT = "the issue's criterion; Lube et al.'s data scatter about their laws by about 10%"
 ASPECTS, ASPECTS_QUICK = (0.5, 1.0, 2.0, 4.0, 7.0, 10.0), (0.5, 2.0)
 L0 = 0.05  # m, half-width of the column
 SPLIT = 2.3  # aspect ratio between Lube's two laws
 
 TOL_ARREST = 0.2
-WHY_ARREST = ("the arrest condition is the shallow-layer limit; the deposit is 0.05 m deep "
-              "over 0.3 m (aspect 1/6), whose corrections are of that order")
+WHY_ARREST = (
+    "the arrest condition is the shallow-layer limit; the deposit is 0.05 m deep "
+    "over 0.3 m (aspect 1/6), whose corrections are of that order"
+)
 TOL_STOPPED = 1e-3
-WHY_STOPPED = ("a creep of the capped viscosity is far below 1 mm/s (|tau| / cap ~ 5e-4 1/s); "
-               "the split of the viscous and pressure steps allows up to 0.6 |g| dt = 2.9 "
-               "mm/s at this step (materials/stiffness.py): a miss may be the split's")
+WHY_STOPPED = (
+    "a creep of the capped viscosity is far below 1 mm/s (|tau| / cap ~ 5e-4 1/s); "
+    "the split of the viscous and pressure steps allows up to 0.6 |g| dt = 2.9 "
+    "mm/s at this step (materials/stiffness.py): a miss may be the split's"
+)
 
 
 def lube(a):
@@ -78,30 +81,58 @@ def run_wave(out, quick=False, context=None):
             def centre(sim, xc=xc):
                 xc.append((sim.time, float(sim.particles.x[:, 0].mean()) - 0.2))
 
-            model = (["material.model='newtonian'", f"material.viscosity={nu * 1000.0}"]
-                     if nu > 0 else [])
-            sim = run_example("sloshing.toml", [f"grid.spacing={h}",
-                                                f"time.end={2.0 if quick else 5.0}", *model],
-                              on_output=centre)
+            model = (
+                ["material.model='newtonian'", f"material.viscosity={nu * 1000.0}"]
+                if nu > 0
+                else []
+            )
+            sim = run_example(
+                "sloshing.toml",
+                [f"grid.spacing={h}", f"time.end={2.0 if quick else 5.0}", *model],
+                on_output=centre,
+            )
             a = np.array(xc)
             period, decay = period_and_decay(a[:, 0], a[:, 1])[:2]
             rates.append(-math.log(1 - decay) / period)
             if nu > 0:
                 wall = sim.summary["wall_seconds"]
                 iters = sim.counters.viscous_iterations / max(sim.steps, 1)
-        runs.append({"h": h, "rate": rates[0], "inviscid": rates[1], "wall": wall,
-                     "iters": iters})
+        runs.append({"h": h, "rate": rates[0], "inviscid": rates[1], "wall": wall, "iters": iters})
     r = runs[-1]
-    res.rows.append(Row("viscous_wave", f"decay rate, h = {r['h']} m",
-                        "|rate - 2 nu k^2| / (2 nu k^2), nu = 1e-3 m^2/s",
-                        abs(r["rate"] - theory) / theory, TOL_WAVE, WHY_WAVE,
-                        miss="too few cells across the wave: the decay converges from above "
-                        "(see the table)"))
+    res.rows.append(
+        Row(
+            "viscous_wave",
+            f"decay rate, h = {r['h']} m",
+            "|rate - 2 nu k^2| / (2 nu k^2), nu = 1e-3 m^2/s",
+            abs(r["rate"] - theory) / theory,
+            TOL_WAVE,
+            WHY_WAVE,
+            miss="too few cells across the wave: the decay converges from above (see the table)",
+        )
+    )
     table = markdown_table(
-        ["h (m)", "decay rate (1/s)", "2 nu k^2 (1/s)", "error", "inviscid rate, same mesh",
-         "viscous iterations per step", "wall (s)"],
-        [[x["h"], fmt(x["rate"], 4), fmt(theory, 4), fmt((x["rate"] - theory) / theory),
-          fmt(x["inviscid"], 3), fmt(x["iters"]), fmt(x["wall"])] for x in runs])
+        [
+            "h (m)",
+            "decay rate (1/s)",
+            "2 nu k^2 (1/s)",
+            "error",
+            "inviscid rate, same mesh",
+            "viscous iterations per step",
+            "wall (s)",
+        ],
+        [
+            [
+                x["h"],
+                fmt(x["rate"], 4),
+                fmt(theory, 4),
+                fmt((x["rate"] - theory) / theory),
+                fmt(x["inviscid"], 3),
+                fmt(x["iters"]),
+                fmt(x["wall"]),
+            ]
+            for x in runs
+        ],
+    )
     res.text = __doc__.split("\n\n")[1] + "\n\n" + table
     return res
 
@@ -117,36 +148,67 @@ def _collapse(a, quick, width=1.6):
     h = L0 / (6.25 if quick else 12.5)
     dt = min(5e-4, 0.35 * h / math.sqrt(2 * G * H0))
     end = 0.6 + 6 * math.sqrt(H0 / G)
-    sim = run_example("granular_collapse.toml", [
-        f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]", f"grid.spacing={h}",
-        f"bodies.0.min=[{half - L0:.4f}, 0.0]", f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
-        f"time.dt={dt:.4g}", f"time.end={end:.3f}", "output.interval=0.05"])
+    sim = run_example(
+        "granular_collapse.toml",
+        [
+            f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
+            f"grid.spacing={h}",
+            f"bodies.0.min=[{half - L0:.4f}, 0.0]",
+            f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
+            f"time.dt={dt:.4g}",
+            f"time.end={end:.3f}",
+            "output.interval=0.05",
+        ],
+    )
     x = sim.particles.x
     reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))
     walled = bool(x[:, 0].max() > 2 * half - 1.5 * h or x[:, 0].min() < 1.5 * h)
-    return {"a": a, "runout": (reach - L0) / L0, "law": lube(a), "height": x[:, 1].max() / H0,
-            "walled": walled,
-            "speed": float(np.abs(sim.particles.v).max()), "wall": sim.summary["wall_seconds"],
-            "h": h, "particles": sim.particles.count}
+    return {
+        "a": a,
+        "runout": (reach - L0) / L0,
+        "law": lube(a),
+        "height": x[:, 1].max() / H0,
+        "walled": walled,
+        "speed": float(np.abs(sim.particles.v).max()),
+        "wall": sim.summary["wall_seconds"],
+        "h": h,
+        "particles": sim.particles.count,
+    }
 
 
 def run_collapse(out, quick=False, context=None):
     res = CaseResult("granular_collapse", "Granular column collapse against Lube et al. (2005)")
     runs = [_collapse(a, quick) for a in (ASPECTS_QUICK if quick else ASPECTS)]
     for r in runs:
-        res.rows.append(Row("granular_collapse", f"run-out, a = {r['a']:g}",
-                            "|run-out - law| / law, (L_inf - L0) / L0", abs(r["runout"] - r["law"])
-                            / r["law"], TOL_RUNOUT, WHY_RUNOUT,
-                            miss="the deposit spreads short of the law with PIC transfer (and "
-                            "past it with FLIP); see the text"))
+        res.rows.append(
+            Row(
+                "granular_collapse",
+                f"run-out, a = {r['a']:g}",
+                "|run-out - law| / law, (L_inf - L0) / L0",
+                abs(r["runout"] - r["law"]) / r["law"],
+                TOL_RUNOUT,
+                WHY_RUNOUT,
+                miss="the deposit spreads short of the law with PIC transfer (and "
+                "past it with FLIP); see the text",
+            )
+        )
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.5))
     aa = np.linspace(0.4, 11, 200)
     ax.plot(aa[aa < SPLIT], 1.2 * aa[aa < SPLIT], "k-", label="Lube et al. 2005: 1.2 a")
-    ax.plot(aa[aa >= SPLIT], 1.9 * aa[aa >= SPLIT] ** (2 / 3), "k--",
-            label="Lube et al. 2005: 1.9 a^(2/3)")
-    ax.fill_between(aa, [lube(v) * (1 - TOL_RUNOUT) for v in aa],
-                    [lube(v) * (1 + TOL_RUNOUT) for v in aa], color="0.9", label="+-15%")
+    ax.plot(
+        aa[aa >= SPLIT],
+        1.9 * aa[aa >= SPLIT] ** (2 / 3),
+        "k--",
+        label="Lube et al. 2005: 1.9 a^(2/3)",
+    )
+    ax.fill_between(
+        aa,
+        [lube(v) * (1 - TOL_RUNOUT) for v in aa],
+        [lube(v) * (1 + TOL_RUNOUT) for v in aa],
+        color="0.9",
+        label="+-15%",
+    )
     ax.plot([r["a"] for r in runs], [r["runout"] for r in runs], "o", label="mpmflow (2D, mu(I))")
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -155,13 +217,40 @@ def run_collapse(out, quick=False, context=None):
     ax.legend()
     fig.tight_layout()
     save(fig, out / "granular_collapse.png")
-    res.figures.append(("granular_collapse.png", "Run-out of the granular columns against "
-                        "Lube et al. (2005)'s laws (the grey band: the tolerance)."))
+    res.figures.append(
+        (
+            "granular_collapse.png",
+            "Run-out of the granular columns against "
+            "Lube et al. (2005)'s laws (the grey band: the tolerance).",
+        )
+    )
     table = markdown_table(
-        ["a", "h (m)", "particles", "run-out (L_inf - L0)/L0", "Lube's law", "H_inf / H0",
-         "largest speed at the end (m/s)", "reached a side wall", "wall (s)"],
-        [[r["a"], r["h"], r["particles"], fmt(r["runout"]), fmt(r["law"]), fmt(r["height"]),
-          fmt(r["speed"]), "yes" if r["walled"] else "no", fmt(r["wall"])] for r in runs])
+        [
+            "a",
+            "h (m)",
+            "particles",
+            "run-out (L_inf - L0)/L0",
+            "Lube's law",
+            "H_inf / H0",
+            "largest speed at the end (m/s)",
+            "reached a side wall",
+            "wall (s)",
+        ],
+        [
+            [
+                r["a"],
+                r["h"],
+                r["particles"],
+                fmt(r["runout"]),
+                fmt(r["law"]),
+                fmt(r["height"]),
+                fmt(r["speed"]),
+                "yes" if r["walled"] else "no",
+                fmt(r["wall"]),
+            ]
+            for r in runs
+        ],
+    )
     res.text = __doc__.split("\n\n")[2] + "\n\n" + table
     return res
 
@@ -176,8 +265,14 @@ def arrest_ratios(x, centre, spacing, scale, lo=0.25, hi=0.75):
         d = side * (x[:, 0] - centre)
         front = d.max() + 0.5 * spacing
         edges = np.arange(0.0, front, spacing)
-        top = np.array([x[(d >= a) & (d < a + spacing), 1].max() + 0.5 * spacing
-                        if ((d >= a) & (d < a + spacing)).any() else np.nan for a in edges])
+        top = np.array(
+            [
+                x[(d >= a) & (d < a + spacing), 1].max() + 0.5 * spacing
+                if ((d >= a) & (d < a + spacing)).any()
+                else np.nan
+                for a in edges
+            ]
+        )
         mid = edges + 0.5 * spacing
         keep = (mid > lo * front) & (mid < hi * front) & np.isfinite(top)
         if keep.sum() < 3:
@@ -197,13 +292,32 @@ def run_slump(out, quick=False, context=None):
     values = arrest_ratios(sim.particles.x, centre, spacing, scale)
     ratio = float(np.mean(values))
     speed = float(np.abs(sim.particles.v).max())
-    res.rows.append(Row("bingham_slump", "arrest: h |dh/dx| rho g / tau_y",
-                        "|mean over the deposit's middle - 1|", abs(ratio - 1), TOL_ARREST,
-                        WHY_ARREST, miss="the deposit has not stopped, or is not shallow"))
-    res.rows.append(Row("bingham_slump", "stopped", "largest particle speed at the end",
-                        speed, TOL_STOPPED, WHY_STOPPED, unit="m/s",
-                        miss="still spreading at the end of the run"))
-    res.text = (__doc__.split("\n\n")[3] + f"\n\nMeasured: h |dh/dx| rho g / tau_y = "
-                f"{fmt(ratio)} (left, right: {fmt(values[1])}, {fmt(values[0])}); largest speed "
-                f"at t = {sim.time:g} s: {speed:.3g} m/s; wall {fmt(sim.summary['wall_seconds'])} s.")
+    res.rows.append(
+        Row(
+            "bingham_slump",
+            "arrest: h |dh/dx| rho g / tau_y",
+            "|mean over the deposit's middle - 1|",
+            abs(ratio - 1),
+            TOL_ARREST,
+            WHY_ARREST,
+            miss="the deposit has not stopped, or is not shallow",
+        )
+    )
+    res.rows.append(
+        Row(
+            "bingham_slump",
+            "stopped",
+            "largest particle speed at the end",
+            speed,
+            TOL_STOPPED,
+            WHY_STOPPED,
+            unit="m/s",
+            miss="still spreading at the end of the run",
+        )
+    )
+    res.text = (
+        __doc__.split("\n\n")[3] + f"\n\nMeasured: h |dh/dx| rho g / tau_y = "
+        f"{fmt(ratio)} (left, right: {fmt(values[1])}, {fmt(values[0])}); largest speed "
+        f"at t = {sim.time:g} s: {speed:.3g} m/s; wall {fmt(sim.summary['wall_seconds'])} s."
+    )
     return res

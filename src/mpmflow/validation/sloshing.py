@@ -26,15 +26,21 @@ G = 9.81
 
 # tolerances, fixed before the results were looked at
 TOL_PERIOD_FINEST = 0.02
-WHY_PERIOD_FINEST = ("the issue's criterion; the nonlinear shift of the period at k A = 0.06 "
-                     "is below 0.1%, so 2% is all discretisation")
+WHY_PERIOD_FINEST = (
+    "the issue's criterion; the nonlinear shift of the period at k A = 0.06 "
+    "is below 0.1%, so 2% is all discretisation"
+)
 TOL_PERIOD = 0.03
-WHY_PERIOD = ("coarser grids (10 and 20 cells across the depth): 3%, the resolution a "
-              "practical sloshing run uses")
+WHY_PERIOD = (
+    "coarser grids (10 and 20 cells across the depth): 3%, the resolution a "
+    "practical sloshing run uses"
+)
 TOL_DECAY = 0.02
-WHY_DECAY = ("water's own viscous decay is 2 nu k^2 T = 1e-4 per period, so all decay is "
-             "numerical; 2% per period keeps (or doubles) the amplitude within a factor 2 over "
-             "35 periods")
+WHY_DECAY = (
+    "water's own viscous decay is 2 nu k^2 T = 1e-4 per period, so all decay is "
+    "numerical; 2% per period keeps (or doubles) the amplitude within a factor 2 over "
+    "35 periods"
+)
 
 
 def theory(L, h):
@@ -84,8 +90,9 @@ def run(out, quick=False, context=None):
 
         finest = h == spacings[-1]
         recorder = Recorder(then=centre) if finest else None
-        sim = run_example("sloshing.toml", [f"grid.spacing={h}", f"time.end={end}"],
-                          on_output=recorder or centre)
+        sim = run_example(
+            "sloshing.toml", [f"grid.spacing={h}", f"time.end={end}"], on_output=recorder or centre
+        )
         body = sim.case.bodies[0]
         L, depth, A = body.max[0] - body.min[0], body.max[1], body.surface_amplitude
         T0 = theory(L, depth)
@@ -94,31 +101,58 @@ def run(out, quick=False, context=None):
         period, decay, cross, ext = period_and_decay(t, s)
         energy = sim.series("kinetic_energy") + sim.series("potential_energy")
         wave = 0.25 * sim.case.material.density * G * A**2 * L  # J/m, the mode's energy
-        runs.append({"h": h, "particles": sim.particles.count, "T": period,
-                     "err": abs(period - T0) / T0, "decay": decay, "t": t, "s": s, "ext": ext,
-                     "periods": (cross[-1] - cross[0]) / T0 * 1.0 if cross.size else 0,
-                     "wall": sim.summary["wall_seconds"], "T0": T0,
-                     "energy": (energy[-1] - energy[0]) / wave, "L": L, "depth": depth,
-                     "A": A})
+        runs.append(
+            {
+                "h": h,
+                "particles": sim.particles.count,
+                "T": period,
+                "err": abs(period - T0) / T0,
+                "decay": decay,
+                "t": t,
+                "s": s,
+                "ext": ext,
+                "periods": (cross[-1] - cross[0]) / T0 * 1.0 if cross.size else 0,
+                "wall": sim.summary["wall_seconds"],
+                "T0": T0,
+                "energy": (energy[-1] - energy[0]) / wave,
+                "L": L,
+                "depth": depth,
+                "A": A,
+            }
+        )
         if finest and context is not None:
             context.setdefault("volume", {})["sloshing"] = (f"h = {h} m", recorder)
     name = "sloshing"
     for r in runs:
         finest = r is runs[-1]
-        res.rows.append(Row(name, f"period, h = {r['h']} m",
-                            "|T - T_linear| / T_linear (zero crossings of the centre of mass)",
-                            r["err"], TOL_PERIOD_FINEST if finest else TOL_PERIOD,
-                            WHY_PERIOD_FINEST if finest else WHY_PERIOD,
-                            miss="too few cells across the wave to carry its pressure field: at 10 "
-                                 "cells over the depth 1% PIC per millisecond damps the wave "
-                                 "(2.3% per period) and slows it"))
+        res.rows.append(
+            Row(
+                name,
+                f"period, h = {r['h']} m",
+                "|T - T_linear| / T_linear (zero crossings of the centre of mass)",
+                r["err"],
+                TOL_PERIOD_FINEST if finest else TOL_PERIOD,
+                WHY_PERIOD_FINEST if finest else WHY_PERIOD,
+                miss="too few cells across the wave to carry its pressure field: at 10 "
+                "cells over the depth 1% PIC per millisecond damps the wave "
+                "(2.3% per period) and slows it",
+            )
+        )
     r = runs[-1]
-    res.rows.append(Row(name, f"amplitude change, h = {r['h']} m", "amplitude lost per period "
-                        f"(fit over {r['periods']:.1f} periods; < 0: the wave grows)", r["decay"],
-                        TOL_DECAY, WHY_DECAY, sense="|<=|",
-                        miss="loss: numerical damping (1% PIC per millisecond, solver.flip = "
-                        "0.99); growth: energy put in by the pressure at the free surface "
-                        "(docs/method.md, Energy)"))
+    res.rows.append(
+        Row(
+            name,
+            f"amplitude change, h = {r['h']} m",
+            f"amplitude lost per period (fit over {r['periods']:.1f} periods; < 0: the wave grows)",
+            r["decay"],
+            TOL_DECAY,
+            WHY_DECAY,
+            sense="|<=|",
+            miss="loss: numerical damping (1% PIC per millisecond, solver.flip = "
+            "0.99); growth: energy put in by the pressure at the free surface "
+            "(docs/method.md, Energy)",
+        )
+    )
     T0 = runs[0]["T0"]
     if len(runs) >= 3:
         order = observed_order([r["h"] for r in runs], [r["err"] for r in runs])
@@ -131,21 +165,54 @@ def run(out, quick=False, context=None):
     for r in runs:
         ax.plot(r["t"], r["s"] * scale * 1e3, label=f"h = {r['h']} m")
     tt = np.linspace(0, runs[0]["t"][-1], 2000)
-    ax.plot(tt, runs[0]["A"] * np.cos(2 * np.pi * tt / T0) * 1e3, "k:", lw=1,
-            label=f"linear theory, T = {T0:.4f} s")
+    ax.plot(
+        tt,
+        runs[0]["A"] * np.cos(2 * np.pi * tt / T0) * 1e3,
+        "k:",
+        lw=1,
+        label=f"linear theory, T = {T0:.4f} s",
+    )
     ax.set_xlabel("t [s]")
     ax.set_ylabel("first-mode elevation at x = 0 [mm]\n(from the centre of mass)")
     ax.legend(loc="lower left")
     fig.tight_layout()
     save(fig, out / "sloshing.png")
-    res.figures.append(("sloshing.png", "First-mode surface elevation at the left wall, from "
-                        "the centre of mass, against undamped linear theory."))
+    res.figures.append(
+        (
+            "sloshing.png",
+            "First-mode surface elevation at the left wall, from "
+            "the centre of mass, against undamped linear theory.",
+        )
+    )
     table = markdown_table(
-        ["grid spacing h (m)", "cells over the depth", "particles", "period T (s)",
-         "T_linear (s)", "period error", "amplitude lost per period",
-         "energy gained by the end / wave energy", "wall (s)"],
-        [[r["h"], round(r["depth"] / r["h"]), r["particles"], fmt(r["T"], 5), fmt(T0, 5),
-          fmt(r["err"]), fmt(r["decay"]), fmt(r["energy"]), fmt(r["wall"])] for r in runs])
-    res.text = (__doc__.split("\n", 2)[2].strip() + f" Run to {end:g} s with dt = 1 ms and "
-                "the default solver settings, slip walls.\n\n" + table + "\n\n" + conv.strip())
+        [
+            "grid spacing h (m)",
+            "cells over the depth",
+            "particles",
+            "period T (s)",
+            "T_linear (s)",
+            "period error",
+            "amplitude lost per period",
+            "energy gained by the end / wave energy",
+            "wall (s)",
+        ],
+        [
+            [
+                r["h"],
+                round(r["depth"] / r["h"]),
+                r["particles"],
+                fmt(r["T"], 5),
+                fmt(T0, 5),
+                fmt(r["err"]),
+                fmt(r["decay"]),
+                fmt(r["energy"]),
+                fmt(r["wall"]),
+            ]
+            for r in runs
+        ],
+    )
+    res.text = (
+        __doc__.split("\n", 2)[2].strip() + f" Run to {end:g} s with dt = 1 ms and "
+        "the default solver settings, slip walls.\n\n" + table + "\n\n" + conv.strip()
+    )
     return res

@@ -33,41 +33,60 @@ from .common import ROOT, CaseResult, Row, fmt, markdown_table, pyplot, run_exam
 
 H0 = 0.55  # m
 LENGTH = 3.22  # m, the tank
-DATA = (ROOT.parent / "shared" / "data" / "validation"
-        / "spheric_test2_kleefsman2005_marin_exp_P1-P8_H1-H4.csv")
-GAUGES = {"H1": "H3 as labelled in source [m]", "H2": "H2 as labelled in source [m]",
-          "H3": "H1 as labelled in source [m]", "H4": "H4 as labelled in source [m]"}
+DATA = (
+    ROOT.parent
+    / "shared"
+    / "data"
+    / "validation"
+    / "spheric_test2_kleefsman2005_marin_exp_P1-P8_H1-H4.csv"
+)
+GAUGES = {
+    "H1": "H3 as labelled in source [m]",
+    "H2": "H2 as labelled in source [m]",
+    "H3": "H1 as labelled in source [m]",
+    "H4": "H4 as labelled in source [m]",
+}
 IMPACT = ("P1", "P3", "P5", "P7")
 THRESHOLD = 500.0  # Pa
 WINDOW = (-0.05, 0.3)  # s around the measured first impact
 
 TOL_LEVEL = 0.1
-WHY_LEVEL = ("0.1 H0 = 5.5 cm RMS: 1.4 cells of the 0.04 m mesh, 2.2 of the 0.025 m one; a "
-             "level that follows the measured wave's arrival, height and return")
+WHY_LEVEL = (
+    "0.1 H0 = 5.5 cm RMS: 1.4 cells of the 0.04 m mesh, 2.2 of the 0.025 m one; a "
+    "level that follows the measured wave's arrival, height and return"
+)
 PHOTOS = (0.4, 0.6, 1.0, 1.5)  # s, the experiment's photographs (Kleefsman et al. 2005)
 TOL_TIME = 0.04
-WHY_TIME = ("10% of the 0.39 s the front takes to reach the box; 8 outputs of 5 ms")
+WHY_TIME = "10% of the 0.39 s the front takes to reach the box; 8 outputs of 5 ms"
 # why rows miss, written after the runs (the tolerances above were fixed before)
-MISS_TOP = ("the first water on the top face comes from the jet that climbs the front face at "
-            "the first impact: the top-face pressure first passes 500 Pa at 0.98 s at "
-            "0.04 m, 1.34 s at 0.025 m and 1.33 s at 0.02 m (benchmarks/spheric.py), "
-            "against 1.07-1.10 s measured: where and when the jet lands is not converged "
-            "at these meshes (8 cells across the box's height at 0.02 m)")
-MISS_FRONT = ("after the impact peak the simulated face pressure averages below the measured "
-              "one (0.45-0.7 s, P3: 2.8 against 4.6 kPa at 0.05 m, 2.1 against 4.6 kPa at "
-              "0.02 m; P1 at 0.02 m: 3.6 against 5.5 kPa), with swings of 2-3.5 kPa between "
-              "5 ms outputs that the window's mean and its plane fit read alike (so they are "
-              "the particles' own); why the face reads low after the impact is not "
-              "established")
-_RETURN = ("the RMS comes from 1-3 s, the bore that reflects from the wall behind the box "
-           "(x = 0) and runs back: at 0.04 m H1 (integral gauge) averages 0.227 m over 1-2 s "
-           "against the measured 0.293 m (the first-drop gauge read 0.130 m there: its "
-           "drop-outs were 0.10 m of the deficit, the flow the other 0.07 m; "
-           "benchmarks/spheric_gauges.py)")
+MISS_TOP = (
+    "the first water on the top face comes from the jet that climbs the front face at "
+    "the first impact: the top-face pressure first passes 500 Pa at 0.98 s at "
+    "0.04 m, 1.34 s at 0.025 m and 1.33 s at 0.02 m (benchmarks/spheric.py), "
+    "against 1.07-1.10 s measured: where and when the jet lands is not converged "
+    "at these meshes (8 cells across the box's height at 0.02 m)"
+)
+MISS_FRONT = (
+    "after the impact peak the simulated face pressure averages below the measured "
+    "one (0.45-0.7 s, P3: 2.8 against 4.6 kPa at 0.05 m, 2.1 against 4.6 kPa at "
+    "0.02 m; P1 at 0.02 m: 3.6 against 5.5 kPa), with swings of 2-3.5 kPa between "
+    "5 ms outputs that the window's mean and its plane fit read alike (so they are "
+    "the particles' own); why the face reads low after the impact is not "
+    "established"
+)
+_RETURN = (
+    "the RMS comes from 1-3 s, the bore that reflects from the wall behind the box "
+    "(x = 0) and runs back: at 0.04 m H1 (integral gauge) averages 0.227 m over 1-2 s "
+    "against the measured 0.293 m (the first-drop gauge read 0.130 m there: its "
+    "drop-outs were 0.10 m of the deficit, the flow the other 0.07 m; "
+    "benchmarks/spheric_gauges.py)"
+)
 MISS_LEVEL = {"H1": _RETURN, "H2": _RETURN, "H3": _RETURN, "H4": _RETURN}
 TOL_IMPULSE = 0.3
-WHY_IMPULSE = ("the impulse converges where the peak does not; 30% with the 0.16 m box "
-               "resolved by 4 to 6 cells")
+WHY_IMPULSE = (
+    "the impulse converges where the peak does not; 30% with the 0.16 m box "
+    "resolved by 4 to 6 cells"
+)
 
 
 def data():
@@ -97,10 +116,12 @@ def overrides(spacing, end):
     cells = LENGTH / spacing
     if abs(cells - round(cells)) > 1e-6:
         length = (math.ceil(cells) + 2) * spacing
-        out += [f"domain.size=[{length:.10g}, 1.0, 1.0]",
-                "obstacles=[{name = 'box', type = 'box', min = [0.6635, 0.2955, 0.0], "
-                "max = [0.8245, 0.6985, 0.161]}, {name = 'end_wall', type = 'box', "
-                f"min = [{LENGTH}, 0.0, 0.0], max = [{length:.10g}, 1.0, 1.0]}}]"]
+        out += [
+            f"domain.size=[{length:.10g}, 1.0, 1.0]",
+            "obstacles=[{name = 'box', type = 'box', min = [0.6635, 0.2955, 0.0], "
+            "max = [0.8245, 0.6985, 0.161]}, {name = 'end_wall', type = 'box', "
+            f"min = [{LENGTH}, 0.0, 0.0], max = [{length:.10g}, 1.0, 1.0]}}]",
+        ]
     return out
 
 
@@ -135,28 +156,56 @@ def run(out, quick, context):
     rows, text, runs = [], [], []
     photos = []  # (t, x, volume) of the finest mesh at the PHOTOS times
     for j, (spacing, end) in enumerate(meshes):
-        sim = run_example("spheric_test2.toml", overrides(spacing, end),
-                          on_output=_photographer(photos) if j == len(meshes) - 1 else None)
+        sim = run_example(
+            "spheric_test2.toml",
+            overrides(spacing, end),
+            on_output=_photographer(photos) if j == len(meshes) - 1 else None,
+        )
         m = measures(sim, exp, end)
-        runs.append((spacing, sim.series("time"),
-                     {n: sim.probe_series(n) for n in (*GAUGES, *IMPACT)}))
+        runs.append(
+            (spacing, sim.series("time"), {n: sim.probe_series(n) for n in (*GAUGES, *IMPACT)})
+        )
         tag = f"{spacing:g} m"
         if end >= 6.0:
             for gauge, value in m["levels"].items():
-                rows.append(Row("SPHERIC 2", f"{tag}: water level {gauge}",
-                                "RMS of (h - h_exp) / H0 over 0-6 s", value, TOL_LEVEL,
-                                WHY_LEVEL, miss=MISS_LEVEL.get(gauge, "")))
+                rows.append(
+                    Row(
+                        "SPHERIC 2",
+                        f"{tag}: water level {gauge}",
+                        "RMS of (h - h_exp) / H0 over 0-6 s",
+                        value,
+                        TOL_LEVEL,
+                        WHY_LEVEL,
+                        miss=MISS_LEVEL.get(gauge, ""),
+                    )
+                )
         for name, (ts, te_) in m["times"].items():
             if end < te_ + WINDOW[1]:
                 continue
-            rows.append(Row("SPHERIC 2", f"{tag}: first impact at {name}",
-                            f"|t - t_exp|, first p > {THRESHOLD:g} Pa", abs(ts - te_),
-                            TOL_TIME, WHY_TIME, unit="s", miss=MISS_TOP))
+            rows.append(
+                Row(
+                    "SPHERIC 2",
+                    f"{tag}: first impact at {name}",
+                    f"|t - t_exp|, first p > {THRESHOLD:g} Pa",
+                    abs(ts - te_),
+                    TOL_TIME,
+                    WHY_TIME,
+                    unit="s",
+                    miss=MISS_TOP,
+                )
+            )
         for name, (js, je) in m["impulses"].items():
-            rows.append(Row("SPHERIC 2", f"{tag}: impulse of the first impact at {name}",
-                            "|J - J_exp| / J_exp, J = int p dt over [t_exp - 0.05, t_exp + 0.3] s",
-                            abs(js - je) / je, TOL_IMPULSE, WHY_IMPULSE,
-                            miss=MISS_TOP if name in ("P5", "P7") else MISS_FRONT))
+            rows.append(
+                Row(
+                    "SPHERIC 2",
+                    f"{tag}: impulse of the first impact at {name}",
+                    "|J - J_exp| / J_exp, J = int p dt over [t_exp - 0.05, t_exp + 0.3] s",
+                    abs(js - je) / je,
+                    TOL_IMPULSE,
+                    WHY_IMPULSE,
+                    miss=MISS_TOP if name in ("P5", "P7") else MISS_FRONT,
+                )
+            )
         table = [[n, fmt(ps), fmt(pe)] for n, (ps, pe) in m["peaks"].items()]
         timing = [[n, fmt(ts), fmt(te_)] for n, (ts, te_) in m["times"].items()]
         text.append(
@@ -165,9 +214,14 @@ def run(out, quick, context):
             "reported, no tolerance):\n\n"
             + markdown_table(["sensor", "computed", "measured"], table)
             + "\n\nFirst-impact times (s):\n\n"
-            + markdown_table(["sensor", "computed", "measured"], timing))
-    res = CaseResult("spheric", "SPHERIC Test 2: 3D dam break on a box", rows,
-                     text=__doc__.split("\n\n", 1)[1] + "\n\n" + "\n\n".join(text))
+            + markdown_table(["sensor", "computed", "measured"], timing)
+        )
+    res = CaseResult(
+        "spheric",
+        "SPHERIC Test 2: 3D dam break on a box",
+        rows,
+        text=__doc__.split("\n\n", 1)[1] + "\n\n" + "\n\n".join(text),
+    )
     figure(out, exp, runs, res)
     pictures(out, sim, photos, res)
     return res
@@ -176,10 +230,12 @@ def run(out, quick, context):
 def _photographer(photos):
     """An on_output callback that keeps (t, particle positions, volumes) at the PHOTOS
     times (outputs every 5 ms fall on them; a quarter output of slack for round-off)."""
+
     def keep(sim):
         dt = sim.case.output.interval
         if any(abs(sim.time - t) <= 0.25 * dt for t in PHOTOS):
             photos.append((sim.time, sim.particles.x.copy(), sim.particles.volume.copy()))
+
     return keep
 
 
@@ -199,16 +255,20 @@ def pictures(out, sim, photos, res):
     for k, (t, x, volume) in enumerate(photos):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
         f = volume_fraction(x, volume, grid.spacing, grid.cells)
-        draw_surface(ax, *water_surface(f, grid.spacing), solids, grid.size,
-                     f"t = {t:.2f} s")
+        draw_surface(ax, *water_surface(f, grid.spacing), solids, grid.size, f"t = {t:.2f} s")
     fig.subplots_adjust(0, 0.02, 1, 0.92, wspace=0.02, hspace=0.1)
     save(fig, out / "spheric_3d.png")
     times = ", ".join(f"{t:.1f}" for t, _, _ in photos)
-    res.figures.append(("spheric_3d.png", f"The water at {grid.spacing:g} m at {times} s (the "
-                        "experiment's photograph times the run reaches): the surface where "
-                        "the particles' volume fraction on the grid is 1/2, the box and the "
-                        "end wall in grey; seen from the front (y < 0), above and the side of "
-                        "the dam's end (x = 3.22 m)."))
+    res.figures.append(
+        (
+            "spheric_3d.png",
+            f"The water at {grid.spacing:g} m at {times} s (the "
+            "experiment's photograph times the run reaches): the surface where "
+            "the particles' volume fraction on the grid is 1/2, the box and the "
+            "end wall in grey; seen from the front (y < 0), above and the side of "
+            "the dam's end (x = 3.22 m).",
+        )
+    )
 
 
 def figure(out, exp, runs, res):
@@ -219,8 +279,11 @@ def figure(out, exp, runs, res):
     te = exp["time [s]"]
     for k, (gauge, column) in enumerate(GAUGES.items()):
         ax[0, k].plot(te, exp[column], "k-", lw=0.7, label="MARIN")
-        ax[0, k].set(title=f"{gauge} (data: {column.split(' ')[0]} as labelled)",
-                     xlabel="t [s]", ylabel="level [m]")
+        ax[0, k].set(
+            title=f"{gauge} (data: {column.split(' ')[0]} as labelled)",
+            xlabel="t [s]",
+            ylabel="level [m]",
+        )
     for k, name in enumerate(IMPACT):
         ax[1, k].plot(te, exp[f"{name} [Pa]"], "k-", lw=0.5, label="MARIN")
         ax[1, k].set(title=name, xlabel="t [s]", ylabel="pressure [Pa]")
@@ -237,6 +300,11 @@ def figure(out, exp, runs, res):
         a.set_xlim(0, min(end, 2.0))
     fig.tight_layout()
     save(fig, out / "spheric.png")
-    res.figures.append(("spheric.png", "Water levels H1-H4 (top) and pressures on the box's "
-                        "front (P1, P3) and top (P5, P7) face (bottom, first 2 s) against "
-                        "MARIN's measurements (black)."))
+    res.figures.append(
+        (
+            "spheric.png",
+            "Water levels H1-H4 (top) and pressures on the box's "
+            "front (P1, P3) and top (P5, P7) face (bottom, first 2 s) against "
+            "MARIN's measurements (black).",
+        )
+    )

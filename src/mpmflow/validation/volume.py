@@ -28,16 +28,15 @@ from .common import CaseResult, Row, fmt, markdown_table, pyplot, save
 TOL_SHARE = {"sloshing": 0.01, "dam break": 0.05}
 WHY_SHARE = {
     "sloshing": "a gentle flow: the volume correction should undo packing within a few steps, "
-                "leaving at most 1 cell in 100 with 4 surplus particles",
+    "leaving at most 1 cell in 100 with 4 surplus particles",
     "dam break": "the impact and the overturning jet pack the particles; 5% of the cells is "
-                 "the upper bound of what the volume correction is designed to tolerate",
+    "the upper bound of what the volume correction is designed to tolerate",
 }
 TOL_RATIO = {"sloshing": 0.01, "dam break": 0.03}
 WHY_RATIO = {
     "sloshing": "1% of the volume is 2 mm of depth, a quarter of the wave amplitude 8 mm; the "
-                "f = 1/2 surface of 40 columns resolves it",
+    "f = 1/2 surface of 40 columns resolves it",
     "dam break": "3% of the column is 0.06 a of height, below the 0.08 a height tolerance",
-
 }
 
 
@@ -53,8 +52,12 @@ def packing(sim):
     w = f > 0
     inner = np.zeros_like(w)
     inner[1:-1, 1:-1] = np.logical_and.reduce(
-        [w[1 + dy:w.shape[0] - 1 + dy, 1 + dx:w.shape[1] - 1 + dx]
-         for dy in (-1, 0, 1) for dx in (-1, 0, 1)])
+        [
+            w[1 + dy : w.shape[0] - 1 + dy, 1 + dx : w.shape[1] - 1 + dx]
+            for dy in (-1, 0, 1)
+            for dx in (-1, 0, 1)
+        ]
+    )
     interior = float(f[inner].mean()) if inner.any() else float("nan")
     return share, region, deficit, interior
 
@@ -89,24 +92,51 @@ def run(out, quick=False, context=None):
         t, share, region, deficit, interior = a.T
         change = region - 1.0
         worst = float(change[np.argmax(np.abs(change))])
-        res.rows.append(Row("volume", f"{flow}: packed cells", f"largest share of wetted cells "
-                            f"with f > 1.2 over 0-{t[-1]:g} s ({label})", float(share.max()),
-                            TOL_SHARE[flow], WHY_SHARE[flow],
-                            miss="a count per cell steps by a row of particles (a quarter of a cell): the "
-                     "flow strains the lattice of particles by a few percent and some cells "
-                     "hold 5 rows of 4 (1.25) while the material's volume is right; the same "
-                     "threshold on the volume correction's hat-kernel density reads 0-0.8% "
-                     "(the long-run case)"))
-        res.rows.append(Row("volume", f"{flow}: wetted region", "largest |V(f >= 1/2) / V_water "
-                            f"- 1| over 0-{t[-1]:g} s ({label}; signed value shown)", worst,
-                            TOL_RATIO[flow], WHY_RATIO[flow], sense="|<=|",
-                            miss="the water loosens (value > 0) or packs (value < 0) faster than the volume "
-                     "correction brings it back"))
-        lines.append([flow, label, fmt(share.max()), fmt(share[-1]), fmt(region.min()),
-                      fmt(region.max()), fmt(region[-1]), fmt(deficit.max()),
-                      fmt(interior.min()), fmt(interior[-1])])
+        res.rows.append(
+            Row(
+                "volume",
+                f"{flow}: packed cells",
+                f"largest share of wetted cells with f > 1.2 over 0-{t[-1]:g} s ({label})",
+                float(share.max()),
+                TOL_SHARE[flow],
+                WHY_SHARE[flow],
+                miss="a count per cell steps by a row of particles (a quarter of a cell): the "
+                "flow strains the lattice of particles by a few percent and some cells "
+                "hold 5 rows of 4 (1.25) while the material's volume is right; the same "
+                "threshold on the volume correction's hat-kernel density reads 0-0.8% "
+                "(the long-run case)",
+            )
+        )
+        res.rows.append(
+            Row(
+                "volume",
+                f"{flow}: wetted region",
+                "largest |V(f >= 1/2) / V_water "
+                f"- 1| over 0-{t[-1]:g} s ({label}; signed value shown)",
+                worst,
+                TOL_RATIO[flow],
+                WHY_RATIO[flow],
+                sense="|<=|",
+                miss="the water loosens (value > 0) or packs (value < 0) faster than the volume "
+                "correction brings it back",
+            )
+        )
+        lines.append(
+            [
+                flow,
+                label,
+                fmt(share.max()),
+                fmt(share[-1]),
+                fmt(region.min()),
+                fmt(region.max()),
+                fmt(region[-1]),
+                fmt(deficit.max()),
+                fmt(interior.min()),
+                fmt(interior[-1]),
+            ]
+        )
         ax[0].plot(t, 100 * share, label=f"{flow} ({label})")
-        line, = ax[1].plot(t, region, label=f"wetted region, {flow} ({label})")
+        (line,) = ax[1].plot(t, region, label=f"wetted region, {flow} ({label})")
         ax[1].plot(t, interior, ":", color=line.get_color(), label=f"interior mean f, {flow}")
     ax[0].set_xlabel("t [s]")
     ax[0].set_ylabel("wetted cells with f > 1.2 [%]")
@@ -116,10 +146,29 @@ def run(out, quick=False, context=None):
         a_.legend()
     fig.tight_layout()
     save(fig, out / "volume.png")
-    res.figures.append(("volume.png", "Share of packed cells (left) and volume of the "
-                        "wetted region (right) against time."))
-    res.text = (__doc__.split("\n", 2)[2].strip() + "\n\n" + markdown_table(
-        ["flow", "run", "largest packed share", "packed share at the end",
-         "wetted region / water volume: smallest", "largest", "at the end",
-         "largest packing deficit", "interior mean f: smallest", "at the end"], lines))
+    res.figures.append(
+        (
+            "volume.png",
+            "Share of packed cells (left) and volume of the wetted region (right) against time.",
+        )
+    )
+    res.text = (
+        __doc__.split("\n", 2)[2].strip()
+        + "\n\n"
+        + markdown_table(
+            [
+                "flow",
+                "run",
+                "largest packed share",
+                "packed share at the end",
+                "wetted region / water volume: smallest",
+                "largest",
+                "at the end",
+                "largest packing deficit",
+                "interior mean f: smallest",
+                "at the end",
+            ],
+            lines,
+        )
+    )
     return res
