@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mpmflow import load_case, probes
+from mpmflow import load_case
 from mpmflow.cells import bin_particles
+from mpmflow.diagnostics import probes
 from mpmflow.geometry.seeding import build_particles
 from mpmflow.grid import Grid
 

@@ -5,7 +5,7 @@ import pytest
 from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case
-from mpmflow.diagnostics import front_and_height
+from mpmflow.diagnostics.measures import front_and_height
 from mpmflow.errors import CaseError
 from mpmflow.geometry.bodies import fills_grid, overlap_message
 from mpmflow.grid import Grid

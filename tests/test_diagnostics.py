@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mpmflow.diagnostics import front_and_height, last_crossing
+from mpmflow.diagnostics.measures import front_and_height, last_crossing
 from mpmflow.grid import Grid
 
 

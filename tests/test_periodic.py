@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES, make_case
 
-from mpmflow import Simulation, load_case, probes
+from mpmflow import Simulation, load_case
 from mpmflow.cells import bin_particles
+from mpmflow.diagnostics import probes
 from mpmflow.errors import CaseError
 
 RHO, G = 1000.0, 9.81

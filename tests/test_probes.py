@@ -7,12 +7,13 @@ import tomllib
 from conftest import EXAMPLES
 from PIL import Image
 
-from mpmflow import load_case, open_run, probes
+from mpmflow import load_case, open_run
 from mpmflow.case import apply_overrides, validate_case
 from mpmflow.cli import main
+from mpmflow.diagnostics import probes
+from mpmflow.diagnostics.probes import level_at, window_box
 from mpmflow.errors import CaseError
 from mpmflow.grid import Grid
-from mpmflow.probes import level_at, window_box
 from mpmflow.simulation import Simulation
 
 RHO, G = 1000.0, 9.81

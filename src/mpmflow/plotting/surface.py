@@ -55,7 +55,7 @@ def volume_fraction(x, volume, spacing, cells):
     The cells are the solver's (``state.cell_index``: particles on or past the domain's
     faces count in the cells at the faces)."""
     from .. import state
-    from ..diagnostics import volume_fraction_field
+    from ..diagnostics.measures import volume_fraction_field
     from ..grid import Grid
 
     grid = Grid(float(spacing), tuple(int(c) for c in cells))

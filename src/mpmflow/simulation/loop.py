@@ -27,7 +27,7 @@ from threadpoolctl import threadpool_limits
 from .. import checkpoint
 from ..case import revalidate
 from ..cells import bin_particles
-from ..diagnostics import (
+from ..diagnostics.measures import (
     front_and_height,
     kinetic_energy,
     potential_energy,

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from .. import probes
 from .._version import __version__
 from ..case import resolved
+from ..diagnostics import probes
 from ..output.timeseries import units as timeseries_units
 from ..stability import case_stable_time_step, sound_speed
 

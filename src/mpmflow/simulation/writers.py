@@ -15,7 +15,7 @@ checkpoint records of it), ``sync()`` (flush to the disk before a checkpoint) an
 ``close()``. The formats themselves are in ``mpmflow.output``.
 """
 
-from .. import probes
+from ..diagnostics import probes
 from ..output.snapshots import SnapshotWriter
 from ..output.timeseries import COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter, read_table
 

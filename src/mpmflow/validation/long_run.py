@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import state
 from ..cells import bin_particles
-from ..diagnostics import last_crossings, volume_measures
+from ..diagnostics.measures import last_crossings, volume_measures
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .sloshing import period_and_decay, theory
 

@@ -54,7 +54,7 @@ import itertools
 
 import numpy as np
 
-from .diagnostics import volume_fraction_field
+from .measures import volume_fraction_field
 
 UNITS = {"pressure": "Pa", "level": "m"}
 ON_WALL = 1e-6  # a point within this share of the window from a wall lies on the wall

@@ -10,7 +10,7 @@ the vertical is z, and both run over every row (column) of cells across the widt
 
 import numpy as np
 
-from . import state
+from .. import state
 
 
 def last_crossings(f, centres, wall):
