@@ -1,6 +1,7 @@
 """The fixed background grid: uniform square (cubic) cells covering the domain [0, size]."""
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +23,13 @@ class Grid:
         return cls.covering(case.domain.size, case.grid.spacing, periodic=case.domain.periodic)
 
     @classmethod
-    def covering(cls, size, spacing, rtol=1e-6, periodic=None):
+    def covering(
+        cls,
+        size: Sequence[float],
+        spacing: float,
+        rtol: float = 1e-6,
+        periodic: Sequence[bool] | None = None,
+    ) -> "Grid":
         """The grid of the given spacing that covers the box [0, size], periodic along the
         axes where ``periodic[k]`` (None: none).
 

@@ -5,9 +5,10 @@ it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explic
 """
 
 import math
+from typing import Any
 
 
-def sound_speed(bulk_modulus, density):
+def sound_speed(bulk_modulus: float, density: float) -> float:
     """c = sqrt(K / rho) (m/s)."""
     return math.sqrt(bulk_modulus / density)
 
@@ -17,19 +18,19 @@ def stable_time_step(spacing, bulk_modulus, density, speed=0.0):
     return spacing / (sound_speed(bulk_modulus, density) + speed)
 
 
-def initial_speed(case):
+def initial_speed(case: Any) -> float:
     """The largest initial body speed (m/s)."""
     return max(math.hypot(*body.velocity) for body in case.bodies)
 
 
-def case_stable_time_step(case):
+def case_stable_time_step(case: Any) -> float:
     """The stable explicit step of a case at its initial speeds (s)."""
     return stable_time_step(
         case.grid.spacing, case.material.bulk_modulus, case.material.density, initial_speed(case)
     )
 
 
-def time_step(case):
+def time_step(case: Any) -> float:
     """The time step a run uses (s): time.dt; for time.dt = "auto", the stable explicit step
     times time.safety_factor (explicit scheme), or the longest step time.max_dt (projection
     scheme, which then sets each step from the flow within it)."""

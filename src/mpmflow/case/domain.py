@@ -2,9 +2,10 @@
 side) and its periodic axes (SI units: m)."""
 
 import difflib
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
+from typing_extensions import Self
 
 from .sections import Section
 
@@ -13,7 +14,7 @@ AXES = "xyz"
 SIDES = ("min", "max")  # the lower wall (at 0) and the upper (at domain.size)
 
 
-def wall_keys(dim):
+def wall_keys(dim: int) -> list[str]:
     """The keys of a per-side domain.walls: the axes, then each axis's two sides."""
     return [AXES[k] for k in range(dim)] + [f"{AXES[k]}_{s}" for k in range(dim) for s in SIDES]
 
@@ -58,7 +59,7 @@ class Domain(Section):
 
     @field_validator("walls", mode="before")
     @classmethod
-    def _wall_keys(cls, walls, info: ValidationInfo):
+    def _wall_keys(cls, walls: Any, info: ValidationInfo) -> Any:
         dim = len(info.data.get("size") or ()) or 3
         keys = wall_keys(dim)
         example = '{z_min = "no_slip"}' if dim == 3 else '{y_min = "no_slip"}'
@@ -96,7 +97,7 @@ class Domain(Section):
         return walls
 
     @model_validator(mode="after")
-    def _positive(self):
+    def _positive(self) -> Self:
         if any(s <= 0 for s in self.size):
             raise ValueError("every entry of domain.size must be positive (metres)")
         if self.periodic is not None and len(self.periodic) != len(self.size):
@@ -117,31 +118,32 @@ class Domain(Section):
                     )
         return self
 
-    def wall_conditions(self):
+    def wall_conditions(self) -> list[tuple[str, str]]:
         """The condition of each wall, \"slip\" or \"no_slip\": a (lower, upper) pair per
         axis, the lower wall at 0 and the upper at domain.size (a periodic axis's pair too,
         though it has no walls)."""
         dim = len(self.size)
         if isinstance(self.walls, str):
             return [(self.walls, self.walls)] * dim
-        out = []
+        out: list[tuple[str, str]] = []
         for k in range(dim):
             axis = self.walls.get(AXES[k], "slip")
-            out.append(tuple(self.walls.get(f"{AXES[k]}_{side}", axis) for side in SIDES))
+            lower, upper = (self.walls.get(f"{AXES[k]}_{side}", axis) for side in SIDES)
+            out.append((lower, upper))
         return out
 
-    def walls_text(self):
+    def walls_text(self) -> str:
         """domain.walls as a case file writes it: "no_slip", {x = "slip", z_min = ...}."""
         if isinstance(self.walls, str):
             return f'"{self.walls}"'
         return "{" + ", ".join(f'{k} = "{v}"' for k, v in self.walls.items()) + "}"
 
-    def no_slip_sides(self):
+    def no_slip_sides(self) -> list[bool]:
         """One flag per wall in the order x_min, x_max, y_min, ... (the core's side order):
         whether it is no-slip."""
         return [c == "no_slip" for pair in self.wall_conditions() for c in pair]
 
-    def uniform_walls(self):
+    def uniform_walls(self) -> str | None:
         """The one condition of every wall (periodic axes aside), or None where walls
         differ."""
         periodic = self.periodic or [False] * len(self.size)

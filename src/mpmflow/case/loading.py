@@ -3,9 +3,11 @@ name the key and the fix (``CaseError``)."""
 
 import difflib
 import sys
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from ..errors import CaseError
 from .domain import AXES
@@ -23,7 +25,7 @@ else:  # pragma: no cover
 # --------------------------------------------------------------------------- loading
 
 
-def _read_toml(path):
+def _read_toml(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     try:
         with open(path, "rb") as f:  # any file: also a pipe, e.g. <(sed ... case.toml)
@@ -58,7 +60,8 @@ def _read_toml(path):
             "TOML case file, e.g. examples/dam_break.toml."
         )
     try:
-        return tomllib.loads(text)
+        data: dict[str, Any] = tomllib.loads(text)
+        return data
     except tomllib.TOMLDecodeError as err:
         raise CaseError(
             f"Case file {path} is not valid TOML: {err}. Fix the syntax there "
@@ -66,7 +69,7 @@ def _read_toml(path):
         ) from None
 
 
-def _parse_value(text):
+def _parse_value(text: str) -> Any:
     """A --set value: any TOML value, or a bare word taken as a string."""
     try:
         return tomllib.loads(f"v = {text}")["v"]
@@ -79,12 +82,12 @@ def _parse_value(text):
 LIST_KEYS = ("bodies", "obstacles", "probes")
 
 
-def _generic(dotted):
+def _generic(dotted: str) -> str:
     """bodies.0.max -> bodies.N.max"""
     return ".".join("N" if part.isdigit() else part for part in dotted.split("."))
 
 
-def _suggest(dotted):
+def _suggest(dotted: str) -> str:
     parts = dotted.split(".")
     if parts[0] not in Case.model_fields:
         # a misspelt section or list ([[obstacle]]): the whole key's nearest match would be
@@ -100,12 +103,12 @@ def _suggest(dotted):
     return f" Did you mean `{match[0].replace('.N.', '.' + _index(dotted) + '.')}`?"
 
 
-def _index(dotted):
+def _index(dotted: str) -> str:
     parts = [p for p in dotted.split(".") if p.isdigit()]
     return parts[0] if parts else "0"
 
 
-def apply_overrides(data, overrides):
+def apply_overrides(data: dict[str, Any], overrides: Iterable[str] | Mapping[str, Any]) -> None:
     """Apply overrides to the raw case dict, in place: ``key=value`` strings (dotted keys,
     TOML values, as --set takes them) or a dict {dotted key: Python value}."""
     if isinstance(overrides, dict):
@@ -157,7 +160,7 @@ def apply_overrides(data, overrides):
         node[parts[-1]] = _parse_value(value.strip()) if parse else value
 
 
-def _walls_by_axis(domain):
+def _walls_by_axis(domain: dict[str, Any]) -> dict[str, str]:
     """A single domain.walls condition as the table of its wall axes (a periodic axis has
     none), so that an override of one side keeps the condition of the others."""
     size, periodic = domain.get("size"), domain.get("periodic")
@@ -170,7 +173,15 @@ def _walls_by_axis(domain):
     }
 
 
-def _check_index(label, key, parts, depth, entries, value, append=False):
+def _check_index(
+    label: str,
+    key: str,
+    parts: list[str],
+    depth: int,
+    entries: Any,
+    value: Any,
+    append: bool = False,
+) -> None:
     """parts[depth] indexes the list ``entries`` (the tables of parts[depth - 1]), or, for a
     whole table (``append``), is the next index; CaseError naming the list otherwise."""
     name, part = ".".join(parts[:depth]), parts[depth]
@@ -200,10 +211,11 @@ _TABLE_EXAMPLES = {  # a table of each list, for messages
 }
 
 
-def _shape_loc(parts):
+def _shape_loc(parts: Sequence[str | int]) -> tuple[str, str | None]:
     """(loc without the shape tags pydantic puts after a body's or obstacle's index, the
     shape type of that table or None): ("bodies", 0, "disc", "radius") -> bodies.0.radius."""
-    out, kind = [], None
+    out: list[str | int] = []
+    kind: str | None = None
     for p in parts:
         if isinstance(p, str) and p in SHAPE_TYPES and out and isinstance(out[-1], int):
             kind = p
@@ -212,13 +224,13 @@ def _shape_loc(parts):
     return ".".join(str(p) for p in out), kind
 
 
-def _shape_keys(kind, table):
+def _shape_keys(kind: str, table: str) -> str:
     models = {"bodies": Body, "obstacles": Obstacle}[table]
     model = _models_of(models)[SHAPE_TYPES.index(kind)]
     return ", ".join(model.model_fields)
 
 
-def _format_error(err, source):
+def _format_error(err: ValidationError, source: str) -> CaseError:
     lines = []
     for e in err.errors():
         loc, kind = _shape_loc(e["loc"])
@@ -276,9 +288,9 @@ def _format_error(err, source):
     )
 
 
-def _is_section(loc):
+def _is_section(loc: str) -> bool:
     parts = [p for p in loc.split(".") if not p.isdigit()]
-    model = Case
+    model: type[BaseModel] = Case
     for part in parts:
         field = model.model_fields.get(part)
         if field is None:
@@ -290,11 +302,11 @@ def _is_section(loc):
     return True
 
 
-def _describe(loc):
-    return _REFERENCE.get(_generic(loc), {}).get("description", "")
+def _describe(loc: str) -> str:
+    return str(_REFERENCE.get(_generic(loc), {}).get("description", ""))
 
 
-def _example(row):
+def _example(row: dict[str, Any]) -> str:
     value = row["example"] if row["example"] is not None else row["default"]
     if value is None:
         return ""
@@ -307,7 +319,7 @@ def _example(row):
     )
 
 
-def validate(data, source="", base_dir=None):
+def validate(data: Any, source: str = "", base_dir: str | Path | None = None) -> Case:
     """A Case from the case's dict; ``base_dir``: the folder relative paths (mesh files,
     probes' data) start from, the case file's (None: the folder of ``source`` when it names
     a file, else the current folder)."""
@@ -319,14 +331,14 @@ def validate(data, source="", base_dir=None):
         raise _format_error(err, source) from None
 
 
-def _folder_of(path):
+def _folder_of(path: str | Path) -> Path:
     """The folder of a case file, where its relative paths start; the current folder for a
     case that is not a regular file (a pipe such as <(sed ... case.toml))."""
     path = Path(path)
     return path.resolve().parent if path.is_file() else Path.cwd()
 
 
-def load_case(path, overrides=()):
+def load_case(path: str | Path, overrides: Iterable[str] | Mapping[str, Any] = ()) -> Case:
     """Read, override and validate a case file; raises CaseError with a user message.
 
     ``overrides``: what --set takes, as a list of "dotted.key=value" strings (TOML values),
@@ -337,7 +349,7 @@ def load_case(path, overrides=()):
     return validate(data, source=str(path), base_dir=_folder_of(path))
 
 
-def validate_case(data):
+def validate_case(data: Any) -> Case:
     """A case from a dict of sections (as the TOML file would hold them), or a Case to check
     again as a whole (see ``revalidate``); CaseError with a user message."""
     if isinstance(data, Case):
@@ -347,7 +359,7 @@ def validate_case(data):
     return validate(data)
 
 
-def revalidate(case):
+def revalidate(case: Case) -> Case:
     """The case validated again as a whole: the cross-field checks (bodies in the domain and
     apart, time step against end, ...) for a case whose fields were changed after loading
     (an assignment checks only its own section). CaseError when it no longer holds."""
@@ -359,6 +371,6 @@ def revalidate(case):
     return validate(case.model_dump(), source="(changed after loading)", base_dir=case._base_dir)
 
 
-def resolved(case):
+def resolved(case: Case) -> dict[str, Any]:
     """The fully resolved case as plain data (defaults filled in)."""
     return case.model_dump(mode="json")

@@ -5,10 +5,11 @@ from pathlib import Path
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
+from typing_extensions import Self
 
 from .. import schemes
 from ..geometry import bodies, placement
-from ..geometry.shapes import DIM_OF
+from ..geometry.shapes import DIM_OF, Shape
 from ..geometry.specs import from_spec
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
@@ -35,7 +36,7 @@ from .solver import Solver
 MAX_COARSEST_PERIOD = 64
 
 
-def _coarsest_period(cells):
+def _coarsest_period(cells: int) -> int:
     """The points a periodic axis of ``cells`` cells keeps on the coarsest level."""
     while cells % 4 == 0 and cells >= 8:
         cells //= 2
@@ -72,10 +73,14 @@ class Case(Section):
     execution: Execution = Execution()
 
     _base_dir: Path | None = PrivateAttr(None)  # the case file's folder
-    _shapes: dict = PrivateAttr(default_factory=dict)  # built shapes, by their tables
-    _counts: dict = PrivateAttr(default_factory=dict)  # particle counts, by the geometry
+    _shapes: dict[tuple[str, int, str, str], Shape] = PrivateAttr(
+        default_factory=dict
+    )  # built shapes, by their tables
+    _counts: dict[tuple[str, str], list[float]] = PrivateAttr(
+        default_factory=dict
+    )  # particle counts, by the geometry
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         """Equal cases: the same settings and folder (the caches of shapes and counts
         aside)."""
         if not isinstance(other, Case):
@@ -83,12 +88,12 @@ class Case(Section):
         return self.__dict__ == other.__dict__ and self._base_dir == other._base_dir
 
     @property
-    def base_dir(self):
+    def base_dir(self) -> Path:
         """The folder relative paths of the case (mesh files) start from: the case file's,
         or the current folder for a case not read from a file."""
         return self._base_dir if self._base_dir is not None else Path.cwd()
 
-    def _shape(self, kind, k):
+    def _shape(self, kind: str, k: int) -> Shape:
         spec = getattr(self, kind)[k]
         key = (kind, k, spec.model_dump_json(), str(self.base_dir))
         if key not in self._shapes:
@@ -97,7 +102,7 @@ class Case(Section):
             )
         return self._shapes[key]
 
-    def _unsupported(self):
+    def _unsupported(self) -> str | None:
         """The message for a feature the case uses that its scheme does not support (each
         scheme declares its own, ``schemes.SUPPORTS``); None when there is none."""
         used = {
@@ -117,7 +122,7 @@ class Case(Section):
                 )
         return None
 
-    def _periodic_problem(self, size, obstacle_shapes):
+    def _periodic_problem(self, size: list[float], obstacle_shapes: list[Shape]) -> str | None:
         """What is wrong with domain.periodic for this case (None: nothing)."""
         periodic = self.domain.periodic or []
         if not any(periodic):
@@ -163,15 +168,15 @@ class Case(Section):
                     )
         return None
 
-    def body_shape(self, k):
+    def body_shape(self, k: int) -> Shape:
         """The ``geometry.shapes`` shape of bodies.k."""
         return self._shape("bodies", k)
 
-    def obstacle_shape(self, k):
+    def obstacle_shape(self, k: int) -> Shape:
         """The ``geometry.shapes`` shape of obstacles.k."""
         return self._shape("obstacles", k)
 
-    def particle_counts(self):
+    def particle_counts(self) -> list[float]:
         """The exact number of particles each body is seeded with (obstacles left out)."""
         key = (
             self.model_dump_json(include={"bodies", "obstacles", "grid", "domain"}),
@@ -185,7 +190,7 @@ class Case(Section):
             ]
         return self._counts[key]
 
-    def _same_dimension(self):
+    def _same_dimension(self) -> None:
         """Every vector has one entry per axis of domain.size; the defaults (gravity down
         the last axis, bodies at rest) follow the dimension."""
         D = len(self.domain.size)
@@ -222,7 +227,7 @@ class Case(Section):
                 )
         if D == 3:
             for k, body in enumerate(self.bodies):
-                if getattr(body, "surface_amplitude", 0.0):
+                if isinstance(body, BoxBody) and body.surface_amplitude:
                     raise ValueError(
                         f"bodies.{k}.surface_amplitude = {body.surface_amplitude:g} m: the "
                         "cosine top surface is defined for 2D cases only so far; use a flat "
@@ -230,7 +235,7 @@ class Case(Section):
                     )
 
     @model_validator(mode="after")
-    def _consistent(self, info: ValidationInfo):
+    def _consistent(self, info: ValidationInfo) -> Self:
         if info.context and info.context.get("base_dir") is not None:
             self._base_dir = Path(info.context["base_dir"])
         size = self.domain.size
@@ -411,11 +416,12 @@ class Case(Section):
         return self
 
 
-def _check_probe_data(k, probe, folder):
+def _check_probe_data(k: int, probe: Probe, folder: Path | None) -> None:
     """probes.k.data: its file exists and names its columns (ValueError otherwise); the path
     is made absolute (relative to ``folder``, the case file's, else the working folder), so
     that the resolved case in summary.json finds it from anywhere."""
     data = probe.data
+    assert data is not None  # called for the probes that have data
     path = Path(data.path).expanduser()
     if not path.is_absolute():
         path = (Path(folder) if folder is not None else Path.cwd()) / path

@@ -3,7 +3,7 @@ description (docs/reference.md, `mpmflow keys`), and the lookups messages use.""
 
 import types
 import typing
-from typing import Annotated, Union
+from typing import Annotated, Any, Union
 
 from pydantic import BaseModel
 
@@ -12,12 +12,12 @@ from .model import Case
 from .solver import FORMULATIONS, Solver
 
 
-def _model_for(section):
+def _model_for(section: Any) -> type[BaseModel] | None:
     """The pydantic model describing a nested dict at this position, if any."""
     return section if isinstance(section, type) and issubclass(section, BaseModel) else None
 
 
-def _models_of(annotation):
+def _models_of(annotation: Any) -> list[type[BaseModel]]:
     """The pydantic models a field's annotation (or a list's item) may hold: one, the
     members of a union (the shapes of bodies and obstacles), or none."""
     origin = typing.get_origin(annotation)
@@ -29,20 +29,20 @@ def _models_of(annotation):
     return [model] if model is not None else []
 
 
-def _item(annotation):
+def _item(annotation: Any) -> tuple[bool, Any]:
     """(is a list, the annotation of an item or the annotation itself)."""
     if typing.get_origin(annotation) is list:
         return True, typing.get_args(annotation)[0]
     return False, annotation
 
 
-def key_reference():
+def key_reference() -> list[dict[str, Any]]:
     """Every case key with its default, whether it is required, and its description."""
-    rows = []
+    rows: list[dict[str, Any]] = []
 
-    seen = set()
+    seen: set[str] = set()
 
-    def walk(model, prefix):
+    def walk(model: type[BaseModel], prefix: str) -> None:
         for name, field in model.model_fields.items():
             is_list, inner = _item(field.annotation)
             subs = _models_of(inner)
@@ -76,7 +76,7 @@ _REFERENCE = {row["key"]: row for row in key_reference()}
 KNOWN_KEYS = list(_REFERENCE) + [f"domain.walls.{k}" for k in wall_keys(3)]
 
 
-def reference_markdown():
+def reference_markdown() -> str:
     """The case-file reference as a Markdown table (generated into the README)."""
     lines = ["| key | default | meaning |", "|---|---|---|"]
     for row in key_reference():
@@ -94,7 +94,7 @@ def reference_markdown():
     return "\n".join(lines)
 
 
-def reference_page():
+def reference_page() -> str:
     """docs/reference.md: the case-file reference page, generated from the schema."""
     return (
         "# Case-file reference\n\n"

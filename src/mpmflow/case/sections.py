@@ -7,6 +7,7 @@ cross-field rules in ``case.model``."""
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from typing_extensions import Self
 
 from .. import materials
 
@@ -108,7 +109,7 @@ class Material(Section):
     )
 
     @model_validator(mode="after")
-    def _model_parameters(self):
+    def _model_parameters(self) -> Self:
         materials.check(self)
         return self
 
@@ -158,7 +159,7 @@ class Time(Section):
     )
 
     @model_validator(mode="after")
-    def _positive(self):
+    def _positive(self) -> Self:
         if self.dt != "auto" and self.dt <= 0:
             raise ValueError('time.dt must be greater than 0 (seconds), or "auto"')
         return self
@@ -297,7 +298,7 @@ class Execution(Section):
     )
 
     @model_validator(mode="after")
-    def _positive(self):
+    def _positive(self) -> Self:
         if self.threads != "auto" and self.threads < 1:
             raise ValueError('execution.threads must be "auto" or at least 1')
         return self

@@ -2,9 +2,10 @@
 only the shape's fields; bodies and obstacles add their own fields to the same shape
 classes (``mpmflow.geometry`` builds the geometry from them)."""
 
-from typing import Annotated, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import Discriminator, Field, Tag, model_validator
+from typing_extensions import Self
 
 from ..geometry import shapes
 from .sections import Section
@@ -23,11 +24,11 @@ _TYPE_DOC = (
 )
 
 
-def _type_field(kind):
+def _type_field(kind: str) -> Any:
     return Field(kind, description=_TYPE_DOC)
 
 
-def _centre():
+def _centre() -> Any:
     return Field(
         description="Centre (m) of a disc or sphere; of a cylinder, the centre of "
         "its base, where its axis starts.",
@@ -37,7 +38,7 @@ def _centre():
     )
 
 
-def _radius():
+def _radius() -> Any:
     return Field(description="Radius (m) of a disc, sphere or cylinder.", gt=0, examples=[0.05])
 
 
@@ -55,7 +56,7 @@ class _BoxShape(Section):
     )
 
     @model_validator(mode="after")
-    def _ordered(self):
+    def _ordered(self) -> Self:
         if any(b <= a for a, b in zip(self.min, self.max)):
             raise ValueError("each entry of max must be larger than the entry of min")
         return self
@@ -78,7 +79,7 @@ class _CylinderShape(Section):
     )
 
     @model_validator(mode="after")
-    def _axis(self):
+    def _axis(self) -> Self:
         if not any(self.axis):
             raise ValueError(
                 "the cylinder's axis must not be [0, 0, 0]; give its direction, "
@@ -112,7 +113,7 @@ class _PolygonShape(Section):
     )
 
     @model_validator(mode="after")
-    def _simple(self):
+    def _simple(self) -> Self:
         message = shapes.polygon_problem(self.vertices)
         if message:
             raise ValueError(message)
@@ -190,7 +191,7 @@ class Box(_BodyFields, _BoxShape):
     )
 
     @model_validator(mode="after")
-    def _amplitude(self):
+    def _amplitude(self) -> Self:
         if abs(self.surface_amplitude) >= self.max[1] - self.min[1]:
             raise ValueError(
                 f"|surface_amplitude| = {abs(self.surface_amplitude):g} m must be smaller than "
@@ -259,7 +260,7 @@ class MeshObstacle(_ObstacleFields, _MeshShape):
     pass
 
 
-def _shape_tag(value):
+def _shape_tag(value: Any) -> str:
     """The ``type`` of a body or obstacle table ("box" when not given)."""
     kind = value.get("type", "box") if isinstance(value, dict) else getattr(value, "type", "box")
     return kind if isinstance(kind, str) else repr(kind)

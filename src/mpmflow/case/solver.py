@@ -1,9 +1,11 @@
 """The case's [solver] table: the scheme, the formulation of the pressure step (the paper's
 or the project's default) and each of its choices, the solvers' tolerances (SI units)."""
 
-from typing import Literal
+from collections.abc import Callable
+from typing import Any, Literal
 
 from pydantic import Field, PrivateAttr, model_validator
+from typing_extensions import Self
 
 from .sections import Section
 
@@ -237,11 +239,11 @@ class Solver(Section):
         "p >= -explicit_tension (0 = none: free water holds no tension).",
     )
 
-    _from_preset: set = PrivateAttr(default_factory=set)  # keys the preset gave
+    _from_preset: set[str] = PrivateAttr(default_factory=set)  # keys the preset gave
 
     @model_validator(mode="wrap")
     @classmethod
-    def _preset(cls, data, handler):
+    def _preset(cls, data: Any, handler: Callable[[Any], "Solver"]) -> "Solver":
         given = None
         if isinstance(data, dict):  # not on assignment (then data is the model)
             given = set(data)
@@ -254,7 +256,7 @@ class Solver(Section):
             model._from_preset = set(FORMULATIONS["mpmflow"]) - given
         return model
 
-    def __setattr__(self, name, value):
+    def __setattr__(self, name: str, value: Any) -> None:
         """Assigning formulation after loading applies its preset to the keys the preset
         gave (not those set explicitly), as --set solver.formulation=... does."""
         super().__setattr__(name, value)
@@ -265,8 +267,9 @@ class Solver(Section):
             self._from_preset.discard(name)
 
     @model_validator(mode="after")
-    def _thresholds(self):
-        if self.sparse_cell_threshold >= self.full_cell_threshold:
+    def _thresholds(self) -> Self:
+        sparse = self.sparse_cell_threshold  # set by the formulation's preset
+        if sparse is not None and sparse >= self.full_cell_threshold:
             raise ValueError(
                 "solver.sparse_cell_threshold must be smaller than solver.full_cell_threshold"
             )

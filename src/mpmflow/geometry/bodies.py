@@ -16,10 +16,13 @@ the box's part near the obstacles).
 
 import itertools
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from .lattice import lattice_chunks, lattice_count, lattice_indices
+from .shapes import Shape
 
 TOUCH = 1e-9  # overlaps thinner than this fraction of a grid cell are touching faces
 
@@ -106,7 +109,9 @@ def _clip(lo, hi, shapes):
     return np.min([p[0] for p in parts], axis=0), np.max([p[1] for p in parts], axis=0)
 
 
-def particle_count(body, grid_spacing, shape=None, obstacles=()):
+def particle_count(
+    body: Any, grid_spacing: float, shape: Shape | None = None, obstacles: Sequence[Shape] = ()
+) -> float:
     """The number of particles the body is seeded with (exact; ``setup_case`` seeds them);
     inf when the count overflows a float. ``shape``: the body's ``mpmflow.shapes`` shape
     (needed unless the body is a box); ``obstacles``: the obstacles' shapes, whose points
@@ -249,7 +254,7 @@ def _inside(a, b, tol):
     )
 
 
-def overlap_message(bodies, spacing):
+def overlap_message(bodies: Sequence[Any], spacing: float) -> str | None:
     """One paragraph naming the first pair of overlapping bodies and the fix; None if no two
     bodies overlap."""
     tol = TOUCH * spacing
@@ -289,7 +294,7 @@ def overlap_message(bodies, spacing):
     return None
 
 
-def fills_grid(bodies, spacing, grid_size):
+def fills_grid(bodies: Sequence[Any], spacing: float, grid_size: Sequence[float]) -> bool:
     """True when the particles of the bodies (each the square of its lattice cell) cover the
     whole grid, leaving no empty space (flat boxes; a cosine top always leaves some, other
     shapes are taken to: the start's free-surface check catches what remains)."""

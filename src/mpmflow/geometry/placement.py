@@ -19,10 +19,14 @@ that involve the other shapes and the obstacles:
 * two obstacles with the same name.
 """
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 
 from . import bodies
 from .lattice import lattice_chunks
+from .shapes import Shape
 
 THIN = 2  # grid cells: the thinnest obstacle the grid resolves
 
@@ -67,7 +71,7 @@ def thickness(spec, shape):
     return float(hi[axis] - lo[axis]), f"its extent along {'xyz'[axis]}"
 
 
-def check(case, body_shapes, obstacle_shapes):
+def check(case: Any, body_shapes: Sequence[Shape], obstacle_shapes: Sequence[Shape]) -> None:
     """Raise ValueError for the first geometric problem of the case (see the module)."""
     size = np.asarray(case.domain.size, dtype=float)
     h = case.grid.spacing
@@ -82,7 +86,7 @@ def check(case, body_shapes, obstacle_shapes):
                 f"{_box_text(size)} m; move it inside ({_move_keys('bodies', k, body)}) or "
                 "enlarge domain.size"
             )
-    names = {}
+    names: dict[str, int] = {}
     for k, (obstacle, shape) in enumerate(zip(case.obstacles, obstacle_shapes)):
         lo, hi = shape.bounds()
         if (
@@ -226,7 +230,9 @@ def _shared(P, shape_p, Q, shape_q, s):
     return n, first, last
 
 
-def empty_body_message(case, k, body_shape, obstacle_shapes):
+def empty_body_message(
+    case: Any, k: int, body_shape: Shape, obstacle_shapes: Sequence[Shape]
+) -> str | None:
     """The message for bodies.k when obstacles take every one of its lattice points, or
     None (a count pass without obstacles; called only when its count is 0)."""
     body = case.bodies[k]
@@ -241,7 +247,9 @@ def empty_body_message(case, k, body_shape, obstacle_shapes):
     )
 
 
-def overlap_message(case, k, count, body_shape, obstacle_shapes):
+def overlap_message(
+    case: Any, k: int, count: float, body_shape: Shape, obstacle_shapes: Sequence[Shape]
+) -> str | None:
     """The message for bodies.k overlapping an obstacle (``count``: its particles with the
     obstacles left out), or None when no obstacle takes any of its lattice points."""
     body = case.bodies[k]

@@ -19,6 +19,7 @@ fast winding number, point-to-mesh distance).
 """
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -63,7 +64,7 @@ class Shape:
     def volume(self):  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def support(self, direction):  # pragma: no cover - abstract
+    def support(self, direction: Any) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
 
@@ -215,7 +216,7 @@ class Polygon(Shape):
         return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
 
 
-def polygon_problem(vertices):
+def polygon_problem(vertices: Any) -> str | None:
     """Why these corners (m) are not a simple polygon (all on one line, edges that cross or
     touch), or None. O(n^2) in the corners: a case's polygon has tens, not thousands. The
     crossing edges are looked for before the area: a bow tie's two loops can enclose areas
@@ -240,16 +241,16 @@ def polygon_problem(vertices):
     return None
 
 
-def _crossing_edges(v):
+def _crossing_edges(v: np.ndarray) -> str | None:
     """The message for the first two edges of the polygon v that cross (each passes
     through the other's inside) or touch, or None."""
     n = len(v)
 
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    def cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+        return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
 
-    def spans_meet(a, b, c, d, k):
-        return max(min(a[k], b[k]), min(c[k], d[k])) <= min(max(a[k], b[k]), max(c[k], d[k]))
+    def spans_meet(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, k: int) -> bool:
+        return bool(max(min(a[k], b[k]), min(c[k], d[k])) <= min(max(a[k], b[k]), max(c[k], d[k])))
 
     for i in range(n):
         a, b = v[i], v[(i + 1) % n]

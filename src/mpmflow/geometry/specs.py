@@ -1,12 +1,13 @@
 """The shape of a case's ``[[bodies]]`` or ``[[obstacles]]`` table."""
 
 from pathlib import Path
+from typing import Any
 
 from .meshes import load_mesh
-from .shapes import DIM_OF, Ball, Box, Cylinder, Polygon
+from .shapes import DIM_OF, Ball, Box, Cylinder, Polygon, Shape
 
 
-def from_spec(spec, dim, base_dir, key=None):
+def from_spec(spec: Any, dim: int, base_dir: str | Path, key: str | None = None) -> Shape:
     """The Shape of a case's ``[[bodies]]`` or ``[[obstacles]]`` table ``spec`` (its ``type``
     and shape fields) in a ``dim``-dimensional case. ``base_dir``: the folder relative mesh
     paths start from (the case file's). ``key``: the table's name for messages, e.g.

@@ -15,6 +15,8 @@ A material is one per case for now; the compiled step takes (model, parameters) 
 table of materials indexed per particle can follow without changing the kernels' formulas.
 """
 
+from typing import Any
+
 import numpy as np
 
 from .. import state
@@ -24,7 +26,7 @@ MATERIALS = {m.NAME: m for m in (water, newtonian, herschel_bulkley, mu_i)}
 COMMON = ("model", "density", "bulk_modulus")
 
 
-def check(m):
+def check(m: Any) -> None:
     """Refuse parameters of another model (set to other than their defaults), then run the
     model's own checks."""
     module = MATERIALS[m.model]

@@ -2,7 +2,32 @@
 declaring what it supports (``SUPPORTS``): the case's rules ask here instead of naming
 schemes."""
 
-SCHEMES: dict[str, type] = {}
+from collections.abc import Callable
+from typing import Any, ClassVar, Protocol
+
+
+class Scheme(Protocol):
+    """What the Simulation asks of a scheme (``projection``, ``explicit``)."""
+
+    SUPPORTS: ClassVar[frozenset[str]]  # the FEATURES it supports
+    last_unknowns: int  # the size of the last step's system (0: none)
+
+    def __init__(self, case: Any, grid: Any, particles: Any) -> None: ...
+
+    def advance(self, dt: float, nsteps: int, where: Callable[[int], str]) -> Any:
+        """nsteps steps of dt (s) on the particles, in place; a report of what they did."""
+        ...
+
+    def state(self) -> dict[str, Any]:
+        """What a checkpoint keeps of the scheme besides the particles."""
+        ...
+
+    def restore(self, saved: dict[str, Any]) -> None:
+        """Put back what ``state`` returned."""
+        ...
+
+
+SCHEMES: dict[str, type[Scheme]] = {}
 
 # The features a scheme may support, as the case's rules name them to the user.
 FEATURES = {
@@ -13,30 +38,30 @@ FEATURES = {
 }
 
 
-def _load():
+def _load() -> None:
     from . import explicit, projection  # noqa: F401  (they register themselves)
 
 
-def supports(name, feature):
+def supports(name: str, feature: str) -> bool:
     """True when scheme ``name`` supports ``feature`` (a key of FEATURES)."""
     _load()
     return feature in SCHEMES[name].SUPPORTS
 
 
-def supporting(feature):
+def supporting(feature: str) -> list[str]:
     """The names of the schemes that support ``feature``."""
     _load()
     return [name for name, cls in SCHEMES.items() if feature in cls.SUPPORTS]
 
 
-def register(name):
-    def deco(cls):
+def register(name: str) -> Callable[[type[Scheme]], type[Scheme]]:
+    def deco(cls: type[Scheme]) -> type[Scheme]:
         SCHEMES[name] = cls
         return cls
 
     return deco
 
 
-def make_scheme(case, grid, particles):
+def make_scheme(case: Any, grid: Any, particles: Any) -> Scheme:
     _load()
     return SCHEMES[case.solver.scheme](case, grid, particles)

@@ -16,6 +16,7 @@ choices, the cures and the variants tried and rejected: docs/method.md, "The exp
 comparator"."""
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -34,9 +35,8 @@ class ExplicitReport(StepReport):
 
 @register("explicit")
 class ExplicitScheme:
-    SUPPORTS: frozenset[str] = (
-        frozenset()
-    )  # water only, walls only (the weakly compressible comparator)
+    # water only, walls only (the weakly compressible comparator)
+    SUPPORTS: ClassVar[frozenset[str]] = frozenset()
 
     def __init__(self, case, grid, particles):
         self.grid = grid
@@ -127,11 +127,11 @@ class ExplicitScheme:
         their cell's J after the sums were taken)."""
         return {name: np.array(getattr(self, name), copy=True) for name in self._STATE}
 
-    def restore(self, state):
+    def restore(self, saved):
         """Continue from ``state()`` (a checkpoint)."""
         for name in self._STATE[:-1]:
-            np.copyto(getattr(self, name), state[name])
-        self.smallest_dt = float(state["smallest"][0])
+            np.copyto(getattr(self, name), saved[name])
+        self.smallest_dt = float(saved["smallest"][0])
 
     def stable_time_step(self):
         """h / (c + |v|max) at the current particle speeds (s)."""

@@ -6,6 +6,7 @@ reported by the compiled code into a message.
 """
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -79,7 +80,7 @@ class AdaptiveReport(StepReport):
 
 @register("projection")
 class ProjectionScheme:
-    SUPPORTS = frozenset({"obstacles", "materials", "periodic", "apic"})
+    SUPPORTS: ClassVar[frozenset[str]] = frozenset({"obstacles", "materials", "periodic", "apic"})
 
     def __init__(self, case, grid, particles):
         s = case.solver
