@@ -11,7 +11,7 @@ the command) a signal stops at once with a message.
 import os
 import signal
 import sys
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -60,15 +60,26 @@ def stop_on_signals(sim):
             "time with a checkpoint (send it again to stop at once, without one).\n"
         )
 
+    # StopNow lost in a __del__ is raised by the run loop after the current chunk
+    with _handling(handler, quiet=(StopNow,)):
+        yield
+
+
+@contextmanager
+def _handling(handler, quiet):
+    """``handler`` on SIGINT and SIGTERM, and the exceptions of the types ``quiet`` left
+    unprinted when they are raised where Python cannot propagate them: a handler that runs
+    inside a __del__ (a library freeing objects while it loads) has its exception printed as
+    "Exception ignored ... Traceback" and dropped, and the caller raises it again itself.
+    ValueError outside the main thread (where no handler can be installed)."""
+    previous = {s: signal.signal(s, handler) for s in SIGNALS}
+    previous_hook = sys.unraisablehook
+
     def unraisable(info):
-        # a handler that runs inside a __del__ (a library freeing objects while it loads)
-        # has its exception printed as "Exception ignored ... Traceback" and
-        # dropped; StopNow is then raised by the run loop after the current chunk
-        if not isinstance(info.exc_value, StopNow):
+        if not isinstance(info.exc_value, quiet):
             previous_hook(info)
 
-    previous = {s: signal.signal(s, handler) for s in SIGNALS}
-    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
+    sys.unraisablehook = unraisable
     try:
         yield
     finally:
@@ -122,20 +133,10 @@ class EarlySignals:
 
     @contextmanager
     def installed(self):
-        def unraisable(info):
-            if not isinstance(info.exc_value, (EarlyStop, StopNow)):
-                previous_hook(info)
-
         self.pending, self.phase = None, "before"
-        try:
-            previous = {s: signal.signal(s, self._handler) for s in SIGNALS}
-        except ValueError:  # not in the main thread (an embedding program): leave them
+        with ExitStack() as stack:
+            try:
+                stack.enter_context(_handling(self._handler, quiet=(EarlyStop, StopNow)))
+            except ValueError:  # not in the main thread (an embedding program): leave them
+                pass
             yield
-            return
-        previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
-        try:
-            yield
-        finally:
-            sys.unraisablehook = previous_hook
-            for s, old in previous.items():
-                signal.signal(s, old)
