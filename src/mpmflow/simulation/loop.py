@@ -17,15 +17,19 @@ run's life (``output.folder``): a second run into it is refused, and a folder th
 another run is not reused unless ``overwrite=True``.
 """
 
+from __future__ import annotations
+
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from .. import checkpoint
-from ..case import revalidate
+from ..case import Case, revalidate
 from ..cells import bin_particles
 from ..diagnostics.measures import (
     front_and_height,
@@ -44,7 +48,7 @@ from ..threads import ThreadGovernor
 from . import callbacks, checkpointer, setup, writers
 from .callbacks import Action
 from .counters import Counters, add_report
-from .schedules import IterationInterval, TimeInterval, WallTimeInterval
+from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterval
 from .summary import summary as _summary
 
 
@@ -64,7 +68,13 @@ class Simulation:
     chunk. Raises CaseError (``mpmflow.errors``) for a case that cannot run here:
     cross-field checks, memory, overlapping or too tightly packed bodies, no free surface."""
 
-    def __init__(self, case, out_dir=None, progress=None, overwrite=False):
+    def __init__(
+        self,
+        case: Case,
+        out_dir: str | Path | None = None,
+        progress: Callable[[float, int, float], None] | None = None,
+        overwrite: bool = False,
+    ) -> None:
         case = revalidate(case)
         self.case = case
         made = setup.build(case)
@@ -74,7 +84,9 @@ class Simulation:
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.overwrite = bool(overwrite)
         self.progress = progress
-        self.on_output = None  # optional callable(sim), called after each output row
+        self.on_output: Callable[[Simulation], None] | None = (
+            None  # optional callable(sim), called after each output row
+        )
         self.time = 0.0
         self.steps = 0
         self.counters = Counters()
@@ -82,19 +94,27 @@ class Simulation:
         self.mass0 = float(self.particles.mass.sum())
         self.volume0 = float(self.particles.volume.sum())
         self.count0 = self.particles.count
-        self.threads = None  # the ThreadGovernor while a run goes
-        self.last_checkpoint = None
-        self.resumed_from = None  # the checkpoint this run continues, if any
-        self.resume_state = None  # what that checkpoint recorded of the outputs and schedules
-        self.stop_signal = None  # set (to a signal number) to stop at the next output time
-        self.stop_now = None  # set (to a signal number) to stop after the current chunk,
+        self.threads: ThreadGovernor | None = None  # while a run goes
+        self.last_checkpoint: Path | None = None
+        self.resumed_from: Path | None = None  # the checkpoint this run continues, if any
+        self.resume_state: dict[str, Any] | None = (
+            None  # what that checkpoint recorded of the outputs and schedules
+        )
+        self.stop_signal: int | None = (
+            None  # set (to a signal number) to stop at the next output time
+        )
+        self.stop_now: int | None = (
+            None  # set (to a signal number) to stop after the current chunk,
+        )
         # without a checkpoint (the CLI's second signal: its StopNow may be lost in a __del__)
-        self.last_chunk = None  # (first step, steps, t0, dt) of the last chunk
+        self.last_chunk: tuple[int, int, float, float] | None = (
+            None  # (first step, steps, t0, dt) of the last chunk
+        )
         self.wall_before = 0.0  # wall seconds of the runs this one continues
-        self._wall0 = None
-        self._folder = None  # the claimed output folder (output.folder.RunFolder)
+        self._wall0: float | None = None
+        self._folder: RunFolder | None = None  # the claimed output folder
         self._opened = False
-        self._stop = None
+        self._stop: Stop | None = None
         self._binned = None
         self._schedules_and_actions()
 
@@ -141,7 +161,12 @@ class Simulation:
         ]
 
     # ------------------------------------------------------------------ public API
-    def add_writer(self, writer, schedule=None, name=None):
+    def add_writer(
+        self,
+        writer: Callable[[Simulation], None],
+        schedule: Schedule | None = None,
+        name: str | None = None,
+    ) -> Action:
         """Add ``writer``, a callable(sim), to act on ``schedule`` (default: the output
         times, ``TimeInterval(output.interval)``), at t = 0 and at time.end: after the
         built-in writers, before the checkpointer. It may have ``open(sim, resume)``,
@@ -155,7 +180,12 @@ class Simulation:
         )
         return action
 
-    def add_callback(self, func, schedule=None, name=None):
+    def add_callback(
+        self,
+        func: Callable[[Simulation], None],
+        schedule: Schedule | None = None,
+        name: str | None = None,
+    ) -> Action:
         """Add ``func``, a callable(sim), to act on ``schedule`` (default: after every
         chunk, ``IterationInterval(1)``): after the writers and the built-in callbacks,
         before the checkpointer (so that a checkpoint follows every action of its moment).
@@ -184,7 +214,7 @@ class Simulation:
             )
         return Action(name, func, schedule, **kw)
 
-    def stop(self, message, status="stopped", checkpoint=True):
+    def stop(self, message: str, status: str = "stopped", checkpoint: bool = True) -> None:
         """End the run once the writers and callbacks of the current moment have acted
         (call it from a callback): the summary's ``status`` and ``message`` say why; with
         ``checkpoint`` (and an output folder) a checkpoint of that state is written. The
@@ -193,16 +223,23 @@ class Simulation:
             self._stop = Stop(message, status, checkpoint)
 
     @property
-    def stopping(self):
+    def stopping(self) -> Stop | None:
         """The stop asked for (``stop``), None while the run goes on."""
         return self._stop
 
-    def checkpoint(self):
+    def checkpoint(self) -> Path:
         """Write a checkpoint of the current state now; returns its path."""
         return checkpointer.write(self)
 
     @classmethod
-    def resume(cls, case, out_dir, path=None, progress=None, hints=API_HINTS):
+    def resume(
+        cls,
+        case: Case,
+        out_dir: str | Path,
+        path: str | Path | None = None,
+        progress: Callable[[float, int, float], None] | None = None,
+        hints: Any = API_HINTS,
+    ) -> Simulation:
         """The run of ``out_dir`` continued from a checkpoint: ``path``, or (None) the latest
         readable one, passing over damaged ones with a notice (in ``notices``). Same
         settings except a later time.end (to extend the run) and execution.*; CaseError
@@ -223,21 +260,21 @@ class Simulation:
         sim.notices[:0] = folder.notes
         return sim
 
-    def run_seconds(self):
+    def run_seconds(self) -> float:
         """Wall time (s) since this run() started (0 before it starts)."""
         return _time.perf_counter() - self._wall0 if self._wall0 else 0.0
 
-    def wall_seconds(self):
+    def wall_seconds(self) -> float:
         """Wall time of the run so far, with that of the runs it continues."""
         return self.wall_before + self.run_seconds()
 
-    def describe(self):
+    def describe(self) -> list[str]:
         """The case summary the command line prints before a run (lines of text): what
         runs, how many steps and outputs, and the memory estimate."""
         return setup.describe(self)
 
     # ------------------------------------------------------------------ the output folder
-    def claim(self, hints=API_HINTS):
+    def claim(self, hints: Any = API_HINTS) -> None:
         """Lock ``out_dir`` for this run and prepare it (see ``output.folder``); done by
         ``run()`` if not before. CaseError (FolderBusy) when another run holds it, or when
         it holds another run's outputs and ``overwrite`` is not set."""
@@ -247,7 +284,7 @@ class Simulation:
         self._folder = RunFolder.claim(self.out_dir, mode, hints)
         self.notices[:0] = self._folder.notes
 
-    def close(self):
+    def close(self) -> None:
         """Close the writers' files and release the folder's lock (``run()`` does it when
         it ends; needed only for a Simulation that is resumed or claimed and then not run)."""
         for action in self.actions:
@@ -256,10 +293,10 @@ class Simulation:
         if self._folder is not None:
             self._folder.release()
 
-    def __enter__(self):
+    def __enter__(self) -> Simulation:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     def _open_outputs(self):
@@ -279,11 +316,11 @@ class Simulation:
 
     # ------------------------------------------------------------------ measures
     @property
-    def rows(self):
+    def rows(self) -> list[dict[str, float]]:
         """The timeseries rows so far, as dicts (built on each call; see ``series``)."""
         return self.builtin_writers["timeseries"].buffer.rows()
 
-    def series(self, name):
+    def series(self, name: str) -> np.ndarray:
         """One timeseries column as an array (see ``output.timeseries.COLUMNS``)."""
         if name not in COLUMNS:
             raise KeyError(
@@ -291,7 +328,7 @@ class Simulation:
             )
         return self.builtin_writers["timeseries"].buffer.column(name)
 
-    def probe_series(self, name):
+    def probe_series(self, name: str) -> np.ndarray:
         """One probe's values at the output times (``series("time")``)."""
         probes = self.builtin_writers.get("probes")
         if probes is None or name not in probes.buffer.columns:
@@ -301,7 +338,7 @@ class Simulation:
             )
         return probes.buffer.column(name)
 
-    def measure(self, bins=None):
+    def measure(self, bins: Any = None) -> dict[str, float]:
         """The diagnostics of one timeseries row at the current state."""
         P, g = self.particles, self.grid
         bins = bins if bins is not None else self._bins()
@@ -332,17 +369,17 @@ class Simulation:
         """Particles binned by cell, theta over the cells' fluid part."""
         return bin_particles(self.grid, self.particles, open_=self._open())
 
-    def binned(self):
+    def binned(self) -> Any:
         """The particles binned by cell at this output time, shared by the writers."""
         if self._binned is None:
             self._binned = self._bins()
         return self._binned
 
-    def forget_bins(self):
+    def forget_bins(self) -> None:
         self._binned = None
 
     # ------------------------------------------------------------------ time loop
-    def run(self, wall_budget=None):
+    def run(self, wall_budget: float | None = None) -> dict[str, Any]:
         """Run to ``time.end``; returns the summary dict (also written to summary.json).
 
         ``wall_budget`` (s of wall time): stop at the first output time after it is spent,
