@@ -21,14 +21,21 @@ the run ends, and the summary's status is "stopped" (or the status given) with t
 message.
 """
 
+from __future__ import annotations
+
 import signal
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import SimulationError
 from ..interrupts import StopNow
 from .schedules import Schedule
+
+if TYPE_CHECKING:
+    from .loop import Simulation
 
 
 @dataclass
@@ -37,20 +44,21 @@ class Action:
     (writers: the initial state); ``at_end``: also at time.end whatever the schedule."""
 
     name: str
-    func: object  # callable(sim)
+    func: Callable[[Simulation], None]
     schedule: Schedule
     at_start: bool = False
     at_end: bool = False
     writer: bool = False
     builtin: bool = field(default=False, repr=False)
 
-    def due(self, sim, end):
+    def due(self, sim: Simulation, end: float) -> bool:
         return self.schedule.due(sim) or (self.at_end and sim.time >= end)
 
 
-def blow_up_guard(sim):
+def blow_up_guard(sim: Simulation) -> None:
     """SimulationError when a particle's velocity or position is not finite, or a particle
     is faster than solver.max_speed, after the last chunk (``sim.last_chunk``)."""
+    assert sim.last_chunk is not None  # the guard acts after a chunk
     first, n, t0, dt = sim.last_chunk
     span = (
         f" in steps {first} to {first + n - 1} (t = {t0:.6g} to {t0 + n * dt:.6g} s)"
@@ -79,22 +87,22 @@ def blow_up_guard(sim):
         )
 
 
-def progress(sim):
+def progress(sim: Simulation) -> None:
     if sim.progress is not None:
         sim.progress(sim.time, sim.steps, sim.case.time.end)
 
 
-def on_output(sim):
+def on_output(sim: Simulation) -> None:
     if sim.on_output is not None:
         sim.on_output(sim)
 
 
-def govern_threads(sim):
+def govern_threads(sim: Simulation) -> None:
     if sim.threads is not None:
         sim.threads.update(sim.time)
 
 
-def stop_on_signal(sim):
+def stop_on_signal(sim: Simulation) -> None:
     """The CLI's signal handlers (``interrupts.stop_on_signals``) only set ``stop_signal``
     (and ``stop_now``); the run stops here, between chunks."""
     if sim.stop_now is not None:  # its StopNow may have been lost in a __del__
@@ -106,17 +114,17 @@ def stop_on_signal(sim):
         f"t = {sim.time:.6g} s (step {sim.steps}); "
     )
     if sim.out_dir is not None:
-        sim.checkpoint()
-        message += f"checkpoint {sim.last_checkpoint.name} written"
+        path = sim.checkpoint()
+        message += f"checkpoint {path.name} written"
     else:
         message += "no checkpoint: no output folder"
     sim.stop(message, status="interrupted", checkpoint=False)
 
 
-def wall_budget(budget):
+def wall_budget(budget: float) -> Callable[[Simulation], None]:
     """``run(wall_budget=budget)``: stop at the first chunk end after it is spent."""
 
-    def stop_when_spent(sim):
+    def stop_when_spent(sim: Simulation) -> None:
         if sim.time < sim.case.time.end:
             sim.stop(
                 f"stopped at t = {sim.time:.6g} s when the wall budget of {budget:g} s was spent",

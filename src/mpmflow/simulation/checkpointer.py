@@ -9,8 +9,11 @@ the phase of every schedule: the built-in ones as ``k_out``, ``k_snap`` and
 their names.
 """
 
+from __future__ import annotations
+
 from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +23,9 @@ from ..case import resolved, revalidate
 from ..errors import CaseError
 from ..fallbacks import Fallbacks
 from ..particles import Particles
+
+if TYPE_CHECKING:
+    from .loop import Simulation
 
 # what a checkpoint's meta must hold
 META = (
@@ -47,7 +53,7 @@ class Checkpointer:
             write(sim)
 
 
-def write(sim):
+def write(sim: Simulation) -> Path:
     """Write a checkpoint of the current state of ``sim`` (after its outputs)."""
     arrays = {name: getattr(sim.particles, name) for name in Particles.FIELDS}
     arrays.update({f"scheme.{k}": v for k, v in sim.scheme.state().items()})
