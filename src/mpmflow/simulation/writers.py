@@ -15,9 +15,19 @@ checkpoint records of it), ``sync()`` (flush to the disk before a checkpoint) an
 ``close()``. The formats themselves are in ``mpmflow.output``.
 """
 
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
 from ..diagnostics import probes
 from ..output.snapshots import SnapshotWriter
 from ..output.timeseries import COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter, read_table
+
+if TYPE_CHECKING:
+    from ..case import Case
+    from .loop import Simulation
 
 
 class _Rows:
@@ -25,33 +35,34 @@ class _Rows:
 
     file_name: str = ""  # set by each writer
 
-    def __init__(self, columns):
+    def __init__(self, columns: Iterable[str]) -> None:
         self.buffer = SeriesBuffer(columns)
-        self.file = None
+        self.file: Any = None  # the CSV appender while a folder is written
 
-    def _open_file(self, sim, resume):
+    def _open_file(self, folder: Path, sim: Simulation, resume: Any) -> Any:
         raise NotImplementedError
 
-    def open(self, sim, resume):
-        if sim.out_dir is None:
+    def open(self, sim: Simulation, resume: Any) -> None:
+        folder = sim.out_dir
+        if folder is None:
             return
-        self.file = self._open_file(sim, resume)
+        self.file = self._open_file(folder, sim, resume)
         if resume is not None:  # the earlier rows, for series()
-            self.buffer.extend(read_table(sim.out_dir / self.file_name)[0])
+            self.buffer.extend(read_table(folder / self.file_name)[0])
 
-    def append(self, row):
+    def append(self, row: dict[str, float]) -> None:
         self.buffer.append(row)
         if self.file is not None:
             self.file.append(row)
 
-    def position(self):
+    def position(self) -> Any:
         return self.file.position() if self.file is not None else None
 
-    def sync(self):
+    def sync(self) -> None:
         if self.file is not None:
             self.file.sync()
 
-    def close(self):
+    def close(self) -> None:
         if self.file is not None:
             self.file.close()
 
@@ -59,13 +70,13 @@ class _Rows:
 class TimeSeries(_Rows):
     file_name = "timeseries.csv"
 
-    def __init__(self):
+    def __init__(self) -> None:
         super().__init__(COLUMNS)
 
-    def _open_file(self, sim, resume):
-        return TimeSeriesWriter(sim.out_dir / self.file_name, resume)
+    def _open_file(self, folder: Path, sim: Simulation, resume: Any) -> Any:
+        return TimeSeriesWriter(folder / self.file_name, resume)
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         row = sim.measure(sim.binned())
         self.append(row)
         sim.counters.iterations_since_output = 0
@@ -74,15 +85,15 @@ class TimeSeries(_Rows):
 class Probes(_Rows):
     file_name = "probes.csv"
 
-    def __init__(self, case):
+    def __init__(self, case: Case) -> None:
         super().__init__(probes.columns(case))
 
-    def _open_file(self, sim, resume):
+    def _open_file(self, folder: Path, sim: Simulation, resume: Any) -> Any:
         return CsvAppender(
-            sim.out_dir / self.file_name, probes.columns(sim.case), resume, probes.header(sim.case)
+            folder / self.file_name, probes.columns(sim.case), resume, probes.header(sim.case)
         )
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         solids = getattr(sim.scheme, "solids", None)  # the explicit scheme has none
         self.append(
             probes.measure(
@@ -101,21 +112,21 @@ class Snapshots:
     """Snapshots when the case asks for them (``output.snapshots``) and there is a folder;
     otherwise the schedule still runs (its phase is in the checkpoints)."""
 
-    def __init__(self):
-        self.file = None
+    def __init__(self) -> None:
+        self.file: SnapshotWriter | None = None
 
-    def open(self, sim, resume):
+    def open(self, sim: Simulation, resume: Any) -> None:
         if sim.out_dir is not None and sim.case.output.snapshots:
             self.file = SnapshotWriter(sim.out_dir, resume=resume)
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         sim.forget_bins()  # the cells' bins are no longer needed: freed before the copies
         if self.file is not None:
             self.file.write(sim.time, sim.particles)
 
-    def position(self):
+    def position(self) -> int | None:
         return len(self.file.entries) if self.file is not None else None
 
-    def sync(self):
+    def sync(self) -> None:
         if self.file is not None:
             self.file.sync()
