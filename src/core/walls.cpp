@@ -67,10 +67,13 @@ index_t release_contact(View<const index_t> node, View<const index_t> axis, View
 }
 
 void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
-                     View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact) {
+                     View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact,
+                     View<const double> phi) {
   const index_t D = v.extent(1);
+  const bool in_solid_only = phi.size() > 0;
   for (index_t e = 0; e < onode.size(); ++e) {
     const index_t i = onode(e);
+    if (in_solid_only && phi(i) > 0.0) continue;
     const double vn = normal_velocity(v, i, onormal, e);
     if (ocontact(i) && no_slip(e)) {
       for (index_t k = 0; k < D; ++k) v(i, k) = 0.0;

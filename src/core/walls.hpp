@@ -54,9 +54,13 @@ inline double normal_velocity(View<const double, 2> v, index_t i, View<const dou
 
 // Velocity conditions at the obstacle nodes (in place), as apply_walls: the normal velocity
 // is removed where the obstacle holds the material, elsewhere only a velocity into the
-// solid; a no-slip obstacle zeroes the whole velocity where it holds.
+// solid; a no-slip obstacle zeroes the whole velocity where it holds. With phi (the signed
+// distance at the nodes) only the nodes inside the solid or on its face (phi <= 0) are
+// constrained: an obstacle node in the water (a corner of a cut cell on the fluid side of
+// the face) keeps its velocity, since the face lies beyond it.
 void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
-                     View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact);
+                     View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact,
+                     View<const double> phi = View<const double>());
 
 // The obstacle nodes that hold the material as the pressure step starts (in place): a
 // pressure unknown, or v* pressing into the solid.
