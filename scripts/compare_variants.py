@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from mpmflow import Simulation, load_case
-from mpmflow.reference import errors_against_vof, height_error_against_martin_moyce
+from mpmflow.studies.reference_data import errors_against_vof, height_error_against_martin_moyce
 
 ROOT = Path(__file__).resolve().parents[1]
 A = 0.114

@@ -17,7 +17,7 @@ import meshio  # noqa: E402
 import numpy as np  # noqa: E402
 
 from mpmflow import Simulation, load_case  # noqa: E402
-from mpmflow.reference import MM_HEIGHT_AR2, VOF_AR2, G, load  # noqa: E402
+from mpmflow.studies.reference_data import MM_HEIGHT_AR2, VOF_AR2, G, load  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 A = 0.114

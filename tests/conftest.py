@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from mpmflow.case import validate
-from mpmflow.reference import data_dir
+from mpmflow.studies.reference_data import data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"

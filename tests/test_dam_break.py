@@ -5,7 +5,7 @@ import pytest
 from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
-from mpmflow.reference import errors_against_vof, height_error_against_martin_moyce
+from mpmflow.studies.reference_data import errors_against_vof, height_error_against_martin_moyce
 
 A = 0.114
 

@@ -11,9 +11,9 @@ from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
 from mpmflow.errors import CaseError
-from mpmflow.reference import errors_against_vof
 from mpmflow.stability import stable_time_step
-from mpmflow.study import reduced_bulk_modulus
+from mpmflow.studies.paper import reduced_bulk_modulus
+from mpmflow.studies.reference_data import errors_against_vof
 
 RHO, G = 1000.0, 9.81
 EXPLICIT = ["solver.scheme=explicit", "output.snapshots=false"]

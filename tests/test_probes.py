@@ -303,7 +303,7 @@ def test_a_missing_data_file_or_column_is_one_clear_error(tmp_path, data, words)
 def test_the_spheric_test2_file_names_its_columns_for_probes(tmp_path):
     """The SPHERIC Test 2 measurements (README section E of the data) can be named as they
     are labelled: P1 [Pa] and "H3 as labelled in source [m]" (the gauge at x = 0.496 m)."""
-    from mpmflow.reference import data_dir
+    from mpmflow.studies.reference_data import data_dir
 
     path = data_dir() / "validation" / "spheric_test2_kleefsman2005_marin_exp_P1-P8_H1-H4.csv"
     case = load_case(

@@ -311,7 +311,7 @@ def _run(args):
 
 
 def _study(args):
-    from .study import run_study
+    from .studies.paper import run_study
 
     if not args.budget > 0:
         raise CaseError(
@@ -348,7 +348,7 @@ def _plot(args):
 
 def _validate(args):
     from .plotting.mpl import have_matplotlib
-    from .reference import data_dir
+    from .studies.reference_data import data_dir
 
     unknown = [c for c in args.cases if c not in VALIDATION_CASES]
     if unknown:

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from ..reference import errors_against_vof, height_error_against_martin_moyce, load
+from ..studies.reference_data import errors_against_vof, height_error_against_martin_moyce, load
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
 from .volume import Recorder
 

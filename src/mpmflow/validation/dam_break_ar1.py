@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..reference import load
+from ..studies.reference_data import load
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .dam_break import DT, END, TOL_HEIGHT_MM, WHY_HEIGHT_MM, A, G, front_rms
 

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..reference import load
+from ..studies.reference_data import load
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 
 H = 0.3  # m, column height

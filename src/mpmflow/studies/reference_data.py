@@ -16,7 +16,7 @@ MM_HEIGHT_AR2 = "validation/martin_moyce_1952_n2eq2_a2.25in_height_table6.csv"
 
 def data_dir():
     env = os.environ.get("MPMFLOW_DATA")
-    path = Path(env) if env else Path(__file__).resolve().parents[3] / "shared" / "data"
+    path = Path(env) if env else Path(__file__).resolve().parents[4] / "shared" / "data"
     if not path.is_dir():
         raise FileNotFoundError(
             f"Reference data not found at {path}. Put the project's shared/ folder beside the "

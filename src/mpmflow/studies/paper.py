@@ -9,7 +9,7 @@ scheme with the real K = 2.2 GPa at its stable step, for as long as the wall bud
 and the explicit scheme with a reduced K (sound speed ten times the free-fall speed
 sqrt(2 g H) of the column) to 1.0 s. Explicit runs start from the hydrostatic pressure.
 Writes study.csv / study.md (per run: dt, steps, wall time, cost per simulated second,
-errors against the references, pressure noise) and the figures (study_figures).
+errors against the references, pressure noise) and the figures (paper_figures).
 """
 
 import csv
@@ -21,13 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import load_case
-from .errors import SimulationError
-from .output.atomic import write_text
-from .reference import G, errors_against_vof, height_error_against_martin_moyce, load
-from .simulation import Simulation
+from ..case import load_case
+from ..errors import SimulationError
+from ..output.atomic import write_text
+from ..simulation import Simulation
+from .reference_data import G, errors_against_vof, height_error_against_martin_moyce, load
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 MESHES = [(0.0114, 1e-2), (0.008, 1e-3), (0.004, 1e-3)]
 REAL_K = 2.2e9
 SOUND_FACTOR = 10.0  # reduced K: sound speed = this times the free-fall speed sqrt(2 g H)
@@ -302,7 +302,7 @@ def run_study(out, budget=480.0, quick=False, end=1.0, progress=None):
         csv_text, md_text = tables(results, end)
         write_text(out / "study.csv", csv_text)
         write_text(out / "study.md", md_text)
-    from .study_figures import write_figures
+    from .paper_figures import write_figures
 
     write_figures(results, out)
     return results

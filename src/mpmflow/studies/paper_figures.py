@@ -1,11 +1,11 @@
-"""Figures of the paper study (``mpmflow.study``): Fig. 2, 3 and 4 analogues as PNG files."""
+"""Figures of the paper study (``studies.paper``): Fig. 2, 3 and 4 analogues as PNG files."""
 
 from pathlib import Path
 
 import numpy as np
 
-from .plotting.mpl import pyplot
-from .reference import MM_HEIGHT_AR2, VOF_AR2, G, load
+from ..plotting.mpl import pyplot
+from .reference_data import MM_HEIGHT_AR2, VOF_AR2, G, load
 
 A = 0.114  # m, width of both columns
 MM_FRONT = "validation/martin_moyce_1952_n2eq2_a2.25in_front_table2.csv"
