@@ -10,11 +10,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from .. import materials, pressure, state, volume_correction
+from .. import materials, state
 from ..boundaries import obstacles, walls
 from ..errors import SolverError
 from ..linalg.solvers import SMOOTHING_SWEEPS
-from . import register
+from . import pressure, register, volume_correction
 
 MARGIN = 1e-6  # particles put back inside stay this fraction of a cell off the wall
 MODEL_PARAMETERS = 8  # the material parameters the compiled step takes (zero-padded)

@@ -11,8 +11,8 @@ pressure to the ghost nodes.
 
 import numpy as np
 
-from .errors import SolverError
-from .linalg.solvers import LinearSolver, PressureMatrix
+from ..errors import SolverError
+from ..linalg.solvers import LinearSolver, PressureMatrix
 
 SETUP_ERRORS = (np.linalg.LinAlgError, RuntimeError, ValueError)
 

@@ -31,7 +31,7 @@ The compiled step runs it (``State::volume_correction`` in src/core/step.cpp, on
 kernels of src/core/volume_correction); this module holds its constants and its failure message.
 """
 
-from .errors import SolverError
+from ..errors import SolverError
 
 TOLERANCE = 1e-2  # relative residual of the solve: a correction, not a constraint (measured: 1e-4 and 1e-1 give the same runs)
 MAX_ITERATIONS = 200
