@@ -42,82 +42,39 @@ class ExplicitScheme:
         self.grid = grid
         self.particles = particles
         m, sv = case.material, case.solver
-        self.density = m.density
-        self.bulk = m.bulk_modulus
+        q_lin, q_quad = (float(q) for q in sv.explicit_bulk_viscosity)
+        self.settings = state.ExplicitSettings(
+            density=m.density,
+            bulk=m.bulk_modulus,
+            gravity=np.asarray(case.physics.gravity, dtype=float),
+            flip=sv.flip,
+            no_slip=walls.side_conditions(case),  # x_min, x_max, y_min, ...
+            smoothing=sv.pressure_smoothing == "nodal",
+            full=sv.full_cell_threshold,
+            sparse=sv.explicit_cell_threshold,
+            mass_cut=sv.explicit_mass_cutoff,
+            q_lin=q_lin,
+            q_quad=q_quad,
+            tension=sv.explicit_tension,
+            max_speed=sv.max_speed,
+        )
         self.sound_speed = sound_speed(m.bulk_modulus, m.density)
-        self.gravity = np.asarray(case.physics.gravity, dtype=float)
-        self.no_slip = walls.side_conditions(case)  # x_min, x_max, y_min, ...
-        self.flip = sv.flip
-        self.smoothing = sv.pressure_smoothing == "nodal"
-        self.full = sv.full_cell_threshold
-        self.sparse = sv.explicit_cell_threshold
-        self.mass_cut = sv.explicit_mass_cutoff
-        self.q_lin, self.q_quad = (float(q) for q in sv.explicit_bulk_viscosity)
-        self.tension = sv.explicit_tension
-        self.max_speed = sv.max_speed
         self.auto = case.time.dt == "auto"
         self.safety = case.time.safety_factor
-        self.upper = np.asarray(grid.size, dtype=float)
-        n, d, c = grid.nnodes, grid.dim, grid.ncells
-        self.node_mass = np.zeros(n)
-        self.node_mom = np.zeros((n, d))
-        self.v_old = np.zeros((n, d))
-        self.v_new = np.zeros((n, d))
-        self.contact = np.zeros((n, d), dtype=np.bool_)
-        self.cell_j = np.zeros(c)
-        self.cell_vol = np.zeros(c)
-        self.cell_v0 = np.zeros(c)
-        self.cell_xi = np.zeros((c, d))
-        self.cell_p = np.zeros(c)
-        self.cell_q = np.zeros(c)
-        self.node_w = np.zeros(n)
-        self.node_p = np.zeros(n)
-        self.stats = np.zeros(6)
+        self.work = state.ExplicitWork.zeros(grid)
         self.smallest_dt = np.inf  # the smallest step taken so far (s)
         self.clock = np.zeros(2)  # the simulated time (s) and the steps taken so far
         self.last_unknowns = 0
         # an initial pressure is an initial compression: V = (1 - p / K) m / rho
-        particles.volume[:] = (1.0 - particles.pressure / self.bulk) * particles.mass / self.density
+        s = self.settings
+        particles.volume[:] = (1.0 - particles.pressure / s.bulk) * particles.mass / s.density
         self._pressure()
 
     def _pressure(self):
-        g, P = self.grid, self.particles
-        state.explicit_cell_state(
-            g,
-            P.x,
-            P.mass,
-            P.volume,
-            self.density,
-            self.bulk,
-            self.tension,
-            self.full,
-            self.sparse,
-            self.cell_j,
-            self.cell_vol,
-            self.cell_v0,
-            self.cell_xi,
-            self.cell_p,
-        )
-        state.explicit_particle_state(
-            g,
-            P.x,
-            P.mass,
-            P.volume,
-            P.pressure,
-            self.density,
-            self.smoothing,
-            self.cell_j,
-            self.cell_vol,
-            self.cell_p,
-            self.node_w,
-            self.node_p,
-        )
+        state.explicit_cell_state(self.grid, self.particles, self.settings, self.work)
+        state.explicit_particle_state(self.grid, self.particles, self.settings, self.work)
 
-    _STATE = ("cell_j", "cell_vol", "cell_v0", "cell_xi", "cell_p", "clock", "smallest")
-
-    @property
-    def smallest(self):
-        return np.array([self.smallest_dt])
+    _CELLS = ("cell_j", "cell_vol", "cell_v0", "cell_xi", "cell_p")  # in ``work``
 
     def state(self):
         """What the scheme carries from one step to the next beyond the particles (whose
@@ -125,18 +82,21 @@ class ExplicitScheme:
         smallest step and the clock. The cell state is not recomputed from the particles on a
         restart because that would not be bit-identical (the particles' volumes are set from
         their cell's J after the sums were taken)."""
-        return {name: np.array(getattr(self, name), copy=True) for name in self._STATE}
+        saved = {name: np.array(getattr(self.work, name), copy=True) for name in self._CELLS}
+        return {**saved, "clock": self.clock.copy(), "smallest": np.array([self.smallest_dt])}
 
     def restore(self, saved):
         """Continue from ``state()`` (a checkpoint)."""
-        for name in self._STATE[:-1]:
-            np.copyto(getattr(self, name), saved[name])
+        for name in self._CELLS:
+            np.copyto(getattr(self.work, name), saved[name])
+        np.copyto(self.clock, saved["clock"])
         self.smallest_dt = float(saved["smallest"][0])
 
     def stable_time_step(self):
         """h / (c + |v|max) at the current particle speeds (s)."""
         speed = float(state.explicit_max_speed(self.particles.v))
-        return stable_time_step(self.grid.spacing, self.bulk, self.density, speed)
+        s = self.settings
+        return stable_time_step(self.grid.spacing, s.bulk, s.density, speed)
 
     def advance(self, dt, nsteps, where=lambda k: ""):
         """The span nsteps * dt in one compiled call; ``where(k)`` names step k in messages.
@@ -149,45 +109,16 @@ class ExplicitScheme:
             nsteps * dt,
             nsteps,
             self.safety if self.auto else 0.0,
-            P.x,
-            P.v,
-            P.pressure,
-            P.mass,
-            P.volume,
-            self.density,
-            self.bulk,
-            self.gravity,
-            self.flip,
-            self.no_slip,
-            self.smoothing,
-            self.full,
-            self.sparse,
-            self.mass_cut,
-            self.q_lin,
-            self.q_quad,
-            self.tension,
-            self.max_speed,
-            self.upper,
+            P,
+            self.settings,
+            self.work,
             1e-6 * g.spacing,
-            self.node_mass,
-            self.node_mom,
-            self.v_old,
-            self.v_new,
-            self.contact,
-            self.cell_j,
-            self.cell_vol,
-            self.cell_v0,
-            self.cell_xi,
-            self.cell_p,
-            self.cell_q,
-            self.node_w,
-            self.node_p,
-            self.stats,
         )
-        steps, _, smallest, moved, stopped, vmax = self.stats
+        stats = self.work.stats
+        steps, _, smallest, moved, stopped, vmax = stats
         steps = int(steps)
         self.smallest_dt = min(self.smallest_dt, smallest)
-        self.clock += (self.stats[1], steps)
+        self.clock += (stats[1], steps)
         if stopped:
             fastest = int(np.argmax(np.sum(P.v**2, axis=1)))
             xy = ", ".join(f"{c:.4g}" for c in P.x[fastest])
@@ -195,10 +126,10 @@ class ExplicitScheme:
             raise SimulationError(
                 f"The run blew up at step {int(self.clock[1])} (t = {self.clock[0]:.6g} s, "
                 f"explicit scheme): particle {fastest} at ({xy}) m moves at {vmax:.4g} m/s, "
-                f"above solver.max_speed = {self.max_speed:g} m/s. The outputs written so far "
+                f"above solver.max_speed = {self.settings.max_speed:g} m/s. The outputs written so far "
                 f"are kept. Try a smaller {step}, a larger solver.explicit_cell_threshold "
-                f"(now {self.sparse:g}) or solver.explicit_bulk_viscosity (now "
-                f"[{self.q_lin:g}, {self.q_quad:g}]), or raise solver.max_speed if such "
+                f"(now {self.settings.sparse:g}) or solver.explicit_bulk_viscosity (now "
+                f"[{self.settings.q_lin:g}, {self.settings.q_quad:g}]), or raise solver.max_speed if such "
                 "speeds are real."
             )
         if not self.auto:

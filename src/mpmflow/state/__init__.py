@@ -32,6 +32,8 @@ def set_threads(n):
 
 # every kernel wrapper, as state.<name>
 from .explicit import (  # noqa: E402 (the core is loaded first, with its message)
+    ExplicitSettings,
+    ExplicitWork,
     explicit_cell_state,
     explicit_max_speed,
     explicit_particle_state,
