@@ -13,7 +13,9 @@ def sound_speed(bulk_modulus: float, density: float) -> float:
     return math.sqrt(bulk_modulus / density)
 
 
-def stable_time_step(spacing, bulk_modulus, density, speed=0.0):
+def stable_time_step(
+    spacing: float, bulk_modulus: float, density: float, speed: float = 0.0
+) -> float:
     """The largest stable explicit step h / (c + |v|) (s)."""
     return spacing / (sound_speed(bulk_modulus, density) + speed)
 

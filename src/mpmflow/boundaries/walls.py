@@ -5,10 +5,12 @@ outward sign: the wall's normal) and the wall's condition (slip or no-slip) from
 lets it go where holding it would need suction."""
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .. import state
+from ..grid import Grid
 
 
 @dataclass(frozen=True)
@@ -22,17 +24,17 @@ class Walls:
     sign: np.ndarray  # (n,) float: -1 at the lower wall (at 0), +1 at the upper
     no_slip: np.ndarray  # (n,) bool: the wall's condition is no-slip
 
-    def as_tuple(self):
+    def as_tuple(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(node, axis, sign, no_slip), as the core's state takes them."""
         return self.node, self.axis, self.sign, self.no_slip
 
 
-def side_conditions(case):
+def side_conditions(case: Any) -> np.ndarray:
     """No-slip flags of the domain's sides in the order x_min, x_max, y_min, ... (bool)."""
     return np.array(case.domain.no_slip_sides(), dtype=np.bool_)
 
 
-def of_case(case, grid):
+def of_case(case: Any, grid: Grid) -> Walls:
     """The walls of the case's domain on its grid."""
     node, axis, sign = state.wall_pairs(tuple(int(c) for c in grid.cells), grid.periodic)
     sides = side_conditions(case)

@@ -15,14 +15,17 @@ re-evaluated every step from the current speeds. The kernel is the core's explic
 choices, the cures and the variants tried and rejected: docs/method.md, "The explicit
 comparator"."""
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from .. import state
 from ..boundaries import walls
 from ..errors import SimulationError
+from ..grid import Grid
+from ..particles import Particles
 from ..stability import sound_speed, stable_time_step
 from . import register
 from .projection import StepReport
@@ -38,7 +41,7 @@ class ExplicitScheme:
     # water only, walls only (the weakly compressible comparator)
     SUPPORTS: ClassVar[frozenset[str]] = frozenset()
 
-    def __init__(self, case, grid, particles):
+    def __init__(self, case: Any, grid: Grid, particles: Particles) -> None:
         self.grid = grid
         self.particles = particles
         m, sv = case.material, case.solver
@@ -70,13 +73,13 @@ class ExplicitScheme:
         particles.volume[:] = (1.0 - particles.pressure / s.bulk) * particles.mass / s.density
         self._pressure()
 
-    def _pressure(self):
+    def _pressure(self) -> None:
         state.explicit_cell_state(self.grid, self.particles, self.settings, self.work)
         state.explicit_particle_state(self.grid, self.particles, self.settings, self.work)
 
     _CELLS = ("cell_j", "cell_vol", "cell_v0", "cell_xi", "cell_p")  # in ``work``
 
-    def state(self):
+    def state(self) -> dict[str, Any]:
         """What the scheme carries from one step to the next beyond the particles (whose
         volume is their compression J): the cell state the next step starts from, and the
         smallest step and the clock. The cell state is not recomputed from the particles on a
@@ -85,20 +88,22 @@ class ExplicitScheme:
         saved = {name: np.array(getattr(self.work, name), copy=True) for name in self._CELLS}
         return {**saved, "clock": self.clock.copy(), "smallest": np.array([self.smallest_dt])}
 
-    def restore(self, saved):
+    def restore(self, saved: dict[str, Any]) -> None:
         """Continue from ``state()`` (a checkpoint)."""
         for name in self._CELLS:
             np.copyto(getattr(self.work, name), saved[name])
         np.copyto(self.clock, saved["clock"])
         self.smallest_dt = float(saved["smallest"][0])
 
-    def stable_time_step(self):
+    def stable_time_step(self) -> float:
         """h / (c + |v|max) at the current particle speeds (s)."""
         speed = float(state.explicit_max_speed(self.particles.v))
         s = self.settings
         return stable_time_step(self.grid.spacing, s.bulk, s.density, speed)
 
-    def advance(self, dt, nsteps, where=lambda k: ""):
+    def advance(
+        self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""
+    ) -> ExplicitReport:
         """The span nsteps * dt in one compiled call; ``where(k)`` names step k in messages.
         With time.dt = "auto" the span is cut into steps re-evaluated every step from the
         current speeds (``state.explicit_steps``), as many as needed; else nsteps

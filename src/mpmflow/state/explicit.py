@@ -5,11 +5,15 @@ scheme's settings and its cell and node work arrays travel as two dataclasses
 (``ExplicitSettings``, ``ExplicitWork``) rather than as 40 positional arrays. Arrays are
 C-contiguous float64 (``contact``: bool), vectors (count, dim), written in place."""
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import _core
+from ..grid import Grid
+from ..particles import Particles
 from . import arrays
 
 
@@ -53,7 +57,7 @@ class ExplicitWork:
     stats: np.ndarray  # what explicit_steps reports (see there)
 
     @classmethod
-    def zeros(cls, grid):
+    def zeros(cls, grid: Grid) -> ExplicitWork:
         n, d, c = grid.nnodes, grid.dim, grid.ncells
         return cls(
             node_mass=np.zeros(n),
@@ -73,7 +77,9 @@ class ExplicitWork:
         )
 
 
-def explicit_cell_state(grid, particles, s, w):
+def explicit_cell_state(
+    grid: Grid, particles: Particles, s: ExplicitSettings, w: ExplicitWork
+) -> None:
     """Volumetric strain J and pressure once per cell from the particles in it (in place)."""
     P = particles
     _core.cell_state(
@@ -95,7 +101,9 @@ def explicit_cell_state(grid, particles, s, w):
     )
 
 
-def explicit_particle_state(grid, particles, s, w):
+def explicit_particle_state(
+    grid: Grid, particles: Particles, s: ExplicitSettings, w: ExplicitWork
+) -> None:
     """Each particle's volume (its cell's J) and pressure (smoothed through the nodes or its
     cell's), in place."""
     P = particles
@@ -116,12 +124,21 @@ def explicit_particle_state(grid, particles, s, w):
     )
 
 
-def explicit_max_speed(v):
+def explicit_max_speed(v: np.ndarray) -> float:
     """The largest particle speed (m/s); NaN if any speed is NaN."""
-    return _core.max_speed(v)
+    return float(_core.max_speed(v))
 
 
-def explicit_steps(grid, span, nsteps, safety, particles, s, w, margin):
+def explicit_steps(
+    grid: Grid,
+    span: float,
+    nsteps: int,
+    safety: float,
+    particles: Particles,
+    s: ExplicitSettings,
+    w: ExplicitWork,
+    margin: float,
+) -> None:
     """Explicit steps over ``span`` seconds (in place); particles are put back inside the
     domain ``margin`` (m) from its walls; ``w.stats`` gets [steps taken, time advanced (s),
     smallest step (s), particles put back inside, 1 if stopped on ``max_speed`` else 0,

@@ -2,6 +2,8 @@
 as contact conditions, the multigrid and sparse products (src/core/quadrature, walls,
 multigrid)."""
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from .. import _core
@@ -23,7 +25,9 @@ def particle_cell_tensors(x, volume, order, start, cells_list, h, cells, K, C, V
     )
 
 
-def wall_pairs(cells, periodic=()):
+def wall_pairs(
+    cells: Sequence[int], periodic: Sequence[bool] = ()
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(node, axis, sign) arrays of every wall node and wall of the grid ``cells``: the walls
     normal to axis 0 first, then axis 1, ...; the lower wall (sign -1) before the upper. A
     periodic axis (``periodic[k]``) has no walls."""
