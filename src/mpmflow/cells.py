@@ -1,10 +1,14 @@
 """Which particles lie in which cell, and the cell volume fractions theta (eqs. 8, 9)."""
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import state
+from .grid import Grid
+from .particles import Particles
 
 
 @dataclass
@@ -16,11 +20,13 @@ class CellBins:
     order: np.ndarray  # (n,)
     theta: np.ndarray  # (ncells,) particle volume / cell volume
 
-    def counts(self):
+    def counts(self) -> np.ndarray:
         return np.diff(self.start)
 
 
-def bin_particles(grid, particles, bins=None, open_=None):
+def bin_particles(
+    grid: Grid, particles: Particles, bins: CellBins | None = None, open_: np.ndarray | None = None
+) -> CellBins:
     """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell
     (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.boundaries.obstacles``)."""
     n = particles.count

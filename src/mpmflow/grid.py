@@ -1,8 +1,11 @@
 """The fixed background grid: uniform square (cubic) cells covering the domain [0, size]."""
 
+from __future__ import annotations
+
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -18,7 +21,7 @@ class Grid:
     periodic: tuple[bool, ...] = ()
 
     @classmethod
-    def of_case(cls, case):
+    def of_case(cls, case: Any) -> Grid:
         """The grid of a validated case: its domain, spacing and periodic axes."""
         return cls.covering(case.domain.size, case.grid.spacing, periodic=case.domain.periodic)
 
@@ -29,7 +32,7 @@ class Grid:
         spacing: float,
         rtol: float = 1e-6,
         periodic: Sequence[bool] | None = None,
-    ) -> "Grid":
+    ) -> Grid:
         """The grid of the given spacing that covers the box [0, size], periodic along the
         axes where ``periodic[k]`` (None: none).
 
@@ -45,39 +48,39 @@ class Grid:
         flags = tuple(bool(p) for p in periodic) if periodic and any(periodic) else ()
         return cls(float(spacing), tuple(counts), flags)
 
-    def adjusted(self, size, rtol=1e-6):
+    def adjusted(self, size: Sequence[float], rtol: float = 1e-6) -> bool:
         """True when the grid's extent differs from the requested domain size."""
         return any(abs(a - b) > rtol * b for a, b in zip(self.size, size))
 
     @property
-    def dim(self):
+    def dim(self) -> int:
         return len(self.cells)
 
     @property
-    def nodes(self):
+    def nodes(self) -> tuple[int, ...]:
         return tuple(n + 1 for n in self.cells)
 
     @property
-    def ncells(self):
+    def ncells(self) -> int:
         return math.prod(self.cells)
 
     @property
-    def nnodes(self):
+    def nnodes(self) -> int:
         return math.prod(self.nodes)
 
     @property
-    def size(self):
+    def size(self) -> np.ndarray:
         return np.array(self.cells, dtype=float) * self.spacing
 
     @property
-    def cell_volume(self):
+    def cell_volume(self) -> float:
         return self.spacing**self.dim
 
-    def cell_centres(self, axis):
+    def cell_centres(self, axis: int) -> np.ndarray:
         """Coordinates (m) of the cell centres along one axis."""
         return (np.arange(self.cells[axis]) + 0.5) * self.spacing
 
-    def node_coordinates(self):
+    def node_coordinates(self) -> np.ndarray:
         """(nnodes, dim) coordinates of the nodes in flat order (x fastest)."""
         axes = [np.arange(n) * self.spacing for n in self.nodes]
         mesh = np.meshgrid(*axes, indexing="ij")

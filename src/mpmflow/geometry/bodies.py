@@ -294,7 +294,9 @@ def overlap_message(bodies: Sequence[Any], spacing: float) -> str | None:
     return None
 
 
-def fills_grid(bodies: Sequence[Any], spacing: float, grid_size: Sequence[float]) -> bool:
+def fills_grid(
+    bodies: Sequence[Any], spacing: float, grid_size: Sequence[float] | np.ndarray
+) -> bool:
     """True when the particles of the bodies (each the square of its lattice cell) cover the
     whole grid, leaving no empty space (flat boxes; a cosine top always leaves some, other
     shapes are taken to: the start's free-surface check catches what remains)."""
