@@ -8,12 +8,16 @@ position if the last cell is at least half full); ``front`` is the largest over 
 the vertical is z, and both run over every row (column) of cells across the width.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from .. import state
+from ..grid import Grid
+from ..particles import Particles
 
 
-def last_crossings(f, centres, wall):
+def last_crossings(f: np.ndarray, centres: np.ndarray, wall: float) -> np.ndarray:
     """For every column j of f (one value per cell along axis 0), the position where f[:, j]
     last drops below 1/2; ``wall`` if the last cell is at least half full; nan if never."""
     above = f >= 0.5
@@ -29,18 +33,18 @@ def last_crossings(f, centres, wall):
     return out
 
 
-def last_crossing(f, centres, wall):
+def last_crossing(f: np.ndarray, centres: np.ndarray, wall: float) -> float:
     """Position where the profile f (one value per cell) last drops below 1/2; nan if never above."""
     return float(last_crossings(f[:, None], centres, wall)[0])
 
 
-def volume_fraction_field(grid, theta):
+def volume_fraction_field(grid: Grid, theta: np.ndarray) -> np.ndarray:
     """Cell volume fractions as an array indexed [cx, cy] ([cx, cy, cz] in 3D), clipped to
     [0, 1]."""
     return np.clip(theta, 0.0, 1.0).reshape(grid.cells[::-1]).T
 
 
-def front_and_height(grid, theta):
+def front_and_height(grid: Grid, theta: np.ndarray) -> tuple[float, float]:
     """(front, height) in metres from the cell volume fractions theta (flat cell order).
     In 3D the front is the largest over all rows of cells along x, and the height the mean
     over the vertical columns of cells along the wall x = 0 (the vertical is the last axis)."""
@@ -59,12 +63,14 @@ WET = 0.5  # a cell at least half full is wetted (as for front and height)
 PACKED = 1.2  # a cell more than 20% over full is packed
 
 
-def volume_measures(theta, cell_volume, material_volume, open_=None):
+def volume_measures(
+    theta: np.ndarray, cell_volume: float, material_volume: float, open_: np.ndarray | None = None
+) -> dict[str, float]:
     """``volume_ratio``: the volume of the wetted cells (f >= 1/2) over the material's volume,
     uncapped (loosening shows as > 1, packing as < 1), counting the fluid part of cells that
     obstacles cut (``open_``); ``packed_share``: the share of the cells holding material
     with f > 1.2."""
-    holding = np.count_nonzero(theta > 0.0)
+    holding = int(np.count_nonzero(theta > 0.0))
     wet = theta >= WET
     wetted = np.count_nonzero(wet) if open_ is None else float(open_[wet].sum())
     return {
@@ -73,14 +79,14 @@ def volume_measures(theta, cell_volume, material_volume, open_=None):
     }
 
 
-def kinetic_energy(particles):
+def kinetic_energy(particles: Particles) -> float:
     return float(0.5 * np.sum(particles.mass * np.sum(particles.v**2, axis=1)))
 
 
-def potential_energy(particles, gravity):
+def potential_energy(particles: Particles, gravity: Sequence[float]) -> float:
     return float(-np.sum(particles.mass * (particles.x @ np.asarray(gravity))))
 
 
-def pressure_noise(grid, particles):
+def pressure_noise(grid: Grid, particles: Particles) -> float:
     """RMS difference between particle pressure and its grid-smoothed value (Pa)."""
     return state.pressure_noise(grid, particles.x, particles.mass, particles.pressure)
