@@ -23,11 +23,15 @@ Particles that end a step inside a solid are moved out along grad phi
 (``state.push_out``).
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from .. import state
+from ..geometry.shapes import Shape
+from ..grid import Grid
 
 SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
 
@@ -47,18 +51,22 @@ class Tables:
     node: np.ndarray  # (m,) obstacle nodes
     normal: np.ndarray  # (m, D) their unit normals, into the solid
     no_slip: np.ndarray  # (m,) whether the node's obstacle is no-slip
-    solids: list = field(default_factory=list)  # the shapes (``shapes.Shape``)
+    solids: list[Shape] = field(default_factory=list)  # the obstacles' shapes
 
-    def distance(self, points):
+    def distance(self, points: np.ndarray) -> np.ndarray:
         """The signed distance (m) of points to the nearest obstacle, negative inside."""
         return np.min([s.signed_distance(points) for s in self.solids], axis=0)
 
     @property
-    def present(self):
+    def present(self) -> bool:
         return self.phi.shape[0] > 0
 
 
-def build(grid, phi=None, no_slip_of=None):
+def build(
+    grid: Grid,
+    phi: np.ndarray | None = None,
+    no_slip_of: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> Tables:
     """The tables for signed distances ``phi`` at the nodes (None: no obstacle).
     ``no_slip_of(node_indices) -> bool array`` says which obstacle nodes are no-slip."""
     D, nc = grid.dim, grid.ncells
@@ -195,7 +203,7 @@ def _not_last(shape, axis):
     return m
 
 
-def in_solid_cells(tables, grid, x):
+def in_solid_cells(tables: Tables, grid: Grid, x: np.ndarray) -> np.ndarray:
     """Which of the points ``x`` (n, D) lie in cells the grid takes as wholly solid (fluid
     fraction 0). Where an obstacle touches two or three walls, the wall shift
     (``node_distance``) closes the corner between it and the walls within the first cell, so
@@ -210,7 +218,7 @@ def in_solid_cells(tables, grid, x):
     return tables.open[ci @ strides] <= 0.0
 
 
-def of_case(case, grid):
+def of_case(case: Any, grid: Grid) -> Tables:
     """The tables of the case's ``[[obstacles]]`` (none: empty tables)."""
     specs = getattr(case, "obstacles", None) or []
     if not specs:
@@ -230,7 +238,7 @@ def of_case(case, grid):
     return tables
 
 
-def node_distance(grid, shape, x):
+def node_distance(grid: Grid, shape: Shape, x: np.ndarray) -> np.ndarray:
     """The shape's signed distance at the nodes ``x``, taken one cell in from a domain wall
     the shape touches or crosses: there the shape's own face on the wall would put phi = 0
     at every wall node under it, and the interpolated surface would open a wedge of fluid
