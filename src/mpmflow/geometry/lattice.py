@@ -4,20 +4,21 @@ so particles of neighbouring bodies never overlap and a box that starts on a gri
 particles aligned with the cells."""
 
 import math
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
 CHUNK = 2**20  # lattice points per chunk of a containment pass
 
 
-def lattice_indices(a, b, spacing):
+def lattice_indices(a: float, b: float, spacing: float) -> tuple[int, int]:
     """(k0, k1): the lattice points (k + 1/2) * spacing with k0 <= k <= k1 lie in [a, b)."""
     k0 = math.ceil(a / spacing - 0.5 - 1e-9)
     k1 = math.floor(b / spacing - 0.5 - 1e-9)
     return k0, k1
 
 
-def lattice_axes(lo, hi, spacing):
+def lattice_axes(lo: Sequence[float], hi: Sequence[float], spacing: float) -> list[np.ndarray]:
     """The lattice's coordinates in [lo, hi) along each axis (m)."""
     axes = []
     for a, b in zip(lo, hi):
@@ -26,7 +27,7 @@ def lattice_axes(lo, hi, spacing):
     return axes
 
 
-def lattice_count(lo, hi, spacing):
+def lattice_count(lo: Sequence[float], hi: Sequence[float], spacing: float) -> int:
     """Number of lattice points in [lo, hi) (exact integer)."""
     n = 1
     for a, b in zip(lo, hi):
@@ -35,7 +36,9 @@ def lattice_count(lo, hi, spacing):
     return n
 
 
-def lattice_chunks(lo, hi, spacing, chunk=CHUNK):
+def lattice_chunks(
+    lo: Sequence[float], hi: Sequence[float], spacing: float, chunk: int = CHUNK
+) -> Iterator[np.ndarray]:
     """The lattice points in [lo, hi) as (n, D) arrays of about ``chunk`` points, slabs along
     the last axis (so that a pass over many points holds few at once)."""
     axes = lattice_axes(lo, hi, spacing)
@@ -48,7 +51,7 @@ def lattice_chunks(lo, hi, spacing, chunk=CHUNK):
         yield np.stack([m.ravel(order="F") for m in mesh], axis=1)
 
 
-def lattice_in_box(lo, hi, spacing):
+def lattice_in_box(lo: Sequence[float], hi: Sequence[float], spacing: float) -> np.ndarray:
     """Points of the lattice ``(k + 1/2) * spacing`` (k integer) that lie inside [lo, hi).
 
     The lattice is global, so particles of neighbouring boxes never overlap and a box that

@@ -4,6 +4,7 @@
 import functools
 import io
 from pathlib import Path
+from typing import Any
 
 import igl
 import numpy as np
@@ -42,12 +43,13 @@ class Mesh(Shape):
 
     BAND = 1e-5  # relative to the coordinates' size: the exact winding number this near
 
-    def __init__(self, vertices, faces):
+    def __init__(self, vertices: Any, faces: Any) -> None:
         self.vertices = np.ascontiguousarray(vertices, dtype=float)
         self.faces = np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
         v, f = self.vertices, self.faces
         self.v0, self.v1, self.v2 = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
         self._lo, self._hi = v.min(axis=0), v.max(axis=0)
+        self.notes: list[str] = []  # what reading its file had to decide (load_mesh)
         self._band = self.BAND * float(max(np.abs(v).max(), (self._hi - self._lo).max()))
 
     def _winding(self, x, d):
@@ -58,7 +60,7 @@ class Mesh(Shape):
             w[close] = igl.winding_number(self.vertices, self.faces, np.ascontiguousarray(x[close]))
         return w
 
-    def winding_number(self, points):
+    def winding_number(self, points: Any) -> tuple[np.ndarray, np.ndarray]:
         """(n,) generalised winding number at the points, and (n,) bool: on the surface."""
         x = np.ascontiguousarray(as_points(points, 3))
         if not (len(x) and len(self.faces)):
@@ -78,14 +80,14 @@ class Mesh(Shape):
             out[near] = (w > 0.5) | (d[near] <= ON_SURFACE)
         return out
 
-    def contains(self, points):
+    def contains(self, points: Any) -> np.ndarray:
         x = as_points(points, 3)
         near = self._near_box(x)
         d = np.full(len(x), np.inf)
         d[near] = self.unsigned_distance(x[near])
         return self._inside(x, d)
 
-    def unsigned_distance(self, points):
+    def unsigned_distance(self, points: Any) -> np.ndarray:
         """(n,) distance (m) to the nearest triangle."""
         x = np.ascontiguousarray(as_points(points, 3))
         if not (len(x) and len(self.faces)):
@@ -93,19 +95,19 @@ class Mesh(Shape):
         d2, _, _ = igl.point_mesh_squared_distance(x, self.vertices, self.faces)
         return np.sqrt(d2)
 
-    def signed_distance(self, points):
+    def signed_distance(self, points: Any) -> np.ndarray:
         x = as_points(points, 3)
         d = self.unsigned_distance(x)
         return np.where(self._inside(x, d) & (d > 0), -d, d)
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self._lo.copy(), self._hi.copy()
 
-    def volume(self):
+    def volume(self) -> float:
         """Enclosed volume (m^3) by the divergence theorem over the triangles."""
         return float(abs(np.einsum("ij,ij->i", self.v0, np.cross(self.v1, self.v2)).sum()) / 6.0)
 
-    def support(self, direction):
+    def support(self, direction: Any) -> float:
         return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
 
 
@@ -306,7 +308,13 @@ def _read(path, key, shown):
         )
 
 
-def load_mesh(path, scale=1.0, translate=(0.0, 0.0, 0.0), key="mesh", shown=None):
+def load_mesh(
+    path: str | Path,
+    scale: float = 1.0,
+    translate: Any = (0.0, 0.0, 0.0),
+    key: str = "mesh",
+    shown: str | None = None,
+) -> Mesh:
     """A closed Mesh from an STL or OBJ file (read by trimesh): file units times ``scale``
     are metres, then moved by ``translate`` (m). ValueError, naming ``key``, for a file that
     is missing, unreadable, empty, not a closed surface or enclosing no volume. ``shown``:

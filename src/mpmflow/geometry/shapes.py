@@ -35,7 +35,7 @@ DIM_OF = {
 }
 
 
-def as_points(points, dim):
+def as_points(points: Any, dim: int) -> np.ndarray:
     x = np.asarray(points, dtype=float)
     if x.ndim == 1 and x.shape[0] == dim:
         x = x[None, :]
@@ -51,17 +51,17 @@ class Shape:
 
     dim: int
 
-    def contains(self, points):
+    def contains(self, points: Any) -> np.ndarray:
         """(n,) bool: inside or on the boundary within ON_SURFACE (m)."""
         return self.signed_distance(points) <= ON_SURFACE
 
-    def signed_distance(self, points):  # pragma: no cover - abstract
+    def signed_distance(self, points: Any) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def bounds(self):  # pragma: no cover - abstract
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def volume(self):  # pragma: no cover - abstract
+    def volume(self) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def support(self, direction: Any) -> float:  # pragma: no cover - abstract
@@ -76,23 +76,23 @@ class Box(Shape):
         self.hi = np.asarray(hi, dtype=float)
         self.dim = len(self.lo)
 
-    def contains(self, points):
+    def contains(self, points: Any) -> np.ndarray:
         x = as_points(points, self.dim)
         return np.all((x >= self.lo - ON_SURFACE) & (x <= self.hi + ON_SURFACE), axis=1)
 
-    def signed_distance(self, points):
+    def signed_distance(self, points: Any) -> np.ndarray:
         x = as_points(points, self.dim)
         q = np.abs(x - 0.5 * (self.lo + self.hi)) - 0.5 * (self.hi - self.lo)
         outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
         return outside + np.minimum(q.max(axis=1), 0.0)
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.lo.copy(), self.hi.copy()
 
-    def volume(self):
+    def volume(self) -> float:
         return float(np.prod(self.hi - self.lo))
 
-    def support(self, direction):
+    def support(self, direction: Any) -> float:
         d = np.asarray(direction, dtype=float)
         return float(np.sum(np.where(d > 0, self.hi, self.lo) * d))
 
@@ -105,18 +105,18 @@ class Ball(Shape):
         self.radius = float(radius)
         self.dim = len(self.centre)
 
-    def signed_distance(self, points):
+    def signed_distance(self, points: Any) -> np.ndarray:
         x = as_points(points, self.dim)
         return np.linalg.norm(x - self.centre, axis=1) - self.radius
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.centre - self.radius, self.centre + self.radius
 
-    def volume(self):
+    def volume(self) -> float:
         r = self.radius
         return math.pi * r * r if self.dim == 2 else 4.0 / 3.0 * math.pi * r**3
 
-    def support(self, direction):
+    def support(self, direction: Any) -> float:
         d = np.asarray(direction, dtype=float)
         return float(self.centre @ d + self.radius * np.linalg.norm(d))
 
@@ -140,7 +140,7 @@ class Cylinder(Shape):
         self.radius = float(radius)
         self.length = float(length)
 
-    def signed_distance(self, points):
+    def signed_distance(self, points: Any) -> np.ndarray:
         x = as_points(points, 3) - self.base
         t = x @ self.axis
         rho = np.linalg.norm(x - t[:, None] * self.axis, axis=1)
@@ -150,15 +150,15 @@ class Cylinder(Shape):
             np.maximum(dr, 0.0), np.maximum(da, 0.0)
         )
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         top = self.base + self.length * self.axis
         reach = self.radius * np.sqrt(np.clip(1.0 - self.axis**2, 0.0, 1.0))
         return np.minimum(self.base, top) - reach, np.maximum(self.base, top) + reach
 
-    def volume(self):
+    def volume(self) -> float:
         return math.pi * self.radius**2 * self.length
 
-    def support(self, direction):
+    def support(self, direction: Any) -> float:
         d = np.asarray(direction, dtype=float)
         along = self.axis @ d
         across = math.sqrt(max(float(d @ d) - along * along, 0.0))
@@ -197,22 +197,22 @@ class Polygon(Shape):
             inside ^= straddles & (px < cross_x)
         return inside
 
-    def contains(self, points):
+    def contains(self, points: Any) -> np.ndarray:
         x = as_points(points, 2)
         return self._crossings(x) | (self._edge_distance(x) <= ON_SURFACE)
 
-    def signed_distance(self, points):
+    def signed_distance(self, points: Any) -> np.ndarray:
         x = as_points(points, 2)
         d = self._edge_distance(x)
         return np.where(self._crossings(x) | (d == 0.0), -d, d)
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
 
-    def volume(self):
+    def volume(self) -> float:
         return float(0.5 * abs(np.sum(self.a[:, 0] * self.b[:, 1] - self.b[:, 0] * self.a[:, 1])))
 
-    def support(self, direction):
+    def support(self, direction: Any) -> float:
         return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
 
 
