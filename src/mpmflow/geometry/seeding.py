@@ -2,16 +2,21 @@
 (``geometry.lattice``), clear of the obstacles, with its velocity and, where asked, its
 hydrostatic pressure; and the check that no cell starts over-packed."""
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 
 from ..cells import bin_particles
 from ..errors import CaseError
+from ..grid import Grid
 from ..particles import Particles, subset
 from .bodies import cosine_top, is_box, seed_region, seeded
 from .lattice import lattice_in_box
+from .shapes import Shape
 
 
-def build_particles(case, grid):
+def build_particles(case: Any, grid: Grid) -> Particles:
     """The particles of every body of the case on this grid (``Particles``)."""
     parts = []
     rho = case.material.density
@@ -49,7 +54,9 @@ def build_particles(case, grid):
     return particles
 
 
-def seed_shape(body, shape, spacing, density, obstacles=()):
+def seed_shape(
+    body: Any, shape: Shape, spacing: float, density: float, obstacles: Sequence[Shape] = ()
+) -> Particles:
     """Particles filling a body of any shape: the lattice points of its bounding box that
     it contains and no obstacle does (``bodies.seeded``), each with the volume
     spacing**dim (m^3, m^2 in 2D) and mass density * volume (kg)."""
@@ -67,7 +74,7 @@ def seed_shape(body, shape, spacing, density, obstacles=()):
     )
 
 
-def check_packing(case, grid, particles, counts):
+def check_packing(case: Any, grid: Grid, particles: Particles, counts: Sequence[int]) -> None:
     """Refuse a start with more particles in a cell than the bodies there ask for, or with
     more particle volume than the cell holds (CaseError). Bodies that overlap are refused by
     the case's validation; this catches what remains: bodies with different
@@ -104,7 +111,13 @@ def check_packing(case, grid, particles, counts):
     )
 
 
-def seed_box(lo, hi, spacing, density, velocity):
+def seed_box(
+    lo: Sequence[float],
+    hi: Sequence[float],
+    spacing: float,
+    density: float,
+    velocity: Sequence[float],
+) -> Particles:
     """Particles filling a box; each carries the volume spacing**dim and mass density*volume."""
     x = lattice_in_box(lo, hi, spacing)
     n, dim = x.shape
@@ -118,7 +131,7 @@ def seed_box(lo, hi, spacing, density, velocity):
     )
 
 
-def seed_cosine_box(body, spacing, density):
+def seed_cosine_box(body: Any, spacing: float, density: float) -> Particles:
     """A box body with a cosine top: seeded up to max[1] + |A|, keeping the particles below
     the cosine surface (``bodies.cosine_top``)."""
     top = [body.max[0], body.max[1] + abs(body.surface_amplitude)]
