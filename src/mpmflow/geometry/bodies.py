@@ -16,7 +16,7 @@ the box's part near the obstacles).
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,7 @@ from .shapes import Shape
 TOUCH = 1e-9  # overlaps thinner than this fraction of a grid cell are touching faces
 
 
-def cosine_top(body, x):
+def cosine_top(body: Any, x: Any) -> np.ndarray:
     """The top of a body at x (m): max[1] + A cos(pi (x - min[0]) / width); max[1] if flat."""
     if body.surface_amplitude == 0.0:
         return np.full(np.shape(x), body.max[1], dtype=float)
@@ -42,28 +42,30 @@ def cosine_top(body, x):
 MAX_PASS = 2 * 10**8
 
 
-def is_box(body):
+def is_box(body: Any) -> bool:
     return getattr(body, "type", "box") == "box"
 
 
-def seed_region(body, shape, spacing):
+def seed_region(body: Any, shape: Shape | None, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi): the part of the lattice of ``spacing`` that holds the body's particles,
     for ``lattice.lattice_in_box`` (half open, [lo, hi)): a box's [min, max) (up to the
     crest of a cosine top); for other shapes the bounding box, widened a little so that
     lattice points on its upper faces are kept where the shape contains them."""
     if is_box(body):
-        hi = list(body.max)
-        hi[1] += abs(body.surface_amplitude)
-        return np.asarray(body.min, dtype=float), np.asarray(hi, dtype=float)
+        top = list(body.max)
+        top[1] += abs(body.surface_amplitude)
+        return np.asarray(body.min, dtype=float), np.asarray(top, dtype=float)
+    assert shape is not None  # every shape but a box has one
     lo, hi = shape.bounds()
     return lo, hi + 2e-9 * spacing
 
 
-def in_body(body, shape, points, spacing):
+def in_body(body: Any, shape: Shape | None, points: np.ndarray, spacing: float) -> np.ndarray:
     """Which of the points the body keeps (before obstacles): a box's half-open [min, max)
     on its own lattice (``lattice_indices``: max - 1e-9 spacing excluded) and below a
     cosine top; any other shape, ``shape.contains``."""
     if not is_box(body):
+        assert shape is not None  # every shape but a box has one
         return shape.contains(points)
     lo = np.asarray(body.min) - 1e-9 * spacing
     hi = np.asarray(body.max) - 1e-9 * spacing
@@ -75,7 +77,7 @@ def in_body(body, shape, points, spacing):
     return keep
 
 
-def in_obstacles(obstacles, points):
+def in_obstacles(obstacles: Sequence[Shape], points: np.ndarray) -> np.ndarray:
     """Which of the points lie inside (or on) any of the obstacle shapes."""
     inside = np.zeros(len(points), dtype=bool)
     for shape in obstacles:
@@ -86,7 +88,13 @@ def in_obstacles(obstacles, points):
     return inside
 
 
-def seeded(body, shape, points, spacing, obstacles=()):
+def seeded(
+    body: Any,
+    shape: Shape | None,
+    points: np.ndarray,
+    spacing: float,
+    obstacles: Sequence[Shape] = (),
+) -> np.ndarray:
     """The body's particles among these lattice points: kept by the body, outside every
     obstacle (the material cannot start inside a structure)."""
     keep = in_body(body, shape, points, spacing)
@@ -131,7 +139,7 @@ def particle_count(
         return math.inf
 
 
-def seeds_any(body, grid_spacing, shape=None):
+def seeds_any(body: Any, grid_spacing: float, shape: Shape | None = None) -> bool:
     """Whether the body keeps at least one lattice point, obstacles aside: exact for a box
     (its count, O(1)); for another shape a pass over the lattice points of its bounding box
     that stops at the first chunk holding one. A body whose box holds more than MAX_PASS
@@ -187,12 +195,12 @@ def _count(body, grid_spacing):
     return int(np.searchsorted(y, top, side="left").sum())
 
 
-def region(body):
+def region(body: Any) -> tuple[float, float, float, Callable[[Any], np.ndarray]]:
     """The body's region as (x0, x1, y0, top(x)) with top a function of x."""
     return body.min[0], body.max[0], body.min[1], lambda x: cosine_top(body, x)
 
 
-def overlap(a, b, tol):
+def overlap(a: Any, b: Any, tol: float) -> tuple[list[float], list[float]] | None:
     """The intersection of two bodies' regions if its extent is positive (more than ``tol``
     across every axis), as (lo, hi) corner lists; None when they are apart or only touch.
     Bodies with a cosine top (2D) are sampled along x."""

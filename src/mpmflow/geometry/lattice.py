@@ -8,6 +8,9 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
+# a box's corner (m): a list or an array of its coordinates
+Corner = Sequence[float] | np.ndarray
+
 CHUNK = 2**20  # lattice points per chunk of a containment pass
 
 
@@ -18,7 +21,7 @@ def lattice_indices(a: float, b: float, spacing: float) -> tuple[int, int]:
     return k0, k1
 
 
-def lattice_axes(lo: Sequence[float], hi: Sequence[float], spacing: float) -> list[np.ndarray]:
+def lattice_axes(lo: Corner, hi: Corner, spacing: float) -> list[np.ndarray]:
     """The lattice's coordinates in [lo, hi) along each axis (m)."""
     axes = []
     for a, b in zip(lo, hi):
@@ -27,7 +30,7 @@ def lattice_axes(lo: Sequence[float], hi: Sequence[float], spacing: float) -> li
     return axes
 
 
-def lattice_count(lo: Sequence[float], hi: Sequence[float], spacing: float) -> int:
+def lattice_count(lo: Corner, hi: Corner, spacing: float) -> int:
     """Number of lattice points in [lo, hi) (exact integer)."""
     n = 1
     for a, b in zip(lo, hi):
@@ -37,7 +40,7 @@ def lattice_count(lo: Sequence[float], hi: Sequence[float], spacing: float) -> i
 
 
 def lattice_chunks(
-    lo: Sequence[float], hi: Sequence[float], spacing: float, chunk: int = CHUNK
+    lo: Corner, hi: Corner, spacing: float, chunk: int = CHUNK
 ) -> Iterator[np.ndarray]:
     """The lattice points in [lo, hi) as (n, D) arrays of about ``chunk`` points, slabs along
     the last axis (so that a pass over many points holds few at once)."""
@@ -51,7 +54,7 @@ def lattice_chunks(
         yield np.stack([m.ravel(order="F") for m in mesh], axis=1)
 
 
-def lattice_in_box(lo: Sequence[float], hi: Sequence[float], spacing: float) -> np.ndarray:
+def lattice_in_box(lo: Corner, hi: Corner, spacing: float) -> np.ndarray:
     """Points of the lattice ``(k + 1/2) * spacing`` (k integer) that lie inside [lo, hi).
 
     The lattice is global, so particles of neighbouring boxes never overlap and a box that
