@@ -622,3 +622,15 @@ def test_any_mesh_case_runs_or_fails_cleanly(monkeypatch):
     assert sum(outcomes.values()) >= MESH_CASES
     ran = outcomes.get("ran", 0) + outcomes.get(0, 0)
     assert ran >= MESH_CASES // 12 and outcomes.get(2, 0) >= MESH_CASES // 3, outcomes
+
+
+@pytest.mark.parametrize("key", ["solver.flip", "solver.volume_correction", "solver.wall_flux"])
+def test_none_for_a_preset_solver_key_is_a_clear_error(key):
+    """The keys a formulation presets start as None in the schema; None given in Python is
+    refused with the key's name, not taken as a value that fails inside the step."""
+    from conftest import EXAMPLES
+
+    from mpmflow import CaseError, load_case
+
+    with pytest.raises(CaseError, match=f"{key} = None is not a value"):
+        load_case(EXAMPLES / "dam_break.toml", {key: None})

@@ -267,6 +267,18 @@ class Solver(Section):
             self._from_preset.discard(name)
 
     @model_validator(mode="after")
+    def _given(self) -> Self:
+        # the keys a formulation presets are None only until the preset fills them: None
+        # given for one (in Python) is not a value
+        for key in FORMULATIONS["mpmflow"]:
+            if getattr(self, key) is None:
+                raise ValueError(
+                    f"solver.{key} = None is not a value; give one, or leave the key out for "
+                    f"the formulation's ({self.formulation}) default"
+                )
+        return self
+
+    @model_validator(mode="after")
     def _thresholds(self) -> Self:
         sparse = self.sparse_cell_threshold  # set by the formulation's preset
         if sparse is not None and sparse >= self.full_cell_threshold:
