@@ -35,11 +35,7 @@ import numpy as np
 from mpmflow.validation import common, materials
 
 G = 9.81
-TRANSFERS = {
-    "pic": ["solver.flip=0"],
-    "flip": ["solver.flip=0.99"],
-    "apic": ["solver.transfer=apic"],
-}
+TRANSFERS = materials.TRANSFERS
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 ap.add_argument("--aspect", type=float, default=2.0)
@@ -58,22 +54,9 @@ ap.add_argument("--quiet", action="store_true")
 cli = ap.parse_args()
 
 a, L0 = cli.aspect, materials.L0
-H0 = a * L0
-half = L0 + cli.width * materials.lube(a) * L0 + 0.02
-h = L0 / cli.cells
-dt = min(5e-4, 0.35 * h / math.sqrt(2 * G * H0)) * cli.dt_factor
-end = cli.end if cli.end is not None else 0.6 + 6 * math.sqrt(H0 / G)
-overrides = [
-    f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
-    f"grid.spacing={h}",
-    f"bodies.0.min=[{half - L0:.4f}, 0.0]",
-    f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
-    f"time.dt={dt:.4g}",
-    f"time.end={end:.3f}",
-    f"output.interval={cli.interval}",
-    *TRANSFERS[cli.transfer],
-    *cli.set,
-]
+case = materials.Collapse(a, cli.cells, cli.width, cli.dt_factor, cli.end, cli.interval)
+H0, half, h = case.H0, case.half, case.h
+overrides = [*case.overrides(), *TRANSFERS[cli.transfer], *cli.set]
 if cli.model != "mu_i":
     overrides.append(f"material.model='{cli.model}'")
 
@@ -223,7 +206,7 @@ summary = {
     "transfer": cli.transfer,
     "model": cli.model,
     "h": h,
-    "dt": dt,
+    "dt": case.dt,
     "picard": os.environ.get("MPMFLOW_PICARD", "0"),
     "set": cli.set,
     "runout": (reach - L0) / L0,

@@ -18,18 +18,12 @@ was reached.
 
 import argparse
 import json
-import math
 
 import numpy as np
 
 from mpmflow.validation import common, materials
 
-G = 9.81
-TRANSFERS = {
-    "pic": ["solver.flip=0"],
-    "flip": ["solver.flip=0.99"],
-    "apic": ["solver.transfer=apic"],
-}
+TRANSFERS = materials.TRANSFERS
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 ap.add_argument("--aspect", type=float, default=2.0)
@@ -40,24 +34,10 @@ ap.add_argument("--set", action="append", default=[], help="more overrides key=v
 cli = ap.parse_args()
 
 a, L0 = cli.aspect, materials.L0
-H0 = a * L0
-half = L0 + cli.width * materials.lube(a) * L0 + 0.02
-h = L0 / cli.cells
-dt = min(5e-4, 0.35 * h / math.sqrt(2 * G * H0))
-end = 0.6 + 6 * math.sqrt(H0 / G)
+case = materials.Collapse(a, cli.cells, cli.width)
+H0, half, h = case.H0, case.half, case.h
 sim = common.run_example(
-    "granular_collapse.toml",
-    [
-        f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
-        f"grid.spacing={h}",
-        f"bodies.0.min=[{half - L0:.4f}, 0.0]",
-        f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
-        f"time.dt={dt:.4g}",
-        f"time.end={end:.3f}",
-        "output.interval=0.05",
-        *TRANSFERS[cli.transfer],
-        *cli.set,
-    ],
+    "granular_collapse.toml", [*case.overrides(), *TRANSFERS[cli.transfer], *cli.set]
 )
 x, v = sim.particles.x, sim.particles.v
 reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))

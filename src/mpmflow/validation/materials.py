@@ -31,6 +31,7 @@ the simulated deposits, whose particles stand in columns with gaps, 1.4 times th
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -137,29 +138,66 @@ def run_wave(out, quick=False, context=None):
     return res
 
 
-def _collapse(a, quick, width=1.6):
-    """The column of aspect ratio a (quick: 6.25 cells across L0, else 12.5) in a tank of
-    half-width L0 + width x Lube's run-out + 0.02 m. "walled": the deposit reached a side
-    wall, so its run-out is the tank's, not its own (measured: APIC at a = 2 and 7 reach it
-    at width 1.6)."""
-    H0 = a * L0
-    run = lube(a) * L0
-    half = L0 + width * run + 0.02
-    h = L0 / (6.25 if quick else 12.5)
-    dt = min(5e-4, 0.35 * h / math.sqrt(2 * G * H0))
-    end = 0.6 + 6 * math.sqrt(H0 / G)
-    sim = run_example(
-        "granular_collapse.toml",
-        [
+# the transfers the collapse studies compare (benchmarks/collapse_energy.py, granular_mesh.py)
+TRANSFERS = {
+    "pic": ["solver.flip=0"],
+    "flip": ["solver.flip=0.99"],
+    "apic": ["solver.transfer=apic"],
+}
+
+
+@dataclass(frozen=True)
+class Collapse:
+    """The collapse of a column of aspect ratio ``a`` as granular_collapse.toml's overrides:
+    ``cells`` across L0, a tank of half-width L0 + ``width`` x Lube's run-out + 0.02 m, dt =
+    min(5e-4, 0.35 h / sqrt(2 g H0)) times ``dt_factor``, to 0.6 s + 6 sqrt(H0 / g) (or
+    ``end``)."""
+
+    a: float
+    cells: float
+    width: float = 1.6
+    dt_factor: float = 1.0
+    end: float | None = None
+    interval: float = 0.05
+
+    @property
+    def H0(self) -> float:
+        return self.a * L0
+
+    @property
+    def half(self) -> float:
+        return L0 + self.width * (lube(self.a) * L0) + 0.02
+
+    @property
+    def h(self) -> float:
+        return L0 / self.cells
+
+    @property
+    def dt(self) -> float:
+        return min(5e-4, 0.35 * self.h / math.sqrt(2 * G * self.H0)) * self.dt_factor
+
+    def overrides(self) -> list[str]:
+        H0, half, h, dt = self.H0, self.half, self.h, self.dt
+        end = self.end if self.end is not None else 0.6 + 6 * math.sqrt(H0 / G)
+        return [
             f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
             f"grid.spacing={h}",
             f"bodies.0.min=[{half - L0:.4f}, 0.0]",
             f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
             f"time.dt={dt:.4g}",
             f"time.end={end:.3f}",
-            "output.interval=0.05",
-        ],
-    )
+            f"output.interval={self.interval}",
+        ]
+
+
+def _collapse(a, quick, width=1.6):
+    """The column of aspect ratio a (quick: 6.25 cells across L0, else 12.5) in a tank of
+    half-width L0 + width x Lube's run-out + 0.02 m. "walled": the deposit reached a side
+    wall, so its run-out is the tank's, not its own (measured: APIC at a = 2 and 7 reach it
+    at width 1.6)."""
+    c = Collapse(a, 6.25 if quick else 12.5, width)
+    H0, half, h = c.H0, c.half, c.h
+    sim = run_example("granular_collapse.toml", c.overrides())
     x = sim.particles.x
     reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))
     walled = bool(x[:, 0].max() > 2 * half - 1.5 * h or x[:, 0].min() < 1.5 * h)
