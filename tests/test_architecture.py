@@ -37,7 +37,7 @@ def test_boundaries_are_decided_in_one_package():
     and the obstacles' node distances are asked for in boundaries/ only (case/ defines the
     conditions; state/ is the door to the core's kernels)."""
     calls = re.compile(
-        r"\b(wall_pairs|apply_walls|no_slip_sides|uniform_walls|"
+        r"\b(wall_pairs|apply_walls|no_slip_sides|uniform_walls|outlet_sides|"
         r"wall_conditions|node_distance|cut_cell_tensors)\("
     )
     allowed = ("boundaries/", "case/", "state/")

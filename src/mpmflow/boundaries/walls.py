@@ -2,7 +2,7 @@
 outward sign: the wall's normal) and the wall's condition (slip or no-slip) from the case's
 ``domain.walls``. A periodic axis has no walls. The core applies them as contact conditions
 (src/core/walls.hpp): a wall node holds the material where it presses into the wall and
-lets it go where holding it would need suction."""
+lets it go where holding it would need suction. An outlet side is no wall (outlets.py)."""
 
 from dataclasses import dataclass
 from typing import Any
@@ -35,7 +35,9 @@ def side_conditions(case: Any) -> np.ndarray:
 
 
 def of_case(case: Any, grid: Grid) -> Walls:
-    """The walls of the case's domain on its grid."""
+    """The walls of the case's domain on its grid (an outlet side has none: its nodes are
+    never held; ``boundaries.outlets``)."""
     node, axis, sign = state.wall_pairs(tuple(int(c) for c in grid.cells), grid.periodic)
-    sides = side_conditions(case)
-    return Walls(node, axis, sign, sides[2 * axis + (sign > 0)])
+    side = 2 * axis + (sign > 0)
+    wall = ~np.array(case.domain.outlet_sides(), dtype=np.bool_)[side]
+    return Walls(node[wall], axis[wall], sign[wall], side_conditions(case)[side[wall]])

@@ -5,12 +5,15 @@ schemes."""
 from collections.abc import Callable
 from typing import Any, ClassVar, Protocol
 
+from ..boundaries.outlets import Outflow
+
 
 class Scheme(Protocol):
     """What the Simulation asks of a scheme (``projection``, ``explicit``)."""
 
     SUPPORTS: ClassVar[frozenset[str]]  # the FEATURES it supports
     last_unknowns: int  # the size of the last step's system (0: none)
+    outflow: Outflow  # what has left through the domain's outlets
 
     def __init__(self, case: Any, grid: Any, particles: Any) -> None: ...
 
@@ -35,6 +38,7 @@ FEATURES = {
     "materials": "materials other than inviscid water (material.model)",
     "periodic": "periodic axes (domain.periodic)",
     "apic": 'APIC transfers (solver.transfer = "apic"; it transfers by FLIP/PIC only)',
+    "outlets": 'outlets (domain.walls = "outlet")',
 }
 
 

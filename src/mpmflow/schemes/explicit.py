@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import state
-from ..boundaries import walls
+from ..boundaries import outlets, walls
 from ..errors import SimulationError
 from ..grid import Grid
 from ..particles import Particles
@@ -44,6 +44,7 @@ class ExplicitScheme:
     def __init__(self, case: Any, grid: Grid, particles: Particles) -> None:
         self.grid = grid
         self.particles = particles
+        self.outflow = outlets.Outflow()  # no outlets: nothing leaves
         m, sv = case.material, case.solver
         q_lin, q_quad = (float(q) for q in sv.explicit_bulk_viscosity)
         self.settings = state.ExplicitSettings(

@@ -11,7 +11,7 @@ from typing import ClassVar
 import numpy as np
 
 from .. import materials, state
-from ..boundaries import obstacles, walls
+from ..boundaries import obstacles, outlets, walls
 from ..errors import SolverError
 from ..linalg.solvers import SMOOTHING_SWEEPS
 from . import pressure, register, volume_correction
@@ -80,13 +80,17 @@ class AdaptiveReport(StepReport):
 
 @register("projection")
 class ProjectionScheme:
-    SUPPORTS: ClassVar[frozenset[str]] = frozenset({"obstacles", "materials", "periodic", "apic"})
+    SUPPORTS: ClassVar[frozenset[str]] = frozenset(
+        {"obstacles", "materials", "periodic", "apic", "outlets"}
+    )
 
     def __init__(self, case, grid, particles):
         s = case.solver
         self.case = case
         self.grid = grid
         self.apic = s.transfer == "apic"
+        self.open = bool(outlets.sides(case).any())  # outlets: particles leave the run
+        self.outflow = outlets.Outflow()
         self.particles = particles  # with APIC also their affine matrices (zero)
         self.solids = obstacles.of_case(case, grid)
         self.viscous = materials.is_viscous(case.material)
@@ -104,6 +108,7 @@ class ProjectionScheme:
             MARGIN * grid.spacing,
             s.volume_correction > 0,
             self.viscous,
+            outlets.sides(case) if self.open else (),
         )
         self.python_pressure = (
             None if s.linear_solver == "multigrid" else pressure.PythonPressure(grid, s)
@@ -126,6 +131,18 @@ class ProjectionScheme:
         self._P = P
         D = self.grid.dim
         self.affine = np.zeros((P.count, D, D)) if self.apic else None
+        # with outlets, the particles' own mass and volume: the core zeroes a retired one's
+        self._own = (P.mass.copy(), P.volume.copy()) if self.open else None
+
+    def _drain(self):
+        """Remove the particles that left through an outlet in the last chunk."""
+        if self._own is None:
+            return
+        keep = self.outflow.drain(self._P, *self._own)
+        if keep is not None:
+            self._own = (self._own[0][keep], self._own[1][keep])
+            if self.affine is not None:
+                self.affine = self.affine[keep]
 
     @property
     def p_node(self):
@@ -192,6 +209,8 @@ class ProjectionScheme:
             saved["volume_q"] = q.copy()
         if self.affine is not None:
             saved["affine"] = self.affine.copy()
+        if self.open:
+            saved["outflow"] = self.outflow.as_array()
         return saved
 
     def restore(self, saved):
@@ -205,6 +224,8 @@ class ProjectionScheme:
         q = self.core.volume_q
         if q.size:
             np.copyto(q, saved["volume_q"])
+        if self.open:
+            self.outflow = outlets.Outflow.of_array(saved["outflow"])
         if self.affine is not None:
             affine = saved["affine"]  # KeyError, or ValueError if its shape differs
             if affine.shape != self.affine.shape:
@@ -246,6 +267,8 @@ class ProjectionScheme:
             k = int(report.step)
             self.steps += k
             raise pressure.setup_failed(where(k), err, int(report.last_unknowns)) from err
+        finally:
+            self._drain()
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
         if done < nsteps:
@@ -258,9 +281,12 @@ class ProjectionScheme:
         # the most steps the span can need: every particle at solver.max_speed (the run
         # stops beyond it), at the Courant number
         most = int(np.ceil(span * s.max_speed / (O.courant * self.grid.spacing))) + 3
-        covered = self.core.advance_span(
-            *self._particles(), O, span, most, report, affine=self.affine
-        )
+        try:
+            covered = self.core.advance_span(
+                *self._particles(), O, span, most, report, affine=self.affine
+            )
+        finally:
+            self._drain()
         done = int(report.steps)
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)

@@ -28,11 +28,13 @@ SURFACE_QUADRATURE = {
 Report = _core.Report
 
 
-def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscous):
+def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscous, outlets=()):
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
     (``mpmflow.boundaries.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
-    for inviscid material), ``margin`` (m) how far inside the walls particles are put back.
+    for inviscid material), ``margin`` (m) how far inside the walls particles are put back,
+    ``outlets`` one flag per side (x_min, x_max, y_min, ...; empty: none): the open sides,
+    which have no wall pairs and retire the particles that cross them (mass 0).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls = _core.State2 if D == 2 else _core.State3
@@ -63,6 +65,7 @@ def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscou
         bool(volume_correction),
         bool(viscous),
         [bool(p) for p in grid.periodic],
+        [bool(s) for s in outlets],
     )
 
 
