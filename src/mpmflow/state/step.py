@@ -29,7 +29,7 @@ class Status(enum.IntEnum):
 
 
 OK = Status.OK
-SURFACE_QUADRATURE = {
+SURFACE_QUADRATURE: dict[str, int] = {
     "gauss": _core.GAUSS,
     "divergence": _core.DIVERGENCE,
     "consistent": _core.CONSISTENT,
