@@ -21,6 +21,7 @@ class Scheme(Protocol):
 
     SUPPORTS: ClassVar[frozenset[str]]  # the FEATURES it supports
     last_unknowns: int  # the size of the last step's system (0: none)
+    particles: Particles  # the particles it moves (set anew before the first step: setup)
 
     def __init__(self, case: Case, grid: Grid, particles: Particles) -> None: ...
 
