@@ -5,15 +5,21 @@ retires a particle that crosses an outlet (src/core/transfer.hpp, ``Outlets``: i
 volume set to 0, so that it carries nothing to the grid); between chunks ``Outflow.drain``
 removes the retired particles from the particle arrays and sums what left."""
 
+from __future__ import annotations
+
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..particles import Particles
+from ..state.arrays import Bools, Floats
+
+if TYPE_CHECKING:
+    from ..case import Case
 
 
-def sides(case: Any) -> np.ndarray:
+def sides(case: Case) -> Bools:
     """Outlet flags of the domain's sides in the order x_min, x_max, y_min, ... (bool)."""
     return np.array(case.domain.outlet_sides(), dtype=np.bool_)
 
@@ -26,12 +32,12 @@ class Outflow:
     mass: float = 0.0
     volume: float = 0.0
 
-    def drain(self, P: Particles, mass: np.ndarray, volume: np.ndarray) -> np.ndarray | None:
+    def drain(self, P: Particles, mass: Floats, volume: Floats) -> Bools | None:
         """Remove from ``P`` the particles the core retired (mass 0), in place (its arrays
         replaced by the kept ones), and add them to the totals; ``mass`` and ``volume`` are
         the particles' own (the core zeroed the retired ones'). Returns the mask of the
         particles kept, or None when none left."""
-        gone = P.mass == 0.0
+        gone: Bools = P.mass == 0.0
         if not gone.any():
             return None
         self.count += int(gone.sum())
@@ -42,10 +48,10 @@ class Outflow:
             setattr(P, name, getattr(P, name)[keep])
         return keep
 
-    def as_array(self) -> np.ndarray:
+    def as_array(self) -> Floats:
         """The totals as a checkpoint keeps them."""
         return np.array([self.count, self.mass, self.volume], dtype=np.float64)
 
     @classmethod
-    def of_array(cls, a: np.ndarray) -> "Outflow":
+    def of_array(cls, a: Floats) -> Outflow:
         return cls(int(a[0]), float(a[1]), float(a[2]))

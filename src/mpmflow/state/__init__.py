@@ -16,16 +16,16 @@ except ImportError as err:  # a source tree without the install's build
         "repository (needs a C++17 compiler with OpenMP and CMake >= 3.18)."
     ) from err
 
-CHUNKS = _core.CHUNKS
-POOL = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
+CHUNKS: int = _core.CHUNKS
+POOL: int = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
 
 
-def max_threads():
+def max_threads() -> int:
     """The threads the core's parallel loops use."""
-    return _core.max_threads()
+    return int(_core.max_threads())
 
 
-def set_threads(n):
+def set_threads(n: int) -> None:
     """Run the core's parallel loops on n threads."""
     _core.set_threads(int(n))
 
@@ -42,6 +42,7 @@ from .explicit import (  # noqa: E402 (the core is loaded first, with its messag
 from .pressure import (  # noqa: E402 (the core is loaded first, with its message)
     COARSEST,
     PARALLEL_ROWS,
+    Multigrid,
     apply_walls,
     dot,
     gauss_cell_tensors,
@@ -58,6 +59,9 @@ from .step import (  # noqa: E402 (the core is loaded first, with its message)
     OK,
     PHASES,
     SURFACE_QUADRATURE,
+    CoreOptions,
+    CoreReport,
+    CoreState,
     Report,
     Status,
     step_options,
@@ -100,10 +104,14 @@ from .viscous import (  # noqa: E402 (the core is loaded first, with its message
 __all__ = [
     "CHUNKS",
     "COARSEST",
+    "CoreOptions",
+    "CoreReport",
+    "CoreState",
     "ExplicitSettings",
     "ExplicitWork",
     "HERSCHEL_BULKLEY",
     "MU_I",
+    "Multigrid",
     "NEWTONIAN",
     "OK",
     "PARALLEL_ROWS",
