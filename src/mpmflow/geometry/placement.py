@@ -55,7 +55,9 @@ def _move_keys(kind, k, spec):
     return f"{kind}.{k}.{keys}"
 
 
-def thickness(spec, shape):
+# spec: a case's obstacle table (mpmflow.case.shapes.Obstacle), read by its ``type`` string
+# as geometry.specs does: Any because mypy cannot narrow the union by that string
+def thickness(spec: Any, shape: Shape) -> tuple[float, str]:
     """The obstacle's smallest width (m) and where it is measured: exact for boxes, discs,
     spheres and cylinders; the bounding box's for polygons and meshes (a thin slanted plate
     is not detected)."""
