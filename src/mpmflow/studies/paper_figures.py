@@ -1,10 +1,13 @@
 """Figures of the paper study (``studies.paper``): Fig. 2, 3 and 4 analogues as PNG files."""
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..plotting.mpl import pyplot
+from .paper import RunResult
 from .reference_data import MM_HEIGHT_AR2, VOF_AR2, G, load
 
 A = 0.114  # m, width of both columns
@@ -24,7 +27,7 @@ def _plt():
     return pyplot("mpmflow study (its figures)")
 
 
-def fig2(results, ar, path):
+def fig2(results: Sequence[RunResult], ar: str, path: Path) -> None:
     """Normalised column height and surge front against normalised time."""
     plt = _plt()
     fig, (ax_h, ax_f) = plt.subplots(1, 2, figsize=(13, 5), constrained_layout=True)
@@ -79,7 +82,7 @@ def _finest(results, ar):
     return [r for r in sel if r.row["spacing_m"] == h]
 
 
-def fig3(results, ar, path, vmax):
+def fig3(results: Sequence[RunResult], ar: str, path: Path, vmax: float) -> None:
     """Particle pressure at 0.1 s intervals, each scheme at the finest mesh."""
     plt = _plt()
     runs = _finest(results, ar)
@@ -119,7 +122,9 @@ def fig3(results, ar, path, vmax):
     plt.close(fig)
 
 
-def surface_profile(x, width=0.42, bins=84):
+def surface_profile(
+    x: NDArray[np.float64], width: float = 0.42, bins: int = 84
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Free-surface profile: the highest particle in each of ``bins`` columns (m)."""
     edges = np.linspace(0.0, width, bins + 1)
     k = np.clip(np.digitize(x[:, 0], edges) - 1, 0, bins - 1)
@@ -128,7 +133,7 @@ def surface_profile(x, width=0.42, bins=84):
     return 0.5 * (edges[1:] + edges[:-1]), top
 
 
-def fig4(results, ar, path):
+def fig4(results: Sequence[RunResult], ar: str, path: Path) -> None:
     """Free-surface profiles at 0.1 s intervals, each scheme at the finest mesh."""
     plt = _plt()
     runs = _finest(results, ar)
@@ -147,7 +152,7 @@ def fig4(results, ar, path):
     plt.close(fig)
 
 
-def write_figures(results, out):
+def write_figures(results: Sequence[RunResult], out: str | Path) -> None:
     out = Path(out)
     for ar in sorted({r.row["ar"] for r in results}, reverse=True):
         fig2(results, ar, out / f"fig2_height_front_ar{ar}.png")
