@@ -14,6 +14,7 @@ import os
 import shlex
 import sys
 import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 
 from ._version import __version__
@@ -413,7 +414,7 @@ def _keys(args):
     return 0
 
 
-def main(argv=None):
+def main(argv: Sequence[str] | None = None) -> int:
     with early.installed():
         try:
             return _main(argv)
