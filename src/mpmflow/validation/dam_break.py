@@ -18,11 +18,13 @@ dt = 10 ms, Courant number about 2) is an extra row. Error measures, lengths in 
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from ..studies.reference_data import errors_against_vof, height_error_against_martin_moyce, load
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
+from .types import Context, FloatArray
 from .volume import Recorder
 
 G = 9.81
@@ -70,7 +72,7 @@ WHY_DT = {
 }
 
 
-def front_rms(t, front, data, scale):
+def front_rms(t: FloatArray, front: FloatArray, data: str, scale: float) -> float:
     """RMS of (x_sim - x_ref) / a over the data points before the wall (T = t * scale)."""
     ref = load(data)
     sel = (ref[:, 1] < TANK / A) & (ref[:, 0] > 0)
@@ -80,13 +82,13 @@ def front_rms(t, front, data, scale):
     return float(np.sqrt(np.mean(diff**2))) if diff.size else float("nan")
 
 
-def front_errors(t, front):
+def front_errors(t: FloatArray, front: FloatArray) -> tuple[float, float]:
     """RMS front errors against Martin & Moyce Table 2 and Koshizuka & Oka (units of a)."""
     s = math.sqrt(2 * G / A)
     return front_rms(t, front, MM_FRONT, s), front_rms(t, front, KO_FRONT, s)
 
 
-def vof_front_allowance():
+def vof_front_allowance() -> tuple[float, float]:
     """The tolerances of the experiment comparisons: the VOF's own RMS error plus EXTRA."""
     vof = load(VOF)
     mm, ko = front_errors(vof[:, 0], vof[:, 1])
@@ -125,7 +127,7 @@ def _run_ar2(h, dt, end, on_output=None):
     }
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     meshes = MESHES_QUICK if quick else MESHES
     end = END_QUICK if quick else END
     res = CaseResult("dam_break", "Dam break, aspect ratio 2")
@@ -134,7 +136,7 @@ def run(out, quick=False, context=None):
         finest = h == meshes[-1]
         rec = Recorder() if finest else None
         runs.append(_run_ar2(h, DT, end, rec))
-        if finest and context is not None:
+        if rec is not None and context is not None:
             context.setdefault("volume", {})["dam break"] = (f"h = {h} m", rec)
     paper = None if quick else _run_ar2(*PAPER_COARSE, end)
     tol_mm, tol_ko = vof_front_allowance()
