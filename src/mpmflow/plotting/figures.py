@@ -25,7 +25,7 @@ import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,6 +35,10 @@ from ..grid import Grid
 from ..output import check_out_dir
 from ..results import Snapshot, open_run
 from .mpl import pyplot, save
+
+if TYPE_CHECKING:  # matplotlib is an optional extra: imported when a figure is made
+    from matplotlib.axes import Axes
+    from matplotlib.collections import PathCollection
 
 DPI = 80
 
@@ -197,7 +201,9 @@ def probe_positions(summary: Summary) -> dict[str, list[float] | None]:
     return {name: p.get("position") for name, p in summary.get("probes", {}).items()}
 
 
-def _lines_by_position(ax, t, probes, group, summary, plt):
+def _lines_by_position(
+    ax: Axes, t: Floats, probes: Columns, group: Sequence[str], summary: Summary, plt: ModuleType
+) -> list[tuple[float, float, float, float] | Floats]:  # RGBA by Colormap
     """More probes than a legend can tell apart on one panel: one thin line each, all in
     one LineCollection (2,000 Line2D and their legend took 10 to 18 s to draw, and the
     legend overflowed the figure), coloured by the probe's position along the axis in which
@@ -207,9 +213,10 @@ def _lines_by_position(ax, t, probes, group, summary, plt):
     from matplotlib.collections import LineCollection
 
     where = probe_positions(summary)
-    xyz = [where.get(n) for n in group]
-    if all(p is not None for p in xyz) and len({len(p) for p in xyz}) == 1:
-        xyz = np.asarray(xyz, dtype=float)
+    found = [where.get(n) for n in group]
+    positions = [p for p in found if p is not None]
+    if len(positions) == len(found) and len({len(p) for p in positions}) == 1:
+        xyz = np.asarray(positions, dtype=float)
         axis = int(np.argmax(np.ptp(xyz, axis=0)))
         value, label = xyz[:, axis], f"probe's {'xyz'[axis]} [m]"
     else:
@@ -280,7 +287,16 @@ def obstacle_section(
     return X, Y, phi
 
 
-def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
+def _draw(
+    ax: Axes,
+    xy: Floats,
+    p: Floats,
+    t: float,
+    size: Sequence[float],
+    vmax: float,
+    plt: ModuleType,
+    solid: tuple[Floats, Floats, Floats] | None = None,
+) -> PathCollection:
     if solid is not None and (solid[2] < 0).any():
         ax.contourf(
             solid[0], solid[1], solid[2], levels=[solid[2].min() - 1.0, 0.0], colors=["0.55"]
@@ -305,7 +321,7 @@ def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
     return art
 
 
-def _name_axes(ax, names, caption="", y=True):
+def _name_axes(ax: Axes, names: Sequence[str], caption: str = "", y: bool = True) -> None:
     """The plane's axes named with their unit; in 3D the x label says which slice it is
     (an overview passes it to its title instead, its panels being too narrow for it)."""
     ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
@@ -397,7 +413,7 @@ def overview(n: int) -> NDArray[np.int64]:
     return np.unique(np.linspace(0, n - 1, min(6, n)).round().astype(int))
 
 
-def _water(d, summary):
+def _water(d: Mapping[str, Floats], summary: Summary) -> Floats:
     """The volume fraction field [cx, cy, cz] of one 3D snapshot's particles (``surface``):
     their volume is mass / material.density."""
     from .surface import volume_fraction

@@ -105,7 +105,7 @@ def surface_area(verts: NDArray[np.float64], faces: NDArray[np.int64]) -> float:
     return float(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum())
 
 
-def _box_triangles(lo, hi):
+def _box_triangles(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
     """The 12 triangles of an axis-aligned box's faces, (12, 3, 3) m."""
     c = np.array(
         [
@@ -162,7 +162,9 @@ def obstacle_triangles(
     return np.concatenate(parts) if parts else np.empty((0, 3, 3))
 
 
-def _shaded(triangles, rgb, alpha):
+def _shaded(
+    triangles: NDArray[np.float64], rgb: Sequence[float], alpha: float
+) -> NDArray[np.float64]:
     """RGBA per triangle: ``rgb`` times 0.25 + 0.75 |n . l| (two-sided Lambert shading by
     LIGHT)."""
     n = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])

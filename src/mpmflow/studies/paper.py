@@ -144,7 +144,14 @@ def plan(quick: bool = False) -> list[Planned]:
     return runs
 
 
-def _errors(ar, t, front, height, a, t_end):
+def _errors(
+    ar: str,
+    t: NDArray[np.float64],
+    front: NDArray[np.float64],
+    height: NDArray[np.float64],
+    a: float,
+    t_end: float,
+) -> tuple[float, float, float]:
     if ar == "2":
         e = errors_against_vof(t, front, height, a, min(0.2, t_end), min(0.4, t_end))
         tau_end = min(3.5, t_end * math.sqrt(G / a))
@@ -212,7 +219,7 @@ def run_one(
     return RunResult(row, t, front, height, fields)
 
 
-def _fmt(v):
+def _fmt(v: object) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
     if isinstance(v, float):

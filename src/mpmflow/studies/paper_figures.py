@@ -2,12 +2,13 @@
 
 from collections.abc import Sequence
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..plotting.mpl import pyplot
-from .paper import RunResult
+from .paper import Row, RunResult
 from .reference_data import MM_HEIGHT_AR2, VOF_AR2, G, load
 
 A = 0.114  # m, width of both columns
@@ -17,13 +18,13 @@ COLOURS = {0.0114: "tab:green", 0.008: "tab:orange", 0.004: "tab:blue"}
 STYLES = {"projection": "-", "real": ":", "reduced": "--"}
 
 
-def _kind(row):
+def _kind(row: Row) -> str:
     if row["scheme"] == "projection":
         return "projection"
     return "real" if row["bulk_modulus_pa"] >= 1e9 else "reduced"
 
 
-def _plt():
+def _plt() -> ModuleType:
     return pyplot("mpmflow study (its figures)")
 
 
@@ -76,7 +77,7 @@ def fig2(results: Sequence[RunResult], ar: str, path: Path) -> None:
     plt.close(fig)
 
 
-def _finest(results, ar):
+def _finest(results: Sequence[RunResult], ar: str) -> list[RunResult]:
     sel = [r for r in results if r.row["ar"] == ar]
     h = min(r.row["spacing_m"] for r in sel)
     return [r for r in sel if r.row["spacing_m"] == h]
