@@ -244,7 +244,7 @@ def _order_row(case, quantity, error, runs, errors, miss="the error does not fal
     )
 
 
-def _section(n):
+def _section(n: int) -> str:
     return __doc__.split("\n\n")[n]
 
 

@@ -43,7 +43,7 @@ def bingham(y: ArrayLike, H: float, rho: float, K: float, tau_y: float, gs: floa
     """The steady Bingham layer's velocity (m/s): the yielded layer's parabola below
     Y = H - h_p, the plug's speed rho gs Y^2 / (2 K) above."""
     Y = H - plug_width(H, rho, tau_y, gs)
-    yy = np.clip(np.asarray(y, float), 0.0, Y)
+    yy: FloatArray = np.clip(np.asarray(y, float), 0.0, Y)
     return rho * gs / K * (Y * yy - 0.5 * yy * yy)
 
 
@@ -70,7 +70,7 @@ def bagnold(
     """Bagnold's profile (m/s) of a mu(I) layer H deep at inclination ``theta``: grain
     diameter d (m), solid fraction phi = bulk density / grain density."""
     It = inertial_number(theta, mu_s, mu_2, I0)
-    depth = np.clip(H - np.asarray(y, float), 0.0, H)
+    depth: FloatArray = np.clip(H - np.asarray(y, float), 0.0, H)
     return (2.0 / 3.0) * It * math.sqrt(phi * g * math.cos(theta)) / d * (H**1.5 - depth**1.5)
 
 

@@ -18,13 +18,15 @@ dt = 10 ms, Courant number about 2) is an extra row. Error measures, lengths in 
 """
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from ..simulation import Simulation
 from ..studies.reference_data import errors_against_vof, height_error_against_martin_moyce, load
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
-from .types import Context, FloatArray
+from .types import Context, FloatArray, Measures
 from .volume import Recorder
 
 G = 9.81
@@ -95,7 +97,9 @@ def vof_front_allowance() -> tuple[float, float]:
     return mm + EXTRA, ko + EXTRA
 
 
-def _run_ar2(h, dt, end, on_output=None):
+def _run_ar2(
+    h: float, dt: float, end: float, on_output: Callable[[Simulation], None] | None = None
+) -> Measures:
     sim = run_example(
         "dam_break.toml",
         [f"grid.spacing={h}", f"time.dt={dt}", f"time.end={end}"],
@@ -257,13 +261,13 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
     return res
 
 
-def _dt_study(end, quick):
+def _dt_study(end: float, quick: bool) -> list[Measures]:
     if quick:
         end = min(end, 0.4)
     return [_run_ar2(0.008, dt, end) for dt in DTS]
 
 
-def _difference(r, base, rms=False):
+def _difference(r: Measures, base: Measures, rms: bool = False) -> list[float]:
     """Largest (or RMS) |r - base| / a of the front (t <= 0.2 s) and height (t <= 0.4 s)."""
     out = []
     for key, until in (("front", 0.2), ("height", 0.4)):
@@ -273,7 +277,9 @@ def _difference(r, base, rms=False):
     return out
 
 
-def _figure_ar2(out, runs, paper, dt_runs):
+def _figure_ar2(
+    out: Path, runs: list[Measures], paper: Measures | None, dt_runs: list[Measures]
+) -> None:
     plt = pyplot()
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))
     s2, s1 = math.sqrt(2 * G / A), math.sqrt(G / A)
@@ -301,7 +307,13 @@ def _figure_ar2(out, runs, paper, dt_runs):
     save(fig, out / "dam_break_ar2.png")
 
 
-def _text_ar2(runs, paper, dt_runs, tol_mm, tol_ko):
+def _text_ar2(
+    runs: list[Measures],
+    paper: Measures | None,
+    dt_runs: list[Measures],
+    tol_mm: float,
+    tol_ko: float,
+) -> str:
     doc = __doc__.split("\n", 3)[3].strip()
     rows = [
         [

@@ -99,7 +99,8 @@ def errors(P: Particles, H: float) -> tuple[float, float]:
 def surface(h: float, top: float, case: Case) -> float:
     """The material's surface: the top of the last particle layer below ``top``."""
     dp = h / case.bodies[0].particles_per_cell
-    return np.floor(top / dp + 1e-9) * dp
+    layers: float = np.floor(top / dp + 1e-9)
+    return layers * dp
 
 
 def run_default(h: float, end: float) -> Measures:
@@ -196,7 +197,7 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
             )
         )
 
-    def node_miss(r, kind):
+    def node_miss(r: Measures, kind: str) -> str:
         rel = (
             f"sqrt(3) h / (2 H) = {r['offset']:.3f} in L2"
             if kind == "L2"

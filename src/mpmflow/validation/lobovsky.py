@@ -32,7 +32,7 @@ import numpy as np
 from ..simulation import Simulation
 from ..studies.reference_data import load
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
-from .types import Context
+from .types import Context, FloatArray
 
 H = 0.3  # m, column height
 G = 9.81
@@ -86,14 +86,14 @@ def assert_probe(sim: Simulation, label: str, quantity: str, position: Sequence[
         )
 
 
-def _running_mean(y, n):
+def _running_mean(y: FloatArray, n: int) -> FloatArray:
     if n <= 1:
         return y
     k = np.ones(n) / n
     return np.convolve(y, k, mode="same")
 
 
-def _peak(t, p):
+def _peak(t: FloatArray, p: FloatArray) -> tuple[float, float]:
     sel = (t >= IMPACT[0]) & (t <= IMPACT[1])
     if not np.any(sel):
         return float("nan"), float("nan")

@@ -107,7 +107,7 @@ class Record:
         return np.array(self.rows, dtype=float).reshape(-1, 8)
 
 
-def _run(example, h, end):
+def _run(example: str, h: float, end: float) -> tuple[Simulation, FloatArray]:
     rec = Record()
     sim = run_example(
         example, [f"grid.spacing={h}", f"time.end={end}", "output.interval=0.01"], on_output=rec

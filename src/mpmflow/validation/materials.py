@@ -36,9 +36,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..simulation import Simulation
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .sloshing import period_and_decay
-from .types import Context, FloatArray
+from .types import Context, FloatArray, Measures
 
 G = 9.81
 
@@ -81,7 +82,7 @@ def run_wave(out: Path, quick: bool = False, context: Context | None = None) -> 
         for nu in (NU, 0.0):
             xc: list[tuple[float, float]] = []
 
-            def centre(sim, xc=xc):
+            def centre(sim: Simulation, xc: list[tuple[float, float]] = xc) -> None:
                 xc.append((sim.time, float(sim.particles.x[:, 0].mean()) - 0.2))
 
             model = (
@@ -192,7 +193,7 @@ class Collapse:
         ]
 
 
-def _collapse(a, quick, width=1.6):
+def _collapse(a: float, quick: bool, width: float = 1.6) -> Measures:
     """The column of aspect ratio a (quick: 6.25 cells across L0, else 12.5) in a tank of
     half-width L0 + width x Lube's run-out + 0.02 m. "walled": the deposit reached a side
     wall, so its run-out is the tank's, not its own (measured: APIC at a = 2 and 7 reach it

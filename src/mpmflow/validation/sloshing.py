@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..simulation import Simulation
 from .common import (
     CaseResult,
     Row,
@@ -96,7 +97,7 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
     for h in spacings:
         xc: list[tuple[float, float]] = []
 
-        def centre(sim, xc=xc):
+        def centre(sim: Simulation, xc: list[tuple[float, float]] = xc) -> None:
             P = sim.particles
             xc.append((sim.time, float(np.sum(P.mass * P.x[:, 0]) / np.sum(P.mass))))
 

@@ -26,7 +26,7 @@ output times (no snapshot files).
 """
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TypedDict
 
@@ -251,11 +251,11 @@ def run(out: Path, quick: bool, context: Context | None) -> CaseResult:
     return res
 
 
-def _photographer(photos):
+def _photographer(photos: list[Photo]) -> Callable[[Simulation], None]:
     """An on_output callback that keeps (t, particle positions, volumes) at the PHOTOS
     times (outputs every 5 ms fall on them; a quarter output of slack for round-off)."""
 
-    def keep(sim):
+    def keep(sim: Simulation) -> None:
         dt = sim.case.output.interval
         if any(abs(sim.time - t) <= 0.25 * dt for t in PHOTOS):
             photos.append((sim.time, sim.particles.x.copy(), sim.particles.volume.copy()))
