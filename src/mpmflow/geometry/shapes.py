@@ -177,7 +177,7 @@ class Polygon(Shape):
         self.a = v
         self.b = np.roll(v, -1, axis=0)
 
-    def _edge_distance(self, x):
+    def _edge_distance(self, x: np.ndarray) -> np.ndarray:
         best = np.full(len(x), np.inf)
         for a, b in zip(self.a, self.b):
             e = b - a
@@ -185,7 +185,7 @@ class Polygon(Shape):
             best = np.minimum(best, np.linalg.norm(x - a - t[:, None] * e, axis=1))
         return best
 
-    def _crossings(self, x):
+    def _crossings(self, x: np.ndarray) -> np.ndarray:
         """Inside by the crossing number: a ray to +x crosses an odd number of edges (the
         half-open rule counts a vertex on the ray once)."""
         inside = np.zeros(len(x), dtype=bool)
