@@ -16,16 +16,16 @@ except ImportError as err:  # a source tree without the install's build
         "repository (needs a C++17 compiler with OpenMP and CMake >= 3.18)."
     ) from err
 
-CHUNKS = _core.CHUNKS
-POOL = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
+CHUNKS: int = _core.CHUNKS
+POOL: int = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
 
 
-def max_threads():
+def max_threads() -> int:
     """The threads the core's parallel loops use."""
-    return _core.max_threads()
+    return int(_core.max_threads())
 
 
-def set_threads(n):
+def set_threads(n: int) -> None:
     """Run the core's parallel loops on n threads."""
     _core.set_threads(int(n))
 
