@@ -16,7 +16,18 @@ are off by about 1.5 S (measured on a 0.1 m block at S = 0.06, 0.25 and 1: 8%, 3
   sets, not at |tau| / max_viscosity. Its yielded flow is not concerned.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
+
+from ..particles import Particles
+
+if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports materials)
+    from ..case import Case
+    from ..case.sections import Material
 
 CONDITION = 1e10  # eta dt / (rho h^2) above which the viscous solve has no digits left
 REFUSE = 1.0  # S above which a Newtonian material's motion is mostly the split's error
@@ -25,7 +36,7 @@ ERROR_PER_S = 1.5  # relative error of the creep speed per unit of S (measured, 
 SPLIT_SPEED = 0.6  # the split's creep speed, in units of |g| dt (measured, see above)
 
 
-def depth(particles, gravity):
+def depth(particles: Particles, gravity: ArrayLike) -> float:
     """The material's extent (m) along gravity: the particles' spread along g plus one
     particle's size (their volume's D-th root)."""
     g = np.asarray(gravity, dtype=float)
@@ -33,11 +44,12 @@ def depth(particles, gravity):
     if norm == 0.0 or particles.count == 0:
         return 0.0
     along = particles.x @ (g / norm)
-    size = float(np.mean(particles.volume)) ** (1.0 / particles.x.shape[1])
+    # (float ** float is typed Any: a negative base would give a complex; volumes are > 0)
+    size: float = float(np.mean(particles.volume)) ** (1.0 / particles.x.shape[1])
     return float(along.max() - along.min()) + size
 
 
-def stiffest(m):
+def stiffest(m: Material) -> tuple[float, str | None]:
     """(eta, key): the largest viscosity the model takes (Pa s) and the key that sets it;
     (0, None) for inviscid water."""
     if m.model == "newtonian":
@@ -47,7 +59,7 @@ def stiffest(m):
     return 0.0, None
 
 
-def check(case, particles, dt):
+def check(case: Case, particles: Particles, dt: float) -> list[str]:
     """The notices of a viscous case (list of strings); raises ValueError with the message
     for a Newtonian material too stiff for time step ``dt`` (s). ``particles``: the
     particles at the start."""

@@ -11,6 +11,7 @@ class Scheme(Protocol):
 
     SUPPORTS: ClassVar[frozenset[str]]  # the FEATURES it supports
     last_unknowns: int  # the size of the last step's system (0: none)
+    particles: Any  # the Particles it advances (the run's setup may put a subset in)
 
     def __init__(self, case: Any, grid: Any, particles: Any) -> None: ...
 

@@ -41,7 +41,7 @@ from ..diagnostics.measures import (
 from ..errors import SimulationError
 from ..fallbacks import Fallbacks
 from ..interrupts import StopNow
-from ..output.folder import API_HINTS, RunFolder
+from ..output.folder import API_HINTS, Hints, Mode, RunFolder
 from ..output.summary import write_summary
 from ..output.timeseries import COLUMNS
 from ..threads import ThreadGovernor
@@ -280,7 +280,7 @@ class Simulation:
         it holds another run's outputs and ``overwrite`` is not set."""
         if self.out_dir is None or self._folder is not None:
             return
-        mode = "restart" if self.resumed_from else "overwrite" if self.overwrite else "new"
+        mode: Mode = "restart" if self.resumed_from else "overwrite" if self.overwrite else "new"
         self._folder = RunFolder.claim(self.out_dir, mode, hints)
         self.notices[:0] = self._folder.notes
 
