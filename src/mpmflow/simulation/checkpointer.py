@@ -11,6 +11,7 @@ their names.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,13 +20,16 @@ import numpy as np
 
 from .. import checkpoint
 from .._version import __version__
-from ..case import resolved, revalidate
+from ..case import Case, resolved, revalidate
 from ..errors import CaseError
 from ..fallbacks import Fallbacks
 from ..particles import Particles
 
 if TYPE_CHECKING:
     from .loop import Simulation
+
+# Simulation's progress callable(t, step, end)
+Progress = Callable[[float, int, float], None] | None
 
 # what a checkpoint's meta must hold
 META = (
@@ -48,7 +52,7 @@ META = (
 class Checkpointer:
     """The periodic checkpoints (not at time.end: the end of the run writes its own)."""
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         if sim.out_dir is not None and sim.time < sim.case.time.end:
             write(sim)
 
@@ -92,10 +96,12 @@ def write(sim: Simulation) -> Path:
     return sim.last_checkpoint
 
 
-def resume_latest(cls, case, out_dir, progress):
+def resume_latest(
+    cls: type[Simulation], case: Case, out_dir: str | Path, progress: Progress
+) -> Simulation:
     """The run of ``out_dir`` continued from its latest readable checkpoint."""
     checkpoint.latest(out_dir)  # CaseError when there is none
-    damaged = []
+    damaged: list[checkpoint.CheckpointError] = []
     for path in reversed(checkpoint.checkpoints(out_dir)):
         try:
             sim = resume_from(cls, case, out_dir, path, progress)
@@ -118,7 +124,9 @@ def resume_latest(cls, case, out_dir, progress):
     )
 
 
-def resume_from(cls, case, out_dir, path, progress):
+def resume_from(
+    cls: type[Simulation], case: Case, out_dir: str | Path, path: str | Path, progress: Progress
+) -> Simulation:
     """The run of ``out_dir`` continued from the checkpoint ``path``: a new ``cls`` (a
     Simulation) with the checkpoint's particles, scheme state, counters and schedules."""
     arrays, meta = checkpoint.read(path)

@@ -130,3 +130,6 @@ class Snapshots:
     def sync(self) -> None:
         if self.file is not None:
             self.file.sync()
+
+
+Builtin = TimeSeries | Probes | Snapshots  # the built-in writers
