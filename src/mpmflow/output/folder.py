@@ -95,7 +95,7 @@ def leftovers(folder: str | Path) -> list[Path]:
     return sorted(p for p in Path(folder).iterdir() if _LEFTOVER.match(p.name))
 
 
-def holder(folder: str | Path) -> dict[str, Any]:
+def holder(folder: str | Path) -> dict[str, Any]:  # JSON: what the holder wrote
     """What the lock file says about the run holding it (dict, possibly empty)."""
     for _ in range(20):  # the holder writes it right after locking: a moment to appear
         try:

@@ -42,7 +42,7 @@ def _adaptive(sim: Simulation) -> dict[str, dict[str, float | None]]:
     }
 
 
-def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:
+def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JSON
     """The summary dict of ``sim`` as it stands, with its ``status`` and ``message``."""
     P, c, case, grid = sim.particles, sim.counters, sim.case, sim.grid
     bins = sim._bins()
