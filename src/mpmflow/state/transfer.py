@@ -5,6 +5,7 @@ binning, cut_cells, strips.hpp)."""
 import numpy as np
 
 from .. import _core
+from ..grid import Grid
 from . import arrays
 
 # (src/core/transfer.*, corrector.*, volume_correction.*, strips.hpp.) ``grid`` is a
@@ -92,7 +93,14 @@ def grid_to_particles(
     )
 
 
-def pressure_noise(grid, x, mass, pressure, work_m=None, work_mp=None):
+def pressure_noise(
+    grid: Grid,
+    x: np.ndarray,
+    mass: np.ndarray,
+    pressure: np.ndarray,
+    work_m: np.ndarray | None = None,
+    work_mp: np.ndarray | None = None,
+) -> float:
     """RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa);
     ``work_m``, ``work_mp``: scratch of one value per node (allocated if not given)."""
     if work_m is None:
