@@ -6,7 +6,7 @@ each and writes, or compares with, their particle states (every array of every p
     python scripts/compare_states.py --compare before.npz    # after it: exit 1 if any differ
 
 Runs in memory (no output folder), on the threads MPMFLOW_THREADS gives (the step is
-bit-identical on any thread count, tests/test_threads.py). A few seconds.
+bit-identical on any thread count, tests/state/test_threads.py). A few seconds.
 """
 
 import argparse

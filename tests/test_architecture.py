@@ -37,7 +37,7 @@ def test_boundaries_are_decided_in_one_package():
     and the obstacles' node distances are asked for in boundaries/ only (case/ defines the
     conditions; state/ is the door to the core's kernels)."""
     calls = re.compile(
-        r"\b(wall_pairs|apply_walls|no_slip_sides|uniform_walls|"
+        r"\b(wall_pairs|apply_walls|no_slip_sides|uniform_walls|outlet_sides|"
         r"wall_conditions|node_distance|cut_cell_tensors)\("
     )
     allowed = ("boundaries/", "case/", "state/")
@@ -52,3 +52,17 @@ def test_boundaries_are_decided_in_one_package():
 def test_no_module_is_over_500_lines():
     long = {_rel(p): n for p in MODULES if (n := len(p.read_text().splitlines())) > 500}
     assert long == {}
+
+
+TESTS = ROOT / "tests"
+# tests of the project as a whole (its layout, its documents, its examples, its command
+# line) stand at the top; every other test lives in the folder of the package it tests
+PROJECT_TESTS = {"test_architecture.py", "test_docs.py", "test_examples.py", "test_cli.py"}
+
+
+def test_tests_mirror_the_packages():
+    packages = {p.name for p in SRC.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    folders = {p.parent.relative_to(TESTS).as_posix() for p in TESTS.rglob("test_*.py")}
+    top = {p.name for p in TESTS.glob("test_*.py")}
+    assert top == PROJECT_TESTS
+    assert folders - {"."} <= packages, sorted(folders - {"."} - packages)

@@ -579,9 +579,10 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
     if (status != OK) return status;
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
   }
-  report.moved += grid_to_particles<D>(
-      grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new, p_node_.view(nn), O.dt,
-      O.flip, View<const double>(upper_.data(), {D}), margin_, faces, P.affine);
+  report.moved +=
+      grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new,
+                           p_node_.view(nn), O.dt, O.flip, View<const double>(upper_.data(), {D}),
+                           margin_, faces, P.affine, Outlets{T_.outlet, P.mass, P.volume});
   if (obstacles_) {
     report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
     // a particle pushed out of an obstacle near a periodic end may cross it

@@ -112,10 +112,10 @@ struct Options {
 // The particles: views of the caller's arrays (n particles).
 template <int D>
 struct Particles {
-  View<double, 2> x;  // n x D (m)
-  View<double, 2> v;  // n x D (m/s)
-  View<const double> mass;
-  View<const double> volume;
+  View<double, 2> x;    // n x D (m)
+  View<double, 2> v;    // n x D (m/s)
+  View<double> mass;    // kg; written only where an outlet retires a particle (0)
+  View<double> volume;  // m^3; likewise
   View<double> pressure;
   // n x D x D (1/s): each particle's affine velocity matrix C_p with APIC transfers (empty:
   // FLIP/PIC, Options::flip)
@@ -128,7 +128,8 @@ struct Particles {
 // flag per pair). Obstacles (empty phi: none):
 // phi at the nodes, each cell's fluid fraction and static slot (0: whole cell, s >= 1: a
 // cut cell's, -1: solid), the static element integrals by slot, the cut cells' face terms,
-// the obstacle nodes with their normals and no-slip flags. viscous_T: the full cell's
+// the obstacle nodes with their normals and no-slip flags; the outlet sides (they have no
+// wall pairs). viscous_T: the full cell's
 // gradient products (viscous materials; empty otherwise).
 template <int D>
 struct GridTables {
@@ -146,6 +147,9 @@ struct GridTables {
   View<const double, 2> onormal;  // (m, D)
   View<const bool> ono_slip;
   View<const double, 4> viscous_T;
+  // outlets: one flag per side (x_min, x_max, y_min, ...; empty: none), the sides the
+  // material leaves through (grid_to_particles retires what crosses them)
+  View<const bool> outlet;
 };
 
 template <int D>

@@ -242,7 +242,7 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
                View<double> pressure, View<const double, 2> v_old, View<const double, 2> v_new,
                View<const double> p_node, double dt, double flip, View<const double> upper,
                double margin, const std::array<View<const double>, D>& faces,
-               View<double, 3> affine) {
+               View<double, 3> affine, const Outlets& outlets) {
   constexpr int NC = Grid<D>::NC;
   std::array<double, NC> w;
   std::array<double, D> normal, tangent;
@@ -251,6 +251,7 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
   const bool apic = affine.size() > 0;
   index_t moved = 0;
   for (index_t p = lo; p < hi; ++p) {
+    if (outlets.any() && outlets.mass(p) == 0.0) continue;  // left through an outlet
     const index_t base = g.weights_at(&x(p, 0), w.data());
     std::array<double, D> pic{}, dv{}, disp{};
     double pp = 0.0;
@@ -294,7 +295,19 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
     }
     pressure(p) = pp;
     if (g.any_periodic) wrap_periodic<D>(g, x, p);
-    if (put_inside<D>(x, v, p, upper, margin)) moved += 1;
+    if (outlets.any() && beyond_outlet<D>(View<const double, 2>(x), p, upper, outlets.side)) {
+      outlets.mass(p) = 0.0;
+      outlets.volume(p) = 0.0;
+      pressure(p) = 0.0;
+      for (int k = 0; k < D; ++k) {
+        v(p, k) = 0.0;
+        if (apic)
+          for (int j = 0; j < D; ++j) affine(p, k, j) = 0.0;
+      }
+      put_inside<D>(x, v, p, upper, margin);
+    } else if (put_inside<D>(x, v, p, upper, margin)) {
+      moved += 1;
+    }
   }
   return moved;
 }
@@ -306,10 +319,11 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
                           View<double> pressure, View<const double, 2> v_old,
                           View<const double, 2> v_new, View<const double> p_node, double dt,
                           double flip, View<const double> upper, double margin,
-                          const std::array<View<const double>, D>& faces, View<double, 3> affine) {
+                          const std::array<View<const double>, D>& faces, View<double, 3> affine,
+                          const Outlets& outlets) {
   return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
     return gather<D>(lo, hi, g, x, v, pressure, v_old, v_new, p_node, dt, flip, upper, margin,
-                     faces, affine);
+                     faces, affine, outlets);
   });
 }
 
@@ -324,7 +338,7 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
   template index_t grid_to_particles<D>(                                                           \
       const Grid<D>&, View<double, 2>, View<double, 2>, View<double>, View<const double, 2>,       \
       View<const double, 2>, View<const double>, double, double, View<const double>, double,       \
-      const std::array<View<const double>, D>&, View<double, 3>);
+      const std::array<View<const double>, D>&, View<double, 3>, const Outlets&);
 MPMFLOW_TRANSFER(2)
 MPMFLOW_TRANSFER(3)
 #undef MPMFLOW_TRANSFER

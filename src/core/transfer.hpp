@@ -184,6 +184,29 @@ inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<con
   return out;
 }
 
+// Outlets, the open sides of the domain (domain.walls = "outlet"): side has one flag per side
+// in the order x_min, x_max, y_min, ... (empty: none). A particle that crosses an outlet side
+// leaves the domain: it is retired in place (mass, volume, velocity, pressure and affine
+// matrix set to 0, so that it carries nothing to the grid; its position put back inside the
+// box so that binning stays in range) and skipped by later steps; Python removes the retired
+// particles (mass 0) between chunks, as it owns the particle arrays' sizes.
+struct Outlets {
+  View<const bool> side;
+  View<double> mass, volume;
+  bool any() const { return side.size() > 0; }
+};
+
+// True when particle p lies beyond an outlet side of the box [0, upper].
+template <int D>
+inline bool beyond_outlet(View<const double, 2> x, index_t p, View<const double> upper,
+                          View<const bool> side) {
+  for (int k = 0; k < D; ++k) {
+    if (x(p, k) < 0.0 && side(2 * k)) return true;
+    if (x(p, k) > upper(k) && side(2 * k + 1)) return true;
+  }
+  return false;
+}
+
 // RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa).
 // The smoothed field is the particle-to-grid sum of m_p p_p divided by the nodal mass,
 // interpolated back: a smooth pressure field is kept (up to interpolation), a checkerboard
@@ -217,7 +240,9 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
 // update with v^{t+1} evaluated at x_p^t plus the volume correction's displacement (faces:
 // one array per axis, see face_displacement; empty arrays: none), pressure; then particles
 // that crossed a periodic axis's end are wrapped round it (wrap_periodic) and those that
-// left the box [0, upper] are put back inside (put_inside). Returns how many were put back.
+// left the box [0, upper] are put back inside (put_inside), or retired where they crossed an
+// outlet side (Outlets; retired particles, mass 0, are skipped). Returns how many were put
+// back.
 // With affine non-empty (n x D x D: APIC) the velocity is instead the PIC velocity
 // sum_i N_i(x_p) v_i^{t+1} and C_p = sum_i v_i^{t+1} (grad N_i(x_p))^T, the gradient of the
 // same interpolated field (for multilinear N_i this is B_p D_p^-1 of Jiang et al. 2015, exact
@@ -228,6 +253,6 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
                           View<const double, 2> v_new, View<const double> p_node, double dt,
                           double flip, View<const double> upper, double margin,
                           const std::array<View<const double>, D>& faces,
-                          View<double, 3> affine = {});
+                          View<double, 3> affine = {}, const Outlets& outlets = {});
 
 }  // namespace mpmflow

@@ -9,23 +9,24 @@ import numpy as np
 from . import state
 from .grid import Grid
 from .particles import Particles
+from .state.arrays import Floats, Ints
 
 
 @dataclass
 class CellBins:
     """Particles grouped by cell: cell ``c`` holds ``order[start[c]:start[c+1]]``."""
 
-    cell: np.ndarray  # (n,) flat cell index of each particle
-    start: np.ndarray  # (ncells+1,)
-    order: np.ndarray  # (n,)
-    theta: np.ndarray  # (ncells,) particle volume / cell volume
+    cell: Ints  # (n,) flat cell index of each particle
+    start: Ints  # (ncells+1,)
+    order: Ints  # (n,)
+    theta: Floats  # (ncells,) particle volume / cell volume
 
-    def counts(self) -> np.ndarray:
+    def counts(self) -> Ints:
         return np.diff(self.start)
 
 
 def bin_particles(
-    grid: Grid, particles: Particles, bins: CellBins | None = None, open_: np.ndarray | None = None
+    grid: Grid, particles: Particles, bins: CellBins | None = None, open_: Floats | None = None
 ) -> CellBins:
     """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell
     (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.boundaries.obstacles``)."""

@@ -5,9 +5,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:  # the case makes its grid (case.model imports this module)
+    from .case import Case
 
 
 @dataclass(frozen=True)
@@ -21,7 +25,7 @@ class Grid:
     periodic: tuple[bool, ...] = ()
 
     @classmethod
-    def of_case(cls, case: Any) -> Grid:
+    def of_case(cls, case: Case) -> Grid:
         """The grid of a validated case: its domain, spacing and periodic axes."""
         return cls.covering(case.domain.size, case.grid.spacing, periodic=case.domain.periodic)
 
@@ -69,18 +73,18 @@ class Grid:
         return math.prod(self.nodes)
 
     @property
-    def size(self) -> np.ndarray:
+    def size(self) -> NDArray[np.float64]:
         return np.array(self.cells, dtype=float) * self.spacing
 
     @property
     def cell_volume(self) -> float:
         return self.spacing**self.dim
 
-    def cell_centres(self, axis: int) -> np.ndarray:
+    def cell_centres(self, axis: int) -> NDArray[np.float64]:
         """Coordinates (m) of the cell centres along one axis."""
-        return (np.arange(self.cells[axis]) + 0.5) * self.spacing
+        return (np.arange(self.cells[axis], dtype=np.float64) + 0.5) * self.spacing
 
-    def node_coordinates(self) -> np.ndarray:
+    def node_coordinates(self) -> NDArray[np.float64]:
         """(nnodes, dim) coordinates of the nodes in flat order (x fastest)."""
         axes = [np.arange(n) * self.spacing for n in self.nodes]
         mesh = np.meshgrid(*axes, indexing="ij")

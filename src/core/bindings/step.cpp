@@ -25,7 +25,8 @@ namespace {
 
 template <int D>
 struct BoundState {
-  std::vector<nb::object> keep;  // the arrays the tables view
+  std::vector<nb::object> keep;      // the arrays the tables view
+  std::array<bool, 2 * D> outlet{};  // the outlet sides the tables view
   std::unique_ptr<State<D>> state;
 };
 
@@ -89,11 +90,10 @@ using Affine = std::optional<Array<double>>;
 
 // The particles; affine (n x D x D): APIC's matrices, None: FLIP/PIC transfers.
 template <int D>
-Particles<D> particles(Array<double> x, Array<double> v, Array<const double> mass,
-                       Array<const double> volume, Array<double> pressure,
-                       const Affine& affine = std::nullopt) {
-  Particles<D> P{view<double, 2>(x, "x"), view<double, 2>(v, "v"), view<const double>(mass),
-                 view<const double>(volume), view<double>(pressure)};
+Particles<D> particles(Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+                       Array<double> pressure, const Affine& affine = std::nullopt) {
+  Particles<D> P{view<double, 2>(x, "x"), view<double, 2>(v, "v"), view<double>(mass, "mass"),
+                 view<double>(volume, "volume"), view<double>(pressure)};
   const index_t n = P.x.extent(0);
   if (P.x.extent(1) != D || P.v.extent(0) != n || P.v.extent(1) != D || P.mass.size() != n ||
       P.volume.size() != n || P.pressure.size() != n)
@@ -107,9 +107,9 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<const double> mas
 }
 
 // the particle arguments: those a step writes must not be silently copied
-#define MPMFLOW_PARTICLE_ARGS                                                             \
-  nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("mass"), nb::arg("volume"), \
-      nb::arg("pressure").noconvert()
+#define MPMFLOW_PARTICLE_ARGS                                                      \
+  nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("mass").noconvert(), \
+      nb::arg("volume").noconvert(), nb::arg("pressure").noconvert()
 // the affine matrices (APIC), last, optional: None runs FLIP/PIC
 #define MPMFLOW_AFFINE_ARG nb::arg("affine").noconvert().none() = nb::none()
 
@@ -156,8 +156,8 @@ void bind_dim(nb::module_& m) {
              nb::object wall_sign, nb::object wall_no_slip, nb::object phi, nb::object open,
              nb::object static_slot, nb::object K, nb::object C, nb::object V, nb::object F,
              nb::object Wf, nb::object onode, nb::object onormal, nb::object ono_slip,
-             nb::object viscous_T, bool volume_correction, bool viscous,
-             std::vector<bool> periodic) {
+             nb::object viscous_T, bool volume_correction, bool viscous, std::vector<bool> periodic,
+             std::vector<bool> outlet) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -179,6 +179,10 @@ void bind_dim(nb::module_& m) {
             T.onormal = table<double, 2>(onormal, "onormal", keep);
             T.ono_slip = table<bool, 1>(ono_slip, "ono_slip", keep);
             T.viscous_T = table<double, 4>(viscous_T, "viscous_T", keep);
+            if (!outlet.empty() && outlet.size() != 2 * D)
+              throw std::invalid_argument("State: outlet needs one flag per side");
+            for (std::size_t s = 0; s < outlet.size(); ++s) self->outlet[s] = outlet[s];
+            if (!outlet.empty()) T.outlet = View<const bool>(self->outlet.data(), {2 * D});
             self->state = std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume,
                                                      upper, margin, T, volume_correction, viscous);
           },
@@ -186,9 +190,9 @@ void bind_dim(nb::module_& m) {
           "tables.")
       .def(
           "advance",
-          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-             Array<const double> volume, Array<double> pressure, const O& opt, index_t first,
-             index_t nsteps, Report& report, const Affine& affine) {
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, index_t first, index_t nsteps, Report& report,
+             const Affine& affine) {
             auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return run_chunk([&](const auto& between) {
               return self.state->advance(P, opt, first, nsteps, report, between);
@@ -199,9 +203,9 @@ void bind_dim(nb::module_& m) {
           "nsteps steps; returns the steps done (fewer: report.status says why).")
       .def(
           "advance_span",
-          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-             Array<const double> volume, Array<double> pressure, const O& opt, double span,
-             index_t max_steps, Report& report, const Affine& affine) {
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, double span, index_t max_steps, Report& report,
+             const Affine& affine) {
             auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return run_chunk([&](const auto& between) {
               return self.state->advance_span(P, opt, span, max_steps, report, between);
@@ -215,9 +219,8 @@ void bind_dim(nb::module_& m) {
           [](S& self, double t) { self.state->set_since_volume(t); })
       .def(
           "predict",
-          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-             Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
-             const Affine& affine) {
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, bool correct, const Affine& affine) {
             auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return self.state->predict(P, opt, correct);
           },
@@ -238,9 +241,9 @@ void bind_dim(nb::module_& m) {
            })
       .def(
           "finish",
-          [](S& self, Array<double> x, Array<double> v, Array<const double> mass,
-             Array<const double> volume, Array<double> pressure, const O& opt, bool correct,
-             Report& report, const Affine& affine) {
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, bool correct, Report& report,
+             const Affine& affine) {
             auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return self.state->finish(P, opt, correct, report);
           },
@@ -253,8 +256,7 @@ void bind_dim(nb::module_& m) {
                    })
       .def_prop_ro("p_node", [](nb::handle h) { return out(nb::cast<S&>(h).state->p_node(), h); })
       .def_prop_ro("v_new", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_new(), h); })
-      .def_prop_ro("contact",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->contact(), h); })
+      .def_prop_ro("contact", [](nb::handle h) { return out(nb::cast<S&>(h).state->contact(), h); })
       .def_prop_ro("eta", [](nb::handle h) { return out(nb::cast<S&>(h).state->eta(), h); })
       .def_prop_ro("ocontact",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->ocontact(), h); })

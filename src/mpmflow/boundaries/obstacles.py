@@ -23,15 +23,21 @@ Particles that end a step inside a solid are moved out along grad phi
 (``state.push_out``).
 """
 
-from collections.abc import Callable
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import state
 from ..geometry.shapes import Shape
 from ..grid import Grid
+from ..state.arrays import Bools, Floats, Ints
+
+if TYPE_CHECKING:  # the case builds its obstacles' shapes with geometry/, not with this module
+    from ..case import Case
 
 SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h / 8
 
@@ -40,32 +46,31 @@ SUBCELLS = 8  # sub-cells per axis of a cut cell: the face is placed to within h
 class Tables:
     """The obstacles' fixed tables on the grid (empty arrays where there are none)."""
 
-    phi: np.ndarray  # (nnodes,) signed distance at the nodes (m); empty: no obstacle
-    open: np.ndarray  # (ncells,) fluid fraction of each cell
-    static_slot: np.ndarray  # (ncells,) 0 whole cell, s >= 1 cut cell's slot, -1 solid
-    K: np.ndarray  # (1 + ncut, 2^D, 2^D) element integrals by static slot
-    C: np.ndarray  # (1 + ncut, 2^D, 2^D, D)
-    V: np.ndarray  # (1 + ncut, 2^D)
-    F: np.ndarray  # (1 + ncut, 2^D, 2^D, D) obstacle face term (slot 0: zero)
-    Wf: np.ndarray  # (1 + ncut, 2D, 2^D, 2^D) fluid part of the cell faces (wall terms)
-    node: np.ndarray  # (m,) obstacle nodes
-    normal: np.ndarray  # (m, D) their unit normals, into the solid
-    no_slip: np.ndarray  # (m,) whether the node's obstacle is no-slip
+    phi: Floats  # (nnodes,) signed distance at the nodes (m); empty: no obstacle
+    open: Floats  # (ncells,) fluid fraction of each cell
+    static_slot: Ints  # (ncells,) 0 whole cell, s >= 1 cut cell's slot, -1 solid
+    K: Floats  # (1 + ncut, 2^D, 2^D) element integrals by static slot
+    C: Floats  # (1 + ncut, 2^D, 2^D, D)
+    V: Floats  # (1 + ncut, 2^D)
+    F: Floats  # (1 + ncut, 2^D, 2^D, D) obstacle face term (slot 0: zero)
+    Wf: Floats  # (1 + ncut, 2D, 2^D, 2^D) fluid part of the cell faces (wall terms)
+    node: Ints  # (m,) obstacle nodes
+    normal: Floats  # (m, D) their unit normals, into the solid
+    no_slip: Bools  # (m,) whether the node's obstacle is no-slip
     solids: list[Shape] = field(default_factory=list)  # the obstacles' shapes
 
-    def distance(self, points: np.ndarray) -> np.ndarray:
+    def distance(self, points: Floats) -> Floats:
         """The signed distance (m) of points to the nearest obstacle, negative inside."""
-        return np.min([s.signed_distance(points) for s in self.solids], axis=0)
+        nearest: Floats = np.min([s.signed_distance(points) for s in self.solids], axis=0)
+        return nearest
 
     @property
     def present(self) -> bool:
-        return self.phi.shape[0] > 0
+        return bool(self.phi.shape[0] > 0)
 
 
 def build(
-    grid: Grid,
-    phi: np.ndarray | None = None,
-    no_slip_of: Callable[[np.ndarray], np.ndarray] | None = None,
+    grid: Grid, phi: Floats | None = None, no_slip_of: Callable[[Ints], Bools] | None = None
 ) -> Tables:
     """The tables for signed distances ``phi`` at the nodes (None: no obstacle).
     ``no_slip_of(node_indices) -> bool array`` says which obstacle nodes are no-slip."""
@@ -151,12 +156,12 @@ def build(
     )
 
 
-def _node_strides(cells):
+def _node_strides(cells: Sequence[int]) -> Ints:
     """Flat node strides ns_k (axis 0 fastest): 1, cells[0] + 1, (cells[0] + 1)(cells[1] + 1)."""
     return np.cumprod([1] + [int(c) + 1 for c in cells[:-1]]).astype(np.int64)
 
 
-def _corner_offsets(ns):
+def _corner_offsets(ns: Ints) -> Ints:
     """Flat offset of each of the 2^D corners of a cell from its first node (corner a is
     offset (a >> k) & 1 along axis k)."""
     return np.array(
@@ -165,7 +170,7 @@ def _corner_offsets(ns):
     )
 
 
-def _first_nodes(cells_flat, cells, ns):
+def _first_nodes(cells_flat: Ints, cells: Sequence[int], ns: Ints) -> Ints:
     """The first node of each cell (flat indices, axis 0 fastest)."""
     first = np.zeros(cells_flat.size, dtype=np.int64)
     r = cells_flat.copy()
@@ -175,7 +180,7 @@ def _first_nodes(cells_flat, cells, ns):
     return first
 
 
-def _cell_corner_phi(grid, phi):
+def _cell_corner_phi(grid: Grid, phi: Floats) -> Floats:
     """phi at the 2^D corners of every cell, (ncells, 2^D)."""
     cells = tuple(int(c) for c in grid.cells)
     ns = _node_strides(cells)
@@ -186,24 +191,24 @@ def _cell_corner_phi(grid, phi):
     return out
 
 
-def _not_first(shape, axis):
+def _not_first(shape: tuple[int, ...], axis: int) -> Bools:
     """Mask, False at index 0 along ``axis`` (arrays indexed last axis first)."""
     m = np.ones(shape, dtype=bool)
-    idx = [slice(None)] * len(shape)
+    idx: list[slice | int] = [slice(None)] * len(shape)
     idx[axis] = 0
     m[tuple(idx)] = False
     return m
 
 
-def _not_last(shape, axis):
+def _not_last(shape: tuple[int, ...], axis: int) -> Bools:
     m = np.ones(shape, dtype=bool)
-    idx = [slice(None)] * len(shape)
+    idx: list[slice | int] = [slice(None)] * len(shape)
     idx[axis] = -1
     m[tuple(idx)] = False
     return m
 
 
-def in_solid_cells(tables: Tables, grid: Grid, x: np.ndarray) -> np.ndarray:
+def in_solid_cells(tables: Tables, grid: Grid, x: Floats) -> Bools:
     """Which of the points ``x`` (n, D) lie in cells the grid takes as wholly solid (fluid
     fraction 0). Where an obstacle touches two or three walls, the wall shift
     (``node_distance``) closes the corner between it and the walls within the first cell, so
@@ -218,7 +223,7 @@ def in_solid_cells(tables: Tables, grid: Grid, x: np.ndarray) -> np.ndarray:
     return tables.open[ci @ strides] <= 0.0
 
 
-def of_case(case: Any, grid: Grid) -> Tables:
+def of_case(case: Case, grid: Grid) -> Tables:
     """The tables of the case's ``[[obstacles]]`` (none: empty tables)."""
     specs = getattr(case, "obstacles", None) or []
     if not specs:
@@ -238,7 +243,7 @@ def of_case(case: Any, grid: Grid) -> Tables:
     return tables
 
 
-def node_distance(grid: Grid, shape: Shape, x: np.ndarray) -> np.ndarray:
+def node_distance(grid: Grid, shape: Shape, x: Floats) -> Floats:
     """The shape's signed distance at the nodes ``x``, taken one cell in from a domain wall
     the shape touches or crosses: there the shape's own face on the wall would put phi = 0
     at every wall node under it, and the interpolated surface would open a wedge of fluid

@@ -2,15 +2,21 @@
 outward sign: the wall's normal) and the wall's condition (slip or no-slip) from the case's
 ``domain.walls``. A periodic axis has no walls. The core applies them as contact conditions
 (src/core/walls.hpp): a wall node holds the material where it presses into the wall and
-lets it go where holding it would need suction."""
+lets it go where holding it would need suction. An outlet side is no wall (outlets.py)."""
+
+from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import state
 from ..grid import Grid
+from ..state.arrays import Bools, Floats, Ints
+
+if TYPE_CHECKING:  # the case asks this package for its boundaries
+    from ..case import Case
 
 
 @dataclass(frozen=True)
@@ -19,23 +25,25 @@ class Walls:
     ...; the lower wall (sign -1) before the upper. A node on an edge or corner has a pair
     per wall it lies on."""
 
-    node: np.ndarray  # (n,) int64: the node's index
-    axis: np.ndarray  # (n,) int64: the axis the wall is normal to
-    sign: np.ndarray  # (n,) float: -1 at the lower wall (at 0), +1 at the upper
-    no_slip: np.ndarray  # (n,) bool: the wall's condition is no-slip
+    node: Ints  # (n,) int64: the node's index
+    axis: Ints  # (n,) int64: the axis the wall is normal to
+    sign: Floats  # (n,) float: -1 at the lower wall (at 0), +1 at the upper
+    no_slip: Bools  # (n,) bool: the wall's condition is no-slip
 
-    def as_tuple(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def as_tuple(self) -> tuple[Ints, Ints, Floats, Bools]:
         """(node, axis, sign, no_slip), as the core's state takes them."""
         return self.node, self.axis, self.sign, self.no_slip
 
 
-def side_conditions(case: Any) -> np.ndarray:
+def side_conditions(case: Case) -> Bools:
     """No-slip flags of the domain's sides in the order x_min, x_max, y_min, ... (bool)."""
     return np.array(case.domain.no_slip_sides(), dtype=np.bool_)
 
 
-def of_case(case: Any, grid: Grid) -> Walls:
-    """The walls of the case's domain on its grid."""
+def of_case(case: Case, grid: Grid) -> Walls:
+    """The walls of the case's domain on its grid (an outlet side has none: its nodes are
+    never held; ``boundaries.outlets``)."""
     node, axis, sign = state.wall_pairs(tuple(int(c) for c in grid.cells), grid.periodic)
-    sides = side_conditions(case)
-    return Walls(node, axis, sign, sides[2 * axis + (sign > 0)])
+    side = 2 * axis + (sign > 0)
+    wall = ~np.array(case.domain.outlet_sides(), dtype=np.bool_)[side]
+    return Walls(node[wall], axis[wall], sign[wall], side_conditions(case)[side[wall]])

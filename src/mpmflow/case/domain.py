@@ -9,7 +9,8 @@ from typing_extensions import Self
 
 from .sections import Section
 
-WALL_CONDITIONS = ("slip", "no_slip")
+WALL_CONDITIONS = ("slip", "no_slip", "outlet")
+Condition = Literal["slip", "no_slip", "outlet"]
 AXES = "xyz"
 SIDES = ("min", "max")  # the lower wall (at 0) and the upper (at domain.size)
 
@@ -29,10 +30,10 @@ class Domain(Section):
         min_length=2,
         max_length=3,
     )
-    walls: Literal["slip", "no_slip"] | dict[str, Literal["slip", "no_slip"]] = Field(
+    walls: Condition | dict[str, Condition] = Field(
         "slip",
-        description='Wall condition of the domain boundaries, "slip" or '
-        '"no_slip": one for every wall (walls = "no_slip"), or a table by axis and '
+        description='Condition of the domain boundaries, "slip", "no_slip" or '
+        '"outlet": one for every side (walls = "no_slip"), or a table by axis and '
         "side: keys x, y (and z in 3D) set both walls across that axis, x_min, x_max, y_min, "
         "... one wall (min: at 0, max: at domain.size); a side's key overrides its axis's, "
         "and a wall left out is slip. E.g. a rough floor between smooth side walls in 3D: "
@@ -44,7 +45,12 @@ class Domain(Section):
         "presses against it and lets go where holding it would need suction while it "
         "moves away, so water falls from a ceiling and leaves a wall freely. no_slip also "
         "stops tangential motion where the wall holds (at an edge between a no-slip and a "
-        "slip wall, the no-slip wall's hold).",
+        "slip wall, the no-slip wall's hold). An outlet is an open side, not a wall: the "
+        "velocity there is free, the pressure takes the natural condition of the "
+        "projection's weak form (no normal gradient: the flow leaves as if the domain went "
+        "on), and the material that crosses it leaves the run (its particles removed, "
+        "counted in summary.json's outflow); e.g. a channel's downstream end: "
+        'walls = {x_max = "outlet"}. The projection scheme only; a periodic axis has none.',
     )
     periodic: list[bool] | None = Field(
         None,
@@ -66,14 +72,14 @@ class Domain(Section):
         if isinstance(walls, str):
             if walls not in WALL_CONDITIONS:
                 raise ValueError(
-                    f'{walls!r} is not a wall condition: give "slip" or '
-                    '"no_slip" for every wall, or a table of sides, e.g. '
+                    f'{walls!r} is not a wall condition: give "slip", "no_slip" or '
+                    '"outlet" for every side, or a table of sides, e.g. '
                     f"walls = {example}"
                 )
             return walls
         if not isinstance(walls, dict):
             raise ValueError(
-                'give "slip" or "no_slip" for every wall, or a table of '
+                'give "slip", "no_slip" or "outlet" for every side, or a table of '
                 f"sides, e.g. walls = {example}"
             )
         if not walls:
@@ -92,7 +98,7 @@ class Domain(Section):
                 )
             if value not in WALL_CONDITIONS:
                 raise ValueError(
-                    f'{key} = {value!r} is not a wall condition: give "slip" or "no_slip"'
+                    f'{key} = {value!r} is not a wall condition: give "slip", "no_slip" or "outlet"'
                 )
         return walls
 
@@ -143,13 +149,27 @@ class Domain(Section):
         whether it is no-slip."""
         return [c == "no_slip" for pair in self.wall_conditions() for c in pair]
 
+    def outlet_sides(self) -> list[bool]:
+        """One flag per side in the order x_min, x_max, y_min, ...: whether it is an outlet
+        (never on a periodic axis)."""
+        periodic = self.periodic or [False] * len(self.size)
+        return [
+            c == "outlet" and not periodic[k]
+            for k, pair in enumerate(self.wall_conditions())
+            for c in pair
+        ]
+
     def uniform_walls(self) -> str | None:
-        """The one condition of every wall (periodic axes aside), or None where walls
-        differ."""
+        """The one condition of every wall (periodic axes and outlets aside), or None where
+        walls differ."""
         periodic = self.periodic or [False] * len(self.size)
         found = {
-            c for k, pair in enumerate(self.wall_conditions()) if not periodic[k] for c in pair
+            c
+            for k, pair in enumerate(self.wall_conditions())
+            if not periodic[k]
+            for c in pair
+            if c != "outlet"
         }
-        if not found:  # every axis periodic: no walls at all
-            return self.walls if isinstance(self.walls, str) else "slip"
+        if not found:  # every axis periodic or open: no walls at all
+            return self.walls if self.walls in ("slip", "no_slip") else "slip"
         return found.pop() if len(found) == 1 else None

@@ -110,6 +110,10 @@ class Case(Section):
             "materials": (self.material.model != "water", 'set material.model = "water"'),
             "periodic": (any(self.domain.periodic or []), "remove domain.periodic"),
             "apic": (self.solver.transfer == "apic", 'set solver.transfer = "flip"'),
+            "outlets": (
+                any(self.domain.outlet_sides()),
+                'make the outlet sides of domain.walls "slip"',
+            ),
         }
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():

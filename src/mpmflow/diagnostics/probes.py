@@ -38,7 +38,7 @@ axis):
 
 Cost: the particles are binned by cell once per output anyway (``cells.bin_particles``);
 a pressure probe reads only the particles of the cells its window overlaps, so the probes
-cost no pass over all particles (``tests/test_probes.py`` measures 20 probes on 0.7 million
+cost no pass over all particles (``tests/diagnostics/test_probes.py`` measures 20 probes on 0.7 million
 particles in 3D).
 
 Obstacles (the hook): ``measure(..., solid_distance=f)`` takes the signed distance to the

@@ -11,17 +11,19 @@ called for several right-hand sides. Every solve reports its true relative resid
 """
 
 from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 
 from .. import state
+from ..state.arrays import Floats, Ints
 
 SMOOTHING_SWEEPS = 1  # Gauss-Seidel sweeps before and after each coarse correction
 
 
 @dataclass
 class SolveResult:
-    x: np.ndarray
+    x: Floats
     iterations: int
     residual: float  # true relative residual
     converged: bool
@@ -31,12 +33,13 @@ class SolveResult:
 class PressureMatrix:
     """The pressure matrix in ELL form with its place on the node grid."""
 
-    cols: np.ndarray  # (n, 9) column of each stencil slot, -1 where empty
-    vals: np.ndarray  # (n, 9)
-    nodes: np.ndarray  # (n,) node of each row
-    grid_nodes: tuple  # nodes per axis
+    cols: Ints  # (n, 9) column of each stencil slot, -1 where empty
+    vals: Floats  # (n, 9)
+    nodes: Ints  # (n,) node of each row
+    grid_nodes: tuple[int, ...]  # nodes per axis
 
-    def csr(self):
+    def csr(self) -> Any:
+        """The matrix as a SciPy CSR matrix (SciPy has no type information here: Any)."""
         import scipy.sparse as sp  # here: the default solver never needs SciPy (50 ms import)
 
         mask = self.cols >= 0
@@ -45,19 +48,25 @@ class PressureMatrix:
         return sp.csr_matrix((self.vals[mask], self.cols[mask], indptr), shape=(n, n))
 
 
+Method = Literal["multigrid", "amg", "direct"]
+
+
 class LinearSolver:
-    def __init__(self, method, tolerance, max_iterations):
+    def __init__(self, method: Method, tolerance: float, max_iterations: int) -> None:
         self.method = method
         self.tolerance = tolerance
         self.max_iterations = max_iterations
-        self._setup = None
+        self._hierarchy: state.Multigrid | None = None  # multigrid
+        # direct: SuperLU's factorisation; amg: pyamg's hierarchy (libraries without type
+        # information here)
+        self._setup: Any = None
 
-    def prepare(self, matrix):
+    def prepare(self, matrix: PressureMatrix) -> None:
         self.matrix = matrix
         if self.method == "multigrid":
             # an earlier hierarchy's storage is reused
-            self._setup = state.multigrid(
-                matrix.cols, matrix.vals, matrix.nodes, matrix.grid_nodes, hierarchy=self._setup
+            self._hierarchy = state.multigrid(
+                matrix.cols, matrix.vals, matrix.nodes, matrix.grid_nodes, hierarchy=self._hierarchy
             )
             return
         self._A = matrix.csr()
@@ -72,21 +81,27 @@ class LinearSolver:
                 self._A, symmetry="symmetric", max_coarse=400, coarse_solver="splu"
             )
 
-    def solve(self, b, x0=None, tolerance=None):
+    def solve(
+        self, b: Floats, x0: Floats | None = None, tolerance: float | None = None
+    ) -> SolveResult:
         """Solve the prepared system to ``tolerance`` (default: the solver's own)."""
         tol = self.tolerance if tolerance is None else tolerance
         bnorm = np.linalg.norm(b)
         if bnorm == 0.0:
             return SolveResult(np.zeros_like(b), 0, 0.0, True)
         if self.method == "multigrid":
+            if self._hierarchy is None:
+                raise RuntimeError("LinearSolver.solve before prepare")
             x = np.zeros_like(b) if x0 is None else x0.copy()
-            iterations, residual = self._setup.pcg(b, x, tol, self.max_iterations, SMOOTHING_SWEEPS)
+            iterations, residual = self._hierarchy.pcg(
+                b, x, tol, self.max_iterations, SMOOTHING_SWEEPS
+            )
         else:
             if self.method == "direct":
                 x = self._setup.solve(b)
                 iterations = 1
             else:
-                history = []
+                history: list[float] = []
                 x = self._setup.solve(
                     b, x0=x0, tol=tol, maxiter=self.max_iterations, accel="cg", residuals=history
                 )
@@ -95,7 +110,7 @@ class LinearSolver:
         ok = bool(np.isfinite(residual) and residual <= tol)
         return SolveResult(x, int(iterations), float(residual), ok)
 
-    def residual_vector(self, b, x):
+    def residual_vector(self, b: Floats, x: Floats) -> Floats:
         """b - A x for the prepared matrix."""
         out = np.empty_like(b)
         state.residual(self.matrix.cols, self.matrix.vals, x, b, out)

@@ -15,18 +15,38 @@ A material is one per case for now; the compiled step takes (model, parameters) 
 table of materials indexed per particle can follow without changing the kernels' formulas.
 """
 
-from typing import Any
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from .. import state
+from ..state.arrays import Floats
 from . import herschel_bulkley, mu_i, newtonian, water
 
-MATERIALS = {m.NAME: m for m in (water, newtonian, herschel_bulkley, mu_i)}
+if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
+    from ..case.sections import Material
+
+
+class Model(Protocol):
+    """What a material module gives (see above); the modules are checked against it."""
+
+    NAME: str
+    KEYS: tuple[str, ...]
+    MODEL: int
+
+    def check(self, m: Material) -> None: ...
+
+    def parameters(self, m: Material) -> list[float]: ...
+
+
+_MODULES: tuple[Model, ...] = (water, newtonian, herschel_bulkley, mu_i)
+MATERIALS: dict[str, Model] = {m.NAME: m for m in _MODULES}
 COMMON = ("model", "density", "bulk_modulus")
 
 
-def check(m: Any) -> None:
+def check(m: Material) -> None:
     """Refuse parameters of another model (set to other than their defaults), then run the
     model's own checks."""
     module = MATERIALS[m.model]
@@ -48,11 +68,11 @@ def check(m: Any) -> None:
     module.check(m)
 
 
-def parameters(m):
+def parameters(m: Material) -> tuple[int, Floats]:
     """(model code, parameters) for the compiled step."""
     module = MATERIALS[m.model]
     return module.MODEL, np.asarray(module.parameters(m), dtype=float)
 
 
-def is_viscous(m):
+def is_viscous(m: Material) -> bool:
     return MATERIALS[m.model].MODEL != state.WATER

@@ -4,14 +4,21 @@ rate^flow_index where it flows, rigid below the yield stress. Regularised as the
 model: eta = min(max_viscosity, consistency rate^(n - 1) + yield_stress / rate), so below
 the yield stress the material creeps at rate |tau| / max_viscosity."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .. import state
 
+if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
+    from ..case.sections import Material
+
 NAME = "herschel_bulkley"
-KEYS = ("consistency", "yield_stress", "flow_index", "max_viscosity")
+KEYS: tuple[str, ...] = ("consistency", "yield_stress", "flow_index", "max_viscosity")
 MODEL = state.HERSCHEL_BULKLEY
 
 
-def check(m):
+def check(m: Material) -> None:
     if not m.consistency > 0.0:
         raise ValueError(
             'material.model = "herschel_bulkley" needs material.consistency > 0 '
@@ -37,5 +44,5 @@ def check(m):
         )
 
 
-def parameters(m):
+def parameters(m: Material) -> list[float]:
     return [m.consistency, m.yield_stress, m.flow_index, m.max_viscosity]

@@ -5,10 +5,17 @@ phi = material.density / material.grain_density. As a viscosity: eta = mu(I) p /
 capped at max_viscosity (at rest the material creeps at rate |tau| / max_viscosity); no
 strength without pressure (p <= 0: eta = 0)."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .. import state
 
+if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
+    from ..case.sections import Material
+
 NAME = "mu_i"
-KEYS = (
+KEYS: tuple[str, ...] = (
     "friction_static",
     "friction_limit",
     "inertial_number_ref",
@@ -19,7 +26,7 @@ KEYS = (
 MODEL = state.MU_I
 
 
-def check(m):
+def check(m: Material) -> None:
     if not 0.0 < m.friction_static < m.friction_limit:
         raise ValueError(
             f"material.friction_static = {m.friction_static:g} and material.friction_limit "
@@ -43,7 +50,7 @@ def check(m):
         raise ValueError("material.max_viscosity must be positive (Pa s)")
 
 
-def parameters(m):
+def parameters(m: Material) -> list[float]:
     return [
         m.friction_static,
         m.friction_limit,

@@ -1,14 +1,21 @@
 """A Newtonian liquid (``material.model = "newtonian"``): tau = 2 eta D with a constant
 dynamic viscosity eta = ``material.viscosity`` (Pa s)."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .. import state
 
+if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
+    from ..case.sections import Material
+
 NAME = "newtonian"
-KEYS = ("viscosity",)
+KEYS: tuple[str, ...] = ("viscosity",)
 MODEL = state.NEWTONIAN
 
 
-def check(m):
+def check(m: Material) -> None:
     if not m.viscosity > 0.0:
         raise ValueError(
             'material.model = "newtonian" needs material.viscosity > 0 (Pa s; water at '
@@ -16,5 +23,5 @@ def check(m):
         )
 
 
-def parameters(m):
+def parameters(m: Material) -> list[float]:
     return [m.viscosity]

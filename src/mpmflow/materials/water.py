@@ -1,13 +1,20 @@
 """Inviscid water (``material.model = "water"``, the default): no deviatoric stress."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .. import state
 
+if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
+    from ..case.sections import Material
+
 NAME = "water"
-KEYS = ("viscosity",)
+KEYS: tuple[str, ...] = ("viscosity",)
 MODEL = state.WATER
 
 
-def check(m):
+def check(m: Material) -> None:
     if m.viscosity != 0.0:
         raise ValueError(
             f'material.viscosity = {m.viscosity:g} Pa s with material.model = "water", '
@@ -16,5 +23,5 @@ def check(m):
         )
 
 
-def parameters(m):
+def parameters(m: Material) -> list[float]:
     return []

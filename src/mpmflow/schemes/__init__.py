@@ -2,8 +2,20 @@
 declaring what it supports (``SUPPORTS``): the case's rules ask here instead of naming
 schemes."""
 
+from __future__ import annotations
+
 from collections.abc import Callable
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:  # the case asks this registry what each scheme supports
+    from ..case import Case
+    from ..grid import Grid
+    from ..particles import Particles
+    from .projection import StepReport
+
+from ..boundaries.outlets import Outflow
 
 
 class Scheme(Protocol):
@@ -11,19 +23,21 @@ class Scheme(Protocol):
 
     SUPPORTS: ClassVar[frozenset[str]]  # the FEATURES it supports
     last_unknowns: int  # the size of the last step's system (0: none)
-    particles: Any  # the Particles it advances (the run's setup may put a subset in)
+    particles: Particles  # the particles it moves (set anew before the first step: setup)
+    outflow: Outflow  # what has left through the domain's outlets
 
-    def __init__(self, case: Any, grid: Any, particles: Any) -> None: ...
+    def __init__(self, case: Case, grid: Grid, particles: Particles) -> None: ...
 
-    def advance(self, dt: float, nsteps: int, where: Callable[[int], str]) -> Any:
+    def advance(self, dt: float, nsteps: int, where: Callable[[int], str]) -> StepReport:
         """nsteps steps of dt (s) on the particles, in place; a report of what they did."""
         ...
 
-    def state(self) -> dict[str, Any]:
-        """What a checkpoint keeps of the scheme besides the particles."""
+    def state(self) -> dict[str, NDArray[Any]]:
+        """What a checkpoint keeps of the scheme besides the particles (arrays of any
+        dtype)."""
         ...
 
-    def restore(self, saved: dict[str, Any]) -> None:
+    def restore(self, saved: dict[str, NDArray[Any]]) -> None:
         """Put back what ``state`` returned."""
         ...
 
@@ -36,6 +50,7 @@ FEATURES = {
     "materials": "materials other than inviscid water (material.model)",
     "periodic": "periodic axes (domain.periodic)",
     "apic": 'APIC transfers (solver.transfer = "apic"; it transfers by FLIP/PIC only)',
+    "outlets": 'outlets (domain.walls = "outlet")',
 }
 
 
@@ -63,6 +78,6 @@ def register(name: str) -> Callable[[type[Scheme]], type[Scheme]]:
     return deco
 
 
-def make_scheme(case: Any, grid: Any, particles: Any) -> Scheme:
+def make_scheme(case: Case, grid: Grid, particles: Particles) -> Scheme:
     _load()
     return SCHEMES[case.solver.scheme](case, grid, particles)

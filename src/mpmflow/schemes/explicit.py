@@ -15,20 +15,26 @@ re-evaluated every step from the current speeds. The kernel is the core's explic
 choices, the cures and the variants tried and rejected: docs/method.md, "The explicit
 comparator"."""
 
+from __future__ import annotations
+
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .. import state
-from ..boundaries import walls
+from ..boundaries import outlets, walls
 from ..errors import SimulationError
 from ..grid import Grid
 from ..particles import Particles
 from ..stability import sound_speed, stable_time_step
 from . import register
-from .projection import StepReport
+from .projection import StepReport, preset
+
+if TYPE_CHECKING:  # the case asks the scheme registry what each scheme supports
+    from ..case import Case
 
 
 @dataclass
@@ -41,16 +47,17 @@ class ExplicitScheme:
     # water only, walls only (the weakly compressible comparator)
     SUPPORTS: ClassVar[frozenset[str]] = frozenset()
 
-    def __init__(self, case: Any, grid: Grid, particles: Particles) -> None:
+    def __init__(self, case: Case, grid: Grid, particles: Particles) -> None:
         self.grid = grid
         self.particles = particles
+        self.outflow = outlets.Outflow()  # no outlets: nothing leaves
         m, sv = case.material, case.solver
         q_lin, q_quad = (float(q) for q in sv.explicit_bulk_viscosity)
         self.settings = state.ExplicitSettings(
             density=m.density,
             bulk=m.bulk_modulus,
             gravity=np.asarray(case.physics.gravity, dtype=float),
-            flip=sv.flip,
+            flip=preset(sv.flip, "flip"),
             no_slip=walls.side_conditions(case),  # x_min, x_max, y_min, ...
             smoothing=sv.pressure_smoothing == "nodal",
             full=sv.full_cell_threshold,
@@ -79,7 +86,7 @@ class ExplicitScheme:
 
     _CELLS = ("cell_j", "cell_vol", "cell_v0", "cell_xi", "cell_p")  # in ``work``
 
-    def state(self) -> dict[str, Any]:
+    def state(self) -> dict[str, NDArray[Any]]:
         """What the scheme carries from one step to the next beyond the particles (whose
         volume is their compression J): the cell state the next step starts from, and the
         smallest step and the clock. The cell state is not recomputed from the particles on a
@@ -88,7 +95,7 @@ class ExplicitScheme:
         saved = {name: np.array(getattr(self.work, name), copy=True) for name in self._CELLS}
         return {**saved, "clock": self.clock.copy(), "smallest": np.array([self.smallest_dt])}
 
-    def restore(self, saved: dict[str, Any]) -> None:
+    def restore(self, saved: dict[str, NDArray[Any]]) -> None:
         """Continue from ``state()`` (a checkpoint)."""
         for name in self._CELLS:
             np.copyto(getattr(self.work, name), saved[name])

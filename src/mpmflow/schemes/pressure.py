@@ -9,15 +9,25 @@ the wall and solve again (the matrix and its preconditioner are kept), then exte
 pressure to the ghost nodes.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
+from .. import state
 from ..errors import SolverError
+from ..grid import Grid
 from ..linalg.solvers import LinearSolver, PressureMatrix
+from ..state.arrays import Floats
+
+if TYPE_CHECKING:  # the case's schema asks the scheme registry what each scheme supports
+    from ..case.solver import Solver
 
 SETUP_ERRORS = (np.linalg.LinAlgError, RuntimeError, ValueError)
 
 
-def singular(where):
+def singular(where: str) -> SolverError:
     return SolverError(
         f"The pressure system is singular{where}: the material touches no free surface "
         "(it fills a closed container), so the pressure is defined only up to a "
@@ -25,7 +35,7 @@ def singular(where):
     )
 
 
-def setup_failed(where, err, unknowns):
+def setup_failed(where: str, err: Exception, unknowns: int) -> SolverError:
     return SolverError(
         f"The pressure solver could not be set up{where}: {err}. "
         f'{unknowns} unknowns. Try solver.linear_solver = "direct" or '
@@ -33,7 +43,9 @@ def setup_failed(where, err, unknowns):
     )
 
 
-def not_converged(where, residual, iterations, settings, unknowns, xyz):
+def not_converged(
+    where: str, residual: float, iterations: int, settings: Solver, unknowns: int, xyz: Floats
+) -> SolverError:
     return SolverError(
         f"The pressure solve did not converge{where}: relative residual "
         f"{residual:.3e} after {iterations} iterations (solver.tolerance = "
@@ -48,14 +60,16 @@ class PythonPressure:
     """Step 5 with ``linsolve.LinearSolver`` (amg or direct) around the compiled phases of
     the core's State; fills the step's report as the compiled multigrid step does."""
 
-    def __init__(self, grid, settings):
+    def __init__(self, grid: Grid, settings: Solver) -> None:
         self.grid = grid
         self.settings = settings
         self.solver = LinearSolver(
             settings.linear_solver, settings.tolerance, settings.max_iterations
         )
 
-    def solve(self, core, O, report, where):
+    def solve(
+        self, core: state.CoreState, O: state.CoreOptions, report: state.CoreReport, where: str
+    ) -> None:
         core.warm_start()
         x = core.x0.copy()
         anchored = core.pressure_matrix(O)

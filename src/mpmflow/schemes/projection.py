@@ -5,19 +5,44 @@ The step itself is compiled (the core's ``State``, src/core/step.hpp, reached th
 reported by the compiled code into a message.
 """
 
+from __future__ import annotations
+
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, NoReturn, TypeVar
 
 import numpy as np
+from numpy.typing import NDArray
+from typing_extensions import Self
 
 from .. import materials, state
-from ..boundaries import obstacles, walls
-from ..errors import SolverError
+from ..boundaries import obstacles, outlets, walls
+from ..errors import CaseError, SolverError
+from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
+from ..particles import Particles
+from ..state import CoreOptions, CoreReport
+from ..state.arrays import Floats
 from . import pressure, register, volume_correction
+
+if TYPE_CHECKING:  # the case asks the scheme registry what each scheme supports
+    from ..case import Case
+
+# the particles' arrays as the compiled step takes them: x, v, mass, volume, pressure
+ParticleArrays = tuple[Floats, Floats, Floats, Floats, Floats]
 
 MARGIN = 1e-6  # particles put back inside stay this fraction of a cell off the wall
 MODEL_PARAMETERS = 8  # the material parameters the compiled step takes (zero-padded)
+
+_T = TypeVar("_T")
+
+
+def preset(value: _T | None, key: str) -> _T:
+    """The value of a [solver] key that the formulation presets: typed optional because
+    the preset fills it during validation, which refuses None (``case.solver``)."""
+    if value is None:
+        raise CaseError(f"solver.{key} is None: the case was not validated")
+    return value
 
 
 @dataclass
@@ -36,7 +61,7 @@ class StepReport:
     clamped: int = 0  # face-steps with the volume correction's displacement clamped
     pockets: int = 0  # pocket-steps: water sealed from the free surface held at 0 at its top
 
-    def merge(self, other):
+    def merge(self, other: StepReport) -> StepReport:
         return StepReport(
             max(self.unknowns, other.unknowns),
             self.solves + other.solves,
@@ -52,7 +77,7 @@ class StepReport:
         )
 
     @classmethod
-    def of(cls, r):
+    def of(cls, r: CoreReport) -> Self:
         """From the compiled step's ``Report``."""
         return cls(
             int(r.unknowns),
@@ -80,13 +105,17 @@ class AdaptiveReport(StepReport):
 
 @register("projection")
 class ProjectionScheme:
-    SUPPORTS: ClassVar[frozenset[str]] = frozenset({"obstacles", "materials", "periodic", "apic"})
+    SUPPORTS: ClassVar[frozenset[str]] = frozenset(
+        {"obstacles", "materials", "periodic", "apic", "outlets"}
+    )
 
-    def __init__(self, case, grid, particles):
+    def __init__(self, case: Case, grid: Grid, particles: Particles) -> None:
         s = case.solver
         self.case = case
         self.grid = grid
         self.apic = s.transfer == "apic"
+        self.open = bool(outlets.sides(case).any())  # outlets: particles leave the run
+        self.outflow = outlets.Outflow()
         self.particles = particles  # with APIC also their affine matrices (zero)
         self.solids = obstacles.of_case(case, grid)
         self.viscous = materials.is_viscous(case.material)
@@ -102,8 +131,9 @@ class ProjectionScheme:
             self.solids,
             T,
             MARGIN * grid.spacing,
-            s.volume_correction > 0,
+            preset(s.volume_correction, "volume_correction") > 0,
             self.viscous,
+            outlets.sides(case) if self.open else (),
         )
         self.python_pressure = (
             None if s.linear_solver == "multigrid" else pressure.PythonPressure(grid, s)
@@ -114,28 +144,42 @@ class ProjectionScheme:
         self.dt_range = [np.inf, 0.0]  # the shortest and longest step taken (auto)
 
     @property
-    def particles(self):
+    def particles(self) -> Particles:
         return self._P
 
     @particles.setter
-    def particles(self, P):
+    def particles(self, P: Particles) -> None:
         """The particles the scheme moves. With solver.transfer = "apic" each also carries its
         affine velocity matrix C_p (``affine``, count x D x D, 1/s), here set to 0: bodies
         start at rest or in uniform motion, whose velocity gradient is 0. None with FLIP/PIC
         (the core then runs the FLIP/PIC transfers)."""
         self._P = P
         D = self.grid.dim
-        self.affine = np.zeros((P.count, D, D)) if self.apic else None
+        self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
+        # with outlets, the particles' own mass and volume: the core zeroes a retired one's
+        self._own = (P.mass.copy(), P.volume.copy()) if self.open else None
+
+    def _drain(self) -> None:
+        """Remove the particles that left through an outlet in the last chunk."""
+        if self._own is None:
+            return
+        keep = self.outflow.drain(self._P, *self._own)
+        if keep is not None:
+            self._own = (self._own[0][keep], self._own[1][keep])
+            if self.affine is not None:
+                self.affine = self.affine[keep]
 
     @property
-    def p_node(self):
+    def p_node(self) -> Floats:
         """The nodal pressure of the last step (Pa)."""
         return self.core.p_node
 
-    def options(self, dt):
+    def options(self, dt: float) -> CoreOptions:
         """The compiled step's settings for steps of dt (``Options2``/``Options3``)."""
         s, m = self.case.solver, self.case.material
-        every = max(1, round(s.volume_correction_interval / dt)) if s.volume_correction > 0 else 0
+        volume_rate = preset(s.volume_correction, "volume_correction")
+        flip = preset(s.flip, "flip")
+        every = max(1, round(s.volume_correction_interval / dt)) if volume_rate > 0 else 0
         particles = s.partial_cell_quadrature == "particles"
         model, params = materials.parameters(m)
         padded = np.zeros(MODEL_PARAMETERS)
@@ -145,23 +189,23 @@ class ProjectionScheme:
             dt=float(dt),
             gravity=[float(g) for g in self.case.physics.gravity],
             rho=float(m.density),
-            flip=state.flip_per_step(s.flip, dt),
+            flip=state.flip_per_step(flip, dt),
             full=float(s.full_cell_threshold),
-            sparse=float(s.sparse_cell_threshold),
+            sparse=float(preset(s.sparse_cell_threshold, "sparse_cell_threshold")),
             partial_particles=particles,
             surface=(
                 state.SURFACE_QUADRATURE["gauss"]
                 if particles
-                else state.SURFACE_QUADRATURE[s.surface_quadrature]
+                else state.SURFACE_QUADRATURE[preset(s.surface_quadrature, "surface_quadrature")]
             ),
             subcell=s.free_surface == "subcell",
             wall_flux=bool(s.wall_flux),
             theta_min=float(s.ghost_theta_min),
-            expansion=float(s.density_correction),
+            expansion=float(preset(s.density_correction, "density_correction")),
             tol=float(s.tolerance),
             max_iterations=int(s.max_iterations),
             sweeps=SMOOTHING_SWEEPS,
-            volume_rate=float(s.volume_correction),
+            volume_rate=float(volume_rate),
             volume_every=int(every),
             volume_tol=volume_correction.TOLERANCE,
             volume_max_iterations=volume_correction.MAX_ITERATIONS,
@@ -171,11 +215,11 @@ class ProjectionScheme:
             model_params=[float(v) for v in padded],
             courant=float(self.case.time.courant),
             dt_max=float(self.case.time.max_dt),
-            flip_rate=float(s.flip),
+            flip_rate=float(flip),
             volume_interval=float(s.volume_correction_interval),
         )
 
-    def state(self):
+    def state(self) -> dict[str, NDArray[Any]]:
         """What the scheme carries from one step to the next beyond the particles: the nodal
         pressure and the volume correction's last solution (the warm starts of the next
         solves), and with APIC the particles' affine matrices. Everything else is rebuilt
@@ -192,9 +236,11 @@ class ProjectionScheme:
             saved["volume_q"] = q.copy()
         if self.affine is not None:
             saved["affine"] = self.affine.copy()
+        if self.open:
+            saved["outflow"] = self.outflow.as_array()
         return saved
 
-    def restore(self, saved):
+    def restore(self, saved: dict[str, NDArray[Any]]) -> None:
         """Continue from ``state()`` (a checkpoint)."""
         np.copyto(self.core.p_node, saved["p_node"])
         self.last_unknowns = int(saved["last_unknowns"])
@@ -205,6 +251,8 @@ class ProjectionScheme:
         q = self.core.volume_q
         if q.size:
             np.copyto(q, saved["volume_q"])
+        if self.open:
+            self.outflow = outlets.Outflow.of_array(saved["outflow"])
         if self.affine is not None:
             affine = saved["affine"]  # KeyError, or ValueError if its shape differs
             if affine.shape != self.affine.shape:
@@ -214,11 +262,11 @@ class ProjectionScheme:
                 )
             np.copyto(self.affine, affine)
 
-    def _particles(self):
+    def _particles(self) -> ParticleArrays:
         P = self.particles
         return P.x, P.v, P.mass, P.volume, P.pressure
 
-    def check_free_surface(self):
+    def check_free_surface(self) -> None:
         """Raise SolverError ("singular") when the material as placed touches no free
         surface: the first step's classification and assembly, without the solve (its
         buffers are overwritten by the step). Lets a run refuse such a case before it
@@ -228,7 +276,9 @@ class ProjectionScheme:
         if n and not self.core.pressure_matrix(O):
             raise pressure.singular(" at the start")
 
-    def advance(self, dt, nsteps, where=""):
+    def advance(
+        self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""
+    ) -> StepReport:
         """``nsteps`` steps of size dt; ``where(k)`` names step k in messages. The report sums
         the steps (residual: the worst)."""
         O = self.options(dt)
@@ -241,26 +291,33 @@ class ProjectionScheme:
                     *self._particles(), O, self.steps + 1, nsteps, report, affine=self.affine
                 )
             else:
-                done = self._python_steps(O, nsteps, report, where)
+                done = self._python_steps(self.python_pressure, O, nsteps, report, where)
         except pressure.SETUP_ERRORS as err:
             k = int(report.step)
             self.steps += k
             raise pressure.setup_failed(where(k), err, int(report.last_unknowns)) from err
+        finally:
+            self._drain()
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
         if done < nsteps:
             self._fail(report, where(done))
         return StepReport.of(report)
 
-    def _adaptive(self, O, span, report, where):
+    def _adaptive(
+        self, O: CoreOptions, span: float, report: CoreReport, where: Callable[[int], str]
+    ) -> AdaptiveReport:
         """time.dt = "auto": steps set by the flow over the span (``State.advance_span``)."""
         s = self.case.solver
         # the most steps the span can need: every particle at solver.max_speed (the run
         # stops beyond it), at the Courant number
         most = int(np.ceil(span * s.max_speed / (O.courant * self.grid.spacing))) + 3
-        covered = self.core.advance_span(
-            *self._particles(), O, span, most, report, affine=self.affine
-        )
+        try:
+            covered = self.core.advance_span(
+                *self._particles(), O, span, most, report, affine=self.affine
+            )
+        finally:
+            self._drain()
         done = int(report.steps)
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
@@ -283,8 +340,15 @@ class ProjectionScheme:
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
 
-    def _python_steps(self, O, nsteps, report, where):
-        """The steps with the pressure solved in Python (``pressure.PythonPressure``)."""
+    def _python_steps(
+        self,
+        python_pressure: pressure.PythonPressure,
+        O: CoreOptions,
+        nsteps: int,
+        report: CoreReport,
+        where: Callable[[int], str],
+    ) -> int:
+        """The steps with the pressure solved in Python (``python_pressure``)."""
         for k in range(nsteps):
             report.step = k
             correct = O.volume_every > 0 and (self.steps + k + 1) % O.volume_every == 0
@@ -295,7 +359,7 @@ class ProjectionScheme:
             if status != state.OK:
                 report.status = status
                 return k
-            self.python_pressure.solve(self.core, O, report, where(k))
+            python_pressure.solve(self.core, O, report, where(k))
             report.pockets += self.core.pockets
             status = self.core.finish(*self._particles(), O, correct, report, affine=self.affine)
             if status != state.OK:
@@ -303,7 +367,7 @@ class ProjectionScheme:
                 return k
         return nsteps
 
-    def _fail(self, report, where):
+    def _fail(self, report: CoreReport, where: str) -> NoReturn:
         status = state.Status(int(report.status))
         n = int(report.fail_size)
         iterations = int(report.fail_iterations)

@@ -38,7 +38,7 @@ MAX_ITERATIONS = 200
 MAX_DISPLACEMENT = 0.5  # cells per step, a safety bound (Kugelstadt et al.)
 
 
-def not_converged(where, residual, iterations, cells):
+def not_converged(where: str, residual: float, iterations: int, cells: int) -> SolverError:
     return SolverError(
         f"The volume correction's solve did not converge{where}: relative residual "
         f"{residual:.3e} after {iterations} iterations on {cells} cells. Try a smaller "

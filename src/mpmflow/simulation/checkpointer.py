@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import checkpoint
 from .._version import __version__
+from ..boundaries import outlets
 from ..case import Case, resolved, revalidate
 from ..errors import CaseError
 from ..fallbacks import Fallbacks
@@ -145,14 +146,22 @@ def resume_from(
         )
     sim = cls(case, out_dir, progress)
     P = sim.particles
+    count = P.count
+    # with outlets (domain.walls = "outlet") the particles that left are not in it
+    fewer = bool(outlets.sides(case).any()) and arrays["x"].shape[0] <= count
     for name in Particles.FIELDS:
         saved = arrays[name]
-        if saved.shape != getattr(P, name).shape:
+        if saved.shape[1:] != getattr(P, name).shape[1:] or not (saved.shape[0] == count or fewer):
             raise CaseError(
                 f"--restart: checkpoint {path} holds {saved.shape[0]} "
-                f"particles, the case {P.count}; it belongs to another case."
+                f"particles, the case {count}; it belongs to another case."
             )
-        np.copyto(getattr(P, name), saved)
+        if saved.shape == getattr(P, name).shape:
+            np.copyto(getattr(P, name), saved)
+        else:
+            setattr(P, name, np.array(saved))
+    if P.count != count:
+        sim.scheme.particles = P  # the scheme's arrays of the particles follow (APIC, outlets)
     try:
         sim.scheme.restore(
             {k.removeprefix("scheme."): v for k, v in arrays.items() if k.startswith("scheme.")}

@@ -47,6 +47,7 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
     P, c, case, grid = sim.particles, sim.counters, sim.case, sim.grid
     bins = sim._bins()
     mass = float(P.mass.sum())
+    out = sim.scheme.outflow
     return {
         "status": status,
         "message": message,
@@ -54,11 +55,13 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         "time": sim.time,
         "steps": sim.steps,
         "particles": P.count,
-        "particles_lost": sim.count0 - P.count,
+        "particles_lost": sim.count0 - P.count - out.count,
         "particles_moved_inside": c.moved_inside,
         "mass_initial": sim.mass0,
         "mass_final": mass,
-        "mass_relative_change": (mass - sim.mass0) / sim.mass0,
+        "mass_relative_change": (mass + out.mass - sim.mass0) / sim.mass0,
+        # through the outlets (domain.walls = "outlet"): particles, kg, m^3
+        "outflow": {"particles": out.count, "mass": out.mass, "volume": out.volume},
         "max_particles_per_cell": int(np.diff(bins.start).max()),
         "wall_seconds": sim.wall_seconds(),
         "restarted_from": sim.resumed_from.name if sim.resumed_from else None,

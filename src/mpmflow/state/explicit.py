@@ -15,6 +15,7 @@ from .. import _core
 from ..grid import Grid
 from ..particles import Particles
 from . import arrays
+from .arrays import Bools, Floats
 
 
 @dataclass(frozen=True)
@@ -23,9 +24,9 @@ class ExplicitSettings:
 
     density: float  # kg/m^3
     bulk: float  # Pa
-    gravity: np.ndarray  # m/s^2, (dim,)
+    gravity: Floats  # m/s^2, (dim,)
     flip: float  # the FLIP fraction per millisecond of flow
-    no_slip: np.ndarray  # a flag per side: x_min, x_max, y_min, ...
+    no_slip: Bools  # a flag per side: x_min, x_max, y_min, ...
     smoothing: bool  # the pressure smoothed through the nodes
     full: float  # cells fuller than this are full
     sparse: float  # cells emptier than this take no pressure
@@ -41,20 +42,20 @@ class ExplicitWork:
     """The node and cell arrays the explicit step works in, kept from step to step (the
     cell state ``cell_j`` ... ``cell_p`` is what a checkpoint keeps)."""
 
-    node_mass: np.ndarray
-    node_mom: np.ndarray
-    v_old: np.ndarray
-    v_new: np.ndarray
-    contact: np.ndarray
-    cell_j: np.ndarray
-    cell_vol: np.ndarray
-    cell_v0: np.ndarray
-    cell_xi: np.ndarray
-    cell_p: np.ndarray
-    cell_q: np.ndarray
-    node_w: np.ndarray
-    node_p: np.ndarray
-    stats: np.ndarray  # what explicit_steps reports (see there)
+    node_mass: Floats
+    node_mom: Floats
+    v_old: Floats
+    v_new: Floats
+    contact: Bools
+    cell_j: Floats
+    cell_vol: Floats
+    cell_v0: Floats
+    cell_xi: Floats
+    cell_p: Floats
+    cell_q: Floats
+    node_w: Floats
+    node_p: Floats
+    stats: Floats  # what explicit_steps reports (see there)
 
     @classmethod
     def zeros(cls, grid: Grid) -> ExplicitWork:
@@ -124,7 +125,7 @@ def explicit_particle_state(
     )
 
 
-def explicit_max_speed(v: np.ndarray) -> float:
+def explicit_max_speed(v: Floats) -> float:
     """The largest particle speed (m/s); NaN if any speed is NaN."""
     return float(_core.max_speed(v))
 

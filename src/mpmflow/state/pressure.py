@@ -3,20 +3,34 @@ as contact conditions, the multigrid and sparse products (src/core/quadrature, w
 multigrid)."""
 
 from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import _core
 from . import arrays
+from .arrays import Bools, Floats, Ints
 
 
-def gauss_cell_tensors(h, K, C, V):
+def gauss_cell_tensors(h: float, K: Floats, C: Floats, V: Floats) -> None:
     """The element integrals K (2^D x 2^D), C (2^D x 2^D x D), V (2^D) of a full cell of side
     h from its 2^D Gauss points, into the arrays (float64; D from C's last axis)."""
     _core.gauss_cell_tensors(float(h), K, C, V)
 
 
-def particle_cell_tensors(x, volume, order, start, cells_list, h, cells, K, C, V):
+def particle_cell_tensors(
+    x: Floats,
+    volume: Floats,
+    order: Ints,
+    start: Ints,
+    cells_list: Ints,
+    h: float,
+    cells: Sequence[int],
+    K: Floats,
+    C: Floats,
+    V: Floats,
+) -> None:
     """The element integrals of the cells ``cells_list`` with their material points as
     quadrature points into K[m], C[m], V[m] (K may have no rows: then C and V only); the
     particles of cell c are order[start[c]:start[c + 1]]."""
@@ -25,9 +39,7 @@ def particle_cell_tensors(x, volume, order, start, cells_list, h, cells, K, C, V
     )
 
 
-def wall_pairs(
-    cells: Sequence[int], periodic: Sequence[bool] = ()
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def wall_pairs(cells: Sequence[int], periodic: Sequence[bool] = ()) -> tuple[Ints, Ints, Floats]:
     """(node, axis, sign) arrays of every wall node and wall of the grid ``cells``: the walls
     normal to axis 0 first, then axis 1, ...; the lower wall (sign -1) before the upper. A
     periodic axis (``periodic[k]``) has no walls."""
@@ -41,7 +53,9 @@ def wall_pairs(
     return node, axis, sign
 
 
-def apply_walls(node, axis, sign, no_slip, v, contact):
+def apply_walls(
+    node: Ints, axis: Ints, sign: Floats, no_slip: ArrayLike, v: Floats, contact: Bools
+) -> None:
     """Velocity conditions at the wall nodes, in place in v (nnodes x D): the normal velocity
     zeroed where the wall holds the material (``contact[i, k]``), elsewhere only a velocity
     into the wall; a no-slip pair (``no_slip``: a flag per pair, or one bool for all) zeroes
@@ -49,23 +63,66 @@ def apply_walls(node, axis, sign, no_slip, v, contact):
     _core.apply_walls(node, axis, sign, arrays.pair_flags(no_slip, node), v, contact)
 
 
-def start_contact(node, axis, sign, vstar, node_row, contact):
+def start_contact(
+    node: Ints, axis: Ints, sign: Floats, vstar: Floats, node_row: Ints, contact: Bools
+) -> None:
     """The wall contact as the pressure step starts, into ``contact`` (nnodes x D, bool): a
     wall node holds where it carries an unknown or v* presses into the wall."""
     _core.start_contact(node, axis, sign, vstar, node_row, contact)
 
 
-def release_contact(node, axis, sign, vstar, node_row, p_node, contact):
+def release_contact(
+    node: Ints,
+    axis: Ints,
+    sign: Floats,
+    vstar: Floats,
+    node_row: Ints,
+    p_node: Floats,
+    contact: Bools,
+) -> int:
     """Release the wall nodes in contact under tension that v* leaves (in place); returns
     how many (node, wall) pairs were released."""
-    return _core.release_contact(node, axis, sign, vstar, node_row, p_node, contact)
+    return int(_core.release_contact(node, axis, sign, vstar, node_row, p_node, contact))
 
 
-COARSEST = _core.COARSEST  # unknowns at which the multigrid hierarchy stops (dense factor)
-PARALLEL_ROWS = _core.PARALLEL_ROWS  # multigrid levels this large run on all threads
+COARSEST: int = _core.COARSEST  # unknowns at which the multigrid hierarchy stops (dense factor)
+PARALLEL_ROWS: int = _core.PARALLEL_ROWS  # multigrid levels this large run on all threads
 
 
-def multigrid(cols, vals, node, dims, coarsest=COARSEST, hierarchy=None):
+class Multigrid(Protocol):
+    """The core's multigrid hierarchy (``Multigrid2``/``Multigrid3``, src/core/multigrid.hpp;
+    a compiled class without type information): what Python calls of it."""
+
+    def setup(
+        self, cols: Ints, vals: Floats, node: Ints, dims: Sequence[int], coarsest: int = ...
+    ) -> None:
+        """Build the levels (the arrays are held, not copied)."""
+        ...
+
+    def pcg(
+        self, rhs: Floats, x: Floats, tol: float, maxiter: int, sweeps: int
+    ) -> tuple[int, float]:
+        """Preconditioned CG from x (updated in place): (iterations, true relative
+        residual)."""
+        ...
+
+    def vcycle(self, b: Floats, x: Floats, sweeps: int) -> None: ...
+
+    def levels(self) -> int: ...
+
+    def rows(self) -> int:
+        """The unknowns of the finest level."""
+        ...
+
+
+def multigrid(
+    cols: ArrayLike,
+    vals: ArrayLike,
+    node: ArrayLike,
+    dims: Sequence[int],
+    coarsest: int = COARSEST,
+    hierarchy: Multigrid | None = None,
+) -> Multigrid:
     """A multigrid hierarchy (``_core.Multigrid2``/``Multigrid3``) set up for the ELL matrix
     (cols, vals: n x 3^D) whose row r is grid point node[r] of a grid of ``dims`` points per
     axis: ``hierarchy`` (an earlier one, whose storage is reused) when given, else a new one.
@@ -74,7 +131,7 @@ def multigrid(cols, vals, node, dims, coarsest=COARSEST, hierarchy=None):
     sweeps)`` applies the preconditioner."""
     dims = tuple(int(d) for d in dims)
     kind = _core.Multigrid2 if len(dims) == 2 else _core.Multigrid3
-    mg = hierarchy if isinstance(hierarchy, kind) else kind()
+    mg: Multigrid = hierarchy if isinstance(hierarchy, kind) else kind()
     mg.setup(
         np.ascontiguousarray(cols, dtype=np.int64),
         np.ascontiguousarray(vals, dtype=float),
@@ -85,21 +142,21 @@ def multigrid(cols, vals, node, dims, coarsest=COARSEST, hierarchy=None):
     return mg
 
 
-def matvec(cols, vals, x, y):
+def matvec(cols: Ints, vals: Floats, x: Floats, y: Floats) -> None:
     """y = A x (A in ELL form); y: float64, written in place."""
     _core.matvec(cols, vals, x, y)
 
 
-def residual(cols, vals, x, b, out):
+def residual(cols: Ints, vals: Floats, x: Floats, b: Floats, out: Floats) -> None:
     """out = b - A x (A in ELL form); out: float64, written in place."""
     _core.residual(cols, vals, x, b, out)
 
 
-def dot(a, b):
+def dot(a: Floats, b: Floats) -> float:
     """a . b summed chunk by chunk when long: the same bits on any thread count."""
-    return _core.dot(a, b)
+    return float(_core.dot(a, b))
 
 
-def worst_row(cols, vals, x, b):
+def worst_row(cols: Ints, vals: Floats, x: Floats, b: Floats) -> int:
     """The row of the largest |b - A x| (NaN counts as largest)."""
-    return _core.worst_row(cols, vals, x, b, np.empty(len(b)))
+    return int(_core.worst_row(cols, vals, x, b, np.empty(len(b))))

@@ -1,11 +1,20 @@
 """The compiled projection step: its state, options, report and statuses (src/core/step)."""
 
+from __future__ import annotations
+
 import enum
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from .. import _core
+from ..grid import Grid
 from . import arrays
+from .arrays import Bools, Floats, Ints
+
+if TYPE_CHECKING:  # obstacles builds its tables with this package's kernels
+    from ..boundaries.obstacles import Tables
 
 
 class Status(enum.IntEnum):
@@ -20,22 +29,212 @@ class Status(enum.IntEnum):
 
 
 OK = Status.OK
-SURFACE_QUADRATURE = {
+SURFACE_QUADRATURE: dict[str, int] = {
     "gauss": _core.GAUSS,
     "divergence": _core.DIVERGENCE,
     "consistent": _core.CONSISTENT,
 }
-Report = _core.Report
 
 
-def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscous):
+# The core's classes have no type information (a compiled module without stubs): the
+# Protocols below say what Python reads and calls of them (src/core/bindings/step.cpp).
+
+
+class CoreReport(Protocol):
+    """What a chunk of compiled steps did (the core's ``Report``, src/core/step.hpp)."""
+
+    unknowns: int  # the largest number of pressure unknowns in a step
+    solves: int
+    iterations: int
+    max_iterations: int  # the most iterations in one step
+    residual: float  # the worst relative residual
+    released: int
+    moved: int
+    status: int  # a ``Status``
+    step: int  # the step (0-based, within the chunk) that failed or is running
+    fail_iterations: int
+    fail_residual: float
+    fail_node: int  # node (pressure, viscous) or cell (volume correction)
+    fail_size: int  # unknowns of the failed system
+    volume_iterations: int
+    last_unknowns: int  # the unknowns of the last step
+    viscous_iterations: int
+    steps: int  # the steps taken
+    dt_min: float  # the shortest and longest step taken (s)
+    dt_max: float
+    capped: int
+    clamped: int
+    pockets: int
+
+
+Report: Callable[[], CoreReport] = _core.Report  # a zeroed report
+
+
+class CoreOptions(Protocol):
+    """The compiled step's settings (``Options2``/``Options3``, src/core/step.hpp)."""
+
+    dt: float
+    gravity: list[float]
+    rho: float
+    flip: float
+    full: float
+    sparse: float
+    partial_particles: bool
+    surface: int
+    subcell: bool
+    wall_flux: bool
+    theta_min: float
+    expansion: float
+    tol: float
+    max_iterations: int
+    sweeps: int
+    volume_rate: float
+    volume_every: int
+    volume_tol: float
+    volume_max_iterations: int
+    volume_dmax: float
+    viscous: bool
+    model: int
+    model_params: list[float]
+    courant: float
+    dt_max: float
+    flip_rate: float
+    volume_interval: float
+
+
+class CoreState(Protocol):
+    """The compiled projection step's state (``State2``/``State3``): its methods take the
+    particles' arrays (x, v, pressure written in place; ``affine``: APIC's matrices, None:
+    FLIP/PIC) and the step's options; the arrays it exposes are views of its own storage."""
+
+    since_volume: float  # the time since the last volume correction (s)
+
+    def advance(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        first: int,
+        nsteps: int,
+        report: CoreReport,
+        affine: Floats | None = None,
+    ) -> int:
+        """nsteps steps; returns the steps done (fewer: report.status says why)."""
+        ...
+
+    def advance_span(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        span: float,
+        max_steps: int,
+        report: CoreReport,
+        affine: Floats | None = None,
+    ) -> float:
+        """Adaptive steps over the span (s); returns the time covered."""
+        ...
+
+    def predict(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        correct: bool,
+        affine: Floats | None = None,
+    ) -> int:
+        """The step up to the pressure system; returns the pressure unknowns."""
+        ...
+
+    def warm_start(self) -> None: ...
+
+    def pressure_matrix(self, options: CoreOptions) -> bool:
+        """Assemble; False: singular (no free surface)."""
+        ...
+
+    def pressure_rhs(self, options: CoreOptions) -> None: ...
+
+    def release_walls(self, x: Floats) -> int:
+        """The solution in; returns the wall nodes released."""
+        ...
+
+    def extend_pressure(self, options: CoreOptions) -> None: ...
+
+    def viscous_predictor(self, options: CoreOptions, report: CoreReport) -> int:
+        """Returns a ``Status``."""
+        ...
+
+    def finish(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        correct: bool,
+        report: CoreReport,
+        affine: Floats | None = None,
+    ) -> int:
+        """The step after the pressure solve; returns a ``Status``."""
+        ...
+
+    @property
+    def pockets(self) -> int: ...
+    @property
+    def phase_seconds(self) -> list[float]: ...
+    @property
+    def p_node(self) -> Floats: ...
+    @property
+    def v_new(self) -> Floats: ...
+    @property
+    def contact(self) -> Bools: ...
+    @property
+    def eta(self) -> Floats: ...
+    @property
+    def ocontact(self) -> Bools: ...
+    @property
+    def volume_q(self) -> Floats: ...
+    @property
+    def rows(self) -> Ints: ...
+    @property
+    def matrix_cols(self) -> Ints: ...
+    @property
+    def matrix_vals(self) -> Floats: ...
+    @property
+    def rhs(self) -> Floats: ...
+    @property
+    def x0(self) -> Floats: ...
+
+
+def step_state(
+    grid: Grid,
+    walls: tuple[Ints, Ints, Floats, Bools],
+    solids: Tables,
+    viscous_T: Floats,
+    margin: float,
+    volume_correction: bool,
+    viscous: bool,
+    outlets: Sequence[bool] | Bools = (),
+) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
     (``mpmflow.boundaries.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
-    for inviscid material), ``margin`` (m) how far inside the walls particles are put back.
+    for inviscid material), ``margin`` (m) how far inside the walls particles are put back,
+    ``outlets`` one flag per side (x_min, x_max, y_min, ...; empty: none): the open sides,
+    which have no wall pairs and retire the particles that cross them (mass 0).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
-    cls = _core.State2 if D == 2 else _core.State3
+    cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
     node, axis, sign, no_slip = walls
     o = solids
     return cls(
@@ -63,15 +262,17 @@ def step_state(grid, walls, solids, viscous_T, margin, volume_correction, viscou
         bool(volume_correction),
         bool(viscous),
         [bool(p) for p in grid.periodic],
+        [bool(s) for s in outlets],
     )
 
 
-def step_options(dim, **settings):
-    """The compiled step's settings (``Options2``/``Options3``) from keyword values."""
-    opt = _core.Options2() if dim == 2 else _core.Options3()
+def step_options(dim: int, **settings: float | bool | list[float]) -> CoreOptions:
+    """The compiled step's settings (``Options2``/``Options3``) from keyword values (the
+    names of ``CoreOptions``)."""
+    opt: CoreOptions = _core.Options2() if dim == 2 else _core.Options3()
     for key, value in settings.items():
         setattr(opt, key, value)
     return opt
 
 
-PHASES = tuple(_core.PHASES)  # the phases a step's State times (``phase_seconds``)
+PHASES: tuple[str, ...] = tuple(_core.PHASES)  # the phases a step's State times (``phase_seconds``)

@@ -2,41 +2,45 @@
 correction, binning and cut cells (src/core/transfer, corrector, volume_correction,
 binning, cut_cells, strips.hpp)."""
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import _core
 from ..grid import Grid
 from . import arrays
+from .arrays import Bools, Floats, Ints
 
 # (src/core/transfer.*, corrector.*, volume_correction.*, strips.hpp.) ``grid`` is a
 # ``mpmflow.grid.Grid``; arrays the kernels write must be C-contiguous of the right dtype
 # (float64, int64, bool) and are written in place.
 
 
-def flip_per_step(flip, dt):
+def flip_per_step(flip: float, dt: float) -> float:
     """The FLIP fraction of one step of dt (s): flip^(dt / 1 ms), the same PIC damping per
     second whatever the step (the core's, used by both schemes)."""
     return float(_core.flip_per_step(float(flip), float(dt)))
 
 
 def particles_to_grid(
-    grid,
-    x,
-    v,
-    mass,
-    volume,
-    order,
-    start,
-    gravity,
-    dt,
-    node_mass,
-    node_mom,
-    node_vol,
-    v_old,
-    v_star,
-    cell_vol,
-    affine=None,
-):
+    grid: Grid,
+    x: Floats,
+    v: Floats,
+    mass: Floats,
+    volume: Floats,
+    order: Ints,
+    start: Ints,
+    gravity: ArrayLike,
+    dt: float,
+    node_mass: Floats,
+    node_mom: Floats,
+    node_vol: Floats,
+    v_old: Floats,
+    v_star: Floats,
+    cell_vol: Floats,
+    affine: ArrayLike | None = None,
+) -> None:
     """Particle-to-grid (eqs. 10-12): nodal mass, momentum, material volume, velocity v_old
     and predictor v_star = v_old + dt g where there is mass (0 elsewhere); with ``cell_vol``
     non-empty also the particles' volume on the cell centres. Particles binned by cell
@@ -64,8 +68,20 @@ def particles_to_grid(
 
 
 def grid_to_particles(
-    grid, x, v, pressure, v_old, v_new, p_node, dt, flip, upper, margin, faces=(), affine=None
-):
+    grid: Grid,
+    x: Floats,
+    v: Floats,
+    pressure: Floats,
+    v_old: Floats,
+    v_new: Floats,
+    p_node: Floats,
+    dt: float,
+    flip: float,
+    upper: ArrayLike,
+    margin: float,
+    faces: Sequence[Floats] = (),
+    affine: Floats | None = None,
+) -> int:
     """Grid-to-particle (eqs. 19-21): FLIP/PIC velocity, positions moved with v_new plus the
     volume correction's displacement (``faces``: one array per axis; empty: none), pressure;
     particles that left the box [0, upper] put back inside. Returns how many were put back.
@@ -95,11 +111,11 @@ def grid_to_particles(
 
 def pressure_noise(
     grid: Grid,
-    x: np.ndarray,
-    mass: np.ndarray,
-    pressure: np.ndarray,
-    work_m: np.ndarray | None = None,
-    work_mp: np.ndarray | None = None,
+    x: Floats,
+    mass: Floats,
+    pressure: Floats,
+    work_m: Floats | None = None,
+    work_mp: Floats | None = None,
 ) -> float:
     """RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa);
     ``work_m``, ``work_mp``: scratch of one value per node (allocated if not given)."""
@@ -114,12 +130,21 @@ def pressure_noise(
     )
 
 
-def cell_volume(grid, x, volume, out):
+def cell_volume(grid: Grid, x: Floats, volume: Floats, out: Floats) -> None:
     """sum_p N_c(x_p) V_p on every cell centre (m^3) into ``out`` (walls mirror)."""
     _core.cell_volume(x, volume, float(grid.spacing), arrays.cells(grid), out)
 
 
-def correct_velocity(grid, cell_slot, C, V, p_node, vstar, dt_over_rho, v_new):
+def correct_velocity(
+    grid: Grid,
+    cell_slot: Ints,
+    C: Floats,
+    V: Floats,
+    p_node: Floats,
+    vstar: Floats,
+    dt_over_rho: float,
+    v_new: Floats,
+) -> None:
     """The corrector v_new = v* - dt/rho (G p) / V at every node (eq. 16); nodes outside every
     cell of the system keep v*."""
     _core.correct_velocity(
@@ -128,8 +153,18 @@ def correct_velocity(grid, cell_slot, C, V, p_node, vstar, dt_over_rho, v_new):
 
 
 def assemble_volume(
-    grid, theta, density, wet, contact, static_slot, cell_row, cols, vals, rhs, rows
-):
+    grid: Grid,
+    theta: Floats,
+    density: Floats,
+    wet: float,
+    contact: Bools,
+    static_slot: Ints,
+    cell_row: Ints,
+    cols: Ints,
+    vals: Floats,
+    rhs: Floats,
+    rows: Ints,
+) -> tuple[int, bool]:
     """The volume correction's Poisson system on the cells holding material; returns
     (number of rows, whether any row touches air)."""
     n, anchored = _core.assemble_volume(
@@ -148,7 +183,15 @@ def assemble_volume(
     return int(n), bool(anchored)
 
 
-def face_displacements(grid, cell_row, static_slot, q, scale, dmax, faces):
+def face_displacements(
+    grid: Grid,
+    cell_row: Ints,
+    static_slot: Ints,
+    q: Floats,
+    scale: float,
+    dmax: float,
+    faces: Sequence[Floats],
+) -> None:
     """d = -scale grad q on the inner cell faces normal to each axis (m), limited to dmax;
     ``faces[k]``: the faces normal to axis k, written."""
     _core.face_displacements(
@@ -156,7 +199,7 @@ def face_displacements(grid, cell_row, static_slot, q, scale, dmax, faces):
     )
 
 
-def strips(row_cum, nstrips, min_rows, bounds):
+def strips(row_cum: ArrayLike, nstrips: int, min_rows: int, bounds: Ints) -> int:
     """Cut rows into at most ``nstrips`` strips of at least ``min_rows`` rows holding about
     equal work (``row_cum``: the work before each row, n + 1 entries); strip t is rows
     bounds[t] to bounds[t + 1] - 1. Returns the number of strips."""
@@ -167,27 +210,41 @@ def strips(row_cum, nstrips, min_rows, bounds):
     )
 
 
-def cell_index(x, h, cells, out):
+def cell_index(x: Floats, h: float, cells: Sequence[int], out: Ints) -> None:
     """Flat cell index of every particle (x: n x D, m) into ``out`` (int64)."""
     _core.cell_index(x, float(h), [int(c) for c in cells], out)
 
 
-def counting_sort(cell, ncells, start, order):
+def counting_sort(cell: Ints, ncells: int, start: Ints, order: Ints) -> None:
     """Particles grouped by cell: cell c holds ``order[start[c]:start[c + 1]]``."""
     _core.counting_sort(cell, int(ncells), start, order)
 
 
-def cell_volume_fraction(order, start, volume, cell_volume, open_, theta):
+def cell_volume_fraction(
+    order: Ints, start: Ints, volume: Floats, cell_volume: float, open_: Floats, theta: Floats
+) -> None:
     """theta per cell: particle volume / cell volume, over the fluid part ``open_``."""
     _core.cell_volume_fraction(order, start, volume, float(cell_volume), open_, theta)
 
 
 # Cells cut by fixed obstacles (src/core/cut_cells.hpp; ``mpmflow.boundaries.obstacles``).
 
-SLIVER = _core.SLIVER  # a cut cell with less fluid takes its volume fraction from beside
+SLIVER: float = _core.SLIVER  # a cut cell with less fluid takes its volume fraction from beside
 
 
-def cut_cell_tensors(phi_node, h, cells, candidates, nsub, K, C, V, F, Wf, solid_parts):
+def cut_cell_tensors(
+    phi_node: ArrayLike,
+    h: float,
+    cells: Sequence[int],
+    candidates: ArrayLike,
+    nsub: int,
+    K: Floats,
+    C: Floats,
+    V: Floats,
+    F: Floats,
+    Wf: Floats,
+    solid_parts: Ints,
+) -> None:
     """The element integrals K, C, V, the obstacle face term F and the wall face term Wf of
     the candidate cells (flat indices), with nsub sub-cells per axis; ``solid_parts[m]``:
     solid sub-cells and sub-faces of candidate m (0: not cut). Outputs are filled."""
@@ -206,22 +263,26 @@ def cut_cell_tensors(phi_node, h, cells, candidates, nsub, K, C, V, F, Wf, solid
     )
 
 
-def face_mass(h, dim, Wf):
+def face_mass(h: float, dim: int, Wf: Floats) -> None:
     """``Wf[f, a, b]`` (2 dim x 2^dim x 2^dim) of a whole cell: int N_a N_b over face f."""
     _core.face_mass(float(h), int(dim), Wf)
 
 
-def push_out(x, v, phi_node, h, cells, margin):
+def push_out(
+    x: Floats, v: Floats, phi_node: Floats, h: float, cells: Sequence[int], margin: float
+) -> int:
     """Particles inside an obstacle moved out to phi = margin (x, v in place); returns how
     many were moved."""
-    return _core.push_out(x, v, phi_node, float(h), [int(c) for c in cells], float(margin))
+    return int(_core.push_out(x, v, phi_node, float(h), [int(c) for c in cells], float(margin)))
 
 
-def sliver_fractions(cells, open_, theta):
+def sliver_fractions(cells: Sequence[int], open_: Floats, theta: Floats) -> None:
     """theta of sliver cut cells (0 < open < SLIVER) from their face neighbours (in place)."""
     _core.sliver_fractions([int(c) for c in cells], open_, theta)
 
 
-def extend_velocity(onode, cells, node_mass, v_old, v_star):
+def extend_velocity(
+    onode: Ints, cells: Sequence[int], node_mass: Floats, v_old: Floats, v_star: Floats
+) -> None:
     """Velocities of the massless obstacle nodes from their neighbours' (in place)."""
     _core.extend_velocity(onode, [int(c) for c in cells], node_mass, v_old, v_star)

@@ -1,41 +1,46 @@
 """The viscous materials' kernels: effective viscosity, the implicit viscous system and
 its solve (src/core/rheology.hpp, viscous)."""
 
+from collections.abc import Sequence
+from typing import TypeVar
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .. import _core
 from . import arrays
+from .arrays import Bools, Floats, Ints
+
+_Scalar = TypeVar("_Scalar", bound=np.generic)
 
 # the rheology's model codes (``mpmflow.materials``) and the implicit viscous predictor
 # (src/core/rheology.hpp, src/core/viscous.hpp)
-WATER, NEWTONIAN, HERSCHEL_BULKLEY, MU_I = (
-    _core.WATER,
-    _core.NEWTONIAN,
-    _core.HERSCHEL_BULKLEY,
-    _core.MU_I,
-)
+WATER: int = _core.WATER
+NEWTONIAN: int = _core.NEWTONIAN
+HERSCHEL_BULKLEY: int = _core.HERSCHEL_BULKLEY
+MU_I: int = _core.MU_I
 
 
-def viscosity(model, par, rate, p):
+def viscosity(model: int, par: ArrayLike, rate: float, p: float) -> float:
     """The effective viscosity (Pa s) of rheology ``model`` with parameters ``par`` at strain
     rate ``rate`` (1/s) and pressure ``p`` (Pa)."""
-    return _core.viscosity(
-        int(model), np.ascontiguousarray(par, dtype=float), float(rate), float(p)
+    return float(
+        _core.viscosity(int(model), np.ascontiguousarray(par, dtype=float), float(rate), float(p))
     )
 
 
-def _viscous_out(a):
+def _viscous_out(a: NDArray[_Scalar]) -> NDArray[_Scalar]:
     """``a`` itself when C-contiguous (the core writes into it), else a C-contiguous copy to
     be copied back with ``_viscous_back``."""
     return a if a.flags.c_contiguous else np.ascontiguousarray(a)
 
 
-def _viscous_back(a, c):
+def _viscous_back(a: NDArray[_Scalar], c: NDArray[_Scalar]) -> None:
     if c is not a:
         a[...] = c
 
 
-def gauss_gradients(cells, h):
+def gauss_gradients(cells: Sequence[int], h: float) -> Floats:
     """T[a, b, m, k] = int over a full cell of dN_a/dx_m dN_b/dx_k (2^D x 2^D x D x D)."""
     D = len(cells)
     T = np.empty((1 << D, 1 << D, D, D))
@@ -43,7 +48,20 @@ def gauss_gradients(cells, h):
     return T
 
 
-def cell_viscosity(cells, h, theta, open_, enclosed, full, v, p_node, model, par, eta, weight):
+def cell_viscosity(
+    cells: Sequence[int],
+    h: float,
+    theta: Floats,
+    open_: Floats,
+    enclosed: Bools,
+    full: float,
+    v: Floats,
+    p_node: Floats,
+    model: int,
+    par: ArrayLike,
+    eta: Floats,
+    weight: Floats,
+) -> None:
     """Each cell's viscosity ``eta`` and ``weight`` = eta x its fluid fraction (in place)."""
     etac, weightc = _viscous_out(eta), _viscous_out(weight)
     _core.cell_viscosity(
@@ -65,19 +83,19 @@ def cell_viscosity(cells, h, theta, open_, enclosed, full, v, p_node, model, par
 
 
 def number_unknowns(
-    node_mass,
-    wall_node,
-    wall_axis,
-    wall_no_slip,
-    contact,
-    onode,
-    ocontact,
-    ono_slip,
-    vstar,
-    u,
-    row,
-    off,
-):
+    node_mass: Floats,
+    wall_node: Ints,
+    wall_axis: Ints,
+    wall_no_slip: ArrayLike,
+    contact: Bools,
+    onode: Ints,
+    ocontact: Bools,
+    ono_slip: Bools,
+    vstar: Floats,
+    u: Floats,
+    row: Ints,
+    off: Ints,
+) -> int:
     """Number the viscous system's unknowns (``u``, ``row``, ``off`` in place); returns
     their count. ``wall_no_slip``: a flag per wall pair (or one bool for all); ``contact``
     (nodes x D) and ``ocontact`` (nodes) say where the walls and obstacles hold the material
@@ -99,10 +117,23 @@ def number_unknowns(
     )
     _viscous_back(u, uc)
     _viscous_back(row, rowc)
-    return n
+    return int(n)
 
 
-def viscous_assemble(cells, T, weight, node_mass, dt, u, row, off, cols, vals, rhs, node):
+def viscous_assemble(
+    cells: Sequence[int],
+    T: Floats,
+    weight: Floats,
+    node_mass: Floats,
+    dt: float,
+    u: Floats,
+    row: Ints,
+    off: Ints,
+    cols: Ints,
+    vals: Floats,
+    rhs: Floats,
+    node: Ints,
+) -> None:
     """The viscous system's blocks, right-hand side and the node of each row (in place)."""
     out = [_viscous_out(a) for a in (cols, vals, rhs, node)]
     _core.viscous_assemble(
@@ -112,16 +143,27 @@ def viscous_assemble(cells, T, weight, node_mass, dt, u, row, off, cols, vals, r
         _viscous_back(a, c)
 
 
-def viscous_worst_row(cols, vals, off, x, rhs):
+def viscous_worst_row(cols: Ints, vals: Floats, off: Ints, x: Floats, rhs: Floats) -> int:
     """The row of the largest |rhs - A x| of the viscous system (NaN counts as largest)."""
-    return _core.viscous_worst_row(cols, vals, off, x, rhs)
+    return int(_core.viscous_worst_row(cols, vals, off, x, rhs))
 
 
-def viscous_solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
+def viscous_solve(
+    cols: Ints,
+    vals: Floats,
+    node: Ints,
+    off: Ints,
+    cells: Sequence[int],
+    rhs: Floats,
+    x: Floats,
+    tol: float,
+    maxiter: int,
+    sweeps: int,
+) -> tuple[int, float]:
     """Block-preconditioned CG of the viscous system from the guess in ``x`` (in place).
     Returns (iterations, relative residual)."""
     xc = _viscous_out(x)
-    result = _core.viscous_solve(
+    iterations, residual = _core.viscous_solve(
         cols,
         vals,
         node,
@@ -134,4 +176,4 @@ def viscous_solve(cols, vals, node, off, cells, rhs, x, tol, maxiter, sweeps):
         int(sweeps),
     )
     _viscous_back(x, xc)
-    return result
+    return int(iterations), float(residual)

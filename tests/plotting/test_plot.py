@@ -210,7 +210,7 @@ def test_snapshot_overview_of_a_3d_run_names_its_slice(tmp_path, monkeypatch):
     fig = saved["snapshots.png"]
     assert [ax.get_xlabel() for ax in _panels(fig)] == ["x [m]", "x [m]"]
     assert _panels(fig)[0].get_ylabel() == "z [m]"
-    assert fig._suptitle.get_text() == "slice y = 0.15 m +- 0.005 m"
+    assert fig.get_suptitle() == "slice y = 0.15 m +- 0.005 m"
 
 
 def _with_probes(run, pressure, level, positions=True):
@@ -351,7 +351,7 @@ def test_3d_run_draws_the_water_surface_beside_the_slice(tmp_path, monkeypatch):
                 "z [m]",
             )
             assert ax.get_xlim() == (0.0, 0.3) and ax.get_zlim() == (0.0, 0.3)
-    assert overview._suptitle.get_text() == "water surface (volume fraction 1/2)"
+    assert overview.get_suptitle() == "water surface (volume fraction 1/2)"
     (full,) = [c for c in saved[names[0]].axes[0].collections if isinstance(c, Poly3DCollection)]
     assert saved[names[0]].axes[0].get_title() == "t = 0.000 s"
     (empty,) = [c for c in saved[names[2]].axes[0].collections if isinstance(c, Poly3DCollection)]

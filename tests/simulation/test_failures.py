@@ -138,9 +138,9 @@ def test_nan_stops_the_run_with_step_time_and_cause(tmp_path, monkeypatch, capsy
     def poisoned(self, dt, nsteps, where):
         """The real steps, then a NaN velocity in the chunk after t = 0.02 s."""
         report = advance(self, dt, nsteps, where)
-        if getattr(self, "_steps", 0) >= 20:
+        if getattr(self, "test_steps", 0) >= 20:
             self.particles.v[7, 0] = np.nan
-        self._steps = getattr(self, "_steps", 0) + nsteps
+        self.test_steps = getattr(self, "test_steps", 0) + nsteps
         return report
 
     monkeypatch.setattr(ProjectionScheme, "advance", poisoned)
