@@ -11,13 +11,11 @@ the vertical is z, and both run over every row (column) of cells across the widt
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .. import state
 from ..grid import Grid
 from ..particles import Particles
-
-Floats = NDArray[np.float64]
+from ..state.arrays import Floats
 
 
 def last_crossings(f: Floats, centres: Floats, wall: float) -> Floats:

@@ -57,20 +57,19 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from ..cells import CellBins
 from ..fallbacks import Fallbacks
 from ..grid import Grid
 from ..particles import Particles
+from ..state.arrays import Floats, Ints
 from .measures import volume_fraction_field
 
 if TYPE_CHECKING:
     from ..case import Case
     from ..case.sections import Probe
 
-Floats = NDArray[np.float64]
-Indices = NDArray[np.int64]
 # the obstacles' signed distance f(points) -> distances for an (n, D) array of points
 Distance = Callable[[Floats], ArrayLike]
 # told of each fallback that acted (a key of fallbacks.WHAT)
@@ -160,7 +159,7 @@ def _off_solid(centre: Floats, side: float, solid_distance: Distance) -> Floats:
 
 def window_particles(
     grid: Grid, particles: Particles, bins: CellBins, lo: Floats, hi: Floats
-) -> tuple[Indices, Floats]:
+) -> tuple[Ints, Floats]:
     """Indices of the particles in the box [lo, hi] (both ends included), read from the
     cells the box overlaps (``bins``: ``cells.bin_particles``), not from all particles,
     and their positions seen from the box: along a periodic axis a box reaching beyond an
@@ -187,7 +186,7 @@ def window_particles(
 
 def _box_particles(
     grid: Grid, particles: Particles, bins: CellBins, lo: Floats, hi: Floats
-) -> Indices:
+) -> Ints:
     """Indices of the particles in the box [lo, hi] inside the domain."""
     h, cells = grid.spacing, grid.cells
     first = [int(np.clip(np.floor(a / h), 0, n - 1)) for a, n in zip(lo, cells)]
