@@ -17,22 +17,21 @@ from mpmflow.simulation.schedules import TimeInterval
 H, L, U, DX = 0.05, 0.4, 0.5, 0.005  # a slab H deep moving at U towards the outlet at x = L
 
 
+SLAB = [
+    f"domain.size=[{L}, {3 * H}]",
+    'domain.walls={x_max="outlet"}',
+    f"grid.spacing={DX}",
+    f"bodies.0.max=[{L}, {H}]",
+    f"bodies.0.velocity=[{U}, 0.0]",
+    "bodies.0.particles_per_cell=2",
+    "output.snapshots=false",
+]
+
+
 def _slab(*more):
     return load_case(
         EXAMPLES / "dam_break.toml",
-        [
-            f"domain.size=[{L}, {3 * H}]",
-            'domain.walls={x_max="outlet"}',
-            f"grid.spacing={DX}",
-            f"bodies.0.max=[{L}, {H}]",
-            f"bodies.0.velocity=[{U}, 0.0]",
-            "bodies.0.particles_per_cell=2",
-            "time.end=0.2",
-            "time.dt=0.001",
-            "output.snapshots=false",
-            "output.interval=0.01",
-            *more,
-        ],
+        [*SLAB, "time.end=0.2", "time.dt=0.001", "output.interval=0.01", *more],
     )
 
 
@@ -79,16 +78,7 @@ def test_with_gravity_the_outflow_keeps_the_mass_and_the_summary_says_so(tmp_pat
     t, out_v = rows[-1][0], rows[-1][1]
     assert out_v == pytest.approx(U * H * t, rel=0.05)
     out = tmp_path / "o"
-    overrides = [
-        f"domain.size=[{L}, {3 * H}]",
-        'domain.walls={x_max="outlet"}',
-        f"grid.spacing={DX}",
-        f"bodies.0.max=[{L}, {H}]",
-        f"bodies.0.velocity=[{U}, 0.0]",
-        "bodies.0.particles_per_cell=2",
-        "time.end=0.1",
-        "output.snapshots=false",
-    ]
+    overrides = [*SLAB, "time.end=0.1"]
     args = ["run", str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q"]
     assert main(args + [a for o in overrides for a in ("--set", o)]) == 0
     summary = json.loads((out / "summary.json").read_text())
