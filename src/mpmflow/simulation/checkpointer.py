@@ -92,7 +92,8 @@ def write(sim: Simulation) -> Path:
     added = {a.name: a.schedule.state() for a in sim.actions if not a.builtin}
     if added:  # only then: the meta of a run without them is as before
         meta["schedules"] = added
-    assert sim.out_dir is not None, "a checkpoint needs an output folder (out_dir)"
+    if sim.out_dir is None:  # (the TypeError that Path(None) gave, with its reason)
+        raise TypeError("a checkpoint needs an output folder: the Simulation has no out_dir")
     sim.last_checkpoint = checkpoint.write(sim.out_dir, sim.steps, arrays, meta)
     return sim.last_checkpoint
 
