@@ -10,7 +10,15 @@ projection (Kularathna & Soga 2017). SI units throughout.
 The README's "Python API" section says more.
 """
 
+from typing import TYPE_CHECKING, Any
+
 from ._version import __version__
+
+if TYPE_CHECKING:  # what __getattr__ returns by name, for type checkers
+    from .case import load_case, validate_case
+    from .errors import CaseError, SimulationError
+    from .results import open_run
+    from .simulation import IterationInterval, Simulation, TimeInterval, WallTimeInterval
 
 __all__ = [
     "load_case",
@@ -26,7 +34,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name):
+def _import_on_first_use(name: str) -> Any:  # Any: a different object by name
     # imported on first use, so that `mpmflow --help` and `mpmflow keys` start quickly
     if name == "load_case":
         from .case import load_case
@@ -49,3 +57,10 @@ def __getattr__(name):
 
         return getattr(errors, name)
     raise AttributeError(f"module 'mpmflow' has no attribute {name!r}")
+
+
+# the module's __getattr__ (PEP 562). Bound by assignment, not `def __getattr__`: mypy
+# answers `from .. import _core` in state/ (the compiled core, without type information)
+# with a module __getattr__'s return type, which a typed def in mpmflow's import cycle
+# leaves unresolved ("Any? has no attribute ...", mypy 1.x); a bound name reads as Any
+__getattr__ = _import_on_first_use

@@ -14,12 +14,17 @@ import os
 import shlex
 import sys
 import textwrap
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 from .errors import CaseError, MpmflowError
 from .interrupts import EarlySignals, EarlyStop, StopNow, exit_code
 from .output import check_out_dir as _check_out_dir
+
+if TYPE_CHECKING:
+    from .validation.common import CaseResult
 
 # Ctrl-C and SIGTERM from the moment the command starts: before the run's own handlers
 # (interrupts.stop_on_signals) take over, a signal stops at once with a message
@@ -84,7 +89,7 @@ VALIDATION_CASES = (
 )
 
 
-def _parser():
+def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="mpmflow",
         description=DESCRIPTION,
@@ -205,7 +210,11 @@ def _parser():
     return p
 
 
-def _progress_bar(end, quiet, start=0.0, step=0):
+# the commands read the parsed arguments (argparse.Namespace: Any by attribute) and the
+# progress bar is tqdm's (no type information): Any at both seams
+def _progress_bar(
+    end: float, quiet: bool, start: float = 0.0, step: int = 0
+) -> tuple[Any, Callable[[float, int, float], None] | None]:
     """A tqdm bar over simulated time with the step count, and its update callback.
     ``start``, ``step``: where the run begins (a restart's time and step)."""
     if quiet:
@@ -224,7 +233,7 @@ def _progress_bar(end, quiet, start=0.0, step=0):
     )
     last = [start]
 
-    def update(t, step, end_):
+    def update(t: float, step: int, end_: float) -> None:
         # the step count before the time: update() draws the bar, and a count set after it
         # was drawn beside the next output's time (one output interval behind)
         bar.set_postfix_str(f"step {step}", refresh=False)
@@ -234,14 +243,14 @@ def _progress_bar(end, quiet, start=0.0, step=0):
     return bar, update
 
 
-def _resume_command(args):
+def _resume_command(args: argparse.Namespace) -> str:
     words = ["mpmflow", "run", args.case, "--out", args.out, "--restart"]
     for item in args.overrides:
         words += ["--set", item]
     return " ".join(shlex.quote(str(w)) for w in words)
 
 
-def _run(args):
+def _run(args: argparse.Namespace) -> int:
     with early.deferred():  # the compiled extensions load here
         from .case import load_case
         from .interrupts import stop_on_signals
@@ -310,7 +319,7 @@ def _run(args):
     return 0
 
 
-def _study(args):
+def _study(args: argparse.Namespace) -> int:
     from .studies.paper import run_study
 
     if not args.budget > 0:
@@ -320,7 +329,7 @@ def _study(args):
     out = Path(args.out)
     _check_out_dir(out)
 
-    def report(row):
+    def report(row: dict[str, Any]) -> None:
         print(
             f"mpmflow: {row['label']} (aspect ratio {row['ar']}): {row['steps']} steps to "
             f"t = {row['time_reached_s']:.3g} s in {row['wall_s']:.1f} s wall "
@@ -335,10 +344,10 @@ def _study(args):
     return 0
 
 
-def _plot(args):
+def _plot(args: argparse.Namespace) -> int:
     from .plotting.figures import plot_run
 
-    notes = []
+    notes: list[str] = []
     written = plot_run(args.run_dir, args.out, notes)
     for note in notes:
         print(f"mpmflow: note: {note}", file=sys.stderr)
@@ -346,7 +355,7 @@ def _plot(args):
     return 0
 
 
-def _validate(args):
+def _validate(args: argparse.Namespace) -> int:
     from .plotting.mpl import have_matplotlib
     from .studies.reference_data import data_dir
 
@@ -379,7 +388,7 @@ def _validate(args):
     check_report_folder(out)
     _check_out_dir(out)
 
-    def report(res):
+    def report(res: CaseResult) -> None:
         misses = sum(r.status == "miss" for r in res.rows)
         print(
             f"mpmflow: {res.title}: {len(res.rows)} rows, {misses} missed, {res.wall_s:.0f} s",
@@ -396,7 +405,7 @@ def _validate(args):
     return 0
 
 
-def _keys(args):
+def _keys(args: argparse.Namespace) -> int:
     from .case import key_reference, reference_markdown
 
     rows = key_reference()
@@ -413,7 +422,7 @@ def _keys(args):
     return 0
 
 
-def main(argv=None):
+def main(argv: Sequence[str] | None = None) -> int:
     with early.installed():
         try:
             return _main(argv)
@@ -426,7 +435,7 @@ def main(argv=None):
             return 141
 
 
-def _main(argv):
+def _main(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     if args.command is None:

@@ -16,7 +16,7 @@ the box's part near the obstacles).
 
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -103,7 +103,9 @@ def seeded(
     return keep
 
 
-def _clip(lo, hi, shapes):
+def _clip(
+    lo: np.ndarray, hi: np.ndarray, shapes: Sequence[Shape]
+) -> tuple[np.ndarray, np.ndarray] | None:
     """The part of [lo, hi) inside the union of the shapes' bounding boxes, as one box
     (their hull), or None when none reaches it."""
     parts = []
@@ -156,7 +158,14 @@ def seeds_any(body: Any, grid_spacing: float, shape: Shape | None = None) -> boo
         return True
 
 
-def _pass(body, shape, region, s, obstacles, carved=False):
+def _pass(
+    body: Any,
+    shape: Shape | None,
+    region: tuple[np.ndarray, np.ndarray],
+    s: float,
+    obstacles: Sequence[Shape],
+    carved: bool = False,
+) -> int:
     """Lattice points in region the body keeps (carved: that the obstacles remove)."""
     lo, hi = region
     total = lattice_count(lo, hi, s)
@@ -173,7 +182,7 @@ def _pass(body, shape, region, s, obstacles, carved=False):
     return n
 
 
-def _count(body, grid_spacing):
+def _count(body: Any, grid_spacing: float) -> int:
     s = grid_spacing / body.particles_per_cell
     k0, k1 = lattice_indices(body.min[0], body.max[0], s)
     nx = max(0, k1 - k0 + 1)
@@ -220,15 +229,15 @@ def overlap(a: Any, b: Any, tol: float) -> tuple[list[float], list[float]] | Non
     return ([float(xs[inside].min()), y0], [float(xs[inside].max()), float(top[inside].max())])
 
 
-def _fmt(values):
+def _fmt(values: Iterable[float]) -> str:
     return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
 
 
-def _trims(j, body, other, tol):
+def _trims(j: int, body: Any, other: Any, tol: float) -> list[str]:
     """Changes of ``body`` (bodies.j) that remove its overlap with ``other`` and keep the
     union of the two: a face of body moved to other's face, where the overlap spans body
     across the other axis. Flat boxes only."""
-    out = []
+    out: list[str] = []
     if body.surface_amplitude or other.surface_amplitude:
         return out
     D = len(body.min)
@@ -251,7 +260,7 @@ def _trims(j, body, other, tol):
     return out
 
 
-def _inside(a, b, tol):
+def _inside(a: Any, b: Any, tol: float) -> bool:
     """Body a lies inside body b (flat boxes)."""
     return (
         not a.surface_amplitude

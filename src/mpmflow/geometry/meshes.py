@@ -4,7 +4,7 @@
 import functools
 import io
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn, cast
 
 import igl
 import numpy as np
@@ -52,7 +52,7 @@ class Mesh(Shape):
         self.notes: list[str] = []  # what reading its file had to decide (load_mesh)
         self._band = self.BAND * float(max(np.abs(v).max(), (self._hi - self._lo).max()))
 
-    def _winding(self, x, d):
+    def _winding(self, x: np.ndarray, d: np.ndarray) -> np.ndarray:
         """The winding number at points x (m) with distances d (m) to the surface."""
         w = igl.fast_winding_number(self.vertices, self.faces, x)
         close = np.flatnonzero(d <= self._band)
@@ -68,10 +68,10 @@ class Mesh(Shape):
         d = self.unsigned_distance(x)
         return self._winding(x, d), d <= ON_SURFACE
 
-    def _near_box(self, x):
+    def _near_box(self, x: np.ndarray) -> np.ndarray:
         return np.all((x >= self._lo - ON_SURFACE) & (x <= self._hi + ON_SURFACE), axis=1)
 
-    def _inside(self, x, d):
+    def _inside(self, x: np.ndarray, d: np.ndarray) -> np.ndarray:
         """Inside or on the surface, for points x with distances d to the surface."""
         out = np.zeros(len(x), dtype=bool)
         near = np.flatnonzero(self._near_box(x))
@@ -114,7 +114,7 @@ class Mesh(Shape):
 # --------------------------------------------------------------------------- mesh files
 
 
-def _refuse(key, text):
+def _refuse(key: str, text: str) -> NoReturn:
     raise ValueError(f"{key}.path = {text}")
 
 
@@ -126,7 +126,7 @@ class MeshFileError(ValueError):
     """A mesh file whose bytes say it is damaged (the message says how)."""
 
 
-def _stl_bytes(raw):
+def _stl_bytes(raw: bytes) -> tuple[bytes, str | None]:
     """(the STL bytes for trimesh, a note or None): a binary STL whose header count
     disagrees with the file's size, with its count set to the triangles the file holds.
 
@@ -171,7 +171,7 @@ def _stl_bytes(raw):
     return raw[:80] + held.to_bytes(4, "little") + raw[STL_HEADER:], note
 
 
-def _is_ascii_stl(raw):
+def _is_ascii_stl(raw: bytes) -> bool:
     """An ASCII STL: it starts with ``solid`` and holds no NUL byte (binary triangles hold
     many: the attribute bytes, coordinates 0.0; a binary header may start with "solid")."""
     return raw.lstrip()[:5].lower() == b"solid" and b"\0" not in raw
@@ -180,12 +180,12 @@ def _is_ascii_stl(raw):
 BOMS = ((b"\xef\xbb\xbf", "utf-8-sig"), (b"\xff\xfe", "utf-16"), (b"\xfe\xff", "utf-16"))
 
 
-def _has_bom(raw):
+def _has_bom(raw: bytes) -> bool:
     """Text that starts with a byte-order mark (no binary STL header does, in practice)."""
     return any(raw.startswith(bom) for bom, _ in BOMS)
 
 
-def _text_bytes(raw):
+def _text_bytes(raw: bytes) -> bytes:
     """Text (an ASCII STL, an OBJ) as UTF-8 for trimesh. trimesh decodes other text with
     charset_normalizer's guess, a module it does not install (a Latin-1 solid name, "solid
     W\xfcrfel", failed with "No module named 'charset_normalizer'"); the keywords and numbers
@@ -208,7 +208,7 @@ def _text_bytes(raw):
         return raw.decode("latin-1").encode("utf-8")
 
 
-def _signed_volume(vertices, faces):
+def _signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
     """The volume (m^3, in file units cubed) a closed, outward-oriented surface encloses, by
     the divergence theorem (trimesh's ``volume`` also divides by it, with a warning when
     it is 0)."""
@@ -216,8 +216,12 @@ def _signed_volume(vertices, faces):
     return float(np.einsum("ij,ij->i", v0, np.cross(v1, v2)).sum()) / 6.0
 
 
+# (vertices, faces, boundary edge count, unmatched, note) of a mesh file (_read_mesh)
+MeshData = tuple[np.ndarray, np.ndarray, int, int, str | None]
+
+
 @functools.lru_cache(maxsize=16)
-def _read_mesh(path, stamp):
+def _read_mesh(path: str, stamp: tuple[int, int]) -> MeshData:
     """(vertices, faces, boundary edge count, unmatched, note) of a mesh file; ``stamp``
     (size, mtime) invalidates the cache when the file changes. ``note``: what the reading
     had to decide (a binary STL's wrong count), or None."""
@@ -241,7 +245,9 @@ def _read_mesh(path, stamp):
     # against the corners, arithmetic that warns on inf or nan coordinates; such a file is
     # refused right below, before its vertices are merged
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        mesh = trimesh.load(io.BytesIO(raw), file_type=kind, force="mesh", process=False)
+        # force="mesh" gives a Trimesh (or raises); trimesh's annotation says Geometry
+        loaded = trimesh.load(io.BytesIO(raw), file_type=kind, force="mesh", process=False)
+        mesh = cast("trimesh.Trimesh", loaded)
     if not np.isfinite(np.asarray(mesh.vertices, dtype=float)).all():
         return np.asarray(mesh.vertices, dtype=float), np.zeros((1, 3), np.int64), 0, 0, note
     # a binary STL's triangles share no vertex until equal corners are merged: exactly
@@ -269,7 +275,7 @@ def _read_mesh(path, stamp):
     return vertices, faces, boundary, unmatched, note
 
 
-def _read(path, key, shown):
+def _read(path: Path, key: str, shown: str) -> MeshData:
     """_read_mesh, with what the file system and trimesh raise as the user's message."""
     if path.is_dir():
         _refuse(
@@ -363,7 +369,9 @@ def load_mesh(
     return mesh
 
 
-def _check_extent(key, shown, scale, vertices, v, faces):
+def _check_extent(
+    key: str, shown: str, scale: float, vertices: np.ndarray, v: np.ndarray, faces: np.ndarray
+) -> None:
     """A mesh that encloses no volume (flat, or all its corners at one point; measured in
     the file's units, a tiny scale aside), or whose coordinates times ``scale`` leave the
     floating-point range, is refused: its inside is empty, and every size measured from it

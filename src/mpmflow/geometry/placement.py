@@ -19,7 +19,7 @@ that involve the other shapes and the obstacles:
 * two obstacles with the same name.
 """
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -31,19 +31,19 @@ from .shapes import Shape
 THIN = 2  # grid cells: the thinnest obstacle the grid resolves
 
 
-def _v(values):
+def _v(values: Iterable[float]) -> str:
     return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
 
 
-def _what(kind, k, spec):
+def _what(kind: str, k: int, spec: Any) -> str:
     return f"{kind}.{k} (a {getattr(spec, 'type', 'box')})"
 
 
-def _box_text(size):
+def _box_text(size: Iterable[float]) -> str:
     return " x ".join(f"[0, {s:g}]" for s in size)
 
 
-def _move_keys(kind, k, spec):
+def _move_keys(kind: str, k: int, spec: Any) -> str:
     keys = {
         "box": "min/max",
         "cylinder": "centre",
@@ -55,7 +55,9 @@ def _move_keys(kind, k, spec):
     return f"{kind}.{k}.{keys}"
 
 
-def thickness(spec, shape):
+# spec: a case's obstacle table (mpmflow.case.shapes.Obstacle), read by its ``type`` string
+# as geometry.specs does: Any because mypy cannot narrow the union by that string
+def thickness(spec: Any, shape: Shape) -> tuple[float, str]:
     """The obstacle's smallest width (m) and where it is measured: exact for boxes, discs,
     spheres and cylinders; the bounding box's for polygons and meshes (a thin slanted plate
     is not detected)."""
@@ -143,7 +145,7 @@ def check(case: Any, body_shapes: Sequence[Shape], obstacle_shapes: Sequence[Sha
                 )
 
 
-def _bodies_apart(case, body_shapes):
+def _bodies_apart(case: Any, body_shapes: Sequence[Shape]) -> None:
     """Bodies of which one is not a box must not share a seeded lattice point."""
     h = case.grid.spacing
     listed = case.bodies
@@ -154,7 +156,7 @@ def _bodies_apart(case, body_shapes):
                 continue  # bodies.overlap_message
             for (p, P), (q, Q) in (((i, a), (j, b)), ((j, b), (i, a))):
                 n, lo, hi = _shared(P, body_shapes[p], Q, body_shapes[q], h / P.particles_per_cell)
-                if n:
+                if n and lo is not None and hi is not None:  # n > 0: lo, hi are set
                     raise ValueError(
                         f"{_what('bodies', i, a)} and {_what('bodies', j, b)} overlap: {n} "
                         f"lattice points of bodies.{p} (spacing {h / P.particles_per_cell:.4g}"
@@ -166,7 +168,7 @@ def _bodies_apart(case, body_shapes):
                     )
 
 
-def _bodies_seeded(case, body_shapes):
+def _bodies_seeded(case: Any, body_shapes: Sequence[Shape]) -> None:
     """Every body seeds at least one particle: one that seeds none (smaller or thinner
     than a particle spacing, often a mesh whose scale is off by a thousand) would be left
     out of the run without a word. (A body that obstacles take whole: empty_body_message.)"""
@@ -186,7 +188,7 @@ _SIZE_KEYS = {
 }
 
 
-def _too_small_message(case, k, body, shape):
+def _too_small_message(case: Any, k: int, body: Any, shape: Shape) -> str:
     h, ppc = case.grid.spacing, body.particles_per_cell
     kind = getattr(body, "type", "box")
     lo, hi = (body.min, body.max) if kind == "box" else shape.bounds()
@@ -211,7 +213,9 @@ def _too_small_message(case, k, body, shape):
     return head + resize[0].upper() + resize[1:] + "."
 
 
-def _shared(P, shape_p, Q, shape_q, s):
+def _shared(
+    P: Any, shape_p: Shape, Q: Any, shape_q: Shape, s: float
+) -> tuple[int, np.ndarray | None, np.ndarray | None]:
     """Lattice points (spacing s) that both bodies keep: count and their bounding box."""
     lo_p, hi_p = bodies.seed_region(P, shape_p, s)
     lo_q, hi_q = bodies.seed_region(Q, shape_q, s)

@@ -22,6 +22,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 ON_SURFACE = 1e-12  # m: a point this close to the surface counts as inside
 
@@ -71,7 +72,7 @@ class Shape:
 class Box(Shape):
     """Axis-aligned box [lo, hi] (m), 2D or 3D."""
 
-    def __init__(self, lo, hi):
+    def __init__(self, lo: ArrayLike, hi: ArrayLike) -> None:
         self.lo = np.asarray(lo, dtype=float)
         self.hi = np.asarray(hi, dtype=float)
         self.dim = len(self.lo)
@@ -100,7 +101,7 @@ class Box(Shape):
 class Ball(Shape):
     """Points within ``radius`` (m) of ``centre``: a disc in 2D, a sphere in 3D."""
 
-    def __init__(self, centre, radius):
+    def __init__(self, centre: ArrayLike, radius: float) -> None:
         self.centre = np.asarray(centre, dtype=float)
         self.radius = float(radius)
         self.dim = len(self.centre)
@@ -130,7 +131,7 @@ class Cylinder(Shape):
 
     dim = 3
 
-    def __init__(self, base, axis, radius, length):
+    def __init__(self, base: ArrayLike, axis: ArrayLike, radius: float, length: float) -> None:
         self.base = np.asarray(base, dtype=float)
         axis = np.asarray(axis, dtype=float)
         norm = np.linalg.norm(axis)
@@ -170,13 +171,13 @@ class Polygon(Shape):
 
     dim = 2
 
-    def __init__(self, vertices):
+    def __init__(self, vertices: ArrayLike) -> None:
         v = np.asarray(vertices, dtype=float)
         self.vertices = v
         self.a = v
         self.b = np.roll(v, -1, axis=0)
 
-    def _edge_distance(self, x):
+    def _edge_distance(self, x: np.ndarray) -> np.ndarray:
         best = np.full(len(x), np.inf)
         for a, b in zip(self.a, self.b):
             e = b - a
@@ -184,7 +185,7 @@ class Polygon(Shape):
             best = np.minimum(best, np.linalg.norm(x - a - t[:, None] * e, axis=1))
         return best
 
-    def _crossings(self, x):
+    def _crossings(self, x: np.ndarray) -> np.ndarray:
         """Inside by the crossing number: a ray to +x crosses an odd number of edges (the
         half-open rule counts a vertex on the ray once)."""
         inside = np.zeros(len(x), dtype=bool)

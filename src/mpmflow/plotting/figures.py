@@ -19,21 +19,38 @@ writes into the plot folder:
   Without scikit-image they are left out with a note.
 """
 
+from __future__ import annotations
+
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import CaseError
 from ..grid import Grid
 from ..output import check_out_dir
-from ..results import open_run
+from ..results import Snapshot, open_run
 from .mpl import pyplot, save
+
+if TYPE_CHECKING:  # matplotlib is an optional extra: imported when a figure is made
+    from matplotlib.axes import Axes
+    from matplotlib.collections import PathCollection
 
 DPI = 80
 
+# The types of a run's outputs as mpmflow.results reads them: a CSV's columns by name, and
+# summary.json (parsed JSON: Any for its values, whose shape the code reads key by key).
+# ``plt`` arguments are matplotlib.pyplot (``mpl.pyplot``), a module.
+Columns = Mapping[str, NDArray[np.float64]]
+Summary = Mapping[str, Any]
+Floats = NDArray[np.float64]
 
-def energy_changes(series):
+
+def energy_changes(series: Columns) -> tuple[Floats, Floats]:
     """(potential - initial, total - initial) of a run's timeseries, total = kinetic +
     potential energy, each the change since the first row. The initial total holds the
     initial kinetic energy too: a body released with a velocity starts with it, and
@@ -44,7 +61,7 @@ def energy_changes(series):
     return potential - potential[0], total - total[0]
 
 
-def energy_label(summary):
+def energy_label(summary: Summary) -> str:
     """The energy axis' label: per metre of depth in 2D (J/m), absolute in 3D (J), as the
     summary's units say. A run still going has no summary yet, and timeseries.csv does not
     say its dimension: the label then gives both rather than guess one."""
@@ -52,7 +69,7 @@ def energy_label(summary):
     return f"energy [{unit}]" if unit else "energy [J/m in 2D, J in 3D]"
 
 
-def plot_timeseries(series, summary, path, plt):
+def plot_timeseries(series: Columns, summary: Summary, path: Path, plt: ModuleType) -> None:
     t = series["time"]
     fig, ax = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     ax[0, 0].plot(t, series["front"], label="surge front")
@@ -90,7 +107,7 @@ def plot_timeseries(series, summary, path, plt):
 QUANTITY = {"Pa": ("pressure", "pressure [Pa]"), "m": ("level", "water level [m]")}
 
 
-def measured_series(data):
+def measured_series(data: Mapping[str, str]) -> tuple[Floats, Floats]:
     """(time, values) of a probe's measured series, ``probes.N.data`` as the resolved case
     holds it ({"path", "column", "time_column"}); CaseError when the file cannot be read."""
     path = Path(data["path"])
@@ -112,7 +129,14 @@ def measured_series(data):
 LEGEND_MAX = 10
 
 
-def plot_probes(probes, summary, units, path, plt, notes):
+def plot_probes(
+    probes: Columns,
+    summary: Summary,
+    units: Mapping[str, str | None],
+    path: Path,
+    plt: ModuleType,
+    notes: list[str],
+) -> None:
     """probes.png: one panel per quantity, each probe's series and its measured series.
     Up to LEGEND_MAX probes on a panel are named in its legend; more are coloured by
     position (``_lines_by_position``). ``probes``: probes.csv's columns; ``units``:
@@ -172,12 +196,14 @@ def plot_probes(probes, summary, units, path, plt, notes):
     save(fig, path, DPI)
 
 
-def probe_positions(summary):
+def probe_positions(summary: Summary) -> dict[str, list[float] | None]:
     """{probe: position (m)} as summary.json records them ({} while a run has none)."""
     return {name: p.get("position") for name, p in summary.get("probes", {}).items()}
 
 
-def _lines_by_position(ax, t, probes, group, summary, plt):
+def _lines_by_position(
+    ax: Axes, t: Floats, probes: Columns, group: Sequence[str], summary: Summary, plt: ModuleType
+) -> list[tuple[float, float, float, float] | Floats]:  # RGBA by Colormap
     """More probes than a legend can tell apart on one panel: one thin line each, all in
     one LineCollection (2,000 Line2D and their legend took 10 to 18 s to draw, and the
     legend overflowed the figure), coloured by the probe's position along the axis in which
@@ -187,9 +213,10 @@ def _lines_by_position(ax, t, probes, group, summary, plt):
     from matplotlib.collections import LineCollection
 
     where = probe_positions(summary)
-    xyz = [where.get(n) for n in group]
-    if all(p is not None for p in xyz) and len({len(p) for p in xyz}) == 1:
-        xyz = np.asarray(xyz, dtype=float)
+    found = [where.get(n) for n in group]
+    positions = [p for p in found if p is not None]
+    if len(positions) == len(found) and len({len(p) for p in positions}) == 1:
+        xyz = np.asarray(positions, dtype=float)
         axis = int(np.argmax(np.ptp(xyz, axis=0)))
         value, label = xyz[:, axis], f"probe's {'xyz'[axis]} [m]"
     else:
@@ -210,7 +237,9 @@ def _lines_by_position(ax, t, probes, group, summary, plt):
     return [lines.cmap(lines.norm(v)) for v in value]
 
 
-def side_view(x, p, size, spacing):
+def side_view(
+    x: Floats, p: Floats, size: Sequence[float] | Floats, spacing: float
+) -> tuple[Floats, Floats, list[float], tuple[str, str], str]:
     """What a snapshot figure shows: in 2D the particles on the x-y plane; in 3D the slice
     one grid cell thick through the middle of the width (y), on the x-z plane (z up).
     Returns (points, pressures, the plane's extent, axis names, a caption)."""
@@ -227,7 +256,9 @@ def side_view(x, p, size, spacing):
     )
 
 
-def obstacle_section(summary, plane, notes):
+def obstacle_section(
+    summary: Summary, plane: Sequence[float], notes: list[str]
+) -> tuple[Floats, Floats, Floats] | None:
     """The obstacles on the figures' plane (the x-y plane in 2D, the mid-width x-z slice in
     3D) as (X, Y, signed distance) on a fine raster, or None without obstacles. Rebuilt from
     the case in summary.json; an obstacle that cannot be rebuilt (a mesh file moved away) is
@@ -256,7 +287,16 @@ def obstacle_section(summary, plane, notes):
     return X, Y, phi
 
 
-def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
+def _draw(
+    ax: Axes,
+    xy: Floats,
+    p: Floats,
+    t: float,
+    size: Sequence[float],
+    vmax: float,
+    plt: ModuleType,
+    solid: tuple[Floats, Floats, Floats] | None = None,
+) -> PathCollection:
     if solid is not None and (solid[2] < 0).any():
         ax.contourf(
             solid[0], solid[1], solid[2], levels=[solid[2].min() - 1.0, 0.0], colors=["0.55"]
@@ -281,7 +321,7 @@ def _draw(ax, xy, p, t, size, vmax, plt, solid=None):
     return art
 
 
-def _name_axes(ax, names, caption="", y=True):
+def _name_axes(ax: Axes, names: Sequence[str], caption: str = "", y: bool = True) -> None:
     """The plane's axes named with their unit; in 3D the x label says which slice it is
     (an overview passes it to its title instead, its panels being too narrow for it)."""
     ax.set_xlabel(f"{names[0]} [m]" + (f" ({caption})" if caption else ""))
@@ -289,7 +329,9 @@ def _name_axes(ax, names, caption="", y=True):
         ax.set_ylabel(f"{names[1]} [m]")
 
 
-def plot_snapshots(snaps, summary, folder, plt, notes):
+def plot_snapshots(
+    snaps: Sequence[Snapshot], summary: Summary, folder: Path, plt: ModuleType, notes: list[str]
+) -> list[Path]:
     """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths.
     Snapshots that cannot be read (missing, damaged) are left out with a note."""
     from matplotlib.animation import PillowWriter
@@ -305,8 +347,7 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
         readable.append((snap.time, snap.path))
         if d["x"].shape[1] == 3:
             solid3d.append((snap.time, snap.path, _water(d, summary)))
-    snaps = readable
-    if not snaps:
+    if not readable:
         return []
     size = summary.get("grid", {}).get("domain_used")
     if size is None:
@@ -324,7 +365,7 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
     vmax = float(np.percentile(np.concatenate([p for _, _, p in data]), 99.5)) or 1.0
     (folder / "snapshots").mkdir(exist_ok=True)
     written = []
-    for (t, xy, p), (_, f) in zip(data, snaps):
+    for (t, xy, p), (_, f) in zip(data, readable):
         fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
         art = _draw(ax, xy, p, t, size, vmax, plt, solid)
         fig.colorbar(art, ax=ax, label="pressure [Pa]")
@@ -367,12 +408,12 @@ def plot_snapshots(snaps, summary, folder, plt, notes):
     return written
 
 
-def overview(n):
+def overview(n: int) -> NDArray[np.int64]:
     """Which of n snapshots an overview shows: up to six, evenly spread, first and last."""
     return np.unique(np.linspace(0, n - 1, min(6, n)).round().astype(int))
 
 
-def _water(d, summary):
+def _water(d: Mapping[str, Floats], summary: Summary) -> Floats:
     """The volume fraction field [cx, cy, cz] of one 3D snapshot's particles (``surface``):
     their volume is mass / material.density."""
     from .surface import volume_fraction
@@ -383,7 +424,13 @@ def _water(d, summary):
     return volume_fraction(d["x"], d["mass"] / density, grid["spacing"], cells)
 
 
-def plot_surfaces(fields, summary, folder, plt, notes):
+def plot_surfaces(
+    fields: Sequence[tuple[float, Path, Floats]],
+    summary: Summary,
+    folder: Path,
+    plt: ModuleType,
+    notes: list[str],
+) -> list[Path]:
     """The 3D pictures (``plotting.surface``): snapshots/surface_NNNNNN.png for each snapshot
     (beside its slice particles_NNNNNN.png) and surfaces.png, the overview's snapshots side
     by side. ``fields``: [(time, snapshot file, volume fraction field)]. Returns the
@@ -425,7 +472,9 @@ def plot_surfaces(fields, summary, folder, plt, notes):
     return written
 
 
-def plot_run(run_dir, out_dir=None, notes=None):
+def plot_run(
+    run_dir: str | Path, out_dir: str | Path | None = None, notes: list[str] | None = None
+) -> list[Path]:
     """All figures of the run in ``run_dir`` (into ``out_dir``, default run_dir/plots);
     returns their paths. What could not be read is left out and said in ``notes`` (a list
     to append to)."""

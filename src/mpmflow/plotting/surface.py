@@ -26,7 +26,18 @@ depth. Equal aspect (the box aspect is the domain's), axes in m, seen from the f
 and the side (``VIEW``).
 """
 
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:  # matplotlib is an optional extra (its mplot3d has no type information)
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from mpl_toolkits.mplot3d.axes3d import Axes3D
 
 VIEW = {"elev": 28.0, "azim": -60.0}  # degrees: in front (y < 0), above and to the side
 LIGHT = np.array([0.3, -0.6, 1.0])  # towards the light: from above, behind the viewer
@@ -35,7 +46,7 @@ OBSTACLE = (0.55, 0.55, 0.55, 0.55)  # grey, half transparent
 LEVEL = 0.5
 
 
-def need_skimage(needs="mpmflow plot"):
+def need_skimage(needs: str = "mpmflow plot") -> ModuleType:
     """skimage.measure, or CaseError saying how to install scikit-image."""
     from ..errors import CaseError
 
@@ -49,7 +60,9 @@ def need_skimage(needs="mpmflow plot"):
     return measure
 
 
-def volume_fraction(x, volume, spacing, cells):
+def volume_fraction(
+    x: NDArray[np.float64], volume: ArrayLike, spacing: float, cells: Sequence[int]
+) -> NDArray[np.float64]:
     """The cells' volume fraction [cx, cy, cz] of particles at ``x`` (n, 3) m holding
     ``volume`` (n,) m^3: their volume per cell over the cell's volume, clipped to [0, 1].
     The cells are the solver's (``state.cell_index``: particles on or past the domain's
@@ -68,7 +81,9 @@ def volume_fraction(x, volume, spacing, cells):
     return volume_fraction_field(grid, theta)
 
 
-def water_surface(f, spacing):
+def water_surface(
+    f: NDArray[np.float64], spacing: float
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The iso-surface f = 1/2 of a cell field f [cx, cy, cz] on cells of side ``spacing``
     (m), closed at the domain's faces: (vertices (m, 3) m, triangles (k, 3)); empty arrays
     when no cell reaches 1/2."""
@@ -82,7 +97,7 @@ def water_surface(f, spacing):
     return verts.astype(float) - 0.5 * spacing, faces
 
 
-def surface_area(verts, faces):
+def surface_area(verts: NDArray[np.float64], faces: NDArray[np.int64]) -> float:
     """The area (m^2) of a triangle surface."""
     if len(faces) == 0:
         return 0.0
@@ -90,7 +105,7 @@ def surface_area(verts, faces):
     return float(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum())
 
 
-def _box_triangles(lo, hi):
+def _box_triangles(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
     """The 12 triangles of an axis-aligned box's faces, (12, 3, 3) m."""
     c = np.array(
         [
@@ -106,7 +121,10 @@ def _box_triangles(lo, hi):
     return np.array([c[[a, b, d]] for a, b, _, d in quads] + [c[[b, e, d]] for _, b, e, d in quads])
 
 
-def obstacle_triangles(summary, notes, samples=32):
+# summary: summary.json as read (mpmflow.results): parsed JSON, hence Any for its values
+def obstacle_triangles(
+    summary: Mapping[str, Any], notes: list[str], samples: int = 32
+) -> NDArray[np.float64]:
     """The surfaces of the case's obstacles as triangles (k, 3, 3) m: a box's six faces, a
     mesh's own triangles, any other shape (ball, cylinder) the zero level set of its signed
     distance by marching cubes on ``samples`` points along its bounding box's longest
@@ -144,7 +162,9 @@ def obstacle_triangles(summary, notes, samples=32):
     return np.concatenate(parts) if parts else np.empty((0, 3, 3))
 
 
-def _shaded(triangles, rgb, alpha):
+def _shaded(
+    triangles: NDArray[np.float64], rgb: Sequence[float], alpha: float
+) -> NDArray[np.float64]:
     """RGBA per triangle: ``rgb`` times 0.25 + 0.75 |n . l| (two-sided Lambert shading by
     LIGHT)."""
     n = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
@@ -157,7 +177,15 @@ def _shaded(triangles, rgb, alpha):
     return out
 
 
-def draw_surface(ax, verts, faces, obstacles, size, title=None, labels=True):
+def draw_surface(
+    ax: Axes3D,
+    verts: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    obstacles: NDArray[np.float64],
+    size: Sequence[float],
+    title: str | None = None,
+    labels: bool = True,
+) -> Poly3DCollection:
     """Draw the water's surface (``verts``, ``faces``) and the obstacles' triangles on a 3D
     axes ``ax`` over the domain [0, size] (m); returns the collection. A long domain is
     zoomed in (its box leaves the axes' corners empty), up to 1.25 for 3 to 1 and longer."""

@@ -16,12 +16,17 @@ import csv
 import io
 import math
 import time as _time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from ..case import load_case
+from ..case import Case, load_case
+from ..case.shapes import Body
+from ..case.shapes import Box as BoxBody
 from ..errors import SimulationError
 from ..output.atomic import write_text
 from ..simulation import Simulation
@@ -54,25 +59,41 @@ COLUMNS = {
 }
 
 
+# One run's line of study.csv by COLUMNS key: its values are str, int, float or None by
+# column, and the code reads them as the column's type (Any, as a csv row's cells).
+Row = dict[str, Any]
+# time (s) -> (x, pressure) of the particles
+Fields = dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]]
+# (aspect ratio, example file, label, scheme, overrides, budgeted?)
+Planned = tuple[str, str, str, str, list[str], bool]
+
+
 @dataclass
 class RunResult:
-    row: dict
-    t: np.ndarray
-    front: np.ndarray
-    height: np.ndarray
-    fields: dict = field(default_factory=dict)  # time -> (x, pressure) of the particles
+    row: Row
+    t: NDArray[np.float64]
+    front: NDArray[np.float64]
+    height: NDArray[np.float64]
+    fields: Fields = field(default_factory=dict)
 
 
-def reduced_bulk_modulus(case, factor=SOUND_FACTOR):
+def _box(body: Body) -> BoxBody:
+    """The study's columns: the boxes of the dam-break examples."""
+    if not isinstance(body, BoxBody):
+        raise TypeError(f"the paper study's columns are boxes, not a {body.type}")
+    return body
+
+
+def reduced_bulk_modulus(case: Case, factor: float = SOUND_FACTOR) -> float:
     """K = rho c^2 with c = factor * sqrt(2 g H), H the highest body top (Pa)."""
-    top = max(body.max[1] for body in case.bodies)
+    top = max(_box(body).max[1] for body in case.bodies)
     c = factor * math.sqrt(2.0 * abs(case.physics.gravity[1]) * top)
     return case.material.density * c * c
 
 
-def plan(quick=False):
+def plan(quick: bool = False) -> list[Planned]:
     """The runs of the study: (aspect ratio, example file, label, overrides, budget?)."""
-    runs = []
+    runs: list[Planned] = []
     meshes = MESHES[:1] if quick else MESHES
     for ar, example in (("2", "examples/dam_break.toml"), ("1", "examples/dam_break_ar1.toml")):
         if quick and ar == "1":
@@ -123,7 +144,14 @@ def plan(quick=False):
     return runs
 
 
-def _errors(ar, t, front, height, a, t_end):
+def _errors(
+    ar: str,
+    t: NDArray[np.float64],
+    front: NDArray[np.float64],
+    height: NDArray[np.float64],
+    a: float,
+    t_end: float,
+) -> tuple[float, float, float]:
     if ar == "2":
         e = errors_against_vof(t, front, height, a, min(0.2, t_end), min(0.4, t_end))
         tau_end = min(3.5, t_end * math.sqrt(G / a))
@@ -135,13 +163,24 @@ def _errors(ar, t, front, height, a, t_end):
     return float(np.max(np.abs(diff))), float("nan"), float("nan")
 
 
-def run_one(ar, example, label, scheme, overrides, budgeted, out, budget, end, progress=None):
+def run_one(
+    ar: str,
+    example: str,
+    label: str,
+    scheme: str,
+    overrides: list[str],
+    budgeted: bool,
+    out: Path,
+    budget: float,
+    end: float,
+    progress: Callable[[Row], object] | None = None,
+) -> RunResult:
     overrides = overrides + [f"time.end={end}"]
     case = load_case(ROOT / example, overrides)
     sim = Simulation(case, out)
-    fields = {}
+    fields: Fields = {}
 
-    def keep(s):
+    def keep(s: Simulation) -> None:
         k = round(s.time / 0.1)
         if abs(s.time - 0.1 * k) < 1e-9 and k >= 1:
             fields[round(0.1 * k, 1)] = (s.particles.x.copy(), s.particles.pressure.copy())
@@ -153,7 +192,8 @@ def run_one(ar, example, label, scheme, overrides, budgeted, out, budget, end, p
     except SimulationError as err:  # reported in the table; the study goes on
         status = f"failed: {err}"
     wall = _time.perf_counter() - t0
-    a = case.bodies[0].max[0] - case.bodies[0].min[0]
+    column = _box(case.bodies[0])
+    a = column.max[0] - column.min[0]
     t, front, height = sim.series("time"), sim.series("front"), sim.series("height")
     fe, he, mm = _errors(ar, t, front, height, a, sim.time)
     row = {
@@ -179,7 +219,7 @@ def run_one(ar, example, label, scheme, overrides, budgeted, out, budget, end, p
     return RunResult(row, t, front, height, fields)
 
 
-def _fmt(v):
+def _fmt(v: object) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
     if isinstance(v, float):
@@ -187,7 +227,7 @@ def _fmt(v):
     return str(v)
 
 
-def compare_with_projection(results, a=0.114):
+def compare_with_projection(results: Sequence[RunResult], a: float = 0.114) -> None:
     """Largest |explicit - projection| / a of the front (t <= 0.2 s) and the height
     (t <= 0.4 s) at the same column and mesh, over the times both reached."""
     for r in results:
@@ -214,7 +254,7 @@ def compare_with_projection(results, a=0.114):
             r.row[f"{key}_vs_projection_a"] = float(np.max(np.abs(mine[:n] - theirs[:n])[sel]) / a)
 
 
-def tables(results, end=1.0):
+def tables(results: Sequence[RunResult], end: float = 1.0) -> tuple[str, str]:
     """(csv text, markdown text) of the study table and its headline ratios (wall time to
     ``end``, s)."""
     compare_with_projection(results)
@@ -239,13 +279,13 @@ def tables(results, end=1.0):
     return buf.getvalue(), "\n".join(md) + "\n"
 
 
-def mean_step(row):
+def mean_step(row: Mapping[str, Any]) -> float:
     """The run's mean time step (s): simulated time over steps (time.dt = "auto" re-evaluates
     the explicit step every step, so its first step, dt_s, need not be typical)."""
     return row["time_reached_s"] / row["steps"] if row["steps"] else float("nan")
 
 
-def wall_to_end(row, end=1.0):
+def wall_to_end(row: Mapping[str, Any], end: float = 1.0) -> tuple[float, str]:
     """(wall seconds to ``end``, how it was obtained): measured when the run reached it, else
     extrapolated linearly from the cost per simulated second up to where it stopped."""
     if row["time_reached_s"] >= end - 1e-9:
@@ -255,7 +295,7 @@ def wall_to_end(row, end=1.0):
     )
 
 
-def headline(rows, end=1.0):
+def headline(rows: Sequence[Mapping[str, Any]], end: float = 1.0) -> list[str]:
     """At the finest mesh of each column: the time-step and wall-time ratios between the
     projection and each explicit run (real and reduced K), and the pressure noise of each."""
     lines = []
@@ -289,7 +329,13 @@ def headline(rows, end=1.0):
     return lines
 
 
-def run_study(out, budget=480.0, quick=False, end=1.0, progress=None):
+def run_study(
+    out: str | Path,
+    budget: float = 480.0,
+    quick: bool = False,
+    end: float = 1.0,
+    progress: Callable[[Row], object] | None = None,
+) -> list[RunResult]:
     """Run the study into ``out``; returns the RunResults."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

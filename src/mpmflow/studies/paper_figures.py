@@ -1,10 +1,14 @@
 """Figures of the paper study (``studies.paper``): Fig. 2, 3 and 4 analogues as PNG files."""
 
+from collections.abc import Sequence
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..plotting.mpl import pyplot
+from .paper import Row, RunResult
 from .reference_data import MM_HEIGHT_AR2, VOF_AR2, G, load
 
 A = 0.114  # m, width of both columns
@@ -14,17 +18,17 @@ COLOURS = {0.0114: "tab:green", 0.008: "tab:orange", 0.004: "tab:blue"}
 STYLES = {"projection": "-", "real": ":", "reduced": "--"}
 
 
-def _kind(row):
+def _kind(row: Row) -> str:
     if row["scheme"] == "projection":
         return "projection"
     return "real" if row["bulk_modulus_pa"] >= 1e9 else "reduced"
 
 
-def _plt():
+def _plt() -> ModuleType:
     return pyplot("mpmflow study (its figures)")
 
 
-def fig2(results, ar, path):
+def fig2(results: Sequence[RunResult], ar: str, path: Path) -> None:
     """Normalised column height and surge front against normalised time."""
     plt = _plt()
     fig, (ax_h, ax_f) = plt.subplots(1, 2, figsize=(13, 5), constrained_layout=True)
@@ -73,13 +77,13 @@ def fig2(results, ar, path):
     plt.close(fig)
 
 
-def _finest(results, ar):
+def _finest(results: Sequence[RunResult], ar: str) -> list[RunResult]:
     sel = [r for r in results if r.row["ar"] == ar]
     h = min(r.row["spacing_m"] for r in sel)
     return [r for r in sel if r.row["spacing_m"] == h]
 
 
-def fig3(results, ar, path, vmax):
+def fig3(results: Sequence[RunResult], ar: str, path: Path, vmax: float) -> None:
     """Particle pressure at 0.1 s intervals, each scheme at the finest mesh."""
     plt = _plt()
     runs = _finest(results, ar)
@@ -119,7 +123,9 @@ def fig3(results, ar, path, vmax):
     plt.close(fig)
 
 
-def surface_profile(x, width=0.42, bins=84):
+def surface_profile(
+    x: NDArray[np.float64], width: float = 0.42, bins: int = 84
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Free-surface profile: the highest particle in each of ``bins`` columns (m)."""
     edges = np.linspace(0.0, width, bins + 1)
     k = np.clip(np.digitize(x[:, 0], edges) - 1, 0, bins - 1)
@@ -128,7 +134,7 @@ def surface_profile(x, width=0.42, bins=84):
     return 0.5 * (edges[1:] + edges[:-1]), top
 
 
-def fig4(results, ar, path):
+def fig4(results: Sequence[RunResult], ar: str, path: Path) -> None:
     """Free-surface profiles at 0.1 s intervals, each scheme at the finest mesh."""
     plt = _plt()
     runs = _finest(results, ar)
@@ -147,7 +153,7 @@ def fig4(results, ar, path):
     plt.close(fig)
 
 
-def write_figures(results, out):
+def write_figures(results: Sequence[RunResult], out: str | Path) -> None:
     out = Path(out)
     for ar in sorted({r.row["ar"] for r in results}, reverse=True):
         fig2(results, ar, out / f"fig2_height_front_ar{ar}.png")

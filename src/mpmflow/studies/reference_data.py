@@ -5,16 +5,20 @@ beside the repository. Lengths are normalised by the column width a (m).
 """
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 G = 9.81
 VOF_AR2 = "reference/vof_interfoam_ar2_dx0.004_slip.csv"
 MM_HEIGHT_AR2 = "validation/martin_moyce_1952_n2eq2_a2.25in_height_table6.csv"
 
+Series = NDArray[np.float64] | Sequence[float]  # a simulated series (s, m)
 
-def data_dir():
+
+def data_dir() -> Path:
     env = os.environ.get("MPMFLOW_DATA")
     path = Path(env) if env else Path(__file__).resolve().parents[4] / "shared" / "data"
     if not path.is_dir():
@@ -25,18 +29,20 @@ def data_dir():
     return path
 
 
-def load(relative):
+def load(relative: str) -> NDArray[np.float64]:
     """A reference CSV (header line skipped) as a 2D array."""
     return np.loadtxt(data_dir() / relative, delimiter=",", skiprows=1, ndmin=2)
 
 
-def errors_against_vof(t, front, height, a, front_until, height_until):
+def errors_against_vof(
+    t: Series, front: Series, height: Series, a: float, front_until: float, height_until: float
+) -> dict[str, float]:
     """Largest |sim - VOF| / a of front (t <= front_until) and height (t <= height_until).
 
     The simulation series is interpolated linearly to the reference times."""
     ref = load(VOF_AR2)
     tr = ref[:, 0]
-    out = {}
+    out: dict[str, float] = {}
     for name, sim, col, until in (
         ("front", front, 1, front_until),
         ("height", height, 2, height_until),
@@ -48,7 +54,9 @@ def errors_against_vof(t, front, height, a, front_until, height_until):
     return out
 
 
-def height_error_against_martin_moyce(t, height, a, tau_until):
+def height_error_against_martin_moyce(
+    t: Series, height: Series, a: float, tau_until: float
+) -> float:
     """Largest |sim - M&M Table 6| / a of the column height for tau = t sqrt(g/a) <= tau_until."""
     mm = load(MM_HEIGHT_AR2)
     sel = mm[:, 0] <= tau_until + 1e-9

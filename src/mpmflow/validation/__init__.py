@@ -13,7 +13,9 @@ sloshing and dam-break runs).
 """
 
 import time as _time
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
+from typing import Protocol
 
 from ..errors import CaseError, SimulationError
 from . import (
@@ -30,8 +32,16 @@ from . import (
     volume,
 )
 from .common import EXAMPLES, CaseResult, Row
+from .types import Context
 
-CASES = {
+
+class CaseRun(Protocol):
+    """A case's ``run(out, quick, context)``."""
+
+    def __call__(self, out: Path, quick: bool, context: Context | None) -> CaseResult: ...
+
+
+CASES: dict[str, CaseRun] = {
     "hydrostatic": hydrostatic.run,
     "sloshing": sloshing.run,
     "dam_break": dam_break.run,
@@ -67,7 +77,7 @@ EXAMPLE_FILES = {
 }  # the examples/ files each runs
 
 
-def case_names(cases=None):
+def case_names(cases: Collection[str] | None = None) -> list[str]:
     """The cases to run, in order: ``cases`` (all by default) and those they need."""
     names = list(CASES) if not cases else [c for c in CASES if c in cases]
     for name in list(names):
@@ -77,13 +87,13 @@ def case_names(cases=None):
     return names
 
 
-def missing_examples(cases=None):
+def missing_examples(cases: Collection[str] | None = None) -> list[Path]:
     """The example case files the cases would run that are not there."""
     files = dict.fromkeys(f for n in case_names(cases) for f in EXAMPLE_FILES.get(n, ()))
     return [EXAMPLES / f for f in files if not (EXAMPLES / f).is_file()]
 
 
-def _missing_text(missing):
+def _missing_text(missing: Sequence[Path]) -> str:
     return (
         "mpmflow validate runs the case files in the examples/ folder of a source "
         f"checkout, and {', '.join(str(p) for p in missing)} "
@@ -92,7 +102,12 @@ def _missing_text(missing):
     )
 
 
-def run_validation(out, quick=False, cases=None, progress=None):
+def run_validation(
+    out: str | Path,
+    quick: bool = False,
+    cases: Collection[str] | None = None,
+    progress: Callable[[CaseResult], object] | None = None,
+) -> tuple[list[CaseResult], dict[str, int]]:
     """Run the cases (all by default) into ``out``; returns (results, counts)."""
     from .report import check_report_folder, write_report
 
@@ -103,7 +118,8 @@ def run_validation(out, quick=False, cases=None, progress=None):
         raise CaseError(_missing_text(missing))
     out.mkdir(parents=True, exist_ok=True)
     names = case_names(cases)
-    context, results = {}, []
+    context: Context = {}
+    results: list[CaseResult] = []
     t0 = _time.perf_counter()
     for name in names:
         t1 = _time.perf_counter()

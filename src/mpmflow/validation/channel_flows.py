@@ -38,6 +38,7 @@ against log(spacing) over the two meshes.
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -45,6 +46,7 @@ from .channel_theory import (
     bagnold,
     bingham,
     binned,
+    depth,
     fit_plug,
     incline,
     inertial_number,
@@ -53,6 +55,7 @@ from .channel_theory import (
     poiseuille,
 )
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
+from .types import Context, FloatArray, Measures, Meshes
 
 # tolerances, fixed in this module before the validation runs (those of the issue, 26 item 2)
 TOL_STEADY = 0.01
@@ -88,13 +91,13 @@ WHY_ORDER = (
 )
 
 # meshes and run lengths (full, quick); measured before the tolerances were applied
-POISEUILLE = {"spacings": (0.0025, 0.00125), "end": 1.5}
-POISEUILLE_QUICK = {"spacings": (0.005, 0.0025), "end": 1.0}
+POISEUILLE: Meshes = {"spacings": (0.0025, 0.00125), "end": 1.5}
+POISEUILLE_QUICK: Meshes = {"spacings": (0.005, 0.0025), "end": 1.0}
 STARTUP = 0.1  # of T_visc
-PLUG = {"spacings": (0.005, 0.0025), "end": 1.5}
-PLUG_QUICK = {"spacings": (0.01, 0.005), "end": 1.0}
-LAYER = {"spacings": (0.002, 0.001), "end": 3.0}
-LAYER_QUICK = {"spacings": (0.004, 0.002), "end": 2.5}
+PLUG: Meshes = {"spacings": (0.005, 0.0025), "end": 1.5}
+PLUG_QUICK: Meshes = {"spacings": (0.01, 0.005), "end": 1.0}
+LAYER: Meshes = {"spacings": (0.002, 0.001), "end": 3.0}
+LAYER_QUICK: Meshes = {"spacings": (0.004, 0.002), "end": 2.5}
 MISS_STARTUP_ORDER = (
     "the time step stays 1 ms on both meshes, and the start-up's error at the finer one is "
     "partly backward Euler's (first order in dt): at h = 1.25 mm it is 0.62%, 0.46% and 0.41% "
@@ -103,20 +106,16 @@ MISS_STARTUP_ORDER = (
 )
 
 
-def _depth(case):
-    return float(case.bodies[0].max[1] - case.bodies[0].min[1])
-
-
-def measure_poiseuille(h, end, example="poiseuille_film.toml"):
+def measure_poiseuille(h: float, end: float, example: str = "poiseuille_film.toml") -> Measures:
     """Run the film at spacing ``h`` to ``end`` (s); the start-up and steady measures."""
-    snaps = {}
-    state = {}
+    snaps: dict[str, tuple[float, FloatArray, FloatArray]] = {}
+    state: dict[str, float] = {}
 
     def grab(sim):
         if "T" not in state:
             m = sim.case.material
             nu = m.viscosity / m.density
-            H = _depth(sim.case)
+            H = depth(sim.case)
             state.update(T=H * H / nu, nu=nu, H=H)
         if abs(sim.time - STARTUP * state["T"]) < 0.5 * sim.dt:
             snaps["startup"] = (
@@ -152,12 +151,12 @@ def measure_poiseuille(h, end, example="poiseuille_film.toml"):
     return r
 
 
-def measure_plug(h, end, example="bingham_plug.toml"):
+def measure_plug(h: float, end: float, example: str = "bingham_plug.toml") -> Measures:
     """Run the Bingham layer at spacing ``h`` to ``end`` (s); plug width and speed."""
     sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"])
     m = sim.case.material
     theta, g = incline(sim.case)
-    gs, H = g * math.sin(theta), _depth(sim.case)
+    gs, H = g * math.sin(theta), depth(sim.case)
     y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
     r = {
         "h": h,
@@ -183,12 +182,12 @@ def measure_plug(h, end, example="bingham_plug.toml"):
     return r
 
 
-def measure_layer(h, end, example="mu_i_layer.toml"):
+def measure_layer(h: float, end: float, example: str = "mu_i_layer.toml") -> Measures:
     """Run the mu(I) layer at spacing ``h`` to ``end`` (s); surface velocity and profile."""
     sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"])
     m = sim.case.material
     theta, g = incline(sim.case)
-    H = _depth(sim.case)
+    H = depth(sim.case)
     args = (
         H,
         theta,
@@ -245,11 +244,11 @@ def _order_row(case, quantity, error, runs, errors, miss="the error does not fal
     )
 
 
-def _section(n):
+def _section(n: int) -> str:
     return __doc__.split("\n\n")[n]
 
 
-def run_poiseuille(out, quick=False, context=None):
+def run_poiseuille(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult(
         "poiseuille", "Plane Poiseuille flow (film on an incline): start-up and steady profile"
     )
@@ -348,7 +347,7 @@ def run_poiseuille(out, quick=False, context=None):
     return res
 
 
-def run_plug(out, quick=False, context=None):
+def run_plug(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("bingham_plug", "Bingham plug on an incline: plug width and profile")
     cfg = PLUG_QUICK if quick else PLUG
     runs = [measure_plug(h, cfg["end"]) for h in cfg["spacings"]]
@@ -436,7 +435,7 @@ def run_plug(out, quick=False, context=None):
     return res
 
 
-def run_layer(out, quick=False, context=None):
+def run_layer(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("mu_i_layer", "Inclined mu(I) layer: Bagnold profile")
     cfg = LAYER_QUICK if quick else LAYER
     runs = [measure_layer(h, cfg["end"]) for h in cfg["spacings"]]

@@ -3,8 +3,14 @@
 Bagnold's profile; and the binning of particle velocities across the layer."""
 
 import math
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..case import Case
+from .common import box
+from .types import FloatArray
 
 SERIES_TERMS = 200  # of the start-up series: the tail after N terms is below 1 / (pi^3 N^2)
 
@@ -12,7 +18,9 @@ SERIES_TERMS = 200  # of the start-up series: the tail after N terms is below 1 
 # --- analytic solutions -----------------------------------------------------------------
 
 
-def poiseuille(y, H, nu, gs, t=None, terms=SERIES_TERMS):
+def poiseuille(
+    y: ArrayLike, H: float, nu: float, gs: float, t: float | None = None, terms: int = SERIES_TERMS
+) -> FloatArray:
     """The film's velocity (m/s) at heights ``y`` (m) above the no-slip bed: the steady
     half-channel profile (t None), or the start-up from rest at time ``t`` (s) as the
     Fourier series of the half-channel (no slip at y = 0, no shear at y = H). ``gs``: the
@@ -26,20 +34,20 @@ def poiseuille(y, H, nu, gs, t=None, terms=SERIES_TERMS):
     return gs * H * H / nu * u
 
 
-def plug_width(H, rho, tau_y, gs):
+def plug_width(H: float, rho: float, tau_y: float, gs: float) -> float:
     """The Bingham plug's thickness (m): where the shear stress rho gs (H - y) < tau_y."""
     return min(H, tau_y / (rho * gs))
 
 
-def bingham(y, H, rho, K, tau_y, gs):
+def bingham(y: ArrayLike, H: float, rho: float, K: float, tau_y: float, gs: float) -> FloatArray:
     """The steady Bingham layer's velocity (m/s): the yielded layer's parabola below
     Y = H - h_p, the plug's speed rho gs Y^2 / (2 K) above."""
     Y = H - plug_width(H, rho, tau_y, gs)
-    yy = np.clip(np.asarray(y, float), 0.0, Y)
+    yy: FloatArray = np.clip(np.asarray(y, float), 0.0, Y)
     return rho * gs / K * (Y * yy - 0.5 * yy * yy)
 
 
-def inertial_number(theta, mu_s, mu_2, I0):
+def inertial_number(theta: float, mu_s: float, mu_2: float, I0: float) -> float:
     """The inertial number of steady flow at inclination ``theta`` (rad): mu(I) = tan(theta)
     with mu(I) = mu_s + (mu_2 - mu_s) I / (I0 + I); nan outside mu_s < tan(theta) < mu_2."""
     t = math.tan(theta)
@@ -48,24 +56,40 @@ def inertial_number(theta, mu_s, mu_2, I0):
     return I0 * (t - mu_s) / (mu_2 - t)
 
 
-def bagnold(y, H, theta, mu_s, mu_2, I0, d, phi, g=9.81):
+def bagnold(
+    y: ArrayLike,
+    H: float,
+    theta: float,
+    mu_s: float,
+    mu_2: float,
+    I0: float,
+    d: float,
+    phi: float,
+    g: float = 9.81,
+) -> FloatArray:
     """Bagnold's profile (m/s) of a mu(I) layer H deep at inclination ``theta``: grain
     diameter d (m), solid fraction phi = bulk density / grain density."""
     It = inertial_number(theta, mu_s, mu_2, I0)
-    depth = np.clip(H - np.asarray(y, float), 0.0, H)
+    depth: FloatArray = np.clip(H - np.asarray(y, float), 0.0, H)
     return (2.0 / 3.0) * It * math.sqrt(phi * g * math.cos(theta)) / d * (H**1.5 - depth**1.5)
 
 
 # --- measures -----------------------------------------------------------------------------
 
 
-def incline(case):
+def incline(case: Case) -> tuple[float, float]:
     """(theta (rad), |g|) of a case's tilted gravity [g sin(theta), -g cos(theta)]."""
     gx, gy = case.physics.gravity[:2]
     return math.atan2(gx, -gy), math.hypot(gx, gy)
 
 
-def bins(y, H, h):
+def depth(case: Case) -> float:
+    """The layer's initial depth H (m): the height of the case's first body, a box."""
+    column = box(case.bodies[0])
+    return float(column.max[1] - column.min[1])
+
+
+def bins(y: ArrayLike, H: float, h: float) -> tuple[NDArray[np.int_], int]:
     """Index of each particle's bin (one cell high, 0 < y < H; -1 outside) and their count."""
     n = int(round(H / h))
     idx = np.floor(np.asarray(y) / h).astype(int)
@@ -73,7 +97,9 @@ def bins(y, H, h):
     return idx, n
 
 
-def binned(y, u, H, h, theory):
+def binned(
+    y: FloatArray, u: FloatArray, H: float, h: float, theory: Callable[[FloatArray], FloatArray]
+) -> tuple[FloatArray, ...]:
     """(mean height, mean u, mean theory) per bin (arrays; empty bins dropped)."""
     idx, n = bins(y, H, h)
     th = theory(y)
@@ -85,11 +111,11 @@ def binned(y, u, H, h, theory):
     return tuple(np.array(c) for c in zip(*out))
 
 
-def l2(um, ut):
+def l2(um: FloatArray, ut: FloatArray) -> float:
     return float(math.sqrt(np.sum((um - ut) ** 2) / np.sum(ut**2)))
 
 
-def fit_plug(y, u, H, h):
+def fit_plug(y: FloatArray, u: FloatArray, H: float, h: float) -> float:
     """The plug width (m): H - Y of the Bingham profile A (Y y - y^2 / 2) (y < Y),
     A Y^2 / 2 (y > Y) fitted by least squares to the binned velocity (A linear in the
     fit; Y scanned over [0.05 H, H] then refined by a bounded scalar minimisation)."""
@@ -102,7 +128,7 @@ def fit_plug(y, u, H, h):
     filled = count > 0
     ub = (np.bincount(idx, uk, minlength=n) / np.maximum(count, 1))[filled]
 
-    def residual(Y):
+    def residual(Y: float) -> float:
         z = np.minimum(yk, Y)
         f = (np.bincount(idx, Y * z - 0.5 * z * z, minlength=n) / np.maximum(count, 1))[filled]
         A = float(f @ ub) / float(f @ f)

@@ -5,15 +5,26 @@ before the results were looked at; a row passes when its value is on the allowed
 the tolerance (a value that could not be measured, nan, fails).
 """
 
+from __future__ import annotations
+
 import math
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..case import load_case
+from ..case.shapes import Body
+from ..case.shapes import Box as BoxBody
 from ..plotting import mpl
 from ..simulation import Simulation
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 ROOT = Path(__file__).resolve().parents[3]
 EXAMPLES = ROOT / "examples"
@@ -36,14 +47,14 @@ class Row:
     not_measurable: bool = False  # nan because there is nothing to measure (see ``miss``)
 
     @property
-    def status(self):
+    def status(self) -> Literal["pass", "miss", "n/a"]:
         """ "pass", "miss", or "n/a" (nothing to measure, explained in ``miss``)."""
         if self.not_measurable and not math.isfinite(self.value):
             return "n/a"
         return "pass" if self.passed else "miss"
 
     @property
-    def passed(self):
+    def passed(self) -> bool:
         v = self.value
         if v is None or not math.isfinite(v):
             return False
@@ -52,10 +63,10 @@ class Row:
         return v <= self.tolerance if self.sense == "<=" else v >= self.tolerance
 
     @property
-    def tolerance_text(self):
+    def tolerance_text(self) -> str:
         return {"<=": "<= ", ">=": ">= ", "|<=|": "|x| <= "}[self.sense] + f"{self.tolerance:.3g}"
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, str | float]:
         return {
             "case": self.case,
             "quantity": self.quantity,
@@ -74,13 +85,17 @@ class CaseResult:
 
     name: str
     title: str
-    rows: list = field(default_factory=list)
-    figures: list = field(default_factory=list)  # (file name in the report folder, caption)
+    rows: list[Row] = field(default_factory=list)
+    figures: list[tuple[str, str]] = field(default_factory=list)  # (file name, caption)
     text: str = ""  # Markdown: set-up, measures, per-run numbers
     wall_s: float = 0.0
 
 
-def run_example(example, overrides=(), on_output=None):
+def run_example(
+    example: str,
+    overrides: Sequence[str] = (),
+    on_output: Callable[[Simulation], None] | None = None,
+) -> Simulation:
     """Run ``examples/<example>`` with overrides (no files written); returns the Simulation.
 
     ``on_output(sim)`` is called at every output time. The run's wall time is in
@@ -93,7 +108,7 @@ def run_example(example, overrides=(), on_output=None):
     return sim
 
 
-def observed_order(h, e):
+def observed_order(h: ArrayLike, e: ArrayLike) -> float:
     """Least-squares slope of log(error) against log(spacing): the observed order."""
     h, e = np.asarray(h, float), np.asarray(e, float)
     if np.any(~np.isfinite(e)) or np.any(e <= 0):
@@ -101,7 +116,7 @@ def observed_order(h, e):
     return float(np.polyfit(np.log(h), np.log(e), 1)[0])
 
 
-def fmt(v, digits=3):
+def fmt(v: float | np.integer[Any] | None, digits: int = 3) -> str:
     """A number for the report: 3 significant digits, nan as 'n/a'."""
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "n/a"
@@ -110,7 +125,7 @@ def fmt(v, digits=3):
     return f"{v:.{digits}g}"
 
 
-def markdown_table(header, rows):
+def markdown_table(header: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
     return "\n".join(lines)
@@ -119,11 +134,19 @@ def markdown_table(header, rows):
 DPI = 90  # of the report's figures
 
 
-def pyplot():
+def pyplot() -> ModuleType:
     """matplotlib.pyplot (see ``plotting.mpl``)."""
     return mpl.pyplot("mpmflow validate")
 
 
-def save(fig, path):
+def save(fig: Figure, path: Path) -> None:
     """Save a report figure atomically and close it."""
     mpl.save(fig, path, DPI)
+
+
+def box(body: Body) -> BoxBody:
+    """A validation case's body, which is a box in each example it runs (its corners are
+    read): TypeError for another shape."""
+    if not isinstance(body, BoxBody):
+        raise TypeError(f"the validation expects a box body here, not a {body.type}")
+    return body

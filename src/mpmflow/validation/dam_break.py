@@ -18,11 +18,15 @@ dt = 10 ms, Courant number about 2) is an extra row. Error measures, lengths in 
 """
 
 import math
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
+from ..simulation import Simulation
 from ..studies.reference_data import errors_against_vof, height_error_against_martin_moyce, load
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
+from .types import Context, FloatArray, Measures
 from .volume import Recorder
 
 G = 9.81
@@ -70,7 +74,7 @@ WHY_DT = {
 }
 
 
-def front_rms(t, front, data, scale):
+def front_rms(t: FloatArray, front: FloatArray, data: str, scale: float) -> float:
     """RMS of (x_sim - x_ref) / a over the data points before the wall (T = t * scale)."""
     ref = load(data)
     sel = (ref[:, 1] < TANK / A) & (ref[:, 0] > 0)
@@ -80,20 +84,22 @@ def front_rms(t, front, data, scale):
     return float(np.sqrt(np.mean(diff**2))) if diff.size else float("nan")
 
 
-def front_errors(t, front):
+def front_errors(t: FloatArray, front: FloatArray) -> tuple[float, float]:
     """RMS front errors against Martin & Moyce Table 2 and Koshizuka & Oka (units of a)."""
     s = math.sqrt(2 * G / A)
     return front_rms(t, front, MM_FRONT, s), front_rms(t, front, KO_FRONT, s)
 
 
-def vof_front_allowance():
+def vof_front_allowance() -> tuple[float, float]:
     """The tolerances of the experiment comparisons: the VOF's own RMS error plus EXTRA."""
     vof = load(VOF)
     mm, ko = front_errors(vof[:, 0], vof[:, 1])
     return mm + EXTRA, ko + EXTRA
 
 
-def _run_ar2(h, dt, end, on_output=None):
+def _run_ar2(
+    h: float, dt: float, end: float, on_output: Callable[[Simulation], None] | None = None
+) -> Measures:
     sim = run_example(
         "dam_break.toml",
         [f"grid.spacing={h}", f"time.dt={dt}", f"time.end={end}"],
@@ -125,7 +131,7 @@ def _run_ar2(h, dt, end, on_output=None):
     }
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     meshes = MESHES_QUICK if quick else MESHES
     end = END_QUICK if quick else END
     res = CaseResult("dam_break", "Dam break, aspect ratio 2")
@@ -134,7 +140,7 @@ def run(out, quick=False, context=None):
         finest = h == meshes[-1]
         rec = Recorder() if finest else None
         runs.append(_run_ar2(h, DT, end, rec))
-        if finest and context is not None:
+        if rec is not None and context is not None:
             context.setdefault("volume", {})["dam break"] = (f"h = {h} m", rec)
     paper = None if quick else _run_ar2(*PAPER_COARSE, end)
     tol_mm, tol_ko = vof_front_allowance()
@@ -255,13 +261,13 @@ def run(out, quick=False, context=None):
     return res
 
 
-def _dt_study(end, quick):
+def _dt_study(end: float, quick: bool) -> list[Measures]:
     if quick:
         end = min(end, 0.4)
     return [_run_ar2(0.008, dt, end) for dt in DTS]
 
 
-def _difference(r, base, rms=False):
+def _difference(r: Measures, base: Measures, rms: bool = False) -> list[float]:
     """Largest (or RMS) |r - base| / a of the front (t <= 0.2 s) and height (t <= 0.4 s)."""
     out = []
     for key, until in (("front", 0.2), ("height", 0.4)):
@@ -271,7 +277,9 @@ def _difference(r, base, rms=False):
     return out
 
 
-def _figure_ar2(out, runs, paper, dt_runs):
+def _figure_ar2(
+    out: Path, runs: list[Measures], paper: Measures | None, dt_runs: list[Measures]
+) -> None:
     plt = pyplot()
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))
     s2, s1 = math.sqrt(2 * G / A), math.sqrt(G / A)
@@ -299,7 +307,13 @@ def _figure_ar2(out, runs, paper, dt_runs):
     save(fig, out / "dam_break_ar2.png")
 
 
-def _text_ar2(runs, paper, dt_runs, tol_mm, tol_ko):
+def _text_ar2(
+    runs: list[Measures],
+    paper: Measures | None,
+    dt_runs: list[Measures],
+    tol_mm: float,
+    tol_ko: float,
+) -> str:
     doc = __doc__.split("\n", 3)[3].strip()
     rows = [
         [

@@ -6,12 +6,14 @@ Aspect ratio 1 (examples/dam_break_ar1.toml): the square water column of Cruchag
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from ..studies.reference_data import load
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .dam_break import DT, END, TOL_HEIGHT_MM, WHY_HEIGHT_MM, A, G, front_rms
+from .types import Context
 
 CRUCHAGA = "validation/cruchaga_2007_water_AR1_front_coarse_points_ethersph.csv"
 MM1_FRONT = "validation/martin_moyce_1952_n2eq1_front_jaxsph.csv"
@@ -29,7 +31,7 @@ WHY_FRONT_MM1 = (
 )
 
 
-def run_ar1(out, quick=False, context=None):
+def run_ar1(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     meshes = MESHES_AR1_QUICK if quick else MESHES_AR1
     end = 0.45 if quick else END
     res = CaseResult("dam_break_ar1", "Dam break, aspect ratio 1")

@@ -19,10 +19,16 @@ particle speed grows to ~1 m/s within 0.5 s), so its errors are averaged over th
 in the first PAPER_WINDOW seconds, while the column is still on its plateau.
 """
 
+from pathlib import Path
+
 import numpy as np
 
+from ..case import Case
 from ..cells import bin_particles
+from ..particles import Particles
+from ..simulation import Simulation
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
+from .types import Context, Measures
 
 RHO, G = 1000.0, 9.81
 FILL = 0.1975  # m, the box top asked for (default formulation)
@@ -60,7 +66,7 @@ WHY_CHECKER = (
 )
 
 
-def checkerboard(sim, H):
+def checkerboard(sim: Simulation, H: float) -> float:
     """Amplitude of the (-1)^(i+j) component of the nodal pressure error, / (rho g H).
 
     Over the interior nodes whose four cells are all full (theta >= 0.9): the mean of
@@ -80,7 +86,7 @@ def checkerboard(sim, H):
     return float(abs(np.mean(sign * err)) / (RHO * G * H))
 
 
-def errors(P, H):
+def errors(P: Particles, H: float) -> tuple[float, float]:
     """(relative L2, max / (rho g H)) of the particle pressure against rho g (H - y)."""
     exact = RHO * G * (H - P.x[:, 1])
     err = P.pressure - exact
@@ -90,13 +96,14 @@ def errors(P, H):
     )
 
 
-def surface(h, top, case):
+def surface(h: float, top: float, case: Case) -> float:
     """The material's surface: the top of the last particle layer below ``top``."""
     dp = h / case.bodies[0].particles_per_cell
-    return np.floor(top / dp + 1e-9) * dp
+    layers: float = np.floor(top / dp + 1e-9)
+    return layers * dp
 
 
-def run_default(h, end):
+def run_default(h: float, end: float) -> Measures:
     sim = run_example(
         "hydrostatic.toml", [f"grid.spacing={h}", f"bodies.0.max=[0.1, {FILL}]", f"time.end={end}"]
     )
@@ -120,11 +127,11 @@ def run_default(h, end):
     }
 
 
-def run_paper(h, end):
+def run_paper(h: float, end: float) -> Measures:
     top = PAPER_TOP - h / 2
-    rec = []
+    rec: list[tuple[float, float, float]] = []
 
-    def record(sim):
+    def record(sim: Simulation) -> None:
         H = surface(h, top, sim.case)
         if sim.time > 0:
             rec.append((sim.time, *errors(sim.particles, H)))
@@ -140,28 +147,28 @@ def run_paper(h, end):
         on_output=record,
     )
     H = surface(h, top, sim.case)
-    rec = np.array(rec)
-    window = rec[:, 0] <= PAPER_WINDOW + 1e-9
+    trace = np.array(rec)
+    window = trace[:, 0] <= PAPER_WINDOW + 1e-9
     return {
         "h": h,
         "H": H,
         "particles": sim.particles.count,
-        "l2": float(rec[window, 1].mean()),
-        "max": float(rec[window, 2].mean()),
+        "l2": float(trace[window, 1].mean()),
+        "max": float(trace[window, 2].mean()),
         "offset": np.sqrt(3.0) * (PAPER_TOP - H) / H,
-        "spread": float(np.ptp(rec[window, 1]) / rec[window, 1].mean()),
+        "spread": float(np.ptp(trace[window, 1]) / trace[window, 1].mean()),
         "speed_window": float(
             np.nanmax(sim.series("max_speed")[sim.series("time") <= PAPER_WINDOW + 1e-9])
         ),
         "speed": float(np.nanmax(sim.series("max_speed"))),
-        "trace": rec,
+        "trace": trace,
         "t": sim.series("time"),
         "vt": sim.series("max_speed"),
         "wall": sim.summary["wall_seconds"],
     }
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     end = END_QUICK if quick else END
     end_paper = PAPER_WINDOW if quick else END
     res = CaseResult("hydrostatic", "Hydrostatic column")
@@ -190,7 +197,7 @@ def run(out, quick=False, context=None):
             )
         )
 
-    def node_miss(r, kind):
+    def node_miss(r: Measures, kind: str) -> str:
         rel = (
             f"sqrt(3) h / (2 H) = {r['offset']:.3f} in L2"
             if kind == "L2"

@@ -24,11 +24,15 @@ pressures sensor_1-4 with ``estimate = "mean"``), read from the run's probes.
 """
 
 import math
+from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
+from ..simulation import Simulation
 from ..studies.reference_data import load
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+from .types import Context, FloatArray
 
 H = 0.3  # m, column height
 G = 9.81
@@ -44,7 +48,7 @@ SENSORS = {
 }
 
 
-def probe_name(label):
+def probe_name(label: str) -> str:
     """The probe of examples/lobovsky.toml behind a gauge's or sensor's label."""
     return label.replace(" ", "_")
 
@@ -71,7 +75,7 @@ WHY_PEAK = (
 )
 
 
-def assert_probe(sim, label, quantity, position):
+def assert_probe(sim: Simulation, label: str, quantity: str, position: Sequence[float]) -> None:
     """The example's probe is where this module's table says (they are kept in step)."""
     probe = next(p for p in sim.case.probes if p.name == probe_name(label))
     if probe.quantity != quantity or not np.allclose(probe.position, position):
@@ -82,14 +86,14 @@ def assert_probe(sim, label, quantity, position):
         )
 
 
-def _running_mean(y, n):
+def _running_mean(y: FloatArray, n: int) -> FloatArray:
     if n <= 1:
         return y
     k = np.ones(n) / n
     return np.convolve(y, k, mode="same")
 
 
-def _peak(t, p):
+def _peak(t: FloatArray, p: FloatArray) -> tuple[float, float]:
     sel = (t >= IMPACT[0]) & (t <= IMPACT[1])
     if not np.any(sel):
         return float("nan"), float("nan")
@@ -97,7 +101,7 @@ def _peak(t, p):
     return float(t[k]), float(p[k])
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     h = SPACING_QUICK if quick else SPACING
     end = END_QUICK if quick else END
     res = CaseResult("lobovsky", "Lobovsky et al. (2014), H = 0.3 m")
@@ -110,10 +114,10 @@ def run(out, quick=False, context=None):
         "t": sim.series("time"),
         **{k: sim.probe_series(probe_name(k)) for k in [*GAUGES, *SENSORS]},
     }
-    for k, (x, _) in GAUGES.items():
-        assert_probe(sim, k, "level", [x, 0.0])
-    for k, (y, _) in SENSORS.items():
-        assert_probe(sim, k, "pressure", [sim.case.domain.size[0], y])
+    for label, (x, _) in GAUGES.items():
+        assert_probe(sim, label, "level", [x, 0.0])
+    for label, (y, _) in SENSORS.items():
+        assert_probe(sim, label, "pressure", [sim.case.domain.size[0], y])
     rho = sim.case.material.density
     scale = math.sqrt(G / H)
     ts = np.array(rec["t"]) * scale

@@ -24,13 +24,17 @@ fractions f (particle volume in the cell over the cell's volume):
   (volume / tank width).
 """
 
+from pathlib import Path
+
 import numpy as np
 
 from .. import state
 from ..cells import bin_particles
 from ..diagnostics.measures import last_crossings, volume_measures
-from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+from ..simulation import Simulation
+from .common import CaseResult, Row, box, fmt, markdown_table, pyplot, run_example, save
 from .sloshing import period_and_decay, theory
+from .types import Context, FloatArray
 
 G = 9.81
 SLOSH = (0.01, 0.005)  # m
@@ -69,16 +73,18 @@ WHY_LEVEL = "the issue's criterion: 3% of 0.0619 m is 1.9 mm, half a cell of the
 class Record:
     """An on_output callback recording the long-run measures."""
 
-    def __init__(self):
-        self.rows = []
+    def __init__(self) -> None:
+        self.rows: list[tuple[float, ...]] = []
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         g, P = sim.grid, sim.particles
         bins = bin_particles(g, P)
         vm = volume_measures(bins.theta, g.cell_volume, sim.volume0)
         rho = np.empty(g.ncells)
         state.cell_volume(g, P.x, P.volume, rho)
-        hat = np.count_nonzero(rho > 1.2 * g.cell_volume) / max(np.count_nonzero(bins.theta > 0), 1)
+        hat = np.count_nonzero(rho > 1.2 * g.cell_volume) / max(
+            int(np.count_nonzero(bins.theta > 0)), 1
+        )
         f = np.clip(bins.theta, 0, 1).reshape(g.cells[1], g.cells[0])  # [cy, cx]
         levels = last_crossings(f, g.cell_centres(1), g.size[1])
         ke = 0.5 * float(np.sum(P.mass * np.sum(P.v**2, axis=1)))
@@ -97,11 +103,11 @@ class Record:
             )
         )
 
-    def array(self):
+    def array(self) -> FloatArray:
         return np.array(self.rows, dtype=float).reshape(-1, 8)
 
 
-def _run(example, h, end):
+def _run(example: str, h: float, end: float) -> tuple[Simulation, FloatArray]:
     rec = Record()
     sim = run_example(
         example, [f"grid.spacing={h}", f"time.end={end}", "output.interval=0.01"], on_output=rec
@@ -109,7 +115,7 @@ def _run(example, h, end):
     return sim, rec.array()
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("long_run", "Long runs: volume and energy")
     slosh_h, slosh_end = QUICK["sloshing"] if quick else (SLOSH, SLOSH_END)
     dam_h, dam_end = QUICK["dam break"] if quick else (DAM, DAM_END)
@@ -119,7 +125,7 @@ def run(out, quick=False, context=None):
     for h in slosh_h:
         sim, a = _run("sloshing.toml", h, slosh_end)
         t, region, packed, hat, ke, pe, xc, _ = a.T
-        body = sim.case.bodies[0]
+        body = box(sim.case.bodies[0])
         L, depth, A = body.max[0] - body.min[0], body.max[1], body.surface_amplitude
         T0 = theory(L, depth)
         period, decay, _, _ = period_and_decay(t, xc - L / 2)

@@ -32,11 +32,14 @@ the simulated deposits, whose particles stand in columns with gaps, 1.4 times th
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from ..simulation import Simulation
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
 from .sloshing import period_and_decay
+from .types import Context, FloatArray, Measures
 
 G = 9.81
 
@@ -65,11 +68,11 @@ WHY_STOPPED = (
 )
 
 
-def lube(a):
+def lube(a: float) -> float:
     return 1.2 * a if a < SPLIT else 1.9 * a ** (2 / 3)
 
 
-def run_wave(out, quick=False, context=None):
+def run_wave(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("viscous_wave", "Viscous standing wave: decay against linear theory")
     k = math.pi / 0.4
     theory = 2 * NU * k * k
@@ -77,9 +80,9 @@ def run_wave(out, quick=False, context=None):
     for h in WAVE_SPACINGS_QUICK if quick else WAVE_SPACINGS:
         rates = []
         for nu in (NU, 0.0):
-            xc = []
+            xc: list[tuple[float, float]] = []
 
-            def centre(sim, xc=xc):
+            def centre(sim: Simulation, xc: list[tuple[float, float]] = xc) -> None:
                 xc.append((sim.time, float(sim.particles.x[:, 0].mean()) - 0.2))
 
             model = (
@@ -190,7 +193,7 @@ class Collapse:
         ]
 
 
-def _collapse(a, quick, width=1.6):
+def _collapse(a: float, quick: bool, width: float = 1.6) -> Measures:
     """The column of aspect ratio a (quick: 6.25 cells across L0, else 12.5) in a tank of
     half-width L0 + width x Lube's run-out + 0.02 m. "walled": the deposit reached a side
     wall, so its run-out is the tank's, not its own (measured: APIC at a = 2 and 7 reach it
@@ -214,7 +217,7 @@ def _collapse(a, quick, width=1.6):
     }
 
 
-def run_collapse(out, quick=False, context=None):
+def run_collapse(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("granular_collapse", "Granular column collapse against Lube et al. (2005)")
     runs = [_collapse(a, quick) for a in (ASPECTS_QUICK if quick else ASPECTS)]
     for r in runs:
@@ -293,7 +296,9 @@ def run_collapse(out, quick=False, context=None):
     return res
 
 
-def arrest_ratios(x, centre, spacing, scale, lo=0.25, hi=0.75):
+def arrest_ratios(
+    x: FloatArray, centre: float, spacing: float, scale: float, lo: float = 0.25, hi: float = 0.75
+) -> list[float]:
     """h |dh/dx| / scale on each side of a deposit centred at ``centre`` (m), from the
     particles' positions x (n x 2, m; ``spacing`` their spacing, m): the least-squares slope
     of h^2 against x over [lo, hi] of the way from the centre to the front, halved (h the
@@ -320,7 +325,7 @@ def arrest_ratios(x, centre, spacing, scale, lo=0.25, hi=0.75):
     return values
 
 
-def run_slump(out, quick=False, context=None):
+def run_slump(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("bingham_slump", "Bingham slump: arrest condition")
     sim = run_example("bingham_slump.toml", ["time.end=0.6"] if quick else [])
     m = sim.case.material

@@ -5,11 +5,13 @@ import csv
 import io
 import os
 import platform
+from collections.abc import Iterable, Sequence
+from pathlib import Path
 
 from .._version import __version__
 from ..errors import CaseError
 from ..output.atomic import write_text
-from .common import fmt
+from .common import CaseResult, Row, fmt
 
 TITLE = "# mpmflow validation report"  # the first line of every README.md it writes
 
@@ -25,7 +27,7 @@ CSV_COLUMNS = [
 ]
 
 
-def summary_csv(rows):
+def summary_csv(rows: Iterable[Row]) -> str:
     buf = io.StringIO()
     w = csv.DictWriter(buf, CSV_COLUMNS, lineterminator="\n")
     w.writeheader()
@@ -36,11 +38,11 @@ def summary_csv(rows):
     return buf.getvalue()
 
 
-def _cell(text):
+def _cell(text: object) -> str:
     return str(text).replace("|", "\\|")
 
 
-def summary_table(rows):
+def summary_table(rows: Iterable[Row]) -> str:
     lines = [
         "| case | quantity | error measure | value | tolerance | result | why this tolerance |",
         "|---|---|---|---|---|---|---|",
@@ -67,7 +69,7 @@ def summary_table(rows):
     return "\n".join(lines)
 
 
-def closing_note(rows):
+def closing_note(rows: Iterable[Row]) -> str:
     misses = [r for r in rows if r.status != "pass"]
     if not misses:
         return "Every row meets its tolerance."
@@ -81,7 +83,7 @@ def closing_note(rows):
     return "\n".join(lines)
 
 
-def check_report_folder(out):
+def check_report_folder(out: Path) -> None:
     """CaseError when ``out`` holds a README.md that ``mpmflow validate`` did not write (its
     first line is not TITLE): the report must not replace, e.g., a project's README."""
     readme = out / "README.md"
@@ -103,7 +105,9 @@ def check_report_folder(out):
         )
 
 
-def write_report(out, results, quick, wall):
+def write_report(
+    out: Path, results: Sequence[CaseResult], quick: bool, wall: float
+) -> dict[str, int]:
     rows = [row for res in results for row in res.rows]
     counts = {s: sum(r.status == s for r in rows) for s in ("pass", "miss", "n/a")}
     mode = "the quick run: the CI-sized versions" if quick else "the full run"

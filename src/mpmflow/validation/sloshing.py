@@ -14,10 +14,23 @@ wave keeps it at 0).
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 
-from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
+from ..simulation import Simulation
+from .common import (
+    CaseResult,
+    Row,
+    box,
+    fmt,
+    markdown_table,
+    observed_order,
+    pyplot,
+    run_example,
+    save,
+)
+from .types import Context, FloatArray
 from .volume import Recorder
 
 SPACINGS, SPACINGS_QUICK = (0.02, 0.01, 0.005), (0.01,)
@@ -43,12 +56,12 @@ WHY_DECAY = (
 )
 
 
-def theory(L, h):
+def theory(L: float, h: float) -> float:
     k = math.pi / L
     return 2 * math.pi / math.sqrt(G * k * math.tanh(k * h))
 
 
-def period_and_decay(t, s):
+def period_and_decay(t: FloatArray, s: FloatArray) -> tuple[float, float, FloatArray, FloatArray]:
     """(period, amplitude decay per period, crossing times, extrema) of the signal s(t)."""
     sign = np.sign(s)
     idx = np.flatnonzero(sign[:-1] * sign[1:] < 0)
@@ -57,7 +70,7 @@ def period_and_decay(t, s):
         return float("nan"), float("nan"), cross, np.empty((0, 2))
     half = np.polyfit(np.arange(cross.size), cross, 1)[0]
     period = 2 * half
-    ext = []
+    found: list[tuple[float, float]] = []
     for a, b in zip(np.r_[0, idx + 1], np.r_[idx + 1, t.size]):
         if b - a < 3:
             continue
@@ -66,25 +79,25 @@ def period_and_decay(t, s):
             y0, y1, y2 = s[k - 1], s[k], s[k + 1]
             d = y0 - 2 * y1 + y2
             off = 0.5 * (y0 - y2) / d if d != 0 else 0.0
-            ext.append((t[k] + off * (t[k + 1] - t[k]), abs(y1 - 0.25 * (y0 - y2) * off)))
+            found.append((t[k] + off * (t[k + 1] - t[k]), abs(y1 - 0.25 * (y0 - y2) * off)))
         elif k == 0:
-            ext.append((t[0], abs(s[0])))
-    ext = np.array(ext).reshape(-1, 2)
+            found.append((t[0], abs(s[0])))
+    ext = np.array(found).reshape(-1, 2)
     if ext.shape[0] < 2:
         return period, float("nan"), cross, ext
     rate = -np.polyfit(ext[:, 0], np.log(ext[:, 1]), 1)[0]
     return period, float(1 - math.exp(-rate * period)), cross, ext
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     spacings = SPACINGS_QUICK if quick else SPACINGS
     end = END_QUICK if quick else END
     res = CaseResult("sloshing", "Standing-wave sloshing")
     runs = []
     for h in spacings:
-        xc = []
+        xc: list[tuple[float, float]] = []
 
-        def centre(sim, xc=xc):
+        def centre(sim: Simulation, xc: list[tuple[float, float]] = xc) -> None:
             P = sim.particles
             xc.append((sim.time, float(np.sum(P.mass * P.x[:, 0]) / np.sum(P.mass))))
 
@@ -93,7 +106,7 @@ def run(out, quick=False, context=None):
         sim = run_example(
             "sloshing.toml", [f"grid.spacing={h}", f"time.end={end}"], on_output=recorder or centre
         )
-        body = sim.case.bodies[0]
+        body = box(sim.case.bodies[0])
         L, depth, A = body.max[0] - body.min[0], body.max[1], body.surface_amplitude
         T0 = theory(L, depth)
         a = np.array(xc)
@@ -120,7 +133,7 @@ def run(out, quick=False, context=None):
                 "A": A,
             }
         )
-        if finest and context is not None:
+        if recorder is not None and context is not None:
             context.setdefault("volume", {})["sloshing"] = (f"h = {h} m", recorder)
     name = "sloshing"
     for r in runs:

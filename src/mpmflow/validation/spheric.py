@@ -26,10 +26,16 @@ output times (no snapshot files).
 """
 
 import math
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..simulation import Simulation
 from .common import ROOT, CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+from .types import Context, FloatArray
 
 H0 = 0.55  # m
 LENGTH = 3.22  # m, the tank
@@ -94,7 +100,20 @@ WHY_IMPULSE = (
 )
 
 
-def data():
+class Measured(TypedDict):
+    """``measures``: by gauge the level's RMS / H0; by sensor (simulated, measured) impact
+    time (s), impulse (Pa s) and peak (Pa)."""
+
+    levels: dict[str, float]
+    times: dict[str, tuple[float, float]]
+    impulses: dict[str, tuple[float, float]]
+    peaks: dict[str, tuple[float, float]]
+
+
+Photo = tuple[float, FloatArray, FloatArray]  # (t, x, volume) of the particles
+
+
+def data() -> dict[str, FloatArray]:
     """The measured series: {column name: array}."""
     with open(DATA) as f:
         names = f.readline().strip().split(",")
@@ -102,19 +121,19 @@ def data():
     return {n: values[:, k] for k, n in enumerate(names)}
 
 
-def first_above(t, p, threshold=THRESHOLD):
+def first_above(t: FloatArray, p: ArrayLike, threshold: float = THRESHOLD) -> float:
     """The first time p exceeds the threshold (nan if never)."""
     above = np.flatnonzero(np.asarray(p) > threshold)
     return float(t[above[0]]) if above.size else math.nan
 
 
-def impulse(t, p, lo, hi):
+def impulse(t: FloatArray, p: ArrayLike, lo: float, hi: float) -> float:
     """int p dt over [lo, hi] (Pa s), trapezoidal on the samples inside."""
     w = (t >= lo) & (t <= hi)
     return float(np.trapezoid(np.asarray(p)[w], np.asarray(t)[w])) if w.sum() > 1 else math.nan
 
 
-def overrides(spacing, end):
+def overrides(spacing: float, end: float) -> list[str]:
     """The example at ``spacing``: the domain lengthened to whole cells with the end wall as
     an obstacle where 3.22 m is not a whole number of cells."""
     out = [f"grid.spacing={spacing}", f"time.end={end}", "output.snapshots=false"]
@@ -130,11 +149,11 @@ def overrides(spacing, end):
     return out
 
 
-def measures(sim, exp, end):
+def measures(sim: Simulation, exp: Mapping[str, FloatArray], end: float) -> Measured:
     """Per mesh: level RMS by gauge, impact time and impulse by sensor, peaks."""
     t = sim.series("time")
     te = exp["time [s]"]
-    out = {"levels": {}, "times": {}, "impulses": {}, "peaks": {}}
+    out: Measured = {"levels": {}, "times": {}, "impulses": {}, "peaks": {}}
     for gauge, column in GAUGES.items():
         h = sim.probe_series(gauge)
         he = np.interp(t, te, exp[column])
@@ -155,11 +174,11 @@ def measures(sim, exp, end):
     return out
 
 
-def run(out, quick, context):
+def run(out: Path, quick: bool, context: Context | None) -> CaseResult:
     exp = data()
     meshes = [(0.05, 0.75)] if quick else [(0.04, 6.0), (0.025, 6.0)]
     rows, text, runs = [], [], []
-    photos = []  # (t, x, volume) of the finest mesh at the PHOTOS times
+    photos: list[Photo] = []  # (t, x, volume) of the finest mesh at the PHOTOS times
     for j, (spacing, end) in enumerate(meshes):
         sim = run_example(
             "spheric_test2.toml",
@@ -232,11 +251,11 @@ def run(out, quick, context):
     return res
 
 
-def _photographer(photos):
+def _photographer(photos: list[Photo]) -> Callable[[Simulation], None]:
     """An on_output callback that keeps (t, particle positions, volumes) at the PHOTOS
     times (outputs every 5 ms fall on them; a quarter output of slack for round-off)."""
 
-    def keep(sim):
+    def keep(sim: Simulation) -> None:
         dt = sim.case.output.interval
         if any(abs(sim.time - t) <= 0.25 * dt for t in PHOTOS):
             photos.append((sim.time, sim.particles.x.copy(), sim.particles.volume.copy()))
@@ -244,7 +263,7 @@ def _photographer(photos):
     return keep
 
 
-def pictures(out, sim, photos, res):
+def pictures(out: Path, sim: Simulation, photos: Sequence[Photo], res: CaseResult) -> None:
     """spheric_3d.png: the water's surface (volume fraction 1/2, ``plotting.surface``) and
     the box at the photograph times the run reached, one panel each."""
     from ..plotting.surface import draw_surface, obstacle_triangles, volume_fraction, water_surface
@@ -252,7 +271,8 @@ def pictures(out, sim, photos, res):
     if not photos:
         return
     plt = pyplot()
-    grid, notes = sim.grid, []
+    grid = sim.grid
+    notes: list[str] = []
     solids = obstacle_triangles(sim.summary, notes)
     cols = min(2, len(photos))
     rows = math.ceil(len(photos) / cols)
@@ -276,7 +296,12 @@ def pictures(out, sim, photos, res):
     )
 
 
-def figure(out, exp, runs, res):
+def figure(
+    out: Path,
+    exp: Mapping[str, FloatArray],
+    runs: Sequence[tuple[float, FloatArray, Mapping[str, FloatArray]]],
+    res: CaseResult,
+) -> None:
     """spheric.png: the levels H1-H4 (top) and the pressures P1, P3, P5, P7 (bottom) of each
     mesh against the measured series (black)."""
     plt = pyplot()

@@ -12,9 +12,12 @@
   units of the column width a; and the kinetic energy per metre of width at its peak.
 """
 
+from pathlib import Path
+
 import numpy as np
 
 from .common import CaseResult, Row, fmt, markdown_table, run_example
+from .types import Context
 
 RHO, G = 1000.0, 9.81
 A = 0.114  # m
@@ -31,7 +34,7 @@ TOL_ENERGY = 0.02
 WHY_ENERGY = "2% of the peak kinetic energy: the same flow carries the same energy per width"
 
 
-def run(out, quick, context):
+def run(out: Path, quick: bool, context: Context | None) -> CaseResult:
     rows, text = [], []
     end = 0.2 if quick else 1.0
     table = []

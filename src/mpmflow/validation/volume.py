@@ -19,10 +19,15 @@ keeps f at or below 1:
   violent flow every surface cell with f >= 1/2 counts in full.
 """
 
+from collections.abc import Callable
+from pathlib import Path
+
 import numpy as np
 
 from ..cells import bin_particles
+from ..simulation import Simulation
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, save
+from .types import Context, FloatArray
 
 # tolerances, fixed before the results were looked at
 TOL_SHARE = {"sloshing": 0.01, "dam break": 0.05}
@@ -40,12 +45,12 @@ WHY_RATIO = {
 }
 
 
-def packing(sim):
+def packing(sim: Simulation) -> tuple[float, float, float, float]:
     """(packed share, wetted region ratio, packing deficit, interior mean f) of a state."""
     g = sim.grid
     theta = bin_particles(g, sim.particles).theta
     wet = theta > 0
-    share = float(np.count_nonzero(theta > 1.2) / max(1, np.count_nonzero(wet)))
+    share = float(np.count_nonzero(theta > 1.2) / max(1, int(np.count_nonzero(wet))))
     region = float(np.count_nonzero(theta >= 0.5) * g.cell_volume / sim.volume0)
     deficit = float(1.0 - np.minimum(theta, 1.0).sum() * g.cell_volume / sim.volume0)
     f = theta.reshape(g.cells[1], g.cells[0])
@@ -65,20 +70,20 @@ def packing(sim):
 class Recorder:
     """An on_output callback that records (time, *packing(sim))."""
 
-    def __init__(self, then=None):
-        self.rows = []
+    def __init__(self, then: Callable[[Simulation], None] | None = None) -> None:
+        self.rows: list[tuple[float, ...]] = []
         self.then = then
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         self.rows.append((sim.time, *packing(sim)))
         if self.then is not None:
             self.then(sim)
 
-    def array(self):
+    def array(self) -> FloatArray:
         return np.array(self.rows, dtype=float).reshape(-1, 5)
 
 
-def run(out, quick=False, context=None):
+def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("volume", "Volume and particle distribution")
     recorded = (context or {}).get("volume", {})
     lines = []
