@@ -13,16 +13,37 @@ atomically (and fsynced) and the latest ``KEEP`` are kept. Format 2 (format 1 ca
 row written so far).
 """
 
+from __future__ import annotations
+
 import hashlib
 import json
 import re
 import zipfile
+from collections.abc import Collection, Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .errors import CaseError
 from .output.atomic import atomic_path
+
+if TYPE_CHECKING:
+    from .case import Case
+
+# a checkpoint's arrays by name: the particles' (float64) and the scheme's state (any dtype)
+Arrays = dict[str, NDArray[np.generic]]
+# its meta: JSON read back (a checkpoint of any version, checked key by key where used)
+Meta = dict[str, Any]
+
+
+class FileHash(TypedDict):
+    """The content hash of one file the case reads, and where it was."""
+
+    path: str
+    sha256: str
+
 
 FORMAT = 2
 KEEP = 2
@@ -32,7 +53,7 @@ _NAME = re.compile(r"^checkpoint_(\d{9})\.npz$")
 class CheckpointError(CaseError):
     """A checkpoint file cannot be read (damaged, cut short, or missing an entry)."""
 
-    def __init__(self, path, why):
+    def __init__(self, path: str | Path, why: str) -> None:
         self.path, self.why = Path(path), why
         super().__init__(
             f"Checkpoint {path} cannot be read ({why}); it is damaged, e.g. cut short by a "
@@ -41,11 +62,11 @@ class CheckpointError(CaseError):
         )
 
 
-def path_for(folder, step):
+def path_for(folder: str | Path, step: int) -> Path:
     return Path(folder) / f"checkpoint_{step:09d}.npz"
 
 
-def checkpoints(folder):
+def checkpoints(folder: str | Path) -> list[Path]:
     """The checkpoint files in ``folder``, oldest first (by step)."""
     found = [
         (int(m.group(1)), p)
@@ -55,19 +76,25 @@ def checkpoints(folder):
     return [p for _, p in sorted(found)]
 
 
-def write(folder, step, arrays, meta):
+def write(
+    folder: str | Path,
+    step: int,
+    arrays: Mapping[str, NDArray[np.generic]],
+    meta: Mapping[str, object],
+) -> Path:
     """Write one checkpoint atomically and delete all but the latest ``KEEP``; returns its
     path."""
     path = path_for(folder, step)
     with atomic_path(path, durable=True) as tmp:
         with open(tmp, "wb") as f:  # a file object: np.savez would append .npz to a name
-            np.savez(f, meta=np.array(json.dumps({"format": FORMAT, **meta})), **arrays)
+            # numpy's stub takes a **mapping's values for savez's allow_pickle (bool) too
+            np.savez(f, meta=np.array(json.dumps({"format": FORMAT, **meta})), **arrays)  # type: ignore[arg-type]
     for old in checkpoints(folder)[:-KEEP]:
         old.unlink(missing_ok=True)
     return path
 
 
-def read(path):
+def read(path: str | Path) -> tuple[Arrays, Meta]:
     """(arrays, meta) of a checkpoint file."""
     try:
         data = np.load(path, allow_pickle=False)
@@ -93,7 +120,7 @@ def read(path):
     return arrays, meta
 
 
-def latest(folder):
+def latest(folder: str | Path) -> Path:
     """The path of the latest checkpoint in ``folder``; CaseError if there is none."""
     found = checkpoints(folder)
     if not found:
@@ -104,9 +131,9 @@ def latest(folder):
     return found[-1]
 
 
-def _flatten(data, prefix=""):
+def _flatten(data: object, prefix: str = "") -> dict[str, object]:
     if isinstance(data, dict):
-        out = {}
+        out: dict[str, object] = {}
         for key, value in data.items():
             out.update(_flatten(value, f"{prefix}{key}."))
         return out
@@ -118,7 +145,12 @@ def _flatten(data, prefix=""):
     return {prefix[:-1]: data}
 
 
-def check_same_case(saved, current, path, may_change=("time.end", "execution.threads")):
+def check_same_case(
+    saved: Mapping[str, object],
+    current: Mapping[str, object],
+    path: str | Path,
+    may_change: Collection[str] = ("time.end", "execution.threads"),
+) -> None:
     """Refuse to continue a checkpoint with other settings than it was written with (only
     ``may_change`` may differ): CaseError naming the first differing key."""
     old, new = _flatten(saved), _flatten(current)
@@ -136,7 +168,7 @@ def check_same_case(saved, current, path, may_change=("time.end", "execution.thr
         )
 
 
-def case_files(case):
+def case_files(case: Case) -> dict[str, str]:
     """{case key: absolute path} of every file the case reads: the meshes of bodies and
     obstacles, the probes' data."""
     files = {}
@@ -150,9 +182,9 @@ def case_files(case):
     return files
 
 
-def file_hashes(case):
+def file_hashes(case: Case) -> dict[str, FileHash]:
     """{case key: {"path", "sha256"}} of the files the case reads, as they are now."""
-    out = {}
+    out: dict[str, FileHash] = {}
     for key, path in case_files(case).items():
         digest = hashlib.sha256()
         with open(path, "rb") as f:
@@ -162,7 +194,9 @@ def file_hashes(case):
     return out
 
 
-def check_same_files(saved, current, path):
+def check_same_files(
+    saved: Mapping[str, FileHash] | None, current: Mapping[str, FileHash], path: str | Path
+) -> None:
     """Refuse to continue a checkpoint whose case files changed since the run started
     (CaseError naming the file). ``saved``: the checkpoint's ``files`` (None in checkpoints
     written before they were recorded: nothing to compare)."""

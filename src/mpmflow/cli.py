@@ -307,6 +307,7 @@ def _run(args: argparse.Namespace) -> int:
             f"{_resume_command(args)}",
             file=sys.stderr,
         )
+        assert sim.stop_signal is not None  # "interrupted" with a summary: stop_on_signal's
         return exit_code(sim.stop_signal)
     if not args.quiet:
         print(

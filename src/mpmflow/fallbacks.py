@@ -9,6 +9,21 @@ acted (a probe's name, a setting). Counts are kept in checkpoints, so a restarte
 reports the whole run.
 """
 
+from collections.abc import Iterable
+from typing import TypedDict
+
+
+class Row(TypedDict):
+    """One count: what acted, where, how often (in ``unit``), and when first and last (s)."""
+
+    what: str
+    where: str
+    count: int
+    unit: str
+    first_time: float | None
+    last_time: float | None
+
+
 # what acted -> the unit its count is in
 WHAT = {
     "probe fit fell back to the window mean": "outputs",
@@ -24,12 +39,12 @@ WHAT = {
 class Fallbacks:
     """Counts of the caps and fallbacks that acted: ``count(what, where, n, time)``."""
 
-    def __init__(self, rows=()):
-        self._rows = {}
+    def __init__(self, rows: Iterable[Row] = ()) -> None:
+        self._rows: dict[tuple[str, str], Row] = {}
         for r in rows:  # from a checkpoint's ``rows()``
-            self._rows[(r["what"], r["where"])] = dict(r)
+            self._rows[(r["what"], r["where"])] = r.copy()
 
-    def count(self, what, where, n=1, time=None):
+    def count(self, what: str, where: str, n: int = 1, time: float | None = None) -> None:
         """Record that ``what`` (a key of WHAT) acted ``n`` times at ``where`` (text) at
         ``time`` (s; the first and last are kept)."""
         if n <= 0:
@@ -53,15 +68,15 @@ class Fallbacks:
                 row["first_time"] = time
             row["last_time"] = time
 
-    def rows(self):
+    def rows(self) -> list[Row]:
         """The counts as a list of dicts (what, where, count, unit, first_time, last_time
         (s)), in a fixed order."""
-        return [dict(self._rows[k]) for k in sorted(self._rows)]
+        return [self._rows[k].copy() for k in sorted(self._rows)]
 
-    def __bool__(self):
+    def __bool__(self) -> bool:
         return bool(self._rows)
 
-    def line(self):
+    def line(self) -> str | None:
         """One sentence for the run's last line: what acted and how often (None: nothing)."""
         if not self._rows:
             return None

@@ -8,10 +8,21 @@ while ``mpmflow run`` runs its time loop; outside it (``EarlySignals``, from the
 the command) a signal stops at once with a message.
 """
 
+from __future__ import annotations
+
 import os
 import signal
 import sys
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
+from types import FrameType
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .simulation import Simulation
+
+# a signal handler, as signal.signal takes it
+Handler = Callable[[int, FrameType | None], None]
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -20,12 +31,12 @@ class _Signalled(BaseException):
     """A signal that stops the command, with its number. A BaseException (like
     KeyboardInterrupt) so that no ``except Exception`` on the way takes it for an error."""
 
-    def __init__(self, signum):
+    def __init__(self, signum: int) -> None:
         super().__init__(signum)
         self.signum = int(signum)
 
     @property
-    def name(self):
+    def name(self) -> str:
         return signal.Signals(self.signum).name
 
 
@@ -33,12 +44,12 @@ class StopNow(_Signalled):
     """A second SIGINT/SIGTERM: stop at once."""
 
 
-def exit_code(signum):
+def exit_code(signum: int) -> int:
     """The shell's convention: 128 + signal number (130 for SIGINT, 143 for SIGTERM)."""
     return 128 + int(signum)
 
 
-def _say(text):
+def _say(text: str) -> None:
     """Write to stderr from a signal handler. os.write, not print: the handler can run in
     the middle of a write to sys.stderr (the progress bar's), and a second write to the
     same buffered stream then raises RuntimeError (reentrant call)."""
@@ -49,8 +60,8 @@ def _say(text):
 
 
 @contextmanager
-def stop_on_signals(sim):
-    def handler(signum, frame):
+def stop_on_signals(sim: Simulation) -> Iterator[None]:
+    def handler(signum: int, frame: FrameType | None) -> None:
         if sim.stop_signal is not None:
             sim.stop_now = signum  # the run loop raises StopNow too, should this one be lost
             raise StopNow(signum)
@@ -66,7 +77,7 @@ def stop_on_signals(sim):
 
 
 @contextmanager
-def _handling(handler, quiet):
+def _handling(handler: Handler, quiet: tuple[type[BaseException], ...]) -> Iterator[None]:
     """``handler`` on SIGINT and SIGTERM, and the exceptions of the types ``quiet`` left
     unprinted when they are raised where Python cannot propagate them: a handler that runs
     inside a __del__ (a library freeing objects while it loads) has its exception printed as
@@ -75,7 +86,7 @@ def _handling(handler, quiet):
     previous = {s: signal.signal(s, handler) for s in SIGNALS}
     previous_hook = sys.unraisablehook
 
-    def unraisable(info):
+    def unraisable(info: sys.UnraisableHookArgs) -> None:
         if not isinstance(info.exc_value, quiet):
             previous_hook(info)
 
@@ -101,18 +112,18 @@ class EarlySignals:
     __del__ while a library frees objects), ``check()``, called between the phases of the
     command, raises it again."""
 
-    def __init__(self):
-        self.pending = None
+    def __init__(self) -> None:
+        self.pending: int | None = None
         self.phase = "before"  # "after" once the run has ended
         self.deferring = False
 
-    def _handler(self, signum, frame):
+    def _handler(self, signum: int, frame: FrameType | None) -> None:
         self.pending = signum
         if not self.deferring:
             raise EarlyStop(signum)
 
     @contextmanager
-    def deferred(self):
+    def deferred(self) -> Iterator[None]:
         """Signals are only recorded inside (``check()`` after raises them): an exception
         raised while a compiled extension initialises (the core, libigl) comes out as an
         ImportError or SystemError with a traceback instead of as EarlyStop."""
@@ -122,17 +133,17 @@ class EarlySignals:
         finally:
             self.deferring = False
 
-    def check(self):
+    def check(self) -> None:
         if self.pending is not None:
             raise EarlyStop(self.pending)
 
-    def when(self):
+    def when(self) -> str:
         if self.phase == "after":
             return "after the run ended (its outputs are written)"
         return "before the run started: nothing was run"
 
     @contextmanager
-    def installed(self):
+    def installed(self) -> Iterator[None]:
         self.pending, self.phase = None, "before"
         with ExitStack() as stack:
             try:

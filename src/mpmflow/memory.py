@@ -17,15 +17,21 @@ container or a batch job) plus what the process already holds, or MPMFLOW_MEMORY
 set (bytes, or with a unit: 512M, 8G, 1.5GB).
 """
 
+from __future__ import annotations
+
 import math
 import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .errors import CaseError
 from .geometry import bodies
 from .grid import Grid
+
+if TYPE_CHECKING:
+    from .case import Case
 
 MB = 2**20
 # measured (benchmarks/memory.py): see the module docstring
@@ -44,10 +50,11 @@ MEASURE = (56, 16)  # B per particle and per node while an output row is measure
 class Estimate:
     """The parts of the estimated peak (bytes) and the counts they come from."""
 
-    particles: int
-    nodes: int
-    unknowns: int
-    rows: int
+    # counts: exact ints while they fit, floats (inf included) beyond
+    particles: float
+    nodes: float
+    unknowns: float
+    rows: float
     program: float
     particle_bytes: float
     grid_bytes: float
@@ -58,7 +65,7 @@ class Estimate:
     disk_bytes: float  # the outputs on disk at the end (timeseries, snapshots, checkpoints)
 
     @property
-    def total(self):
+    def total(self) -> float:
         return (
             self.program
             + self.particle_bytes
@@ -68,7 +75,7 @@ class Estimate:
             + self.passing_bytes
         )
 
-    def text(self):
+    def text(self) -> str:
         """One line: the total and its parts."""
         return (
             f"about {size(self.total)} (particles {size(self.particle_bytes)}, grid "
@@ -77,7 +84,7 @@ class Estimate:
             f"{size(self.rows_bytes)}, program {size(self.program)})"
         )
 
-    def as_dict(self):
+    def as_dict(self) -> dict[str, object]:
         return {
             "total": self.total,
             "program": self.program,
@@ -97,7 +104,7 @@ class Estimate:
         }
 
 
-def size(nbytes):
+def size(nbytes: float) -> str:
     """Bytes for people: 512 MB, 3.4 GB, 2.1e+05 TB."""
     if not math.isfinite(nbytes):
         return "more than can be counted"
@@ -108,14 +115,14 @@ def size(nbytes):
     return f"{nbytes / 2**10:.0f} kB"
 
 
-def _as_float(n):
+def _as_float(n: float) -> float:
     try:
         return float(n)
     except OverflowError:
         return math.inf
 
 
-def estimate(case):
+def estimate(case: Case) -> Estimate:
     """The Estimate of a validated case (no allocation: counts from the geometry)."""
     grid = Grid.covering(case.domain.size, case.grid.spacing)
     h = case.grid.spacing
@@ -181,7 +188,7 @@ _UNITS = {
 }
 
 
-def parse_size(text, name):
+def parse_size(text: str, name: str) -> float:
     m = re.fullmatch(r"\s*([0-9.eE+]+)\s*([A-Za-z]*)\s*", text)
     unit = m.group(2).upper() if m else None
     try:
@@ -196,7 +203,7 @@ def parse_size(text, name):
     return value
 
 
-def _read_int(path):
+def _read_int(path: str | Path) -> int | None:
     try:
         text = Path(path).read_text().strip()
     except OSError:
@@ -204,7 +211,7 @@ def _read_int(path):
     return int(text) if text.isdigit() else None
 
 
-def resident_bytes():
+def resident_bytes() -> int:
     """This process's resident memory now (bytes; 0 where it cannot be read)."""
     try:
         pages = int(Path("/proc/self/statm").read_text().split()[1])
@@ -213,7 +220,7 @@ def resident_bytes():
         return 0
 
 
-def available():
+def available() -> tuple[float, str]:
     """(bytes this run may use at its peak, where that number comes from)."""
     limit = os.environ.get("MPMFLOW_MEMORY_LIMIT")
     if limit:
@@ -248,7 +255,7 @@ def available():
     return free + resident_bytes(), source
 
 
-def check(case, est=None):
+def check(case: Case, est: Estimate | None = None) -> Estimate:
     """CaseError when the case's estimated peak is above what the machine can give."""
     est = est or estimate(case)
     budget, source = available()

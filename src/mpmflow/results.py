@@ -18,12 +18,14 @@ Nothing here writes into the folder or needs its lock.
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .errors import CaseError
 from .output.snapshots import read_index
-from .output.timeseries import COLUMNS, header_units, read_table
+from .output.timeseries import COLUMNS, Table, header_units, read_table
 
 
 @dataclass(frozen=True)
@@ -34,7 +36,7 @@ class Snapshot:
     path: Path
     dim: int = 2  # the run's dimension (VTU points always have 3 coordinates)
 
-    def read(self):
+    def read(self) -> dict[str, NDArray[np.float64]]:
         """The particle data: x (n, dim) m, velocity (n, dim) m/s, pressure (n,) Pa, mass
         (n,) kg/m in 2D, kg in 3D. CaseError when the file is missing or damaged."""
         from meshio import vtu
@@ -77,7 +79,7 @@ class Snapshot:
 class RunResults:
     """The results in a run's folder (see the module docstring)."""
 
-    def __init__(self, folder):
+    def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         if not self.folder.is_dir():
             raise CaseError(f"{self.folder} is not a folder; give the --out folder of a run.")
@@ -87,16 +89,16 @@ class RunResults:
                 f"{self.folder} holds no timeseries.csv; give the --out folder of a "
                 "run (mpmflow run CASE --out DIR)."
             )
-        self.notes = []
+        self.notes: list[str] = []
         self.timeseries, notes = read_table(csv, required=tuple(COLUMNS)[:3])
         self.notes += notes
         probes = self.folder / "probes.csv"
-        self.probes = {}
+        self.probes: Table = {}
         if probes.is_file():
             self.probes, notes = read_table(probes)
             self.notes += notes
         self.summary = self._summary()
-        self.snapshots = []
+        self.snapshots: list[Snapshot] = []
         pvd = self.folder / "particles.pvd"
         if pvd.is_file():
             entries, complete = read_index(pvd)
@@ -105,7 +107,7 @@ class RunResults:
             if not complete and entries:
                 self.notes.append("particles.pvd is cut short after its last whole entry")
 
-    def _summary(self):
+    def _summary(self) -> dict[str, Any]:  # JSON: summary.json as the run wrote it
         path = self.folder / "summary.json"
         if not path.is_file():
             return {}
@@ -120,16 +122,19 @@ class RunResults:
         return summary
 
     @property
-    def status(self):
+    def status(self) -> str:
         """The run's status from summary.json; "running" (or killed) while it has none."""
-        return self.summary.get("status", "running")
+        status: str = self.summary.get("status", "running")
+        return status
 
     @property
-    def case(self):
-        return self.summary.get("case", {})
+    def case(self) -> dict[str, Any]:
+        """The resolved case (JSON) the run was made with; {} while the run goes."""
+        case: dict[str, Any] = self.summary.get("case", {})
+        return case
 
     @property
-    def units(self):
+    def units(self) -> dict[str, str]:
         units = dict(COLUMNS)
         units.update(self.summary.get("units", {}))
         units.update(header_units(self.folder / "probes.csv"))
@@ -137,7 +142,7 @@ class RunResults:
             units[name] = probe.get("unit")
         return units
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         n = len(self.timeseries.get("time", []))
         return (
             f"<mpmflow run {self.folder}: {self.status}, {n} rows, "
@@ -145,6 +150,6 @@ class RunResults:
         )
 
 
-def open_run(folder):
+def open_run(folder: str | Path) -> RunResults:
     """The results of the run in ``folder`` (RunResults); CaseError when it holds none."""
     return RunResults(folder)

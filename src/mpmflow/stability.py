@@ -4,8 +4,13 @@ A signal travels at the sound speed c plus the flow speed |v|; an explicit step 
 it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explicit MPM).
 """
 
+from __future__ import annotations
+
 import math
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the case's model imports this module
+    from .case import Case
 
 
 def sound_speed(bulk_modulus: float, density: float) -> float:
@@ -20,19 +25,19 @@ def stable_time_step(
     return spacing / (sound_speed(bulk_modulus, density) + speed)
 
 
-def initial_speed(case: Any) -> float:
+def initial_speed(case: Case) -> float:
     """The largest initial body speed (m/s)."""
     return max(math.hypot(*body.velocity) for body in case.bodies)
 
 
-def case_stable_time_step(case: Any) -> float:
+def case_stable_time_step(case: Case) -> float:
     """The stable explicit step of a case at its initial speeds (s)."""
     return stable_time_step(
         case.grid.spacing, case.material.bulk_modulus, case.material.density, initial_speed(case)
     )
 
 
-def time_step(case: Any) -> float:
+def time_step(case: Case) -> float:
     """The time step a run uses (s): time.dt; for time.dt = "auto", the stable explicit step
     times time.safety_factor (explicit scheme), or the longest step time.max_dt (projection
     scheme, which then sets each step from the flow within it)."""

@@ -25,7 +25,9 @@ instead: slower to follow a change. The choices are recorded in summary.json
 import math
 import os
 import time
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Literal
 
 from .errors import CaseError
 
@@ -39,7 +41,7 @@ except (ValueError, OSError, AttributeError):  # pragma: no cover
     _TICK = 100
 
 
-def pool_size():
+def pool_size() -> int:
     """The most threads the core's parallel loops may use (OMP_NUM_THREADS, default: the
     cores), as it was when mpmflow was imported."""
     from . import state
@@ -47,7 +49,7 @@ def pool_size():
     return state.POOL
 
 
-def usable_cpus():
+def usable_cpus() -> list[int]:
     """The CPUs this process may run on (affinity), as a sorted list of CPU numbers."""
     try:
         return sorted(os.sched_getaffinity(0))
@@ -55,7 +57,7 @@ def usable_cpus():
         return list(range(os.cpu_count() or 1))
 
 
-def cpu_quota():
+def cpu_quota() -> float:
     """The cgroup's CPU quota in cores (cpu.max), or inf."""
     try:
         quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
@@ -66,7 +68,11 @@ def cpu_quota():
     return math.inf
 
 
-def setting_from(value):
+# ("auto", None) or ("fixed", n)
+Setting = tuple[Literal["auto", "fixed"], int | None]
+
+
+def setting_from(value: int | Literal["auto"]) -> Setting:
     """("auto", None) or ("fixed", n) for the case's execution.threads, with MPMFLOW_THREADS
     taking the place of "auto"; CaseError for a bad value or more threads than the core's
     pool."""
@@ -76,14 +82,15 @@ def setting_from(value):
         if env and env != "auto":
             source = f"the environment variable {ENV}"
             try:
-                value = int(env)
+                number: int | None = int(env)
             except ValueError:
-                value = None
-            if value is None or value < 1:
+                number = None
+            if number is None or number < 1:
                 raise CaseError(
                     f"{ENV} = {env!r} is not a number of threads; give a whole "
                     'number of at least 1, or "auto", or unset it.'
                 )
+            value = number
     if value == "auto":
         return "auto", None
     pool = pool_size()
@@ -99,11 +106,11 @@ def setting_from(value):
 class CpuMeter:
     """CPU time used by other programs on this run's CPUs, between two looks."""
 
-    def __init__(self, cpus):
+    def __init__(self, cpus: Iterable[int]) -> None:
         self.names = {f"cpu{c}" for c in cpus}
         self.last = self._look()
 
-    def _look(self):
+    def _look(self) -> tuple[float, float, float] | None:
         busy = 0
         try:
             with open("/proc/stat") as f:
@@ -119,7 +126,7 @@ class CpuMeter:
         t = os.times()
         return time.monotonic(), busy / _TICK, t.user + t.system
 
-    def others(self):
+    def others(self) -> tuple[float | None, float]:
         """(cores used by other programs since the last look, seconds since it)."""
         now = self._look()
         if now is None or self.last is None:
@@ -132,7 +139,7 @@ class CpuMeter:
         return max(0.0, ((b1 - b0) - (o1 - o0)) / wall), wall
 
 
-def _own_running():
+def _own_running() -> int:
     """This process's threads that are running or runnable now (OpenMP's workers spin for a
     while after a parallel region)."""
     n = 0
@@ -146,7 +153,7 @@ def _own_running():
     return n
 
 
-def running_now():
+def running_now() -> int | None:
     """Other programs' runnable threads now: the least of three looks at procs_running of
     /proc/stat, 1 ms apart, less this process's running threads; None where it cannot be
     read."""
@@ -166,17 +173,18 @@ def running_now():
 class ThreadGovernor:
     """Sets the core's threads for a run: ``start()``, ``update(t)`` at output times, ``stop()``."""
 
-    def __init__(self, setting):
+    def __init__(self, setting: int | Literal["auto"]) -> None:
         self.mode, self.fixed = setting_from(setting)
         self.cpus = usable_cpus()
         self.cores = max(1, int(min(len(self.cpus), cpu_quota())))
         self.limit = min(pool_size(), self.cores)
-        self.meter = None
-        self.threads = None
-        self.changes = []  # (simulated time, threads, cores used by others)
-        self._previous = None
+        self.meter: CpuMeter | None = None
+        self.threads: int | None = None
+        # (simulated time, threads, cores used by others)
+        self.changes: list[tuple[float, int, float | None]] = []
+        self._previous: int | None = None
 
-    def _set(self, n, t, others):
+    def _set(self, n: float, t: float, others: float | None) -> None:
         from . import state
 
         n = max(1, min(int(n), self.limit if self.mode == "auto" else pool_size()))
@@ -185,18 +193,19 @@ class ThreadGovernor:
             self.threads = n
             self.changes.append((t, n, None if others is None else round(others, 2)))
 
-    def _choose(self, others):
+    def _choose(self, others: float) -> int:
         return math.floor(self.cores - others + (1 - FREE))
 
-    def start(self, t=0.0):
+    def start(self, t: float = 0.0) -> None:
         from . import state
 
         self._previous = state.max_threads()
         if self.mode == "fixed":
+            assert self.fixed is not None  # setting_from gives a number with "fixed"
             self._set(self.fixed, t, None)
             return
         self.meter = CpuMeter(self.cpus)
-        others = None
+        others: float | None = None
         if self.meter.last is not None and len(self.cpus) == (os.cpu_count() or 0):
             others = running_now()
         if others is None and self.meter.last is None and hasattr(os, "getloadavg"):
@@ -204,11 +213,13 @@ class ThreadGovernor:
         self._set(self._choose(others or 0.0), t, others)
         self._next = time.monotonic() + INTERVAL
 
-    def update(self, t):
+    def update(self, t: float) -> None:
         """At an output time: look again, at most once per INTERVAL of wall time."""
         if self.mode == "fixed" or time.monotonic() < self._next:
             return
         self._next = time.monotonic() + INTERVAL
+        assert self.meter is not None and self.threads is not None  # set by start()
+        others: float | None
         if self.meter.last is not None:
             others, _ = self.meter.others()
         elif hasattr(os, "getloadavg"):
@@ -218,7 +229,7 @@ class ThreadGovernor:
         if others is not None:
             self._set(self._choose(others), t, others)
 
-    def stop(self):
+    def stop(self) -> None:
         """Give the core back the threads it had before the run."""
         from . import state
 
@@ -226,7 +237,7 @@ class ThreadGovernor:
             state.set_threads(self._previous)
             self._previous = None
 
-    def record(self):
+    def record(self) -> dict[str, object]:
         """For summary.json."""
         return {
             "setting": self.mode if self.mode == "auto" else self.fixed,

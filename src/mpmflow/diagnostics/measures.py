@@ -15,9 +15,10 @@ import numpy as np
 from .. import state
 from ..grid import Grid
 from ..particles import Particles
+from ..state.arrays import Floats
 
 
-def last_crossings(f: np.ndarray, centres: np.ndarray, wall: float) -> np.ndarray:
+def last_crossings(f: Floats, centres: Floats, wall: float) -> Floats:
     """For every column j of f (one value per cell along axis 0), the position where f[:, j]
     last drops below 1/2; ``wall`` if the last cell is at least half full; nan if never."""
     above = f >= 0.5
@@ -33,18 +34,19 @@ def last_crossings(f: np.ndarray, centres: np.ndarray, wall: float) -> np.ndarra
     return out
 
 
-def last_crossing(f: np.ndarray, centres: np.ndarray, wall: float) -> float:
+def last_crossing(f: Floats, centres: Floats, wall: float) -> float:
     """Position where the profile f (one value per cell) last drops below 1/2; nan if never above."""
     return float(last_crossings(f[:, None], centres, wall)[0])
 
 
-def volume_fraction_field(grid: Grid, theta: np.ndarray) -> np.ndarray:
+def volume_fraction_field(grid: Grid, theta: Floats) -> Floats:
     """Cell volume fractions as an array indexed [cx, cy] ([cx, cy, cz] in 3D), clipped to
     [0, 1]."""
-    return np.clip(theta, 0.0, 1.0).reshape(grid.cells[::-1]).T
+    f: Floats = np.clip(theta, 0.0, 1.0).reshape(grid.cells[::-1]).T
+    return f
 
 
-def front_and_height(grid: Grid, theta: np.ndarray) -> tuple[float, float]:
+def front_and_height(grid: Grid, theta: Floats) -> tuple[float, float]:
     """(front, height) in metres from the cell volume fractions theta (flat cell order).
     In 3D the front is the largest over all rows of cells along x, and the height the mean
     over the vertical columns of cells along the wall x = 0 (the vertical is the last axis)."""
@@ -64,7 +66,7 @@ PACKED = 1.2  # a cell more than 20% over full is packed
 
 
 def volume_measures(
-    theta: np.ndarray, cell_volume: float, material_volume: float, open_: np.ndarray | None = None
+    theta: Floats, cell_volume: float, material_volume: float, open_: Floats | None = None
 ) -> dict[str, float]:
     """``volume_ratio``: the volume of the wetted cells (f >= 1/2) over the material's volume,
     uncapped (loosening shows as > 1, packing as < 1), counting the fluid part of cells that

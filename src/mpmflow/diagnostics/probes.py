@@ -50,29 +50,48 @@ longer reaches into it, as a wall moves it; the fit still reads the pressure at 
 Without it (the default, and all cases so far) only the domain's walls move windows.
 """
 
+from __future__ import annotations
+
 import itertools
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..cells import CellBins
+from ..fallbacks import Fallbacks
+from ..grid import Grid
+from ..particles import Particles
+from ..state.arrays import Floats, Ints
 from .measures import volume_fraction_field
+
+if TYPE_CHECKING:
+    from ..case import Case
+    from ..case.sections import Probe
+
+# the obstacles' signed distance f(points) -> distances for an (n, D) array of points
+Distance = Callable[[Floats], ArrayLike]
+# told of each fallback that acted (a key of fallbacks.WHAT)
+Note = Callable[[str], None]
 
 UNITS = {"pressure": "Pa", "level": "m"}
 ON_WALL = 1e-6  # a point within this share of the window from a wall lies on the wall
 FLAT = 0.05  # a fit needs the particles spread over at least this share of the window
 
 
-def columns(case):
+def columns(case: Case) -> list[str]:
     """The keys of a probes.csv row: time, then one per probe (the probes' names)."""
     return ["time"] + [p.name for p in case.probes]
 
 
-def header(case):
+def header(case: Case) -> list[str]:
     """The header of probes.csv: each column's name with its unit, ``time [s]``,
     ``wall_p [Pa]``, ``gauge_1 [m]`` (``output.timeseries.read_table`` strips the units)."""
     return ["time [s]"] + [f"{p.name} [{UNITS[p.quantity]}]" for p in case.probes]
 
 
-def window(probe, grid, case):
+def window(probe: Probe, grid: Grid, case: Case) -> float:
     """The side (m) of a pressure probe's window: probes.N.window, else the fewest whole
     grid cells that hold the 2 (D + 1) particles of a fit at the sparsest body's seeding
     density (particles_per_cell along each axis)."""
@@ -83,12 +102,18 @@ def window(probe, grid, case):
     return grid.spacing * max(1, int(np.ceil(need - 1e-9)))
 
 
-def fit_minimum(dim):
+def fit_minimum(dim: int) -> int:
     """The particles a fit of p = a + b.(x - point) needs in its window: 2 (D + 1)."""
     return 2 * (dim + 1)
 
 
-def window_box(point, side, size, solid_distance=None, periodic=()):
+def window_box(
+    point: ArrayLike,
+    side: float,
+    size: ArrayLike,
+    solid_distance: Distance | None = None,
+    periodic: Sequence[bool] = (),
+) -> tuple[Floats, Floats]:
     """The (lo, hi) corners (m) of the window of side ``side`` around ``point`` in the
     domain [0, size] (see the module docstring: on a wall the window lies on the water's
     side; elsewhere it is centred and cut at the walls; ``solid_distance`` moves it off a
@@ -96,7 +121,7 @@ def window_box(point, side, size, solid_distance=None, periodic=()):
     stays centred and may reach beyond the ends (``window_particles`` wraps it round)."""
     point = np.asarray(point, dtype=float)
     size = np.asarray(size, dtype=float)
-    centre = point.copy()
+    centre: Floats = point.copy()
     if solid_distance is not None:
         centre = _off_solid(centre, side, solid_distance)
     lo, hi = centre - 0.5 * side, centre + 0.5 * side
@@ -113,7 +138,7 @@ def window_box(point, side, size, solid_distance=None, periodic=()):
     return np.where(wraps, lo, np.maximum(lo, 0.0)), np.where(wraps, hi, np.minimum(hi, size))
 
 
-def _off_solid(centre, side, solid_distance):
+def _off_solid(centre: Floats, side: float, solid_distance: Distance) -> Floats:
     """The window's centre moved along the solid's outward normal until a window of side
     ``side`` no longer reaches into it (unchanged when it does not)."""
     d = float(np.asarray(solid_distance(centre[None, :])).ravel()[0])
@@ -128,10 +153,13 @@ def _off_solid(centre, side, solid_distance):
     norm = float(np.linalg.norm(grad))
     if norm == 0.0:
         return centre
-    return centre + grad / norm * (0.5 * side - d)
+    moved: Floats = centre + grad / norm * (0.5 * side - d)
+    return moved
 
 
-def window_particles(grid, particles, bins, lo, hi):
+def window_particles(
+    grid: Grid, particles: Particles, bins: CellBins, lo: Floats, hi: Floats
+) -> tuple[Ints, Floats]:
     """Indices of the particles in the box [lo, hi] (both ends included), read from the
     cells the box overlaps (``bins``: ``cells.bin_particles``), not from all particles,
     and their positions seen from the box: along a periodic axis a box reaching beyond an
@@ -156,7 +184,9 @@ def window_particles(grid, particles, bins, lo, hi):
     return np.concatenate(found), np.concatenate(where)
 
 
-def _box_particles(grid, particles, bins, lo, hi):
+def _box_particles(
+    grid: Grid, particles: Particles, bins: CellBins, lo: Floats, hi: Floats
+) -> Ints:
     """Indices of the particles in the box [lo, hi] inside the domain."""
     h, cells = grid.spacing, grid.cells
     first = [int(np.clip(np.floor(a / h), 0, n - 1)) for a, n in zip(lo, cells)]
@@ -173,7 +203,15 @@ def _box_particles(grid, particles, bins, lo, hi):
     return idx[inside]
 
 
-def pressure_at(grid, particles, bins, probe, case, solid_distance=None, note=None):
+def pressure_at(
+    grid: Grid,
+    particles: Particles,
+    bins: CellBins,
+    probe: Probe,
+    case: Case,
+    solid_distance: Distance | None = None,
+    note: Note | None = None,
+) -> float:
     """The pressure (Pa) a pressure probe reads (see the module docstring). ``note(what)``
     is told of each fallback that acted (a key of ``fallbacks.WHAT``)."""
     note = note or (lambda what: None)
@@ -195,7 +233,7 @@ def pressure_at(grid, particles, bins, probe, case, solid_distance=None, note=No
     return value
 
 
-def _fit(x, p, point, side, dim):
+def _fit(x: Floats, p: Floats, point: ArrayLike, side: float, dim: int) -> float | None:
     """a of the plane p = a + b.(x - point) fitted to the particles (x, p) by least squares;
     None when they are too few or lie in one layer (the gradient along its normal is then
     undetermined)."""
@@ -211,7 +249,9 @@ def _fit(x, p, point, side, dim):
     return float(np.linalg.lstsq(X, p, rcond=None)[0][0])
 
 
-def level_at(grid, f, foot, note=None, gauge="integral"):
+def level_at(
+    grid: Grid, f: Floats, foot: Sequence[float], note: Note | None = None, gauge: str = "integral"
+) -> float:
     """Water level (m) above ``foot`` on the vertical line through it, as ``gauge`` reads it
     (see the module docstring); ``f``: the cell volume fractions
     (``diagnostics.volume_fraction_field``); ``note(what)`` is told when a "first_drop"
@@ -222,7 +262,7 @@ def level_at(grid, f, foot, note=None, gauge="integral"):
     return _first_drop(grid, col, float(foot[-1]), note)
 
 
-def _integral(grid, col, z0):
+def _integral(grid: Grid, col: Floats, z0: float) -> float:
     """The integral (m) of the column's fractions ``col`` (constant in each cell) from
     height z0 (m) to the grid's top."""
     h = grid.spacing
@@ -231,7 +271,7 @@ def _integral(grid, col, z0):
     return float(max(col[k0] * part + h * np.sum(col[k0 + 1 :]), 0.0))
 
 
-def _column(grid, f, foot):
+def _column(grid: Grid, f: Floats, foot: Sequence[float]) -> Floats:
     """The column of f on the vertical line through ``foot`` (one value per cell along the
     last axis)."""
     h, dim = grid.spacing, grid.dim
@@ -253,7 +293,7 @@ def _column(grid, f, foot):
     return np.broadcast_to(col, (grid.cells[-1],))
 
 
-def _first_drop(grid, col, z0, note):
+def _first_drop(grid: Grid, col: Floats, z0: float, note: Note | None) -> float:
     """Where the column ``col`` first drops below 1/2 above z0, minus z0 (m)."""
     h = grid.spacing
     zc = grid.cell_centres(grid.dim - 1)
@@ -270,7 +310,15 @@ def _first_drop(grid, col, z0, note):
     return float(max(z - z0, 0.0))
 
 
-def measure(case, grid, particles, bins, time, solid_distance=None, fallbacks=None):
+def measure(
+    case: Case,
+    grid: Grid,
+    particles: Particles,
+    bins: CellBins,
+    time: float,
+    solid_distance: Distance | None = None,
+    fallbacks: Fallbacks | None = None,
+) -> dict[str, float]:
     """One row of probes.csv: {"time": t, name: value, ...}. ``bins``: the particles binned
     by cell (``cells.bin_particles``) at this state; ``solid_distance``: the obstacles' hook
     (module docstring); ``fallbacks``: a ``fallbacks.Fallbacks`` that counts the fallbacks
@@ -279,7 +327,7 @@ def measure(case, grid, particles, bins, time, solid_distance=None, fallbacks=No
     f = None
     for probe in case.probes:
 
-        def note(what, name=probe.name):
+        def note(what: str, name: str = probe.name) -> None:
             if fallbacks is not None:
                 fallbacks.count(what, f"probe {name}", time=time)
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..errors import CaseError
 
 
-def check_out_dir(out, create=True, name="--out"):
+def check_out_dir(out: str | Path, create: bool = True, name: str = "--out") -> None:
     """CaseError when the output folder ``out`` (``name`` in messages: the option or
     argument that gave it) is a file or (with ``create``) cannot be created."""
     out = Path(out)

@@ -2,6 +2,7 @@
 
 import os
 import tempfile
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -10,7 +11,7 @@ os.umask(_UMASK)
 
 
 @contextmanager
-def atomic_path(path, durable=False):
+def atomic_path(path: str | Path, durable: bool = False) -> Iterator[Path]:
     """Yield a temporary path in the target's folder; on success it replaces ``path``.
 
     ``durable``: fsync the file before the rename (and the folder after it), so that after a
@@ -34,7 +35,7 @@ def atomic_path(path, durable=False):
         raise
 
 
-def _fsync(path):
+def _fsync(path: str | Path) -> None:
     fd = os.open(path, os.O_RDONLY)
     try:
         os.fsync(fd)
@@ -42,7 +43,7 @@ def _fsync(path):
         os.close(fd)
 
 
-def _fsync_folder(folder):
+def _fsync_folder(folder: Path) -> None:
     """Make the rename itself durable (best effort: not every system can fsync a folder)."""
     try:
         _fsync(folder)
@@ -50,6 +51,6 @@ def _fsync_folder(folder):
         pass
 
 
-def write_text(path, text):
+def write_text(path: str | Path, text: str) -> None:
     with atomic_path(path) as tmp:
         tmp.write_text(text)

@@ -19,6 +19,8 @@ Locks need a POSIX system (Linux, macOS); on NFS, Linux maps flock to fcntl lock
 work between machines when the server supports locking.
 """
 
+from __future__ import annotations
+
 import errno
 import fcntl
 import json
@@ -28,6 +30,7 @@ import socket
 import sys
 import time
 from pathlib import Path
+from typing import Any, Literal, TypedDict
 
 from ..errors import CaseError
 from . import check_out_dir
@@ -44,13 +47,25 @@ _LEFTOVER = re.compile(
     r"particles_\d+\.vtu|checkpoint_\d+\.npz)\..+\.tmp$"
 )
 
-CLI_HINTS = {
+
+class Hints(TypedDict):
+    """How refusals tell the user what to do: the command line's words or the API's."""
+
+    busy: str  # when another run holds the folder ({pid}: its PID)
+    holds: str  # when the folder holds another run's outputs
+    name: str  # what gave the folder: the option or the argument
+
+
+# how a run claims its folder: a new run, one that replaces the outputs there, a restart
+Mode = Literal["new", "overwrite", "restart"]
+
+CLI_HINTS: Hints = {
     "busy": "Wait for it to finish (or stop it: kill -TERM {pid}), or give another --out.",
     "holds": "Choose another folder, add --restart to continue it from its latest checkpoint, "
     "or add --overwrite to replace it.",
     "name": "--out",
 }
-API_HINTS = {
+API_HINTS: Hints = {
     "busy": "Wait for it to finish (or stop it: kill -TERM {pid}), or give another out_dir.",
     "holds": "Choose another folder, continue it with Simulation.resume(case, out_dir), or "
     "pass overwrite=True to replace it.",
@@ -61,12 +76,12 @@ API_HINTS = {
 class FolderBusy(CaseError):
     """The output folder is locked by another run."""
 
-    def __init__(self, message, pid):
+    def __init__(self, message: str, pid: int | None) -> None:
         super().__init__(message)
         self.pid = pid
 
 
-def output_files(folder):
+def output_files(folder: str | Path) -> list[Path]:
     """The run outputs present in ``folder`` (see OUTPUT_NAMES / OUTPUT_PATTERNS)."""
     folder = Path(folder)
     found = [folder / n for n in OUTPUT_NAMES if (folder / n).exists()]
@@ -75,12 +90,12 @@ def output_files(folder):
     return found
 
 
-def leftovers(folder):
+def leftovers(folder: str | Path) -> list[Path]:
     """Temporary files of atomic writes that a killed run left behind."""
     return sorted(p for p in Path(folder).iterdir() if _LEFTOVER.match(p.name))
 
 
-def holder(folder):
+def holder(folder: str | Path) -> dict[str, Any]:  # JSON: what the holder wrote
     """What the lock file says about the run holding it (dict, possibly empty)."""
     for _ in range(20):  # the holder writes it right after locking: a moment to appear
         try:
@@ -97,7 +112,7 @@ def holder(folder):
     return {}
 
 
-def _describe(info):
+def _describe(info: dict[str, Any]) -> str:
     pid = info.get("pid")
     who = f"PID {pid}" if pid is not None else "PID unknown"
     if info.get("host") and info.get("host") != socket.gethostname():
@@ -112,14 +127,14 @@ def _describe(info):
 class RunFolder:
     """A claimed (locked) output folder; ``release()`` (or the process's exit) frees it."""
 
-    def __init__(self, path, fd, notes, created):
+    def __init__(self, path: str | Path, fd: int, notes: list[str], created: bool) -> None:
         self.path = Path(path)
-        self._fd = fd
+        self._fd: int | None = fd
         self.notes = notes
         self.created = created
 
     @classmethod
-    def claim(cls, path, mode="new", hints=API_HINTS):
+    def claim(cls, path: str | Path, mode: Mode = "new", hints: Hints = API_HINTS) -> RunFolder:
         """Lock ``path`` for one run and prepare it.
 
         ``mode``: "new" (refuse a folder that holds a run's outputs), "overwrite" (delete
@@ -171,7 +186,7 @@ class RunFolder:
             raise
         return folder
 
-    def _write_holder(self):
+    def _write_holder(self) -> None:
         info = {
             "pid": os.getpid(),
             "host": socket.gethostname(),
@@ -179,10 +194,11 @@ class RunFolder:
             "command": " ".join(sys.argv) if sys.argv and sys.argv[0] else "python",
         }
         data = (json.dumps(info) + "\n").encode()
+        assert self._fd is not None  # right after the claim: not released yet
         os.ftruncate(self._fd, 0)
         os.pwrite(self._fd, data, 0)
 
-    def _prepare(self, mode, hints):
+    def _prepare(self, mode: Mode, hints: Hints) -> None:
         if mode == "new" and output_files(self.path):
             raise CaseError(
                 f"{hints['name']} {self.path} already holds the results of a run. " + hints["holds"]
@@ -202,10 +218,10 @@ class RunFolder:
             )
 
     @property
-    def held(self):
+    def held(self) -> bool:
         return self._fd is not None
 
-    def release(self):
+    def release(self) -> None:
         """Unlock (idempotent)."""
         if self._fd is not None:
             fd, self._fd = self._fd, None
@@ -214,5 +230,5 @@ class RunFolder:
             finally:
                 os.close(fd)
 
-    def __del__(self):
+    def __del__(self) -> None:
         self.release()

@@ -7,9 +7,12 @@ after any kill of the process (a single write is never half done for another pro
 restart rewrites it (atomically) with the entries the checkpoint counts.
 """
 
+from __future__ import annotations
+
 import os
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 import meshio
@@ -17,6 +20,12 @@ import numpy as np
 
 from ..errors import CaseError
 from .atomic import atomic_path, write_text
+
+if TYPE_CHECKING:
+    from ..particles import Particles
+
+# an entry of the index: a snapshot's time (s) and file name
+Entry = tuple[float, str]
 
 HEADER = (
     '<?xml version="1.0"?>\n'
@@ -27,18 +36,18 @@ FOOTER = "  </Collection>\n</VTKFile>\n"
 _ENTRY = re.compile(r'^\s*<DataSet timestep="([^"]*)" part="0" file="([^"]*)"\s*/>\s*$')
 
 
-def _entry(time, name):
+def _entry(time: float, name: str) -> str:
     return f'    <DataSet timestep="{time:.9g}" part="0" file={quoteattr(name)}/>\n'
 
 
-def read_index(path):
+def read_index(path: str | Path) -> tuple[list[Entry], bool]:
     """The (time, file name) entries of a particles.pvd written by mpmflow, in order; a
     damaged tail (a crash of the machine) ends the list. Returns (entries, complete)."""
     try:
         text = Path(path).read_text(errors="replace")
     except OSError as err:
         raise CaseError(f"{path} cannot be read: {err.strerror}.") from None
-    entries = []
+    entries: list[Entry] = []
     for line in text.splitlines():
         m = _ENTRY.match(line)
         if m:
@@ -49,21 +58,23 @@ def read_index(path):
     return entries, text.endswith(FOOTER)
 
 
-def _unescape(value):
+def _unescape(value: str) -> str:
     return (
         value.replace("&quot;", '"').replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&")
     )
 
 
 class SnapshotWriter:
-    def __init__(self, folder, stem="particles", resume=None):
+    def __init__(
+        self, folder: str | Path, stem: str = "particles", resume: int | None = None
+    ) -> None:
         """``resume``: the number of snapshots the checkpoint counts: the index is cut back
         to them (CaseError when it holds fewer) and later snapshot files are deleted.
         Without it the index is started anew."""
         self.folder = Path(folder)
         self.stem = stem
         self.index = self.folder / f"{stem}.pvd"
-        self.entries = []  # (time, file name)
+        self.entries: list[Entry] = []
         if resume is not None:
             found, _ = read_index(self.index) if self.index.exists() else ([], False)
             if len(found) < resume:
@@ -79,12 +90,12 @@ class SnapshotWriter:
                     old.unlink()
         self._rewrite()
 
-    def _rewrite(self):
+    def _rewrite(self) -> None:
         text = HEADER + "".join(_entry(t, f) for t, f in self.entries)
         self._end = len(text.encode())  # where the next entry goes
         write_text(self.index, text + FOOTER)
 
-    def write(self, time, particles):
+    def write(self, time: float, particles: Particles) -> str:
         name = f"{self.stem}_{len(self.entries):06d}.vtu"
         n, dim = particles.x.shape
         points = np.zeros((n, 3))
@@ -115,7 +126,7 @@ class SnapshotWriter:
         self.entries.append((time, name))
         return name
 
-    def sync(self):
+    def sync(self) -> None:
         fd = os.open(self.index, os.O_RDONLY | os.O_CLOEXEC)
         try:
             os.fsync(fd)

@@ -14,12 +14,28 @@ The columns and their units: COLUMNS (and the README).
 
 import math
 import os
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any, TypedDict
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import CaseError
 from .atomic import write_text
+
+# a row: a value by column (None: not measured, written as nan)
+Row = Mapping[str, float | None]
+# a table read back: a column of values by name
+Table = dict[str, NDArray[np.float64]]
+
+
+class Position(TypedDict):
+    """Where a CSV file ended when a checkpoint was written: its rows and bytes."""
+
+    rows: int
+    bytes: int
+
 
 COLUMNS = {
     "time": "s",
@@ -39,7 +55,7 @@ COLUMNS = {
 }
 
 
-def units(dim):
+def units(dim: int) -> dict[str, str]:
     """The columns' units for a run of dimension ``dim``: energies per metre of depth in 2D
     (J/m), absolute in 3D (J)."""
     if dim == 2:
@@ -47,7 +63,7 @@ def units(dim):
     return {c: ("J" if u == "J/m" else u) for c, u in COLUMNS.items()}
 
 
-def _fmt(value):
+def _fmt(value: float | np.integer[Any] | None) -> str:
     if isinstance(value, (int, np.integer)):
         return str(int(value))
     if value is None or (isinstance(value, float) and math.isnan(value)):
@@ -55,7 +71,7 @@ def _fmt(value):
     return f"{value:.9g}"
 
 
-def format_row(columns, row):
+def format_row(columns: Iterable[str], row: Row) -> str:
     """One CSV line (with its newline) of the values of ``row`` (a dict) in column order."""
     return ",".join(_fmt(row[c]) for c in columns) + "\n"
 
@@ -69,8 +85,14 @@ class CsvAppender:
     ``labels``: the header's names of the columns when they differ from the row's keys
     (probes.csv: ``name [unit]``)."""
 
-    def __init__(self, path, columns, resume=None, labels=None):
-        self._fd = None
+    def __init__(
+        self,
+        path: str | Path,
+        columns: Iterable[str],
+        resume: Position | None = None,
+        labels: Iterable[str] | None = None,
+    ) -> None:
+        self._fd: int | None = None
         self.path = Path(path)
         self.columns = list(columns)
         header = ",".join(labels if labels is not None else self.columns) + "\n"
@@ -83,7 +105,7 @@ class CsvAppender:
             os.truncate(self.path, self.bytes)
         self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CLOEXEC)
 
-    def _check(self, header):
+    def _check(self, header: str) -> None:
         name = self.path.name
         try:
             with open(self.path, "rb") as f:
@@ -108,33 +130,35 @@ class CsvAppender:
                 "short since. Start the run again with --overwrite, or restore the file."
             )
 
-    def append(self, row):
+    def append(self, row: Row) -> None:
         """Append one row (a dict with every column)."""
         data = format_row(self.columns, row).encode()
+        assert self._fd is not None, "appending to a closed CSV file"
         written = os.write(self._fd, data)
         while written < len(data):  # a regular file takes it whole; a full disk raises
             written += os.write(self._fd, data[written:])
         self.rows += 1
         self.bytes += len(data)
 
-    def position(self):
+    def position(self) -> Position:
         """What a checkpoint records to continue this file."""
         return {"rows": self.rows, "bytes": self.bytes}
 
-    def sync(self):
+    def sync(self) -> None:
+        assert self._fd is not None, "syncing a closed CSV file"
         os.fsync(self._fd)
 
-    def close(self):
+    def close(self) -> None:
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
 
-    def __del__(self):
+    def __del__(self) -> None:
         self.close()
 
 
 class TimeSeriesWriter(CsvAppender):
-    def __init__(self, path, resume=None):
+    def __init__(self, path: str | Path, resume: Position | None = None) -> None:
         super().__init__(path, COLUMNS, resume)
 
 
@@ -142,35 +166,36 @@ class SeriesBuffer:
     """The rows of a run in memory, as one float array that doubles when full (8 bytes per
     value: ``Simulation.series`` and the rows of a resumed run)."""
 
-    def __init__(self, columns):
+    def __init__(self, columns: Iterable[str]) -> None:
         self.columns = list(columns)
         self._index = {c: k for k, c in enumerate(self.columns)}
         self._data = np.empty((64, len(self.columns)))
         self._n = 0
 
-    def __len__(self):
+    def __len__(self) -> int:
         return self._n
 
-    def append(self, row):
+    def append(self, row: Row) -> None:
         if self._n == self._data.shape[0]:
             self._data = np.concatenate([self._data, np.empty_like(self._data)])
         self._data[self._n] = [np.nan if row[c] is None else row[c] for c in self.columns]
         self._n += 1
 
-    def extend(self, table):
+    def extend(self, table: Mapping[str, NDArray[np.float64]]) -> None:
         """Append the rows of a table read by ``read_table`` (a dict of columns)."""
         n = len(table[self.columns[0]]) if table else 0
         for k in range(n):
             self.append({c: table[c][k] for c in self.columns})
 
-    def column(self, name):
-        return self._data[: self._n, self._index[name]].copy()
+    def column(self, name: str) -> NDArray[np.float64]:
+        values: NDArray[np.float64] = self._data[: self._n, self._index[name]].copy()
+        return values
 
-    def rows(self):
+    def rows(self) -> list[dict[str, float]]:
         """The rows as dicts (integer columns as int)."""
         out = []
         for values in self._data[: self._n]:
-            row = {}
+            row: dict[str, float] = {}
             for c, v in zip(self.columns, values):
                 row[c] = int(v) if c in _INTEGER and v == v else float(v)
             out.append(row)
@@ -180,7 +205,7 @@ class SeriesBuffer:
 _INTEGER = {"step", "max_particles_per_cell", "pressure_unknowns", "solver_iterations"}
 
 
-def read_table(path, required=("time",)):
+def read_table(path: str | Path, required: Iterable[str] = ("time",)) -> tuple[Table, list[str]]:
     """Read an mpmflow CSV (timeseries.csv, probes.csv) as {column: array}, the columns named
     without the units a header gives (``time [s]`` -> ``time``), tolerating what a
     crash can leave: a last line without its newline is dropped. Returns (table, notes).
@@ -198,7 +223,7 @@ def read_table(path, required=("time",)):
             "mpmflow table; the run that wrote it may have been damaged. Run the "
             "case again."
         ) from None
-    notes = []
+    notes: list[str] = []
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()  # the newline that ends the last complete row
@@ -235,7 +260,7 @@ def read_table(path, required=("time",)):
     return {c: values[:, j].copy() for j, c in enumerate(header)}, notes
 
 
-def header_units(path):
+def header_units(path: str | Path) -> dict[str, str]:
     """The units a CSV's header gives its columns ({name: unit}, ``wall_p [Pa]`` -> "Pa");
     {} when it cannot be read. probes.csv states them, so a run still going (no summary.json
     yet) has them too."""
@@ -244,7 +269,7 @@ def header_units(path):
             first = f.readline().rstrip("\n")
     except (OSError, UnicodeDecodeError):
         return {}
-    out = {}
+    out: dict[str, str] = {}
     for label in first.split(","):
         name = _strip_unit(label)
         if name != label:
@@ -252,11 +277,11 @@ def header_units(path):
     return out
 
 
-def _strip_unit(label):
+def _strip_unit(label: str) -> str:
     """A column's name without the unit its header may give: ``wall_p [Pa]`` -> ``wall_p``."""
     name, sep, unit = label.partition(" [")
     return name if sep and unit.endswith("]") and "[" not in unit else label
 
 
-def _probe_name(name):
+def _probe_name(name: str) -> bool:
     return bool(name) and all(ch.isalnum() or ch in "_.+-" for ch in name)

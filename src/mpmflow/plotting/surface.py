@@ -182,7 +182,7 @@ def draw_surface(
     verts: NDArray[np.float64],
     faces: NDArray[np.int64],
     obstacles: NDArray[np.float64],
-    size: Sequence[float],
+    size: Sequence[float] | NDArray[np.float64],
     title: str | None = None,
     labels: bool = True,
 ) -> Poly3DCollection:

@@ -55,6 +55,16 @@ class Action:
         return self.schedule.due(sim) or (self.at_end and sim.time >= end)
 
 
+@dataclass
+class Stop:
+    """A stop asked for (``Simulation.stop``): the summary's message and status, and
+    whether a checkpoint of that state is written."""
+
+    message: str
+    status: str
+    checkpoint: bool
+
+
 def blow_up_guard(sim: Simulation) -> None:
     """SimulationError when a particle's velocity or position is not finite, or a particle
     is faster than solver.max_speed, after the last chunk (``sim.last_chunk``)."""

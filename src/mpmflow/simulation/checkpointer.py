@@ -11,6 +11,7 @@ their names.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -20,13 +21,16 @@ import numpy as np
 from .. import checkpoint
 from .._version import __version__
 from ..boundaries import outlets
-from ..case import resolved, revalidate
+from ..case import Case, resolved, revalidate
 from ..errors import CaseError
 from ..fallbacks import Fallbacks
 from ..particles import Particles
 
 if TYPE_CHECKING:
     from .loop import Simulation
+
+# Simulation's progress callable(t, step, end)
+Progress = Callable[[float, int, float], None] | None
 
 # what a checkpoint's meta must hold
 META = (
@@ -49,7 +53,7 @@ META = (
 class Checkpointer:
     """The periodic checkpoints (not at time.end: the end of the run writes its own)."""
 
-    def __call__(self, sim):
+    def __call__(self, sim: Simulation) -> None:
         if sim.out_dir is not None and sim.time < sim.case.time.end:
             write(sim)
 
@@ -88,14 +92,18 @@ def write(sim: Simulation) -> Path:
     added = {a.name: a.schedule.state() for a in sim.actions if not a.builtin}
     if added:  # only then: the meta of a run without them is as before
         meta["schedules"] = added
+    if sim.out_dir is None:  # (the TypeError that Path(None) gave, with its reason)
+        raise TypeError("a checkpoint needs an output folder: the Simulation has no out_dir")
     sim.last_checkpoint = checkpoint.write(sim.out_dir, sim.steps, arrays, meta)
     return sim.last_checkpoint
 
 
-def resume_latest(cls, case, out_dir, progress):
+def resume_latest(
+    cls: type[Simulation], case: Case, out_dir: str | Path, progress: Progress
+) -> Simulation:
     """The run of ``out_dir`` continued from its latest readable checkpoint."""
     checkpoint.latest(out_dir)  # CaseError when there is none
-    damaged = []
+    damaged: list[checkpoint.CheckpointError] = []
     for path in reversed(checkpoint.checkpoints(out_dir)):
         try:
             sim = resume_from(cls, case, out_dir, path, progress)
@@ -118,7 +126,9 @@ def resume_latest(cls, case, out_dir, progress):
     )
 
 
-def resume_from(cls, case, out_dir, path, progress):
+def resume_from(
+    cls: type[Simulation], case: Case, out_dir: str | Path, path: str | Path, progress: Progress
+) -> Simulation:
     """The run of ``out_dir`` continued from the checkpoint ``path``: a new ``cls`` (a
     Simulation) with the checkpoint's particles, scheme state, counters and schedules."""
     arrays, meta = checkpoint.read(path)

@@ -2,6 +2,10 @@
 fallbacks that acted); checkpoints carry them."""
 
 from dataclasses import dataclass
+from typing import Protocol
+
+from ..case import Case
+from ..fallbacks import Fallbacks
 
 
 @dataclass
@@ -17,7 +21,23 @@ class Counters:
     viscous_iterations: int = 0
 
 
-def add_report(c, fallbacks, report, case, time):
+class ChunkReport(Protocol):
+    """What every scheme's report of a chunk holds (``Scheme.advance``); ``capped``,
+    ``clamped``, ``pockets``, ``viscous_iterations`` and ``steps`` only some (0 or the
+    chunk's steps when absent)."""
+
+    moved_inside: int
+    solves: int
+    iterations: int
+    max_iterations: int
+    unknowns: int
+    released: int
+    residual: float
+
+
+def add_report(
+    c: Counters, fallbacks: Fallbacks, report: ChunkReport, case: Case, time: float
+) -> None:
     """Add the scheme's ``report`` of a chunk ending at ``time`` to the counters ``c`` and
     to ``fallbacks`` (``mpmflow.fallbacks.Fallbacks``)."""
     c.moved_inside += report.moved_inside

@@ -21,16 +21,17 @@ from __future__ import annotations
 
 import time as _time
 from collections.abc import Callable
-from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from .. import checkpoint
 from ..case import Case, revalidate
-from ..cells import bin_particles
+from ..cells import CellBins, bin_particles
 from ..diagnostics.measures import (
     front_and_height,
     kinetic_energy,
@@ -41,22 +42,15 @@ from ..diagnostics.measures import (
 from ..errors import SimulationError
 from ..fallbacks import Fallbacks
 from ..interrupts import StopNow
-from ..output.folder import API_HINTS, RunFolder
+from ..output.folder import API_HINTS, Hints, Mode, RunFolder
 from ..output.summary import write_summary
 from ..output.timeseries import COLUMNS
 from ..threads import ThreadGovernor
 from . import callbacks, checkpointer, setup, writers
-from .callbacks import Action
-from .counters import Counters, add_report
+from .callbacks import Action, Stop
+from .counters import ChunkReport, Counters, add_report
 from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterval
 from .summary import summary as _summary
-
-
-@dataclass
-class Stop:
-    message: str
-    status: str
-    checkpoint: bool
 
 
 class Simulation:
@@ -98,7 +92,7 @@ class Simulation:
         self.last_checkpoint: Path | None = None
         self.resumed_from: Path | None = None  # the checkpoint this run continues, if any
         self.resume_state: dict[str, Any] | None = (
-            None  # what that checkpoint recorded of the outputs and schedules
+            None  # what that checkpoint recorded of the outputs and schedules (its JSON)
         )
         self.stop_signal: int | None = (
             None  # set (to a signal number) to stop at the next output time
@@ -115,10 +109,10 @@ class Simulation:
         self._folder: RunFolder | None = None  # the claimed output folder
         self._opened = False
         self._stop: Stop | None = None
-        self._binned = None
+        self._binned: CellBins | None = None
         self._schedules_and_actions()
 
-    def _schedules_and_actions(self):
+    def _schedules_and_actions(self) -> None:
         out = self.case.output
         # the output times, where chunks end; snapshots and checkpoints at the first output
         # time at or after each multiple of their interval (a shorter interval: every
@@ -127,15 +121,16 @@ class Simulation:
         self.snapshot_times = TimeInterval(max(out.snapshot_interval or out.interval, out.interval))
         self.checkpoint_times = TimeInterval(max(self.case.checkpoint.interval, out.interval))
         chunks = IterationInterval(1)
-        self.builtin_writers = {"timeseries": writers.TimeSeries()}
-        if self.case.probes:
-            self.builtin_writers["probes"] = writers.Probes(self.case)
+        # the built-in writers by name, in the order they act (rows in memory: the first two)
+        self._timeseries = writers.TimeSeries()
+        self._probes = writers.Probes(self.case) if self.case.probes else None
+        self.builtin_writers: dict[str, writers.Builtin] = {"timeseries": self._timeseries}
+        if self._probes is not None:
+            self.builtin_writers["probes"] = self._probes
         self.builtin_writers["snapshots"] = writers.Snapshots()
         w = self.builtin_writers
 
-        def builtin(name, func, schedule, **kw):
-            return Action(name, func, schedule, builtin=True, **kw)
-
+        builtin = partial(Action, builtin=True)
         self.actions = [
             builtin("blow_up_guard", callbacks.blow_up_guard, chunks),
             builtin("progress", callbacks.progress, chunks),
@@ -197,7 +192,9 @@ class Simulation:
         )
         return action
 
-    def _action(self, func, schedule, name, **kw):
+    def _action(
+        self, func: Callable[[Simulation], None], schedule: Schedule, name: str | None, **kw: bool
+    ) -> Action:
         if not callable(func):
             raise TypeError(
                 f"{func!r} is not callable: a writer or callback is a function of the Simulation"
@@ -207,7 +204,7 @@ class Simulation:
                 f"{schedule!r} is not a schedule (mpmflow.simulation.TimeInterval, "
                 "IterationInterval, WallTimeInterval)"
             )
-        name = name or getattr(func, "__name__", type(func).__name__)
+        name = name or cast(str, getattr(func, "__name__", type(func).__name__))
         if any(a.name == name for a in self.actions):
             raise ValueError(
                 f"a writer or callback named {name!r} is in the run already; give another name="
@@ -238,7 +235,7 @@ class Simulation:
         out_dir: str | Path,
         path: str | Path | None = None,
         progress: Callable[[float, int, float], None] | None = None,
-        hints: Any = API_HINTS,
+        hints: Hints = API_HINTS,
     ) -> Simulation:
         """The run of ``out_dir`` continued from a checkpoint: ``path``, or (None) the latest
         readable one, passing over damaged ones with a notice (in ``notices``). Same
@@ -274,13 +271,13 @@ class Simulation:
         return setup.describe(self)
 
     # ------------------------------------------------------------------ the output folder
-    def claim(self, hints: Any = API_HINTS) -> None:
+    def claim(self, hints: Hints = API_HINTS) -> None:
         """Lock ``out_dir`` for this run and prepare it (see ``output.folder``); done by
         ``run()`` if not before. CaseError (FolderBusy) when another run holds it, or when
         it holds another run's outputs and ``overwrite`` is not set."""
         if self.out_dir is None or self._folder is not None:
             return
-        mode = "restart" if self.resumed_from else "overwrite" if self.overwrite else "new"
+        mode: Mode = "restart" if self.resumed_from else "overwrite" if self.overwrite else "new"
         self._folder = RunFolder.claim(self.out_dir, mode, hints)
         self.notices[:0] = self._folder.notes
 
@@ -299,7 +296,7 @@ class Simulation:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def _open_outputs(self):
+    def _open_outputs(self) -> None:
         """Open the writers' files (a resumed run's cut back to its checkpoint) and put
         the checkpoint's phases back into the added writers' and callbacks' schedules."""
         if self._opened:
@@ -318,19 +315,19 @@ class Simulation:
     @property
     def rows(self) -> list[dict[str, float]]:
         """The timeseries rows so far, as dicts (built on each call; see ``series``)."""
-        return self.builtin_writers["timeseries"].buffer.rows()
+        return self._timeseries.buffer.rows()
 
-    def series(self, name: str) -> np.ndarray:
+    def series(self, name: str) -> NDArray[np.float64]:
         """One timeseries column as an array (see ``output.timeseries.COLUMNS``)."""
         if name not in COLUMNS:
             raise KeyError(
                 f"{name!r} is not a timeseries column; the columns are " + ", ".join(COLUMNS)
             )
-        return self.builtin_writers["timeseries"].buffer.column(name)
+        return self._timeseries.buffer.column(name)
 
-    def probe_series(self, name: str) -> np.ndarray:
+    def probe_series(self, name: str) -> NDArray[np.float64]:
         """One probe's values at the output times (``series("time")``)."""
-        probes = self.builtin_writers.get("probes")
+        probes = self._probes
         if probes is None or name not in probes.buffer.columns:
             raise KeyError(
                 f"no probe named {name!r}; the case's probes are "
@@ -338,7 +335,7 @@ class Simulation:
             )
         return probes.buffer.column(name)
 
-    def measure(self, bins: Any = None) -> dict[str, float]:
+    def measure(self, bins: CellBins | None = None) -> dict[str, float]:
         """The diagnostics of one timeseries row at the current state."""
         P, g = self.particles, self.grid
         bins = bins if bins is not None else self._bins()
@@ -360,16 +357,16 @@ class Simulation:
             "solver_iterations": int(self.counters.iterations_since_output),
         }
 
-    def _open(self):
+    def _open(self) -> NDArray[np.float64] | None:
         """The cells' fluid fractions when obstacles cut cells (None: no obstacle)."""
         solids = getattr(self.scheme, "solids", None)
         return solids.open if solids is not None and solids.present else None
 
-    def _bins(self):
+    def _bins(self) -> CellBins:
         """Particles binned by cell, theta over the cells' fluid part."""
         return bin_particles(self.grid, self.particles, open_=self._open())
 
-    def binned(self) -> Any:
+    def binned(self) -> CellBins:
         """The particles binned by cell at this output time, shared by the writers."""
         if self._binned is None:
             self._binned = self._bins()
@@ -414,7 +411,7 @@ class Simulation:
         finally:
             self.close()
 
-    def _run(self):
+    def _run(self) -> dict[str, Any]:
         self._wall0 = _time.perf_counter()
         status, message = "failed", ""
         try:
@@ -449,7 +446,7 @@ class Simulation:
                     pass  # the run's own error (often the same one) is the one to report
         return self.summary
 
-    def _loop(self):
+    def _loop(self) -> tuple[str, str]:
         """The time loop: chunks of steps to the next output time, each followed by the
         writers and callbacks that are due; (status, message) at its end."""
         end = self.case.time.end
@@ -472,7 +469,7 @@ class Simulation:
             self.checkpoint()
         return stop.status, stop.message
 
-    def _act(self, start=False):
+    def _act(self, start: bool = False) -> None:
         """The writers and callbacks whose schedules are due (at t = 0: the writers')."""
         end = self.case.time.end
         try:
@@ -486,14 +483,14 @@ class Simulation:
         finally:
             self.forget_bins()
 
-    def _advance(self, dt, n):
+    def _advance(self, dt: float, n: int) -> None:
         """n steps of size dt, and the counters of what they did."""
         first, t0 = self.steps + 1, self.time
 
-        def where(k):
+        def where(k: int) -> str:
             return f" at step {first + k} (t = {t0 + (k + 1) * dt:.6g} s)"
 
-        report = self.scheme.advance(dt, n, where=where)
+        report: ChunkReport = self.scheme.advance(dt, n, where=where)
         self.last_chunk = (first, n, t0, dt)
         self.steps += getattr(report, "steps", n)  # time.dt = "auto": the steps it took
         self.time = t0 + n * dt

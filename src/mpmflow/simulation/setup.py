@@ -2,32 +2,39 @@
 particles and the scheme built from the case, its memory estimate, the time step, and the
 notices the run's summary will carry."""
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from .. import checkpoint, memory
 from ..boundaries import obstacles
+from ..case import Case
 from ..errors import CaseError, SolverError
 from ..geometry.seeding import build_particles
 from ..grid import Grid
 from ..materials import stiffness
-from ..particles import subset
-from ..schemes import make_scheme
+from ..particles import Particles, subset
+from ..schemes import Scheme, make_scheme
 from ..stability import time_step
 from ..threads import setting_from
+
+if TYPE_CHECKING:
+    from .loop import Simulation
 
 
 @dataclass
 class Setup:
-    memory: object  # memory.Estimate
-    files: dict  # the content hashes of the files the case reads
-    grid: object
-    particles: object
-    scheme: object
+    memory: memory.Estimate
+    files: dict[str, checkpoint.FileHash]  # the content hashes of the files the case reads
+    grid: Grid
+    particles: Particles
+    scheme: Scheme
     dt: float
-    notices: list
+    notices: list[str]
 
 
-def build(case):
+def build(case: Case) -> Setup:
     """The Setup of a validated ``case``; CaseError when it cannot run here."""
     setting_from(case.execution.threads)  # a bad MPMFLOW_THREADS is refused here
     estimate = memory.check(case)
@@ -43,7 +50,7 @@ def build(case):
             "Enlarge the bodies or raise particles_per_cell."
         )
     scheme = make_scheme(case, grid, particles)
-    notices = []
+    notices: list[str] = []
     solids = getattr(scheme, "solids", None)
     if solids is not None:
         inside = obstacles.in_solid_cells(solids, grid, particles.x)
@@ -94,7 +101,7 @@ def build(case):
     return Setup(estimate, files, grid, particles, scheme, dt, notices)
 
 
-def describe(sim):
+def describe(sim: Simulation) -> list[str]:
     """What runs, how many steps and outputs, and the memory estimate (lines of text)."""
     case, g, est = sim.case, sim.grid, sim.memory
     steps = max(1, round((case.time.end - sim.time) / sim.dt))

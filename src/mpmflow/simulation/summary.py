@@ -1,5 +1,9 @@
 """The run's summary (summary.json): status, counts, timings and the resolved case."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from .._version import __version__
@@ -8,8 +12,11 @@ from ..diagnostics import probes
 from ..output.timeseries import units as timeseries_units
 from ..stability import case_stable_time_step, sound_speed
 
+if TYPE_CHECKING:
+    from .loop import Simulation
 
-def _explicit(sim):
+
+def _explicit(sim: Simulation) -> dict[str, float]:
     if sim.case.solver.scheme != "explicit":
         return {}
     m = sim.case.material
@@ -19,7 +26,7 @@ def _explicit(sim):
     }
 
 
-def _adaptive(sim):
+def _adaptive(sim: Simulation) -> dict[str, dict[str, float | None]]:
     """time.dt = "auto" with the projection scheme: the steps' range."""
     scheme = sim.scheme
     if not getattr(scheme, "auto", False) or not hasattr(scheme, "dt_range"):
@@ -35,7 +42,7 @@ def _adaptive(sim):
     }
 
 
-def summary(sim, status, message):
+def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JSON
     """The summary dict of ``sim`` as it stands, with its ``status`` and ``message``."""
     P, c, case, grid = sim.particles, sim.counters, sim.case, sim.grid
     bins = sim._bins()

@@ -19,11 +19,18 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..diagnostics import probes
 from ..output.snapshots import SnapshotWriter
-from ..output.timeseries import COLUMNS, CsvAppender, SeriesBuffer, TimeSeriesWriter, read_table
+from ..output.timeseries import (
+    COLUMNS,
+    CsvAppender,
+    Position,
+    SeriesBuffer,
+    TimeSeriesWriter,
+    read_table,
+)
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -37,12 +44,12 @@ class _Rows:
 
     def __init__(self, columns: Iterable[str]) -> None:
         self.buffer = SeriesBuffer(columns)
-        self.file: Any = None  # the CSV appender while a folder is written
+        self.file: CsvAppender | None = None  # while a folder is written
 
-    def _open_file(self, folder: Path, sim: Simulation, resume: Any) -> Any:
+    def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
         raise NotImplementedError
 
-    def open(self, sim: Simulation, resume: Any) -> None:
+    def open(self, sim: Simulation, resume: Position | None) -> None:
         folder = sim.out_dir
         if folder is None:
             return
@@ -55,7 +62,7 @@ class _Rows:
         if self.file is not None:
             self.file.append(row)
 
-    def position(self) -> Any:
+    def position(self) -> Position | None:
         return self.file.position() if self.file is not None else None
 
     def sync(self) -> None:
@@ -73,7 +80,7 @@ class TimeSeries(_Rows):
     def __init__(self) -> None:
         super().__init__(COLUMNS)
 
-    def _open_file(self, folder: Path, sim: Simulation, resume: Any) -> Any:
+    def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
         return TimeSeriesWriter(folder / self.file_name, resume)
 
     def __call__(self, sim: Simulation) -> None:
@@ -88,7 +95,7 @@ class Probes(_Rows):
     def __init__(self, case: Case) -> None:
         super().__init__(probes.columns(case))
 
-    def _open_file(self, folder: Path, sim: Simulation, resume: Any) -> Any:
+    def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
         return CsvAppender(
             folder / self.file_name, probes.columns(sim.case), resume, probes.header(sim.case)
         )
@@ -115,7 +122,7 @@ class Snapshots:
     def __init__(self) -> None:
         self.file: SnapshotWriter | None = None
 
-    def open(self, sim: Simulation, resume: Any) -> None:
+    def open(self, sim: Simulation, resume: int | None) -> None:
         if sim.out_dir is not None and sim.case.output.snapshots:
             self.file = SnapshotWriter(sim.out_dir, resume=resume)
 
@@ -130,3 +137,6 @@ class Snapshots:
     def sync(self) -> None:
         if self.file is not None:
             self.file.sync()
+
+
+Builtin = TimeSeries | Probes | Snapshots  # the built-in writers

@@ -26,6 +26,7 @@ import numpy as np
 from ..case import Case
 from ..cells import bin_particles
 from ..particles import Particles
+from ..schemes.projection import ProjectionScheme
 from ..simulation import Simulation
 from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
 from .types import Context, Measures
@@ -74,6 +75,7 @@ def checkerboard(sim: Simulation, H: float) -> float:
     g = sim.grid
     nx, ny = g.cells
     theta = bin_particles(g, sim.particles).theta.reshape(ny, nx)  # [cy, cx]
+    assert isinstance(sim.scheme, ProjectionScheme)  # the nodal pressure is the projection's
     p = sim.scheme.p_node.reshape(ny + 1, nx + 1)  # [iy, ix]
     full = theta >= 0.9
     inner = np.zeros((ny + 1, nx + 1), dtype=bool)
