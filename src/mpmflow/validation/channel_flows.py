@@ -37,25 +37,21 @@ theory's mean over its particles. Observed order: the least-squares slope of log
 against log(spacing) over the two meshes.
 """
 
+from __future__ import annotations
+
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .channel_theory import (
-    bagnold,
-    bingham,
-    binned,
-    depth,
-    fit_plug,
-    incline,
-    inertial_number,
-    l2,
-    plug_width,
-    poiseuille,
-)
-from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, run_example, save
+from .channel_runs import measure_layer, measure_plug, measure_poiseuille
+from .channel_theory import bagnold, bingham, poiseuille
+from .common import CaseResult, Row, fmt, markdown_table, observed_order, pyplot, save
 from .types import Context, FloatArray, Measures, Meshes
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 # tolerances, fixed in this module before the validation runs (those of the issue, 26 item 2)
 TOL_STEADY = 0.01
@@ -93,7 +89,6 @@ WHY_ORDER = (
 # meshes and run lengths (full, quick); measured before the tolerances were applied
 POISEUILLE: Meshes = {"spacings": (0.0025, 0.00125), "end": 1.5}
 POISEUILLE_QUICK: Meshes = {"spacings": (0.005, 0.0025), "end": 1.0}
-STARTUP = 0.1  # of T_visc
 PLUG: Meshes = {"spacings": (0.005, 0.0025), "end": 1.5}
 PLUG_QUICK: Meshes = {"spacings": (0.01, 0.005), "end": 1.0}
 LAYER: Meshes = {"spacings": (0.002, 0.001), "end": 3.0}
@@ -106,120 +101,18 @@ MISS_STARTUP_ORDER = (
 )
 
 
-def measure_poiseuille(h: float, end: float, example: str = "poiseuille_film.toml") -> Measures:
-    """Run the film at spacing ``h`` to ``end`` (s); the start-up and steady measures."""
-    snaps: dict[str, tuple[float, FloatArray, FloatArray]] = {}
-    state: dict[str, float] = {}
-
-    def grab(sim):
-        if "T" not in state:
-            m = sim.case.material
-            nu = m.viscosity / m.density
-            H = depth(sim.case)
-            state.update(T=H * H / nu, nu=nu, H=H)
-        if abs(sim.time - STARTUP * state["T"]) < 0.5 * sim.dt:
-            snaps["startup"] = (
-                sim.time,
-                sim.particles.x[:, 1].copy(),
-                sim.particles.v[:, 0].copy(),
-            )
-
-    # the example's output interval is 0.1 T_visc, so the start-up time is an output time
-    sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"], on_output=grab)
-    theta, g = incline(sim.case)
-    gs, H, nu = g * math.sin(theta), state["H"], state["nu"]
-    r = {
-        "h": h,
-        "H": H,
-        "nu": nu,
-        "gs": gs,
-        "T": state["T"],
-        "end": sim.time,
-        "wall": sim.summary["wall_seconds"],
-        "particles": sim.particles.count,
-    }
-    if "startup" not in snaps:
-        raise RuntimeError("the start-up time 0.1 T_visc is not an output time of the run")
-    t0, y0, u0 = snaps["startup"]
-    r["t_startup"] = t0
-    r["startup_bins"] = binned(y0, u0, H, h, lambda yy: poiseuille(yy, H, nu, gs, t0))
-    r["startup"] = l2(*r["startup_bins"][1:])
-    y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
-    r["steady_bins"] = binned(y, u, H, h, lambda yy: poiseuille(yy, H, nu, gs))
-    r["steady"] = l2(*r["steady_bins"][1:])
-    r["surface"] = r["steady_bins"][1][-1] / r["steady_bins"][2][-1] - 1.0
-    return r
-
-
-def measure_plug(h: float, end: float, example: str = "bingham_plug.toml") -> Measures:
-    """Run the Bingham layer at spacing ``h`` to ``end`` (s); plug width and speed."""
-    sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"])
-    m = sim.case.material
-    theta, g = incline(sim.case)
-    gs, H = g * math.sin(theta), depth(sim.case)
-    y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
-    r = {
-        "h": h,
-        "H": H,
-        "end": sim.time,
-        "wall": sim.summary["wall_seconds"],
-        "particles": sim.particles.count,
-        "rho": m.density,
-        "K": m.consistency,
-        "tau_y": m.yield_stress,
-        "gs": gs,
-        "cap": m.max_viscosity,
-    }
-    r["plug_theory"] = plug_width(H, m.density, m.yield_stress, gs)
-    r["plug"] = fit_plug(y, u, H, h)
-    r["plug_error"] = r["plug"] / r["plug_theory"] - 1.0
-    r["bins"] = binned(
-        y, u, H, h, lambda yy: bingham(yy, H, m.density, m.consistency, m.yield_stress, gs)
-    )
-    r["profile"] = l2(*r["bins"][1:])
-    r["speed"], r["speed_theory"] = r["bins"][1][-1], r["bins"][2][-1]
-    r["speed_error"] = r["speed"] / r["speed_theory"] - 1.0
-    return r
-
-
-def measure_layer(h: float, end: float, example: str = "mu_i_layer.toml") -> Measures:
-    """Run the mu(I) layer at spacing ``h`` to ``end`` (s); surface velocity and profile."""
-    sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"])
-    m = sim.case.material
-    theta, g = incline(sim.case)
-    H = depth(sim.case)
-    args = (
-        H,
-        theta,
-        m.friction_static,
-        m.friction_limit,
-        m.inertial_number_ref,
-        m.grain_diameter,
-        m.density / m.grain_density,
-        g,
-    )
-    y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
-    r = {
-        "h": h,
-        "H": H,
-        "end": sim.time,
-        "wall": sim.summary["wall_seconds"],
-        "particles": sim.particles.count,
-        "theta": theta,
-        "args": args,
-        "I": inertial_number(*args[1:5]),
-    }
-    r["bins"] = binned(y, u, H, h, lambda yy: bagnold(yy, *args))
-    r["profile"] = l2(*r["bins"][1:])
-    r["surface"], r["surface_theory"] = r["bins"][1][-1], r["bins"][2][-1]
-    r["surface_error"] = r["surface"] / r["surface_theory"] - 1.0
-    return r
-
-
 # --- the report's cases ------------------------------------------------------------------
 
 
-def _plot(ax, runs, key, curve, yfine, label_theory, title):
+def _plot(
+    ax: Axes,
+    runs: list[Measures],
+    key: str,
+    curve: FloatArray,
+    yfine: FloatArray,
+    label_theory: str,
+    title: str,
+) -> None:
     ax.plot(curve, yfine, "k-", label=label_theory)
     for r, mark in zip(runs, ("o", "s", "^")):
         yb, ub, _ = r[key]
@@ -230,7 +123,14 @@ def _plot(ax, runs, key, curve, yfine, label_theory, title):
     ax.legend(fontsize=8)
 
 
-def _order_row(case, quantity, error, runs, errors, miss="the error does not fall with the mesh"):
+def _order_row(
+    case: str,
+    quantity: str,
+    error: str,
+    runs: list[Measures],
+    errors: list[float],
+    miss: str = "the error does not fall with the mesh",
+) -> Row:
     """The row of the observed order of ``errors`` (one per run) over the runs' meshes."""
     return Row(
         case,

@@ -71,7 +71,10 @@ def bagnold(
     diameter d (m), solid fraction phi = bulk density / grain density."""
     It = inertial_number(theta, mu_s, mu_2, I0)
     depth: FloatArray = np.clip(H - np.asarray(y, float), 0.0, H)
-    return (2.0 / 3.0) * It * math.sqrt(phi * g * math.cos(theta)) / d * (H**1.5 - depth**1.5)
+    u: FloatArray = (
+        (2.0 / 3.0) * It * math.sqrt(phi * g * math.cos(theta)) / d * (H**1.5 - depth**1.5)
+    )
+    return u
 
 
 # --- measures -----------------------------------------------------------------------------
