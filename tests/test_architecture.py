@@ -66,3 +66,16 @@ def test_tests_mirror_the_packages():
     top = {p.name for p in TESTS.glob("test_*.py")}
     assert top == PROJECT_TESTS
     assert folders - {"."} <= packages, sorted(folders - {"."} - packages)
+
+
+def test_no_test_reaches_into_private_state():
+    """Tests use what a user or a developer of another package may use: no attribute or
+    function whose name starts with an underscore (dunders aside), of mpmflow or of a
+    library."""
+    private = re.compile(r"\.(_[a-z][A-Za-z0-9_]*)\b")
+    found = {
+        p.relative_to(TESTS).as_posix(): sorted(set(private.findall(_code(p))))
+        for p in TESTS.rglob("test_*.py")
+        if p.name != "test_architecture.py" and private.search(_code(p))
+    }
+    assert found == {}

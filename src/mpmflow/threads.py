@@ -184,7 +184,9 @@ class ThreadGovernor:
         self.changes: list[tuple[float, int, float | None]] = []
         self._previous: int | None = None
 
-    def _set(self, n: float, t: float, others: float | None) -> None:
+    def take(self, n: float, t: float, others: float | None) -> None:
+        """Run on n threads from simulated time t (at least one, at most the limit;
+        ``others``: the cores other programs kept busy, for the record)."""
         from . import state
 
         n = max(1, min(int(n), self.limit if self.mode == "auto" else pool_size()))
@@ -193,7 +195,9 @@ class ThreadGovernor:
             self.threads = n
             self.changes.append((t, n, None if others is None else round(others, 2)))
 
-    def _choose(self, others: float) -> int:
+    def choose(self, others: float) -> int:
+        """The threads to take when other programs keep ``others`` cores busy: a core
+        counts as free when FREE of it is idle."""
         return math.floor(self.cores - others + (1 - FREE))
 
     def start(self, t: float = 0.0) -> None:
@@ -202,7 +206,7 @@ class ThreadGovernor:
         self._previous = state.max_threads()
         if self.mode == "fixed":
             assert self.fixed is not None  # setting_from gives a number with "fixed"
-            self._set(self.fixed, t, None)
+            self.take(self.fixed, t, None)
             return
         self.meter = CpuMeter(self.cpus)
         others: float | None = None
@@ -210,7 +214,7 @@ class ThreadGovernor:
             others = running_now()
         if others is None and self.meter.last is None and hasattr(os, "getloadavg"):
             others = os.getloadavg()[0]
-        self._set(self._choose(others or 0.0), t, others)
+        self.take(self.choose(others or 0.0), t, others)
         self._next = time.monotonic() + INTERVAL
 
     def update(self, t: float) -> None:
@@ -227,7 +231,7 @@ class ThreadGovernor:
         else:
             others = None
         if others is not None:
-            self._set(self._choose(others), t, others)
+            self.take(self.choose(others), t, others)
 
     def stop(self) -> None:
         """Give the core back the threads it had before the run."""

@@ -11,10 +11,9 @@ import hypothesis.strategies as st
 import pytest
 import tomllib
 from hypothesis import HealthCheck, given, settings
-from test_input_fuzz import BASE, _capped, _run_case, to_toml
+from test_input_fuzz import BASE, _run_case, cap_steps, to_toml
 
 from mpmflow import memory
-from mpmflow.simulation import Simulation
 
 CASES = 400
 
@@ -114,7 +113,7 @@ def test_materials_and_probes_run_or_fail_cleanly(monkeypatch):
     model ran and cases were refused."""
     budget = memory.PROGRAM + 8 * memory.MB
     monkeypatch.setattr(memory, "available", lambda: (budget, "the test's budget"))
-    monkeypatch.setattr(Simulation, "_advance", _capped)
+    cap_steps(monkeypatch)
     monkeypatch.setenv("MPMFLOW_THREADS", "1")
     outcomes = {}
 

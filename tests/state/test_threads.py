@@ -75,8 +75,8 @@ def test_auto_counts_the_cores_others_keep_busy(monkeypatch):
     """The choice from the measured load: a core counts as free when 3/4 of it is idle."""
     gov = threads_module.ThreadGovernor("auto")
     gov.cores, gov.limit = 2, 2
-    assert [gov._choose(x) for x in (0.0, 0.2, 0.3, 1.0, 1.2, 2.0)] == [2, 2, 1, 1, 1, 0]
-    gov._set(gov._choose(2.5), 0.0, 2.5)  # never below one thread
+    assert [gov.choose(x) for x in (0.0, 0.2, 0.3, 1.0, 1.2, 2.0)] == [2, 2, 1, 1, 1, 0]
+    gov.take(gov.choose(2.5), 0.0, 2.5)  # never below one thread
     assert gov.threads == 1
     gov.stop()
 
