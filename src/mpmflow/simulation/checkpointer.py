@@ -65,12 +65,8 @@ def write(sim: Simulation) -> Path:
     for action in sim.actions:
         if action.writer and hasattr(action.func, "sync"):
             action.func.sync()
-    w = sim.builtin_writers
-    outputs = {
-        "timeseries": w["timeseries"].position(),
-        "probes": w["probes"].position() if "probes" in w else None,
-        "snapshots": w["snapshots"].position(),
-    }
+    # where each built-in writer's file stands (a resumed run cuts it back there)
+    outputs = {name: w.position() for name, w in sim.builtin_writers.items()}
     meta = {
         "mpmflow_version": __version__,
         "case": resolved(sim.case),
