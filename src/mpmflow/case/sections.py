@@ -185,6 +185,11 @@ class Output(Section):
         description="Write particle snapshots (VTU files and a "
         "particles.pvd time series for ParaView).",
     )
+    centre_of_mass: bool = Field(
+        False,
+        description="Write the water's centre of mass (m) at the output times into "
+        "centre_of_mass.csv.",
+    )
 
 
 class Checkpoint(Section):

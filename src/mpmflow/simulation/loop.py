@@ -127,6 +127,8 @@ class Simulation:
         self.builtin_writers: dict[str, writers.Builtin] = {"timeseries": self._timeseries}
         if self._probes is not None:
             self.builtin_writers["probes"] = self._probes
+        if self.case.output.centre_of_mass:
+            self.builtin_writers["centre_of_mass"] = writers.CentreOfMass(self.case)
         self.builtin_writers["snapshots"] = writers.Snapshots()
         w = self.builtin_writers
 

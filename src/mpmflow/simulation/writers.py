@@ -115,6 +115,25 @@ class Probes(_Rows):
         )
 
 
+class CentreOfMass(_Rows):
+    """The particles' centre of mass (m) into centre_of_mass.csv (output.centre_of_mass)."""
+
+    file_name = "centre_of_mass.csv"
+
+    def __init__(self, case: Case) -> None:
+        super().__init__(["time"] + [f"{a}_c" for a in "xyz"[: len(case.domain.size)]])
+
+    def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
+        columns = self.buffer.columns
+        units = [f"{c} [{'s' if c == 'time' else 'm'}]" for c in columns]
+        return CsvAppender(folder / self.file_name, columns, resume, units)
+
+    def __call__(self, sim: Simulation) -> None:
+        P = sim.particles
+        c = (P.mass[:, None] * P.x).sum(axis=0) / P.mass.sum()
+        self.append({"time": sim.time, **{f"{a}_c": float(v) for a, v in zip("xyz", c)}})
+
+
 class Snapshots:
     """Snapshots when the case asks for them (``output.snapshots``) and there is a folder;
     otherwise the schedule still runs (its phase is in the checkpoints)."""
@@ -139,4 +158,4 @@ class Snapshots:
             self.file.sync()
 
 
-Builtin = TimeSeries | Probes | Snapshots  # the built-in writers
+Builtin = TimeSeries | Probes | CentreOfMass | Snapshots  # the built-in writers
