@@ -22,6 +22,18 @@ from .types import FloatArray, Measures
 STARTUP = 0.1  # of T_visc: when the start-up profile is measured
 
 
+def _run_record(sim: Simulation, h: float, H: float) -> Measures:
+    """What every run's record starts with: its spacing and depth (m), end (s), wall time
+    (s) and particle count."""
+    return {
+        "h": h,
+        "H": H,
+        "end": sim.time,
+        "wall": sim.summary["wall_seconds"],
+        "particles": sim.particles.count,
+    }
+
+
 def measure_poiseuille(h: float, end: float, example: str = "poiseuille_film.toml") -> Measures:
     """Run the film at spacing ``h`` to ``end`` (s); the start-up and steady measures."""
     snaps: dict[str, tuple[float, FloatArray, FloatArray]] = {}
@@ -75,11 +87,7 @@ def measure_plug(h: float, end: float, example: str = "bingham_plug.toml") -> Me
     gs, H = g * math.sin(theta), depth(sim.case)
     y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
     r = {
-        "h": h,
-        "H": H,
-        "end": sim.time,
-        "wall": sim.summary["wall_seconds"],
-        "particles": sim.particles.count,
+        **_run_record(sim, h, H),
         "rho": m.density,
         "K": m.consistency,
         "tau_y": m.yield_stress,
@@ -115,16 +123,7 @@ def measure_layer(h: float, end: float, example: str = "mu_i_layer.toml") -> Mea
         g,
     )
     y, u = sim.particles.x[:, 1], sim.particles.v[:, 0]
-    r = {
-        "h": h,
-        "H": H,
-        "end": sim.time,
-        "wall": sim.summary["wall_seconds"],
-        "particles": sim.particles.count,
-        "theta": theta,
-        "args": args,
-        "I": inertial_number(*args[1:5]),
-    }
+    r = {**_run_record(sim, h, H), "theta": theta, "args": args, "I": inertial_number(*args[1:5])}
     r["bins"] = binned(y, u, H, h, lambda yy: bagnold(yy, *args))
     r["profile"] = l2(*r["bins"][1:])
     r["surface"], r["surface_theory"] = r["bins"][1][-1], r["bins"][2][-1]
