@@ -21,8 +21,8 @@ def atomic_path(path: str | Path, durable: bool = False) -> Iterator[Path]:
     timeseries.csv, particles.pvd and summary.json from the checkpoint)."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
     try:
+        os.close(fd)
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes files private; outputs are not
         if durable:

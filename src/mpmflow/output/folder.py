@@ -22,6 +22,7 @@ work between machines when the server supports locking.
 from __future__ import annotations
 
 import errno
+import contextlib
 import fcntl
 import json
 import os
@@ -222,8 +223,13 @@ class RunFolder:
         return self._fd is not None
 
     def release(self) -> None:
-        """Unlock (idempotent)."""
+        """Unlock (idempotent). A temporary file of an atomic write still in the folder is
+        this run's (a killed run's were deleted at the claim): one whose write a second
+        signal cut short in the moment between creating it and guarding it. It goes first."""
         if self._fd is not None:
+            with contextlib.suppress(OSError):  # (a folder removed under the run)
+                for tmp in leftovers(self.path):
+                    tmp.unlink(missing_ok=True)
             fd, self._fd = self._fd, None
             try:
                 fcntl.flock(fd, fcntl.LOCK_UN)
