@@ -21,8 +21,8 @@ work between machines when the server supports locking.
 
 from __future__ import annotations
 
-import errno
 import contextlib
+import errno
 import fcntl
 import json
 import os
