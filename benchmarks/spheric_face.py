@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from mpmflow import Simulation, load_case
-from mpmflow import probes as P
+from mpmflow.diagnostics import probes as P
 from mpmflow.validation import spheric
 
 ROOT = Path(__file__).resolve().parents[1]
