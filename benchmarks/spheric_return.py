@@ -1,17 +1,21 @@
 """SPHERIC Test 2: the water that comes back behind the box (issue 25, rows P5/P7;
-benchmarks/README.md, "Why the water returns late behind the box").
+benchmarks/README.md, "The water behind the box").
 
     python benchmarks/spheric_return.py TAG [--spacing 0.04] [--end 1.5] [--set key=value ...]
+        [--trace T ...]
 
 time.dt = "auto" unless --set says otherwise. At every output, on three vertical-column
 lines along x (y = 0.1 m and 0.9 m beside the box, y = 0.471 m the box's centre line), in
 columns of h x h: the water depth (particle volume / h^2; also of the water below
-z = 0.2 m), the mean u and the highest particle; the water that arched over the box (particles that were above the box's top,
-z > 0.2 m over its footprint, at some output before): its mass behind the box, in the air
-(z > 0.2 m) and on the floor (z < 0.2 m) at x < 0.6635 m, and its mean u there; the
-probes. --trace T ...: the particles on the box's top at T, and where they were every
-0.05 s before. Writes runs/spheric_return_TAG.npz and prints the rows (first p > 500 Pa at P5-P8,
-H1 at 0.95-1.2 s).
+z = 0.2 m), the mean u and the highest particle; the water on the box's top (its mean
+layer over the footprint, the column over P7 below z = 0.461 m and the volume fraction of
+its lowest cell); the water that arched
+over the box (particles that were above the box's top, z > 0.2 m over its footprint, at
+some output before): its mass behind the box, in the air (z > 0.2 m) and on the floor
+(z < 0.2 m) at x < 0.6635 m, and its mean u there; the probes. --trace T ...: the
+particles on the box's top at T, and where they were every 0.05 s before. Writes
+runs/spheric_return_TAG.npz and prints the rows (first p > 500 Pa at P5-P8, H1 at
+0.95-1.2 s).
 """
 
 import argparse
@@ -98,6 +102,13 @@ def on_output(s):
     put("m_behind", float(m[x[:, 0] < BACK].sum()))
     put("m_behind_c", float(m[(x[:, 0] < BACK) & (x[:, 1] > Y0) & (x[:, 1] < Y1)].sum()))
     put("m_wall", float(m[x[:, 0] < 0.1].sum()))
+    # water on the box's top: mean layer over its footprint, and the column over P7 (h x h)
+    above = (x[:, 2] > TOP) & (x[:, 2] < TOP + 0.3)
+    foot = above & (x[:, 0] > BACK) & (x[:, 0] < FACE) & (x[:, 1] > Y0) & (x[:, 1] < Y1)
+    put("top_layer", float(vol[foot].sum()) / ((FACE - BACK) * (Y1 - Y0)))
+    p7 = above & (np.abs(x[:, 0] - 0.7235) < 0.5 * h) & (np.abs(x[:, 1] - 0.471) < 0.5 * h)
+    put("p7_layer", float(vol[p7].sum()) / h**2)
+    put("p7_low", float(vol[p7 & (x[:, 2] < TOP + h)].sum()) / h**3)  # fraction of the cell
     row = P.measure(case, s.grid, s.particles, s._bins(), s.time, s.scheme.solids.distance)
     for name in ("P5", "P6", "P7", "P8", "H1"):
         put(name, row[name])

@@ -158,3 +158,26 @@ for name, r in runs.items():
             " / ".join(f"{spheric.first_above(r['t'], e[p]):.3f}" for p in ("P8", "P7", "P5"))
         )
     print(f"| {name} | " + " | ".join(cells) + " |")
+print(
+    "(f) over P7 (x = 0.7235 m, the centre line): water in the column z = 0.161-0.461 m (m) / "
+    "volume fraction of the lowest cell above the top / P7 (Pa, mpmflow)"
+)
+for tt in np.arange(0.8, 1.46, 0.05):
+    cells = []
+    for r in runs.values():
+        if tt > r["t"][-1] + 1e-9:
+            cells.append("")
+            continue
+        i = at(r, tt)
+        if r["extra"] is None:
+            k = col(r, 0.7235)
+            a = r["alpha"][i, 1, k]
+            sel = (r["z"] > 0.161) & (r["z"] < 0.461)
+            low = a[np.nonzero(r["z"] > 0.161)[0][0]]
+            cells.append(f"{a[sel].sum() * (r['z'][1] - r['z'][0]):.3f} / {low:.2f}")
+        elif "p7_low" in r["extra"]:
+            e = r["extra"]
+            cells.append(f"{e['p7_layer'][i]:.3f} / {e['p7_low'][i]:.2f} / {e['P7'][i]:.0f}")
+        else:
+            cells.append("")
+    print(f"{tt:.2f} | " + " | ".join(cells))
