@@ -287,11 +287,30 @@ boundaryField
     }
 
 
-def write_case(case, spacing, end, solver):
-    for (folder, name, cls), body in files(spacing, end, solver).items():
+def write_case(case, spacing, end, solver, functions=""):
+    """The case's files in ``case``; ``functions``: more function objects (OpenFOAM
+    dictionary text) put inside controlDict's functions dictionary."""
+    fs = files(spacing, end, solver)
+    if functions:
+        key = ("system", "controlDict", "dictionary")
+        body = fs[key]
+        fs[key] = body[: body.rstrip().rfind("}")] + functions + "}\n"
+    for (folder, name, cls), body in fs.items():
         path = case / folder / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(HEADER.format(cls=cls, obj=name) + body)
+
+
+def run_with_functions(case, spacing, end, functions):
+    """write_case with the extra function objects (GAMG), interFoam run in it, the probes'
+    CSV written (the peer scripts that sample more than the case's probes)."""
+    write_case(case, spacing, end, "gamg", functions)
+    prefix = openfoam_command()
+    if prefix is None:
+        raise SystemExit("OpenFOAM not found")
+    wall, cpu = run_interfoam(case, prefix)
+    print(f"interFoam: {wall:.0f} s wall, {cpu:.0f} s CPU")
+    write_probes_csv(case, spacing)
 
 
 def children_cpu():

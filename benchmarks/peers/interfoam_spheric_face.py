@@ -37,7 +37,6 @@ x1 = min((i + 0.5) * h[0] for i in range(n[0]) if (i + 0.5) * h[0] > F.BOX[1][0]
 ztop = [z for z in zc if z > F.BOX[1][2]]
 
 if not args.show:
-    fs = F.files(args.spacing, args.end, "gamg")
     points = (
         [f"({x1:.9g} 0.471 {z:.9g})" for z in zc]
         + [f"({x1 + h[0]:.9g} 0.471 {z:.9g})" for z in zc]
@@ -50,21 +49,8 @@ if not args.show:
         fields (p alpha.water U);
         probeLocations ( {" ".join(points)} );
     }}
-}}
 """
-    key = ("system", "controlDict", "dictionary")
-    body = fs[key]
-    fs[key] = body[: body.rstrip().rfind("}")] + extra  # inside the functions dictionary
-    for (folder, name, cls), text in fs.items():
-        path = case / folder / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(F.HEADER.format(cls=cls, obj=name) + text)
-    prefix = F.openfoam_command()
-    if prefix is None:
-        raise SystemExit("OpenFOAM not found")
-    wall, cpu = F.run_interfoam(case, prefix)
-    print(f"interFoam: {wall:.0f} s wall, {cpu:.0f} s CPU")
-    F.write_probes_csv(case, args.spacing)
+    F.run_with_functions(case, args.spacing, args.end, extra)
 
 nz = n[2]
 tp, p = F.read_probes(case / "postProcessing" / "face" / "0" / "p")

@@ -38,7 +38,6 @@ def inside(x, y, z):
 
 points = [(x, y, z) for y in LINES for x in xc for z in zc if not inside(x, y, z)]
 if not args.show:
-    fs = F.files(args.spacing, args.end, "gamg")
     locs = " ".join(f"({x:.9g} {y:.9g} {z:.9g})" for x, y, z in points)
     extra = f"""
     lines
@@ -47,21 +46,8 @@ if not args.show:
         fields (alpha.water U);
         probeLocations ( {locs} );
     }}
-}}
 """
-    key = ("system", "controlDict", "dictionary")
-    body = fs[key]
-    fs[key] = body[: body.rstrip().rfind("}")] + extra
-    for (folder, name, cls), text in fs.items():
-        path = case / folder / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(F.HEADER.format(cls=cls, obj=name) + text)
-    prefix = F.openfoam_command()
-    if prefix is None:
-        raise SystemExit("OpenFOAM not found")
-    wall, cpu = F.run_interfoam(case, prefix)
-    print(f"interFoam: {wall:.0f} s wall, {cpu:.0f} s CPU")
-    F.write_probes_csv(case, args.spacing)
+    F.run_with_functions(case, args.spacing, args.end, extra)
 
 ta, a = F.read_probes(case / "postProcessing" / "lines" / "0" / "alpha.water")
 rows = [
