@@ -79,3 +79,11 @@ def test_no_test_reaches_into_private_state():
         if p.name != "test_architecture.py" and private.search(_code(p))
     }
     assert found == {}
+
+
+def test_only_the_parallel_package_imports_mpi_and_petsc():
+    """mpi4py and petsc4py come with the MPI environment only (make setup-mpi): imported
+    in parallel/ alone, so that the one-process install runs without them."""
+    door = re.compile(r"^\s*(from|import) (mpi4py|petsc4py)\b", re.M)
+    importers = [_rel(p) for p in MODULES if door.search(_code(p))]
+    assert importers and all(name.startswith("parallel/") for name in importers)

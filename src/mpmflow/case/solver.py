@@ -164,12 +164,20 @@ class Solver(Section):
         "a standing wave grows): kept for comparison, off by default; use "
         "solver.volume_correction instead.",
     )
-    linear_solver: Literal["multigrid", "amg", "direct"] = Field(
+    linear_solver: Literal["multigrid", "amg", "direct", "petsc"] = Field(
         "multigrid",
         description='Pressure solver: "multigrid" = conjugate gradients '
         'preconditioned by geometric multigrid on the grid (compiled); "amg" = conjugate '
         'gradients with smoothed-aggregation algebraic multigrid (pyamg); "direct" = sparse '
-        "LU (SciPy).",
+        'LU (SciPy); "petsc" = PETSc\'s conjugate gradients with the preconditioner '
+        "solver.petsc_preconditioner, its rows split over the MPI processes of the run "
+        "(needs the MPI environment: make setup-mpi).",
+    )
+    petsc_preconditioner: Literal["gamg", "hypre"] = Field(
+        "gamg",
+        description='With solver.linear_solver = "petsc": "gamg" = PETSc\'s smoothed-'
+        "aggregation algebraic multigrid, \"hypre\" = hypre's BoomerAMG. PETSc's options "
+        "reach the solve under the prefix mpmflow_pressure_ (PETSC_OPTIONS).",
     )
     tolerance: float = Field(
         1e-8,

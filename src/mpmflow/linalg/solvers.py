@@ -5,6 +5,9 @@
 ``amg``     conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid
             (pyamg); warm-started.
 ``direct``  sparse LU (SuperLU through SciPy).
+``petsc``   PETSc's conjugate gradients with GAMG or BoomerAMG (``parallel.petsc``), the
+            rows split over the run's MPI processes (every process holds the whole
+            system and gets the whole solution); warm-started.
 ``prepare`` sets up for one matrix (hierarchy or factorisation); ``solve`` may then be
 called for several right-hand sides. Every solve reports its true relative residual
 ||b - A x|| / ||b||; the caller decides what a failure means.
@@ -48,12 +51,23 @@ class PressureMatrix:
         return sp.csr_matrix((self.vals[mask], self.cols[mask], indptr), shape=(n, n))
 
 
-Method = Literal["multigrid", "amg", "direct"]
+Method = Literal["multigrid", "amg", "direct", "petsc"]
 
 
 class LinearSolver:
-    def __init__(self, method: Method, tolerance: float, max_iterations: int) -> None:
+    def __init__(
+        self,
+        method: Method,
+        tolerance: float,
+        max_iterations: int,
+        preconditioner: Literal["gamg", "hypre"] = "gamg",
+    ) -> None:
         self.method = method
+        self.preconditioner = preconditioner
+        if method == "petsc":  # a missing petsc4py is told before the run starts
+            from ..parallel.petsc import petsc
+
+            petsc()
         self.tolerance = tolerance
         self.max_iterations = max_iterations
         self._hierarchy: state.Multigrid | None = None  # multigrid
@@ -68,6 +82,9 @@ class LinearSolver:
             self._hierarchy = state.multigrid(
                 matrix.cols, matrix.vals, matrix.nodes, matrix.grid_nodes, hierarchy=self._hierarchy
             )
+            return
+        if self.method == "petsc":
+            self._prepare_petsc(matrix)
             return
         self._A = matrix.csr()
         if self.method == "direct":
@@ -96,6 +113,8 @@ class LinearSolver:
             iterations, residual = self._hierarchy.pcg(
                 b, x, tol, self.max_iterations, SMOOTHING_SWEEPS
             )
+        elif self.method == "petsc":
+            return self._solve_petsc(b, np.zeros_like(b) if x0 is None else x0, tol)
         else:
             if self.method == "direct":
                 x = self._setup.solve(b)
@@ -109,6 +128,32 @@ class LinearSolver:
             residual = float(np.linalg.norm(b - self._A @ x) / bnorm)
         ok = bool(np.isfinite(residual) and residual <= tol)
         return SolveResult(x, int(iterations), float(residual), ok)
+
+    def _prepare_petsc(self, matrix: PressureMatrix) -> None:
+        """This rank's block of rows into PETSc (every rank holds the whole matrix)."""
+        from ..parallel.petsc import DistributedSystem, block
+
+        if self._setup is None:
+            self._setup = DistributedSystem(
+                self.tolerance, self.max_iterations, self.preconditioner
+            )
+        system: DistributedSystem = self._setup
+        n = matrix.cols.shape[0]
+        self._block = block(n, system.rank, system.ranks)
+        lo, hi = self._block
+        system.prepare(lo, matrix.cols[lo:hi], matrix.vals[lo:hi], n)
+
+    def _solve_petsc(self, b: Floats, x0: Floats, tol: float) -> SolveResult:
+        system = self._setup
+        lo, hi = self._block
+        part = system.solve(np.ascontiguousarray(b[lo:hi]), np.ascontiguousarray(x0[lo:hi]), tol)
+        x = system.gather(part.x)
+        return SolveResult(x, part.iterations, part.residual, part.converged)
+
+    def close(self) -> None:
+        """Free what the solver holds outside Python (PETSc's objects; collective)."""
+        if self.method == "petsc" and self._setup is not None:
+            self._setup.destroy()
 
     def residual_vector(self, b: Floats, x: Floats) -> Floats:
         """b - A x for the prepared matrix."""

@@ -64,7 +64,10 @@ class PythonPressure:
         self.grid = grid
         self.settings = settings
         self.solver = LinearSolver(
-            settings.linear_solver, settings.tolerance, settings.max_iterations
+            settings.linear_solver,
+            settings.tolerance,
+            settings.max_iterations,
+            settings.petsc_preconditioner,
         )
 
     def solve(

@@ -1,0 +1,91 @@
+"""The processes of a run: mpi4py's ``COMM_WORLD`` under ``mpirun``, or one process.
+
+A run started by ``mpirun``/``mpiexec`` (its launcher sets the world size in the
+environment) uses mpi4py; one started without it needs no MPI at all (``Single``).
+Collective calls take and return NumPy arrays or Python numbers, as mpi4py's do.
+"""
+
+from __future__ import annotations
+
+import os
+from functools import cache
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import CaseError
+
+# the world size as the launchers of Open MPI, MPICH (Hydra) and Slurm give it
+_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "SLURM_NTASKS")
+
+SETUP_HINT = (
+    "run `make setup-mpi` (Open MPI, mpi4py and petsc4py from Debian's packages, into "
+    ".venv-mpi) and start the run with .venv-mpi/bin/python or .venv-mpi/bin/mpmflow"
+)
+
+
+class Comm(Protocol):
+    """What mpmflow asks of a communicator (mpi4py's ``Comm`` satisfies it)."""
+
+    @property
+    def rank(self) -> int: ...
+    @property
+    def size(self) -> int: ...
+    def allreduce(self, value: Any, op: Any = ...) -> Any: ...
+    def allgather(self, value: Any) -> list[Any]: ...
+    def bcast(self, value: Any, root: int = 0) -> Any: ...
+    def Barrier(self) -> None: ...
+
+
+class Single:
+    """One process: every collective is the identity."""
+
+    rank = 0
+    size = 1
+
+    def allreduce(self, value: Any, op: Any = None) -> Any:
+        return value
+
+    def allgather(self, value: Any) -> list[Any]:
+        return [value]
+
+    def bcast(self, value: Any, root: int = 0) -> Any:
+        return value
+
+    def Barrier(self) -> None:
+        return None
+
+
+def launched_size() -> int:
+    """The number of processes the launcher started (1 without a launcher)."""
+    for name in _SIZE_VARIABLES:
+        value = os.environ.get(name)
+        if value and value.isdigit():
+            return int(value)
+    return 1
+
+
+@cache
+def world() -> Comm:
+    """The run's processes: mpi4py's COMM_WORLD when mpi4py is installed or the run was
+    started by an MPI launcher, ``Single`` otherwise. Under a launcher without mpi4py every
+    process would run the whole case alone and write the same files: refused."""
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        if launched_size() > 1:
+            raise CaseError(
+                f"This run was started on {launched_size()} MPI processes, but mpi4py is not "
+                f"installed in this environment: {SETUP_HINT}."
+            ) from None
+        return Single()
+    comm: Comm = MPI.COMM_WORLD
+    return comm
+
+
+def allgather_rows(comm: Comm, local: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The ranks' blocks of a vector, in rank order, on every rank."""
+    if comm.size == 1:
+        return local
+    return np.concatenate(comm.allgather(local))
