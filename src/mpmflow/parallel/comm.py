@@ -35,6 +35,9 @@ class Comm(Protocol):
     def allreduce(self, value: Any, op: Any = ...) -> Any: ...
     def allgather(self, value: Any) -> list[Any]: ...
     def bcast(self, value: Any, root: int = 0) -> Any: ...
+    def alltoall(self, values: list[Any]) -> list[Any]: ...
+    def Isend(self, buf: Any, dest: int, tag: int = ...) -> Any: ...
+    def Irecv(self, buf: Any, source: int = ..., tag: int = ...) -> Any: ...
     def Barrier(self) -> None: ...
 
 
@@ -52,6 +55,15 @@ class Single:
 
     def bcast(self, value: Any, root: int = 0) -> Any:
         return value
+
+    def alltoall(self, values: list[Any]) -> list[Any]:
+        return list(values)
+
+    def Isend(self, buf: Any, dest: int, tag: int = 0) -> Any:
+        raise RuntimeError("one process sends nothing")
+
+    def Irecv(self, buf: Any, source: int = 0, tag: int = 0) -> Any:
+        raise RuntimeError("one process receives nothing")
 
     def Barrier(self) -> None:
         return None

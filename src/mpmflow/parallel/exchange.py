@@ -1,0 +1,120 @@
+"""What the ranks send each other during a step (docs/design/mpi.md, section 2):
+
+- ``NodeExchange.fill``: the values at the local nodes a rank does not own (its ghost
+  ring and its box's upper planes), copied from their owners after each phase that makes
+  them. The lists of who needs which node are made once per split.
+- ``migrate``: the particles whose cell left a rank's box go to the rank that owns it.
+- ``halo``: copies of a rank's particles in its neighbours' ghost layers, so that every
+  node of a box sees all its particles.
+
+Particles travel as a dict of arrays (one row per particle); the exchanges use mpi4py's
+object collectives (pickled NumPy arrays), node values its buffer sends.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .boxes import Boxes
+from .comm import Comm
+from .subgrid import Subgrid, extended
+
+ParticleArrays = dict[str, NDArray[Any]]
+
+
+class NodeExchange:
+    """The owners' values at a rank's local nodes that it does not own."""
+
+    def __init__(self, comm: Comm, sub: Subgrid) -> None:
+        self.comm = comm
+        size = comm.size
+        foreign = np.flatnonzero(sub.node_owner != sub.rank)
+        owners = sub.node_owner[foreign]
+        # what this rank receives from each owner (local indices) and asks for (global)
+        self.receive = {int(r): foreign[owners == r] for r in np.unique(owners)}
+        asks: list[NDArray[np.int64]] = [
+            sub.node_global[self.receive[r]] if r in self.receive else np.zeros(0, np.int64)
+            for r in range(size)
+        ]
+        asked = comm.alltoall(asks)
+        self.send: dict[int, NDArray[np.int64]] = {}
+        for r in range(size):
+            if r != sub.rank and len(asked[r]):
+                local = sub.local_nodes(np.asarray(asked[r], dtype=np.int64))
+                if np.any(local < 0) or np.any(sub.node_owner[local] != sub.rank):
+                    raise RuntimeError(f"rank {r} asked rank {sub.rank} for nodes it lacks")
+                self.send[r] = local
+
+    def fill(self, *arrays: NDArray[Any]) -> None:
+        """Overwrite each array's rows (first axis: local nodes) at the nodes this rank does
+        not own with their owners' values. Collective."""
+        if self.comm.size == 1:
+            return
+        from mpi4py import MPI
+
+        widths = [int(np.prod(a.shape[1:])) for a in arrays]
+        total = sum(widths)
+        requests = []
+        outgoing = {}
+        for r, idx in self.send.items():
+            buf = np.empty((idx.size, total))
+            col = 0
+            for a, w in zip(arrays, widths):
+                buf[:, col : col + w] = a[idx].reshape(idx.size, w)
+                col += w
+            outgoing[r] = buf
+            requests.append(self.comm.Isend(buf, dest=r, tag=11))
+        incoming = {}
+        for r, idx in self.receive.items():
+            incoming[r] = np.empty((idx.size, total))
+            requests.append(self.comm.Irecv(incoming[r], source=r, tag=11))
+        MPI.Request.Waitall(requests)
+        for r, idx in self.receive.items():
+            col = 0
+            for a, w in zip(arrays, widths):
+                shape = (idx.size, *a.shape[1:])
+                a[idx] = incoming[r][:, col : col + w].reshape(shape).astype(a.dtype)
+                col += w
+
+
+def _cells(x: NDArray[np.float64], spacing: float, cells: tuple[int, ...]) -> NDArray[np.int64]:
+    top = np.asarray(cells, dtype=np.int64) - 1
+    return np.clip(np.floor(x / spacing).astype(np.int64), 0, top)
+
+
+def _take(arrays: ParticleArrays, mask: NDArray[Any]) -> ParticleArrays:
+    return {k: a[mask] for k, a in arrays.items()}
+
+
+def _join(parts: list[ParticleArrays], like: ParticleArrays) -> ParticleArrays:
+    return {k: np.concatenate([p[k] for p in parts] or [like[k][:0]]) for k in like}
+
+
+def migrate(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) -> ParticleArrays:
+    """The particles (global coordinates in ``arrays["x"]``) this rank owns after they
+    moved: those that stayed, then those that arrived, by sending rank. Collective."""
+    owner = boxes.owner_of_cells(_cells(arrays["x"], spacing, boxes.cells))
+    me = comm.rank
+    out = [_take(arrays, owner == r) if r != me else None for r in range(comm.size)]
+    got = comm.alltoall(out)
+    kept = _take(arrays, owner == me)
+    return _join([kept, *[g for r, g in enumerate(got) if r != me]], arrays)
+
+
+def halo(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) -> ParticleArrays:
+    """Copies of the neighbours' particles in this rank's ghost layer (by sending rank).
+    Collective."""
+    ijk = _cells(arrays["x"], spacing, boxes.cells)
+    me = comm.rank
+    out: list[ParticleArrays | None] = []
+    for r in range(comm.size):
+        if r == me:
+            out.append(None)
+            continue
+        lo, hi = extended(boxes, r)
+        out.append(_take(arrays, np.all((ijk >= lo) & (ijk < hi), axis=1)))
+    got = comm.alltoall(out)
+    return _join([g for r, g in enumerate(got) if r != me], arrays)
