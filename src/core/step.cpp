@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "binning.hpp"
 #include "corrector.hpp"
@@ -123,18 +125,7 @@ void State<D>::bin_particles(const Particles<D>& P) {
   cell_index<D>(grid_, P.x, cell);
   sort_with_fraction(cell, nc, P.volume, cell_volume_, T_.open, start, order, theta);
   if (obstacles_) sliver_fractions<D>(grid_, T_.open, theta);
-}
-
-template <int D>
-void State<D>::node_fractions(const Options<D>& O) {
-  const index_t nn = grid_.nnodes, nc = grid_.ncells;
-  nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
-  auto enclosed = enclosed_.view(nc);
-  if (O.subcell) {
-    enclosed_cells<D>(grid_, node_f_.view(nn), enclosed);
-  } else {
-    for (index_t c = 0; c < nc; ++c) enclosed(c) = false;
-  }
+  binned_ = n;
 }
 
 template <int D>
@@ -247,6 +238,12 @@ void State<D>::classify_nodes(const Options<D>& O) {
 
 template <int D>
 index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool correct) {
+  scatter(P, O, correct);
+  return classify(P, O);
+}
+
+template <int D>
+void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct) {
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
   PhaseClock clock(phase_seconds_);
   bin_particles(P);
@@ -259,7 +256,24 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
                        v_old, v_star, correct ? cell_vol_.view(nc) : View<double>(), P.affine);
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
-  node_fractions(O);
+  nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
+  clock.lap(PHASE_FREE_SURFACE);
+}
+
+template <int D>
+index_t State<D>::classify(const Particles<D>& P, const Options<D>& O) {
+  if (P.count() != binned_)
+    throw std::invalid_argument("State::classify: the particles the last scatter binned, " +
+                                std::to_string(binned_) + ", and " + std::to_string(P.count()) +
+                                " given");
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  PhaseClock clock(phase_seconds_);
+  auto enclosed = enclosed_.view(nc);
+  if (O.subcell) {
+    enclosed_cells<D>(grid_, node_f_.view(nn), enclosed);
+  } else {
+    for (index_t c = 0; c < nc; ++c) enclosed(c) = false;
+  }
   clock.lap(PHASE_FREE_SURFACE);
   cell_integrals(P, O);
   clock.lap(PHASE_INTEGRALS);

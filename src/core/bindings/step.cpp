@@ -224,7 +224,28 @@ void bind_dim(nb::module_& m) {
             auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return self.state->predict(P, opt, correct);
           },
-          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG)
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG,
+          "scatter, then classify; returns the pressure unknowns.")
+      .def(
+          "scatter",
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, bool correct, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+            self.state->scatter(P, opt, correct);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG,
+          "The particles to the grid: binning, node mass, volume, v_old, v* (and cell_vol when "
+          "correct), v* into the obstacles, node_f.")
+      .def(
+          "classify",
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt) {
+            auto P = particles<D>(x, v, mass, volume, pressure);
+            return self.state->classify(P, opt);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"),
+          "The enclosed cells, the cells' integrals and the unknowns, from scatter's arrays and "
+          "the particles it binned; returns the pressure unknowns.")
       .def("warm_start", [](S& self) { self.state->warm_start(); })
       .def("pressure_matrix",
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
@@ -263,6 +284,20 @@ void bind_dim(nb::module_& m) {
       .def_prop_ro("volume_q",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_q(), h); })
       .def_prop_ro("rows", [](nb::handle h) { return out(nb::cast<S&>(h).state->rows(), h); })
+      .def_prop_ro("node_mass",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_mass(), h); })
+      .def_prop_ro("node_vol",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_vol(), h); })
+      .def_prop_ro("v_old", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_old(), h); })
+      .def_prop_ro("v_star", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_star(), h); })
+      .def_prop_ro("node_f", [](nb::handle h) { return out(nb::cast<S&>(h).state->node_f(), h); })
+      .def_prop_ro("node_row",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_row(), h); })
+      .def_prop_ro("theta", [](nb::handle h) { return out(nb::cast<S&>(h).state->theta(), h); })
+      .def_prop_ro("cell_vol",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_vol(), h); })
+      .def_prop_ro("anchored",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->anchored(), h); })
       .def_prop_ro("matrix_cols",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_cols(), h); })
       .def_prop_ro("matrix_vals",

@@ -152,7 +152,37 @@ class CoreState(Protocol):
         correct: bool,
         affine: Floats | None = None,
     ) -> int:
-        """The step up to the pressure system; returns the pressure unknowns."""
+        """The step up to the pressure system (scatter, then classify); returns the
+        pressure unknowns."""
+        ...
+
+    def scatter(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        correct: bool,
+        affine: Floats | None = None,
+    ) -> None:
+        """The particles to the grid: binning (theta), node_mass, node_vol, v_old, v_star
+        (and cell_vol when correct), v_star into the obstacles, node_f."""
+        ...
+
+    def classify(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+    ) -> int:
+        """The enclosed cells, the cells' integrals and the unknowns (node_row, rows) from
+        scatter's arrays, for the particles scatter was given (ValueError otherwise); returns
+        the pressure unknowns."""
         ...
 
     def warm_start(self) -> None: ...
@@ -206,6 +236,25 @@ class CoreState(Protocol):
     def volume_q(self) -> Floats: ...
     @property
     def rows(self) -> Ints: ...
+    # scatter's and classify's arrays (views: a caller may write them between the phases)
+    @property
+    def node_mass(self) -> Floats: ...
+    @property
+    def node_vol(self) -> Floats: ...
+    @property
+    def v_old(self) -> Floats: ...
+    @property
+    def v_star(self) -> Floats: ...
+    @property
+    def node_f(self) -> Floats: ...
+    @property
+    def node_row(self) -> Ints: ...
+    @property
+    def theta(self) -> Floats: ...
+    @property
+    def cell_vol(self) -> Floats: ...  # empty without the volume correction
+    @property
+    def anchored(self) -> Bools: ...  # the rows next to a free surface (pressure_matrix)
     @property
     def matrix_cols(self) -> Ints: ...
     @property

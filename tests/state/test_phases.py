@@ -1,0 +1,90 @@
+"""The step's public phases, the seam of a domain decomposition (issue 28,
+docs/design/mpi.md, section 2): scatter + classify are predict, and the arrays between them
+are the State's."""
+
+import numpy as np
+import pytest
+from conftest import EXAMPLES
+
+from mpmflow import Simulation, load_case
+
+DT = 1e-3
+
+# the arrays scatter and classify write, and the system pressure_matrix and pressure_rhs
+# assemble from them
+SCATTERED = ("node_mass", "node_vol", "v_old", "v_star", "node_f", "theta")
+SYSTEM = ("node_row", "rows", "matrix_cols", "matrix_vals", "rhs", "anchored")
+
+
+def dam_break(settings=(), steps=30):
+    """The dam break on a 0.01 m grid after ``steps`` steps (the column falling)."""
+    case = load_case(
+        EXAMPLES / "dam_break.toml", ["grid.spacing=0.01", "output.snapshots=false", *settings]
+    )
+    sim = Simulation(case)
+    sim.scheme.advance(DT, steps)
+    return sim
+
+
+def arrays(sim):
+    P = sim.particles
+    return [P.x, P.v, P.mass, P.volume, P.pressure]
+
+
+def assembled(core, O, correct):
+    assert core.pressure_matrix(O)
+    core.pressure_rhs(O)
+    names = SCATTERED + SYSTEM + (("cell_vol",) if correct else ())
+    return {name: getattr(core, name).copy() for name in names}
+
+
+@pytest.mark.parametrize("correct", [False, True], ids=["step", "volume-correction step"])
+def test_scatter_then_classify_give_predicts_system(correct):
+    """Two runs of the same steps: one predicts, the other scatters and classifies into
+    arrays overwritten with garbage first (so every value the system reads is the phases')."""
+    one, two = dam_break(), dam_break()
+    O = one.scheme.options(DT)
+    n = one.scheme.core.predict(*arrays(one), O, correct)
+    expected = assembled(one.scheme.core, O, correct)
+    core = two.scheme.core
+    assert core.cell_vol.size == np.prod(two.grid.cells)  # the dam break corrects its volume
+    for name in SCATTERED + (("cell_vol",) if correct else ()):
+        getattr(core, name)[...] = np.nan
+    core.node_row[...] = 7
+    core.scatter(*arrays(two), O, correct)
+    assert core.classify(*arrays(two), O) == n > 0
+    got = assembled(core, O, correct)
+    for name, value in expected.items():
+        assert np.array_equal(got[name], value), name
+
+
+def test_classify_refuses_particles_scatter_did_not_bin():
+    sim = dam_break(steps=1)
+    O = sim.scheme.options(DT)
+    sim.scheme.core.scatter(*arrays(sim), O, False)
+    with pytest.raises(ValueError, match="the particles the last scatter binned"):
+        sim.scheme.core.classify(*[a[:10] for a in arrays(sim)], O)
+
+
+def test_the_views_are_the_states_arrays():
+    sim = dam_break(steps=1)
+    core, O = sim.scheme.core, sim.scheme.options(DT)
+    n = core.predict(*arrays(sim), O, False)
+    nn, nc, D = int(np.prod(np.add(sim.grid.cells, 1))), int(np.prod(sim.grid.cells)), 2
+    shapes = {name: getattr(core, name).shape for name in SCATTERED + ("node_row", "cell_vol")}
+    assert shapes == {
+        "node_mass": (nn,),
+        "node_vol": (nn,),
+        "v_old": (nn, D),
+        "v_star": (nn, D),
+        "node_f": (nn,),
+        "theta": (nc,),
+        "node_row": (nn,),
+        "cell_vol": (nc,),  # the volume correction is on
+    }
+    assert core.node_row.dtype == np.int64 and core.anchored.dtype == np.bool_
+    # written through: the mass seen by the next phase is the one written here
+    core.node_mass[0] = 5.0
+    assert core.node_mass[0] == 5.0
+    assert core.pressure_matrix(O)
+    assert core.anchored.shape == (n,) and core.anchored.any() and not core.anchored.all()
