@@ -227,6 +227,13 @@ void State<D>::classify_nodes(const Options<D>& O) {
   auto node_row = node_row_.view(nn);
   nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn), O.subcell,
                                       node_row);
+  fill_rows();
+}
+
+template <int D>
+void State<D>::fill_rows() {
+  const index_t nn = grid_.nnodes;
+  auto node_row = node_row_.view(nn);
   auto rows = rows_.view(nrows_);
   // downwards, so that a row an image shares with its master (periodic axes) ends on the
   // master, the lower index
@@ -234,6 +241,13 @@ void State<D>::classify_nodes(const Options<D>& O) {
     const index_t r = node_row(i);
     if (r >= 0) rows(r) = i;
   }
+}
+
+template <int D>
+index_t State<D>::renumber() {
+  nrows_ = renumber_nodes<D>(grid_, node_row_.view(grid_.nnodes));
+  fill_rows();
+  return nrows_;
 }
 
 template <int D>

@@ -10,7 +10,7 @@
 //
 // The phases are public, so that a caller can run a step in parts: the pressure solvers run
 // from Python, and a domain decomposition over MPI (issue 28, docs/design/mpi.md, section 2),
-// which exchanges the nodes' values between scatter and classify.
+// which exchanges the nodes' values between scatter and classify and renumbers the unknowns.
 //
 // A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
 // (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
@@ -197,6 +197,11 @@ class State {
   // none otherwise), the cells' element integrals, the unknowns (node_row, rows). P: the
   // particles scatter binned (std::invalid_argument otherwise). Returns the unknowns.
   index_t classify(const Particles<D>& P, const Options<D>& O);
+  // Rows and their count again from node_row (>= 0: an unknown, -1: not) after a caller
+  // changed which nodes are unknowns, numbered as classify numbers them (in node order; an
+  // image node of a periodic axis shares its master's row, the master's entry deciding).
+  // Right after classify it changes nothing. Returns the unknowns.
+  index_t renumber();
   bool pressure_matrix(const Options<D>& O);  // assemble; false: singular (no free surface)
   void pressure_rhs(const Options<D>& O);
   index_t release_walls(View<const double> x);  // the solution in; returns nodes released
@@ -240,6 +245,7 @@ class State {
   void bin_particles(const Particles<D>& P);
   void cell_integrals(const Particles<D>& P, const Options<D>& O);
   void classify_nodes(const Options<D>& O);
+  void fill_rows();  // rows_ from node_row_ and nrows_
   void anchor_pockets(const Options<D>& O);
 
   int step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);

@@ -1,6 +1,6 @@
 """The step's public phases, the seam of a domain decomposition (issue 28,
-docs/design/mpi.md, section 2): scatter + classify are predict, and the arrays between them
-are the State's."""
+docs/design/mpi.md, section 2): scatter + classify are predict, renumber numbers as classify
+does."""
 
 import numpy as np
 import pytest
@@ -88,3 +88,43 @@ def test_the_views_are_the_states_arrays():
     assert core.node_mass[0] == 5.0
     assert core.pressure_matrix(O)
     assert core.anchored.shape == (n,) and core.anchored.any() and not core.anchored.all()
+
+
+def test_renumber_right_after_classify_changes_nothing_and_a_row_taken_out_goes():
+    sim = dam_break()
+    core, O = sim.scheme.core, sim.scheme.options(DT)
+    n = core.predict(*arrays(sim), O, False)
+    rows, node_row = core.rows.copy(), core.node_row.copy()
+    assert core.renumber() == n
+    assert np.array_equal(core.rows, rows) and np.array_equal(core.node_row, node_row)
+    k = n // 2
+    core.node_row[rows[k]] = -1
+    assert core.renumber() == n - 1
+    assert np.array_equal(core.rows, np.delete(rows, k))
+    expected = node_row.copy()
+    expected[rows[k]] = -1
+    expected[rows[k + 1 :]] -= 1
+    assert np.array_equal(core.node_row, expected)
+    assert core.pressure_matrix(O)
+    assert core.matrix_cols.shape == (n - 1, 9)
+
+
+def test_renumber_gives_an_image_its_masters_row():
+    """x periodic: the image plane x = L shares the rows of the plane x = 0, whose entries
+    decide (an image's own entry is ignored, as classify_nodes ignores it)."""
+    sim = dam_break(["domain.size=[0.48, 0.44]", "domain.periodic=[true, false]"])
+    core, O = sim.scheme.core, sim.scheme.options(DT)
+    n = core.predict(*arrays(sim), O, False)
+    nx = int(sim.grid.cells[0]) + 1
+    plane = core.node_row.reshape(-1, nx)
+    assert np.array_equal(plane[:, -1], plane[:, 0]) and (plane[:, 0] >= 0).any()
+    rows, node_row = core.rows.copy(), core.node_row.copy()
+    assert core.renumber() == n
+    assert np.array_equal(core.rows, rows) and np.array_equal(core.node_row, node_row)
+    j = int(np.flatnonzero(plane[:, 0] >= 0)[0])  # a row of the master plane
+    plane[j, -1] = -1  # the image alone: nothing changes
+    assert core.renumber() == n and np.array_equal(core.node_row, node_row)
+    plane[j, 0] = -1  # the master: both go
+    assert core.renumber() == n - 1
+    assert plane[j, 0] == plane[j, -1] == -1
+    assert np.array_equal(plane[:, -1], plane[:, 0])

@@ -246,6 +246,10 @@ void bind_dim(nb::module_& m) {
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"),
           "The enclosed cells, the cells' integrals and the unknowns, from scatter's arrays and "
           "the particles it binned; returns the pressure unknowns.")
+      .def(
+          "renumber", [](S& self) { return self.state->renumber(); },
+          "Rows again from node_row (>= 0: an unknown, -1: not), in classify's order; returns "
+          "the pressure unknowns.")
       .def("warm_start", [](S& self) { self.state->warm_start(); })
       .def("pressure_matrix",
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })

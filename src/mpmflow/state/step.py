@@ -185,6 +185,11 @@ class CoreState(Protocol):
         the pressure unknowns."""
         ...
 
+    def renumber(self) -> int:
+        """The rows again from node_row (>= 0: an unknown, -1: not) in classify's order
+        (an image node of a periodic axis shares its master's row); returns the unknowns."""
+        ...
+
     def warm_start(self) -> None: ...
 
     def pressure_matrix(self, options: CoreOptions) -> bool:
