@@ -326,7 +326,7 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
                      vals, anchored);
   for (index_t r = 0; r < n; ++r)
     if (anchored(r)) {
-      anchor_pockets(O);
+      if (O.pockets) anchor_pockets(O);
       return true;
     }
   return false;

@@ -10,7 +10,8 @@
 //
 // The phases are public, so that a caller can run a step in parts: the pressure solvers run
 // from Python, and a domain decomposition over MPI (issue 28, docs/design/mpi.md, section 2),
-// which exchanges the nodes' values between scatter and classify and renumbers the unknowns.
+// which exchanges the nodes' values between scatter and classify, renumbers the unknowns,
+// and decides the sealed pockets across ranks.
 //
 // A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
 // (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
@@ -93,6 +94,10 @@ struct Options {
   int surface = GAUSS;
   bool subcell = true;
   bool wall_flux = true;
+  // pressure_matrix holds each sealed pocket at 0 at its top (pockets.hpp); false: it leaves
+  // them (pockets() = 0), for a caller that owns only part of the domain and decides the
+  // pockets across its parts itself
+  bool pockets = true;
   double theta_min = 0.0;
   double expansion = 0.0;
   double tol = 1e-8;

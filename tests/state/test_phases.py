@@ -1,14 +1,42 @@
 """The step's public phases, the seam of a domain decomposition (issue 28,
 docs/design/mpi.md, section 2): scatter + classify are predict, renumber numbers as classify
-does."""
+does, Options.pockets leaves the sealed pockets to the caller."""
 
 import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from mpmflow import Simulation, load_case
+from mpmflow import Simulation, load_case, state
 
 DT = 1e-3
+
+# water trapped between a disc and two walls: a sealed pocket at every step
+# (tests/boundaries/test_obstacles.py)
+POCKET_2D = """
+title = "disc in the corner of a pool"
+[domain]
+size = [0.4, 0.4]
+[grid]
+spacing = 0.01
+[[bodies]]
+type = "box"
+min = [0.0, 0.0]
+max = [0.4, 0.2]
+particles_per_cell = 2
+around_obstacles = true
+[[obstacles]]
+type = "disc"
+centre = [0.06, 0.06]
+radius = 0.06
+[physics]
+gravity = [0.0, -9.81]
+[time]
+dt = 1e-3
+end = 0.1
+[output]
+interval = 0.01
+snapshots = false
+"""
 
 # the arrays scatter and classify write, and the system pressure_matrix and pressure_rhs
 # assemble from them
@@ -22,6 +50,14 @@ def dam_break(settings=(), steps=30):
         EXAMPLES / "dam_break.toml", ["grid.spacing=0.01", "output.snapshots=false", *settings]
     )
     sim = Simulation(case)
+    sim.scheme.advance(DT, steps)
+    return sim
+
+
+def pocket(tmp_path, steps=5):
+    path = tmp_path / "pocket.toml"
+    path.write_text(POCKET_2D)
+    sim = Simulation(load_case(path))
     sim.scheme.advance(DT, steps)
     return sim
 
@@ -128,3 +164,17 @@ def test_renumber_gives_an_image_its_masters_row():
     assert core.renumber() == n - 1
     assert plane[j, 0] == plane[j, -1] == -1
     assert np.array_equal(plane[:, -1], plane[:, 0])
+
+
+def test_options_pockets_false_leaves_the_sealed_pockets(tmp_path):
+    sim = pocket(tmp_path)
+    core, O = sim.scheme.core, sim.scheme.options(DT)
+    assert O.pockets is True and state.step_options(2).pockets is True
+    assert state.step_options(2, pockets=False).pockets is False
+    core.predict(*arrays(sim), O, False)
+    assert core.pressure_matrix(O) and core.pockets >= 1
+    matrix = core.matrix_vals.copy()
+    O.pockets = False
+    assert core.pressure_matrix(O) and core.pockets == 0
+    # the pockets' held rows lose their couplings only when they are held
+    assert not np.array_equal(core.matrix_vals, matrix)

@@ -130,6 +130,7 @@ void bind_dim(nb::module_& m) {
       .def_rw("surface", &O::surface)
       .def_rw("subcell", &O::subcell)
       .def_rw("wall_flux", &O::wall_flux)
+      .def_rw("pockets", &O::pockets)
       .def_rw("theta_min", &O::theta_min)
       .def_rw("expansion", &O::expansion)
       .def_rw("tol", &O::tol)

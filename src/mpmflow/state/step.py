@@ -83,6 +83,9 @@ class CoreOptions(Protocol):
     surface: int
     subcell: bool
     wall_flux: bool
+    # pressure_matrix holds the sealed pockets at 0 at their top; False leaves them (0
+    # pockets), for a caller owning part of the domain that decides them across the parts
+    pockets: bool
     theta_min: float
     expansion: float
     tol: float
