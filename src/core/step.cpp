@@ -583,6 +583,19 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
 
 template <int D>
 int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
+  this->correct(O);
+  if (correct) {
+    PhaseClock clock(phase_seconds_);
+    const int status = volume_correction(O, report);
+    clock.lap(PHASE_VOLUME);
+    if (status != OK) return status;
+  }
+  report.moved += to_particles(P, O, correct);
+  return OK;
+}
+
+template <int D>
+void State<D>::correct(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
   PhaseClock clock(phase_seconds_);
   auto v_new = v_new_.template view<2>({nn, D});
@@ -600,25 +613,31 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
   apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact,
                   O.wall_flux ? T_.phi : View<const double>());
   clock.lap(PHASE_CORRECTOR);
+}
+
+template <int D>
+index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool displaced) {
+  // Only the particles' own arrays and the grid's are read here (grid_to_particles and
+  // push_out use no binning array: cell_, order_, start_), so P may be the first n of the
+  // particles scatter was given (a rank moves only the particles it owns).
+  const index_t nn = grid_.nnodes;
+  PhaseClock clock(phase_seconds_);
   std::array<View<const double>, D> faces{};  // empty: no displacement
-  if (correct) {
-    const int status = volume_correction(O, report);
-    clock.lap(PHASE_VOLUME);
-    if (status != OK) return status;
+  if (displaced)
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
-  }
-  report.moved +=
-      grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new,
-                           p_node_.view(nn), O.dt, O.flip, View<const double>(upper_.data(), {D}),
-                           margin_, faces, P.affine, Outlets{T_.outlet, P.mass, P.volume});
+  index_t moved =
+      grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
+                           v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
+                           View<const double>(upper_.data(), {D}), margin_, faces, P.affine,
+                           Outlets{T_.outlet, P.mass, P.volume});
   if (obstacles_) {
-    report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+    moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
     // a particle pushed out of an obstacle near a periodic end may cross it
     if (grid_.any_periodic)
       parallel_for(P.count(), [&](index_t p) { wrap_periodic<D>(grid_, P.x, p); });
   }
   clock.lap(PHASE_G2P);
-  return OK;
+  return moved;
 }
 
 template <int D>

@@ -5,13 +5,13 @@
 //            -> classify (enclosed_cells -> cell_integrals -> classify_nodes)
 //     -> viscous_predictor (viscous materials only)
 //     -> pressure (contact walls, assembly, solve, release, ghost values)
-//     -> finish: correct_velocity and the walls -> volume_correction (every few steps)
-//        -> grid_to_particles -> push out of obstacles
+//     -> finish: correct (correct_velocity and the walls) -> volume_correction (every few
+//        steps) -> to_particles (grid_to_particles -> push out of obstacles)
 //
 // The phases are public, so that a caller can run a step in parts: the pressure solvers run
 // from Python, and a domain decomposition over MPI (issue 28, docs/design/mpi.md, section 2),
 // which exchanges the nodes' values between scatter and classify, renumbers the unknowns,
-// and decides the sealed pockets across ranks.
+// decides the sealed pockets across ranks and moves only the particles a rank owns.
 //
 // A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
 // (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
@@ -215,7 +215,15 @@ class State {
   // the sealed pockets of the last pressure_matrix (pockets.hpp), each held at 0 at its top
   index_t pockets() const { return npockets_; }
   int viscous_predictor(const Options<D>& O, Report& report);
+  // finish = correct, volume_correction (when correct), to_particles.
   int finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
+  // v_new: the corrected velocity (eq. 16) with the walls' and obstacles' conditions.
+  void correct(const Options<D>& O);
+  // Grid to particles (with the last volume correction's face displacements when displaced),
+  // push-out of obstacles, the periodic wrap; returns the particles put back inside. Reads
+  // no binning array: P may hold fewer particles than scatter was given (the first n of
+  // them: those a rank owns).
+  index_t to_particles(const Particles<D>& P, const Options<D>& O, bool displaced);
 
   // the arrays Python reads (views of the state's own storage)
   View<double> p_node() { return p_node_.view(grid_.nnodes); }

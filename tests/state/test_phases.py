@@ -1,6 +1,7 @@
 """The step's public phases, the seam of a domain decomposition (issue 28,
-docs/design/mpi.md, section 2): scatter + classify are predict, renumber numbers as classify
-does, Options.pockets leaves the sealed pockets to the caller."""
+docs/design/mpi.md, section 2): scatter + classify are predict, correct + to_particles are
+finish, renumber numbers as classify does, Options.pockets leaves the sealed pockets to the
+caller."""
 
 import numpy as np
 import pytest
@@ -65,6 +66,10 @@ def pocket(tmp_path, steps=5):
 def arrays(sim):
     P = sim.particles
     return [P.x, P.v, P.mass, P.volume, P.pressure]
+
+
+def copies(sim):
+    return [a.copy() for a in arrays(sim)]
 
 
 def assembled(core, O, correct):
@@ -178,3 +183,41 @@ def test_options_pockets_false_leaves_the_sealed_pockets(tmp_path):
     assert core.pressure_matrix(O) and core.pockets == 0
     # the pockets' held rows lose their couplings only when they are held
     assert not np.array_equal(core.matrix_vals, matrix)
+
+
+@pytest.mark.parametrize("case", ["flip", "apic", "obstacle", "volume correction"])
+def test_correct_then_to_particles_is_finish(case, tmp_path):
+    """finish and its parts, from the same predicted step, move copies of the particles
+    alike; to_particles on the first m particles moves them as it moves all of them."""
+    if case == "obstacle":
+        sim = pocket(tmp_path)
+    else:
+        sim = dam_break(["solver.transfer=apic"] if case == "apic" else [])
+    core, O = sim.scheme.core, sim.scheme.options(DT)
+    correct = case == "volume correction"
+    affine = sim.scheme.affine
+    core.predict(*arrays(sim), O, correct, affine=affine)
+    one = copies(sim)
+    one_affine = None if affine is None else affine.copy()
+    report = state.Report()
+    assert core.finish(*one, O, correct, report, affine=one_affine) == state.OK
+    two = copies(sim)
+    two_affine = None if affine is None else affine.copy()
+    core.correct(O)
+    moved = core.to_particles(*two, O, correct, affine=two_affine)
+    assert moved == report.moved
+    for a, b in zip(one, two):
+        assert np.array_equal(a, b)
+    if affine is not None:
+        assert np.array_equal(one_affine, two_affine)
+    m = len(sim.particles.x) // 3
+    three = [a[:m].copy() for a in arrays(sim)]
+    core.to_particles(*three, O, correct, affine=None if affine is None else affine[:m].copy())
+    for a, b in zip(one, three):
+        assert np.array_equal(a[:m], b)
+    # the step really moved the particles, and the volume correction's faces moved them too
+    assert not np.array_equal(one[0], sim.particles.x)
+    if correct:
+        four = copies(sim)
+        core.to_particles(*four, O, False)
+        assert not np.array_equal(four[0], one[0])

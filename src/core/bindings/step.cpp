@@ -274,7 +274,21 @@ void bind_dim(nb::module_& m) {
             return self.state->finish(P, opt, correct, report);
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), nb::arg("report"),
-          MPMFLOW_AFFINE_ARG)
+          MPMFLOW_AFFINE_ARG, "correct, the volume correction (when correct), to_particles.")
+      .def(
+          "correct", [](S& self, const O& opt) { self.state->correct(opt); }, nb::arg("options"),
+          "v_new: the corrected velocity with the walls' and obstacles' conditions.")
+      .def(
+          "to_particles",
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, bool displaced, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+            return self.state->to_particles(P, opt, displaced);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("displaced"), MPMFLOW_AFFINE_ARG,
+          "Grid to particles (with the volume correction's displacements when displaced), "
+          "push-out, periodic wrap; the particles may be the first n of scatter's. Returns the "
+          "particles put back inside.")
       .def_prop_ro("phase_seconds",
                    [](S& self) {
                      const auto& t = self.state->phase_seconds();

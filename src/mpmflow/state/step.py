@@ -223,7 +223,28 @@ class CoreState(Protocol):
         report: CoreReport,
         affine: Floats | None = None,
     ) -> int:
-        """The step after the pressure solve; returns a ``Status``."""
+        """The step after the pressure solve (correct, the volume correction when
+        correct, to_particles); returns a ``Status``."""
+        ...
+
+    def correct(self, options: CoreOptions) -> None:
+        """v_new: the corrected velocity with the walls' and obstacles' conditions."""
+        ...
+
+    def to_particles(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        displaced: bool,
+        affine: Floats | None = None,
+    ) -> int:
+        """Grid to particles (with the volume correction's displacements when displaced),
+        push-out of obstacles, the periodic wrap; the particles may be the first n of those
+        scatter was given. Returns the particles put back inside."""
         ...
 
     @property
