@@ -48,10 +48,12 @@ class PhaseClock {
 }  // namespace
 
 template <int D>
-State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper,
-                double margin, const GridTables<D>& tables, bool volume_correction, bool viscous)
+State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& lower,
+                const std::array<double, D>& upper, double margin, const GridTables<D>& tables,
+                bool volume_correction, bool viscous)
     : grid_(grid),
       cell_volume_(cell_volume),
+      lower_(lower),
       upper_(upper),
       margin_(margin),
       T_(tables),
@@ -625,11 +627,11 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
   std::array<View<const double>, D> faces{};  // empty: no displacement
   if (displaced)
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
-  index_t moved =
-      grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
-                           v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
-                           View<const double>(upper_.data(), {D}), margin_, faces, P.affine,
-                           Outlets{T_.outlet, P.mass, P.volume});
+  index_t moved = grid_to_particles<D>(
+      grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
+      v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
+      View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
+      faces, P.affine, Outlets{T_.outlet, P.mass, P.volume});
   if (obstacles_) {
     moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
     // a particle pushed out of an obstacle near a periodic end may cross it

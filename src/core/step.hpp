@@ -168,8 +168,14 @@ class State {
   static constexpr int NC = 1 << D;
   static constexpr int NS = stencil_size(D);
 
-  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper, double margin,
-        const GridTables<D>& tables, bool volume_correction, bool viscous);
+  // lower, upper: the corners of the domain (m, in the grid's coordinates) that
+  // grid_to_particles puts particles back inside (put_inside): the grid's own box [0, cells h]
+  // for a State on the whole domain; a State on a sub-box of a larger domain (a rank's)
+  // gives the global domain's corners, so that it puts particles back inside that domain,
+  // not inside its own box.
+  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& lower,
+        const std::array<double, D>& upper, double margin, const GridTables<D>& tables,
+        bool volume_correction, bool viscous);
 
   // nsteps steps of options.dt; first: the number of the first step (1-based, from the start
   // of the run). Stops at the first failure; returns the steps done.
@@ -266,7 +272,7 @@ class State {
   double since_volume_ = 0.0;
   Grid<D> grid_;
   double cell_volume_;
-  std::array<double, D> upper_;
+  std::array<double, D> lower_, upper_;
   double margin_;
   GridTables<D> T_;
   bool volume_on_, viscous_on_;

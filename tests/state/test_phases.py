@@ -1,13 +1,14 @@
 """The step's public phases, the seam of a domain decomposition (issue 28,
 docs/design/mpi.md, section 2): scatter + classify are predict, correct + to_particles are
 finish, renumber numbers as classify does, Options.pockets leaves the sealed pockets to the
-caller."""
+caller, and the State's lower corner is where particles are put back inside."""
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES
+from conftest import EXAMPLES, make_case
 
 from mpmflow import Simulation, load_case, state
+from mpmflow.boundaries import walls
 
 DT = 1e-3
 
@@ -221,3 +222,44 @@ def test_correct_then_to_particles_is_finish(case, tmp_path):
         four = copies(sim)
         core.to_particles(*four, O, False)
         assert not np.array_equal(four[0], one[0])
+
+
+def put_back_state(lower, margin):
+    """A State on a 0.1 m x 0.3 m grid (0.01 m) with the given lower corner."""
+    case = make_case()
+    sim = Simulation(case)
+    core = state.step_state(
+        sim.grid,
+        walls.of_case(case, sim.grid).as_tuple(),
+        sim.scheme.solids,
+        np.zeros((0, 0, 0, 0)),
+        margin,
+        False,
+        False,
+        lower=lower,
+    )
+    return sim, core
+
+
+@pytest.mark.parametrize("lower", [None, [0.03, 0.0]], ids=["0", "0.03"])
+def test_a_particle_that_left_below_lower_is_put_back_at_lower_plus_margin(lower):
+    """One particle at x = 0.035 m moved by -0.01 m: inside the box [0, ...] it stays at
+    0.025 m; with lower = 0.03 m it left, and is put back at lower + margin (its mirror
+    0.035 m is nearer the wall than the margin 0.008 m)."""
+    margin = 0.008
+    sim, core = put_back_state(lower, margin)
+    O = state.step_options(2, dt=0.01, flip=1.0)
+    x = np.array([[0.035, 0.15]])
+    v = np.array([[-1.0, 0.0]])
+    P = [x, v, np.array([1.0]), np.array([1e-4]), np.array([0.0])]
+    core.scatter(*P, O, False)
+    core.classify(*P, O)
+    core.v_new[...] = [-1.0, 0.0]  # every node: the particle moves by -0.01 m along x
+    core.v_old[...] = [-1.0, 0.0]
+    core.p_node[...] = 0.0
+    moved = core.to_particles(*P, O, False)
+    if lower is None:
+        assert moved == 0 and x[0, 0] == pytest.approx(0.025) and v[0, 0] == -1.0
+    else:
+        assert moved == 1 and x[0, 0] == 0.03 + margin and v[0, 0] == 0.0
+    assert x[0, 1] == 0.15

@@ -153,11 +153,12 @@ void bind_dim(nb::module_& m) {
       .def(
           "__init__",
           [](S* self, double h, std::vector<index_t> cells, double cell_volume,
-             std::array<double, D> upper, double margin, nb::object wall_node, nb::object wall_axis,
-             nb::object wall_sign, nb::object wall_no_slip, nb::object phi, nb::object open,
-             nb::object static_slot, nb::object K, nb::object C, nb::object V, nb::object F,
-             nb::object Wf, nb::object onode, nb::object onormal, nb::object ono_slip,
-             nb::object viscous_T, bool volume_correction, bool viscous, std::vector<bool> periodic,
+             std::array<double, D> lower, std::array<double, D> upper, double margin,
+             nb::object wall_node, nb::object wall_axis, nb::object wall_sign,
+             nb::object wall_no_slip, nb::object phi, nb::object open, nb::object static_slot,
+             nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
+             nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
+             bool volume_correction, bool viscous, std::vector<bool> periodic,
              std::vector<bool> outlet) {
             new (self) S();
             auto& keep = self->keep;
@@ -184,11 +185,12 @@ void bind_dim(nb::module_& m) {
               throw std::invalid_argument("State: outlet needs one flag per side");
             for (std::size_t s = 0; s < outlet.size(); ++s) self->outlet[s] = outlet[s];
             if (!outlet.empty()) T.outlet = View<const bool>(self->outlet.data(), {2 * D});
-            self->state = std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume,
-                                                     upper, margin, T, volume_correction, viscous);
+            self->state =
+                std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume, lower,
+                                           upper, margin, T, volume_correction, viscous);
           },
-          "Build the step's state for a grid (spacing h, cell counts, periodic axes) and its "
-          "tables.")
+          "Build the step's state for a grid (spacing h, cell counts, periodic axes), the "
+          "domain's corners (lower, upper: where particles are put back inside) and its tables.")
       .def(
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,

@@ -303,13 +303,17 @@ def step_state(
     volume_correction: bool,
     viscous: bool,
     outlets: Sequence[bool] | Bools = (),
+    lower: Sequence[float] | Floats | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
     (``mpmflow.boundaries.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
     for inviscid material), ``margin`` (m) how far inside the walls particles are put back,
     ``outlets`` one flag per side (x_min, x_max, y_min, ...; empty: none): the open sides,
-    which have no wall pairs and retire the particles that cross them (mass 0).
+    which have no wall pairs and retire the particles that cross them (mass 0), ``lower``
+    the domain's lower corner in the grid's coordinates (m; None: zeros), below which
+    particles are put back inside: 0 for a grid on the whole domain, the global domain's
+    corner for a grid on a part of it.
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -319,6 +323,7 @@ def step_state(
         float(grid.spacing),
         [int(c) for c in grid.cells],
         float(grid.cell_volume),
+        [0.0] * D if lower is None else [float(c) for c in lower],
         [float(u) for u in grid.size],
         float(margin),
         arrays.ints(node),
