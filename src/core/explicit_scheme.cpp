@@ -237,6 +237,8 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
   const double light = times_cell_volume<D>(mass_cut * density, h);
   const double c = std::sqrt(bulk / density);
   const index_t n = x.extent(0);
+  const std::array<double, D> origin{};  // the box [0, upper] particles are put back inside
+  const View<const double> lower(origin.data(), {D});
   const index_t nnode = node_mass.size();
   const index_t ncell = g.ncells;
   index_t moved = 0;
@@ -363,7 +365,7 @@ ExplicitStats explicit_steps(const Grid<D>& g, double span, index_t nsteps, doub
           v(p, k) = flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
           x(p, k) += dt * pic[k];
         }
-        if (put_inside<D>(x, v, p, upper, margin)) ++out;
+        if (put_inside<D>(x, v, p, lower, upper, margin)) ++out;
       }
       count[t] = out;
     });

@@ -41,6 +41,17 @@ void enclosed_cells(const Grid<D>& g, View<const double> node_f, View<bool> encl
   });
 }
 
+namespace {
+// Number the unknowns of node_row (>= 0, images marked -1) in node order, then give each
+// image its master's row; returns their count.
+template <int D>
+index_t number_masters(const Grid<D>& g, View<index_t> node_row) {
+  const index_t n = number(node_row);
+  copy_images<D, index_t>(g, node_row.data(), 1);
+  return n;
+}
+}  // namespace
+
 template <int D>
 index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
                        View<const index_t> static_slot, View<const double> node_f, bool subcell,
@@ -59,9 +70,15 @@ index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
     }
     node_row(i) = unknown && fluid && !g.is_image(ix.data()) ? 0 : -1;
   });
-  const index_t n = number(node_row);
-  copy_images<D, index_t>(g, node_row.data(), 1);
-  return n;
+  return number_masters<D>(g, node_row);
+}
+
+template <int D>
+index_t renumber_nodes(const Grid<D>& g, View<index_t> node_row) {
+  for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
+    node_row(i) = node_row(i) >= 0 && !g.is_image(ix.data()) ? 0 : -1;
+  });
+  return number_masters<D>(g, node_row);
 }
 
 index_t number(View<index_t> row) {
@@ -93,5 +110,7 @@ template index_t classify_nodes<2>(const Grid<2>&, View<const index_t>, View<con
                                    View<const double>, bool, View<index_t>);
 template index_t classify_nodes<3>(const Grid<3>&, View<const index_t>, View<const index_t>,
                                    View<const double>, bool, View<index_t>);
+template index_t renumber_nodes<2>(const Grid<2>&, View<index_t>);
+template index_t renumber_nodes<3>(const Grid<3>&, View<index_t>);
 
 }  // namespace mpmflow

@@ -69,6 +69,12 @@ index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
                        View<const index_t> static_slot, View<const double> node_f, bool subcell,
                        View<index_t> node_row);
 
+// Number again the unknowns of node_row (entries >= 0: an unknown, -1: not; e.g. after a
+// caller took some out) as classify_nodes numbers them: in node order, an image node
+// (periodic axes) sharing its master's row (the master's entry decides); returns their count.
+template <int D>
+index_t renumber_nodes(const Grid<D>& g, View<index_t> node_row);
+
 // Number the entries >= 0 of row in order (0, 1, ...); returns how many. A chunked count and
 // scan, so it runs in parallel with the serial result.
 index_t number(View<index_t> row);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "binning.hpp"
 #include "corrector.hpp"
@@ -46,10 +48,12 @@ class PhaseClock {
 }  // namespace
 
 template <int D>
-State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper,
-                double margin, const GridTables<D>& tables, bool volume_correction, bool viscous)
+State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& lower,
+                const std::array<double, D>& upper, double margin, const GridTables<D>& tables,
+                bool volume_correction, bool viscous)
     : grid_(grid),
       cell_volume_(cell_volume),
+      lower_(lower),
       upper_(upper),
       margin_(margin),
       T_(tables),
@@ -123,18 +127,7 @@ void State<D>::bin_particles(const Particles<D>& P) {
   cell_index<D>(grid_, P.x, cell);
   sort_with_fraction(cell, nc, P.volume, cell_volume_, T_.open, start, order, theta);
   if (obstacles_) sliver_fractions<D>(grid_, T_.open, theta);
-}
-
-template <int D>
-void State<D>::node_fractions(const Options<D>& O) {
-  const index_t nn = grid_.nnodes, nc = grid_.ncells;
-  nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
-  auto enclosed = enclosed_.view(nc);
-  if (O.subcell) {
-    enclosed_cells<D>(grid_, node_f_.view(nn), enclosed);
-  } else {
-    for (index_t c = 0; c < nc; ++c) enclosed(c) = false;
-  }
+  binned_ = n;
 }
 
 template <int D>
@@ -236,6 +229,13 @@ void State<D>::classify_nodes(const Options<D>& O) {
   auto node_row = node_row_.view(nn);
   nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn), O.subcell,
                                       node_row);
+  fill_rows();
+}
+
+template <int D>
+void State<D>::fill_rows() {
+  const index_t nn = grid_.nnodes;
+  auto node_row = node_row_.view(nn);
   auto rows = rows_.view(nrows_);
   // downwards, so that a row an image shares with its master (periodic axes) ends on the
   // master, the lower index
@@ -246,7 +246,20 @@ void State<D>::classify_nodes(const Options<D>& O) {
 }
 
 template <int D>
+index_t State<D>::renumber() {
+  nrows_ = renumber_nodes<D>(grid_, node_row_.view(grid_.nnodes));
+  fill_rows();
+  return nrows_;
+}
+
+template <int D>
 index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool correct) {
+  scatter(P, O, correct);
+  return classify(P, O);
+}
+
+template <int D>
+void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct) {
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
   PhaseClock clock(phase_seconds_);
   bin_particles(P);
@@ -259,7 +272,24 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
                        v_old, v_star, correct ? cell_vol_.view(nc) : View<double>(), P.affine);
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
-  node_fractions(O);
+  nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
+  clock.lap(PHASE_FREE_SURFACE);
+}
+
+template <int D>
+index_t State<D>::classify(const Particles<D>& P, const Options<D>& O) {
+  if (P.count() != binned_)
+    throw std::invalid_argument("State::classify: the particles the last scatter binned, " +
+                                std::to_string(binned_) + ", and " + std::to_string(P.count()) +
+                                " given");
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  PhaseClock clock(phase_seconds_);
+  auto enclosed = enclosed_.view(nc);
+  if (O.subcell) {
+    enclosed_cells<D>(grid_, node_f_.view(nn), enclosed);
+  } else {
+    for (index_t c = 0; c < nc; ++c) enclosed(c) = false;
+  }
   clock.lap(PHASE_FREE_SURFACE);
   cell_integrals(P, O);
   clock.lap(PHASE_INTEGRALS);
@@ -298,7 +328,7 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
                      vals, anchored);
   for (index_t r = 0; r < n; ++r)
     if (anchored(r)) {
-      anchor_pockets(O);
+      if (O.pockets) anchor_pockets(O);
       return true;
     }
   return false;
@@ -555,6 +585,19 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
 
 template <int D>
 int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
+  this->correct(O);
+  if (correct) {
+    PhaseClock clock(phase_seconds_);
+    const int status = volume_correction(O, report);
+    clock.lap(PHASE_VOLUME);
+    if (status != OK) return status;
+  }
+  report.moved += to_particles(P, O, correct);
+  return OK;
+}
+
+template <int D>
+void State<D>::correct(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
   PhaseClock clock(phase_seconds_);
   auto v_new = v_new_.template view<2>({nn, D});
@@ -572,25 +615,31 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
   apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact,
                   O.wall_flux ? T_.phi : View<const double>());
   clock.lap(PHASE_CORRECTOR);
+}
+
+template <int D>
+index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool displaced) {
+  // Only the particles' own arrays and the grid's are read here (grid_to_particles and
+  // push_out use no binning array: cell_, order_, start_), so P may be the first n of the
+  // particles scatter was given (a rank moves only the particles it owns).
+  const index_t nn = grid_.nnodes;
+  PhaseClock clock(phase_seconds_);
   std::array<View<const double>, D> faces{};  // empty: no displacement
-  if (correct) {
-    const int status = volume_correction(O, report);
-    clock.lap(PHASE_VOLUME);
-    if (status != OK) return status;
+  if (displaced)
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
-  }
-  report.moved +=
-      grid_to_particles<D>(grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}), v_new,
-                           p_node_.view(nn), O.dt, O.flip, View<const double>(upper_.data(), {D}),
-                           margin_, faces, P.affine, Outlets{T_.outlet, P.mass, P.volume});
+  index_t moved = grid_to_particles<D>(
+      grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
+      v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
+      View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
+      faces, P.affine, Outlets{T_.outlet, P.mass, P.volume});
   if (obstacles_) {
-    report.moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+    moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
     // a particle pushed out of an obstacle near a periodic end may cross it
     if (grid_.any_periodic)
       parallel_for(P.count(), [&](index_t p) { wrap_periodic<D>(grid_, P.x, p); });
   }
   clock.lap(PHASE_G2P);
-  return OK;
+  return moved;
 }
 
 template <int D>

@@ -1,11 +1,17 @@
 // One step of the projection scheme (Kularathna & Soga 2017; docs/method.md, steps 1-8),
 // 2D and 3D. The step is a sequence of named phases, each one or a few parallel loops:
 //
-//   bin_particles -> particles_to_grid -> node_fractions -> cell_integrals -> classify_nodes
+//   predict: scatter (bin_particles -> particles_to_grid -> nodal_fraction)
+//            -> classify (enclosed_cells -> cell_integrals -> classify_nodes)
 //     -> viscous_predictor (viscous materials only)
 //     -> pressure (contact walls, assembly, solve, release, ghost values)
-//     -> finish: correct_velocity and the walls -> volume_correction (every few steps)
-//        -> grid_to_particles -> push out of obstacles
+//     -> finish: correct (correct_velocity and the walls) -> volume_correction (every few
+//        steps) -> to_particles (grid_to_particles -> push out of obstacles)
+//
+// The phases are public, so that a caller can run a step in parts: the pressure solvers run
+// from Python, and a domain decomposition over MPI (issue 28, docs/design/mpi.md, section 2),
+// which exchanges the nodes' values between scatter and classify, renumbers the unknowns,
+// decides the sealed pockets across ranks and moves only the particles a rank owns.
 //
 // A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
 // (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
@@ -88,6 +94,10 @@ struct Options {
   int surface = GAUSS;
   bool subcell = true;
   bool wall_flux = true;
+  // pressure_matrix holds each sealed pocket at 0 at its top (pockets.hpp); false: it leaves
+  // them (pockets() = 0), for a caller that owns only part of the domain and decides the
+  // pockets across its parts itself
+  bool pockets = true;
   double theta_min = 0.0;
   double expansion = 0.0;
   double tol = 1e-8;
@@ -158,8 +168,14 @@ class State {
   static constexpr int NC = 1 << D;
   static constexpr int NS = stencil_size(D);
 
-  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& upper, double margin,
-        const GridTables<D>& tables, bool volume_correction, bool viscous);
+  // lower, upper: the corners of the domain (m, in the grid's coordinates) that
+  // grid_to_particles puts particles back inside (put_inside): the grid's own box [0, cells h]
+  // for a State on the whole domain; a State on a sub-box of a larger domain (a rank's)
+  // gives the global domain's corners, so that it puts particles back inside that domain,
+  // not inside its own box.
+  State(const Grid<D>& grid, double cell_volume, const std::array<double, D>& lower,
+        const std::array<double, D>& upper, double margin, const GridTables<D>& tables,
+        bool volume_correction, bool viscous);
 
   // nsteps steps of options.dt; first: the number of the first step (1-based, from the start
   // of the run). Stops at the first failure; returns the steps done.
@@ -179,8 +195,24 @@ class State {
   double since_volume() const { return since_volume_; }
   void set_since_volume(double t) { since_volume_ = t; }
 
-  // The phases, for the pressure solvers run from Python (amg, direct) and for checks.
-  index_t predict(const Particles<D>& P, const Options<D>& O, bool correct);  // -> unknowns
+  // The phases, for the pressure solvers run from Python (amg, direct), for a caller that
+  // owns a part of the domain (MPI) and for checks.
+  // predict = scatter, then classify; returns the pressure unknowns.
+  index_t predict(const Particles<D>& P, const Options<D>& O, bool correct);
+  // The particles to the grid: binning (theta), node mass, volume, v_old and v* (and the
+  // cells' volume for the volume correction when correct), v* extended into the obstacles,
+  // the nodal fraction node_f.
+  void scatter(const Particles<D>& P, const Options<D>& O, bool correct);
+  // The cells and nodes of the pressure system from scatter's arrays (which a caller may
+  // change in between, e.g. node_f and v* on a ghost ring): the enclosed cells (subcell;
+  // none otherwise), the cells' element integrals, the unknowns (node_row, rows). P: the
+  // particles scatter binned (std::invalid_argument otherwise). Returns the unknowns.
+  index_t classify(const Particles<D>& P, const Options<D>& O);
+  // Rows and their count again from node_row (>= 0: an unknown, -1: not) after a caller
+  // changed which nodes are unknowns, numbered as classify numbers them (in node order; an
+  // image node of a periodic axis shares its master's row, the master's entry deciding).
+  // Right after classify it changes nothing. Returns the unknowns.
+  index_t renumber();
   bool pressure_matrix(const Options<D>& O);  // assemble; false: singular (no free surface)
   void pressure_rhs(const Options<D>& O);
   index_t release_walls(View<const double> x);  // the solution in; returns nodes released
@@ -189,7 +221,15 @@ class State {
   // the sealed pockets of the last pressure_matrix (pockets.hpp), each held at 0 at its top
   index_t pockets() const { return npockets_; }
   int viscous_predictor(const Options<D>& O, Report& report);
+  // finish = correct, volume_correction (when correct), to_particles.
   int finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
+  // v_new: the corrected velocity (eq. 16) with the walls' and obstacles' conditions.
+  void correct(const Options<D>& O);
+  // Grid to particles (with the last volume correction's face displacements when displaced),
+  // push-out of obstacles, the periodic wrap; returns the particles put back inside. Reads
+  // no binning array: P may hold fewer particles than scatter was given (the first n of
+  // them: those a rank owns).
+  index_t to_particles(const Particles<D>& P, const Options<D>& O, bool displaced);
 
   // the arrays Python reads (views of the state's own storage)
   View<double> p_node() { return p_node_.view(grid_.nnodes); }
@@ -199,6 +239,17 @@ class State {
   View<bool> ocontact() { return ocontact_.view(grid_.nnodes); }
   View<double> volume_q() { return q_.view(volume_on_ ? grid_.ncells : 0); }
   View<const index_t> rows() { return rows_.view(nrows_); }
+  // scatter's and classify's arrays, read and written by a caller between the phases
+  View<double> node_mass() { return node_mass_.view(grid_.nnodes); }
+  View<double> node_vol() { return node_vol_.view(grid_.nnodes); }
+  View<double, 2> v_old() { return v_old_.template view<2>({grid_.nnodes, D}); }
+  View<double, 2> v_star() { return v_star_.template view<2>({grid_.nnodes, D}); }
+  View<double> node_f() { return node_f_.view(grid_.nnodes); }
+  View<index_t> node_row() { return node_row_.view(grid_.nnodes); }
+  View<double> theta() { return theta_.view(grid_.ncells); }
+  View<double> cell_vol() { return cell_vol_.view(volume_on_ ? grid_.ncells : 0); }
+  // the rows next to a free surface, as the last pressure_matrix found them
+  View<bool> anchored() { return anchored_.view(nrows_); }
   View<const index_t, 2> matrix_cols() { return cols_.template view<2>({nrows_, NS}); }
   View<const double, 2> matrix_vals() { return vals_.template view<2>({nrows_, NS}); }
   View<double> rhs() { return rhs_.view(nrows_); }
@@ -211,9 +262,9 @@ class State {
   int pressure_multigrid(const Options<D>& O, Report& report);
   int volume_correction(const Options<D>& O, Report& report);
   void bin_particles(const Particles<D>& P);
-  void node_fractions(const Options<D>& O);
   void cell_integrals(const Particles<D>& P, const Options<D>& O);
   void classify_nodes(const Options<D>& O);
+  void fill_rows();  // rows_ from node_row_ and nrows_
   void anchor_pockets(const Options<D>& O);
 
   int step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
@@ -221,13 +272,14 @@ class State {
   double since_volume_ = 0.0;
   Grid<D> grid_;
   double cell_volume_;
-  std::array<double, D> upper_;
+  std::array<double, D> lower_, upper_;
   double margin_;
   GridTables<D> T_;
   bool volume_on_, viscous_on_;
   bool obstacles_;
   index_t nstatic_;
   index_t nrows_ = 0;
+  index_t binned_ = -1;  // the particles of the last scatter (-1: none yet)
   index_t nsurface_ = 0, npartial_ = 0;
 
   // work arrays (Buffers: grown, never shrunk)

@@ -240,9 +240,10 @@ namespace {
 template <int D>
 index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                View<double> pressure, View<const double, 2> v_old, View<const double, 2> v_new,
-               View<const double> p_node, double dt, double flip, View<const double> upper,
-               double margin, const std::array<View<const double>, D>& faces,
-               View<double, 3> affine, const Outlets& outlets) {
+               View<const double> p_node, double dt, double flip, View<const double> lower,
+               View<const double> upper, double margin,
+               const std::array<View<const double>, D>& faces, View<double, 3> affine,
+               const Outlets& outlets) {
   constexpr int NC = Grid<D>::NC;
   std::array<double, NC> w;
   std::array<double, D> normal, tangent;
@@ -295,7 +296,8 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
     }
     pressure(p) = pp;
     if (g.any_periodic) wrap_periodic<D>(g, x, p);
-    if (outlets.any() && beyond_outlet<D>(View<const double, 2>(x), p, upper, outlets.side)) {
+    if (outlets.any() &&
+        beyond_outlet<D>(View<const double, 2>(x), p, lower, upper, outlets.side)) {
       outlets.mass(p) = 0.0;
       outlets.volume(p) = 0.0;
       pressure(p) = 0.0;
@@ -304,8 +306,8 @@ index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View
         if (apic)
           for (int j = 0; j < D; ++j) affine(p, k, j) = 0.0;
       }
-      put_inside<D>(x, v, p, upper, margin);
-    } else if (put_inside<D>(x, v, p, upper, margin)) {
+      put_inside<D>(x, v, p, lower, upper, margin);
+    } else if (put_inside<D>(x, v, p, lower, upper, margin)) {
       moved += 1;
     }
   }
@@ -318,12 +320,12 @@ template <int D>
 index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                           View<double> pressure, View<const double, 2> v_old,
                           View<const double, 2> v_new, View<const double> p_node, double dt,
-                          double flip, View<const double> upper, double margin,
-                          const std::array<View<const double>, D>& faces, View<double, 3> affine,
-                          const Outlets& outlets) {
+                          double flip, View<const double> lower, View<const double> upper,
+                          double margin, const std::array<View<const double>, D>& faces,
+                          View<double, 3> affine, const Outlets& outlets) {
   return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
-    return gather<D>(lo, hi, g, x, v, pressure, v_old, v_new, p_node, dt, flip, upper, margin,
-                     faces, affine, outlets);
+    return gather<D>(lo, hi, g, x, v, pressure, v_old, v_new, p_node, dt, flip, lower, upper,
+                     margin, faces, affine, outlets);
   });
 }
 
@@ -337,8 +339,9 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
                                      View<double, 2>, View<double>, View<const double, 3>);        \
   template index_t grid_to_particles<D>(                                                           \
       const Grid<D>&, View<double, 2>, View<double, 2>, View<double>, View<const double, 2>,       \
-      View<const double, 2>, View<const double>, double, double, View<const double>, double,       \
-      const std::array<View<const double>, D>&, View<double, 3>, const Outlets&);
+      View<const double, 2>, View<const double>, double, double, View<const double>,               \
+      View<const double>, double, const std::array<View<const double>, D>&, View<double, 3>,       \
+      const Outlets&);
 MPMFLOW_TRANSFER(2)
 MPMFLOW_TRANSFER(3)
 #undef MPMFLOW_TRANSFER

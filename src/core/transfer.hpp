@@ -157,19 +157,23 @@ inline void wrap_periodic(const Grid<D>& g, View<double, 2> x, index_t p) {
   }
 }
 
-// Put particle p back inside the box [0, upper] (m) if it left it; true if it was moved.
+// Put particle p back inside the box [lower, upper] (m) if it left it; true if it was moved.
 // A particle beyond a wall is mirrored back across it (so it keeps its distance from the
 // wall) and at least ``margin`` (m) inside; its velocity component into the wall is removed.
+// lower is the domain's lower corner: 0 for a grid on the whole domain, the domain's corner
+// in the grid's coordinates for a grid on a part of it (with lower 0 the same numbers as
+// before it was given: 0 + margin and 0 - x are exact).
 template <int D>
-inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<const double> upper,
-                       double margin) {
+inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<const double> lower,
+                       View<const double> upper, double margin) {
   bool out = false;
   for (int k = 0; k < D; ++k) {
-    const double lo = margin;
+    const double lo = lower(k) + margin;
     const double hi = upper(k) - margin;
     double& xk = x(p, k);
-    if (xk < 0.0) {
-      const double m = lo > -xk ? lo : -xk;  // min(max(-x, lo), hi) as Python takes them
+    if (xk < lower(k)) {
+      const double mirror = 2.0 * lower(k) - xk;
+      const double m = lo > mirror ? lo : mirror;  // min(max(mirror, lo), hi) as Python takes them
       xk = hi < m ? hi : m;
       if (v(p, k) < 0.0) v(p, k) = 0.0;
       out = true;
@@ -196,12 +200,12 @@ struct Outlets {
   bool any() const { return side.size() > 0; }
 };
 
-// True when particle p lies beyond an outlet side of the box [0, upper].
+// True when particle p lies beyond an outlet side of the box [lower, upper].
 template <int D>
-inline bool beyond_outlet(View<const double, 2> x, index_t p, View<const double> upper,
-                          View<const bool> side) {
+inline bool beyond_outlet(View<const double, 2> x, index_t p, View<const double> lower,
+                          View<const double> upper, View<const bool> side) {
   for (int k = 0; k < D; ++k) {
-    if (x(p, k) < 0.0 && side(2 * k)) return true;
+    if (x(p, k) < lower(k) && side(2 * k)) return true;
     if (x(p, k) > upper(k) && side(2 * k + 1)) return true;
   }
   return false;
@@ -240,7 +244,7 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
 // update with v^{t+1} evaluated at x_p^t plus the volume correction's displacement (faces:
 // one array per axis, see face_displacement; empty arrays: none), pressure; then particles
 // that crossed a periodic axis's end are wrapped round it (wrap_periodic) and those that
-// left the box [0, upper] are put back inside (put_inside), or retired where they crossed an
+// left the box [lower, upper] are put back inside (put_inside), or retired where they crossed an
 // outlet side (Outlets; retired particles, mass 0, are skipped). Returns how many were put
 // back.
 // With affine non-empty (n x D x D: APIC) the velocity is instead the PIC velocity
@@ -251,8 +255,8 @@ template <int D>
 index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                           View<double> pressure, View<const double, 2> v_old,
                           View<const double, 2> v_new, View<const double> p_node, double dt,
-                          double flip, View<const double> upper, double margin,
-                          const std::array<View<const double>, D>& faces,
+                          double flip, View<const double> lower, View<const double> upper,
+                          double margin, const std::array<View<const double>, D>& faces,
                           View<double, 3> affine = {}, const Outlets& outlets = {});
 
 }  // namespace mpmflow

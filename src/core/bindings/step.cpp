@@ -130,6 +130,7 @@ void bind_dim(nb::module_& m) {
       .def_rw("surface", &O::surface)
       .def_rw("subcell", &O::subcell)
       .def_rw("wall_flux", &O::wall_flux)
+      .def_rw("pockets", &O::pockets)
       .def_rw("theta_min", &O::theta_min)
       .def_rw("expansion", &O::expansion)
       .def_rw("tol", &O::tol)
@@ -152,11 +153,12 @@ void bind_dim(nb::module_& m) {
       .def(
           "__init__",
           [](S* self, double h, std::vector<index_t> cells, double cell_volume,
-             std::array<double, D> upper, double margin, nb::object wall_node, nb::object wall_axis,
-             nb::object wall_sign, nb::object wall_no_slip, nb::object phi, nb::object open,
-             nb::object static_slot, nb::object K, nb::object C, nb::object V, nb::object F,
-             nb::object Wf, nb::object onode, nb::object onormal, nb::object ono_slip,
-             nb::object viscous_T, bool volume_correction, bool viscous, std::vector<bool> periodic,
+             std::array<double, D> lower, std::array<double, D> upper, double margin,
+             nb::object wall_node, nb::object wall_axis, nb::object wall_sign,
+             nb::object wall_no_slip, nb::object phi, nb::object open, nb::object static_slot,
+             nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
+             nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
+             bool volume_correction, bool viscous, std::vector<bool> periodic,
              std::vector<bool> outlet) {
             new (self) S();
             auto& keep = self->keep;
@@ -183,11 +185,12 @@ void bind_dim(nb::module_& m) {
               throw std::invalid_argument("State: outlet needs one flag per side");
             for (std::size_t s = 0; s < outlet.size(); ++s) self->outlet[s] = outlet[s];
             if (!outlet.empty()) T.outlet = View<const bool>(self->outlet.data(), {2 * D});
-            self->state = std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume,
-                                                     upper, margin, T, volume_correction, viscous);
+            self->state =
+                std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume, lower,
+                                           upper, margin, T, volume_correction, viscous);
           },
-          "Build the step's state for a grid (spacing h, cell counts, periodic axes) and its "
-          "tables.")
+          "Build the step's state for a grid (spacing h, cell counts, periodic axes), the "
+          "domain's corners (lower, upper: where particles are put back inside) and its tables.")
       .def(
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
@@ -224,7 +227,32 @@ void bind_dim(nb::module_& m) {
             auto P = particles<D>(x, v, mass, volume, pressure, affine);
             return self.state->predict(P, opt, correct);
           },
-          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG)
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG,
+          "scatter, then classify; returns the pressure unknowns.")
+      .def(
+          "scatter",
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, bool correct, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+            self.state->scatter(P, opt, correct);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG,
+          "The particles to the grid: binning, node mass, volume, v_old, v* (and cell_vol when "
+          "correct), v* into the obstacles, node_f.")
+      .def(
+          "classify",
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt) {
+            auto P = particles<D>(x, v, mass, volume, pressure);
+            return self.state->classify(P, opt);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"),
+          "The enclosed cells, the cells' integrals and the unknowns, from scatter's arrays and "
+          "the particles it binned; returns the pressure unknowns.")
+      .def(
+          "renumber", [](S& self) { return self.state->renumber(); },
+          "Rows again from node_row (>= 0: an unknown, -1: not), in classify's order; returns "
+          "the pressure unknowns.")
       .def("warm_start", [](S& self) { self.state->warm_start(); })
       .def("pressure_matrix",
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
@@ -248,7 +276,21 @@ void bind_dim(nb::module_& m) {
             return self.state->finish(P, opt, correct, report);
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), nb::arg("report"),
-          MPMFLOW_AFFINE_ARG)
+          MPMFLOW_AFFINE_ARG, "correct, the volume correction (when correct), to_particles.")
+      .def(
+          "correct", [](S& self, const O& opt) { self.state->correct(opt); }, nb::arg("options"),
+          "v_new: the corrected velocity with the walls' and obstacles' conditions.")
+      .def(
+          "to_particles",
+          [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
+             Array<double> pressure, const O& opt, bool displaced, const Affine& affine) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+            return self.state->to_particles(P, opt, displaced);
+          },
+          MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("displaced"), MPMFLOW_AFFINE_ARG,
+          "Grid to particles (with the volume correction's displacements when displaced), "
+          "push-out, periodic wrap; the particles may be the first n of scatter's. Returns the "
+          "particles put back inside.")
       .def_prop_ro("phase_seconds",
                    [](S& self) {
                      const auto& t = self.state->phase_seconds();
@@ -263,6 +305,20 @@ void bind_dim(nb::module_& m) {
       .def_prop_ro("volume_q",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_q(), h); })
       .def_prop_ro("rows", [](nb::handle h) { return out(nb::cast<S&>(h).state->rows(), h); })
+      .def_prop_ro("node_mass",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_mass(), h); })
+      .def_prop_ro("node_vol",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_vol(), h); })
+      .def_prop_ro("v_old", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_old(), h); })
+      .def_prop_ro("v_star", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_star(), h); })
+      .def_prop_ro("node_f", [](nb::handle h) { return out(nb::cast<S&>(h).state->node_f(), h); })
+      .def_prop_ro("node_row",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_row(), h); })
+      .def_prop_ro("theta", [](nb::handle h) { return out(nb::cast<S&>(h).state->theta(), h); })
+      .def_prop_ro("cell_vol",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_vol(), h); })
+      .def_prop_ro("anchored",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->anchored(), h); })
       .def_prop_ro("matrix_cols",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_cols(), h); })
       .def_prop_ro("matrix_vals",

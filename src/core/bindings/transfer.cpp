@@ -75,11 +75,13 @@ void bind_transfer(nb::module_& m) {
             if (faces[0].size() > 0 && f[k].size() != n)
               throw std::invalid_argument("faces: the faces normal to each axis, or empty");
           }
+          const std::array<double, D> lower{};  // the grid's box: its lower corner at 0
           return grid_to_particles<D>(
               make_grid<D>(h, cells), view<double, 2>(x, "x"), view<double, 2>(v, "v"),
               view<double>(pressure, "pressure"), view<const double, 2>(v_old, "v_old"),
               view<const double, 2>(v_new, "v_new"), view<const double>(p_node, "p_node"), dt, flip,
-              view<const double>(upper, "upper"), margin, f, C);
+              View<const double>(lower.data(), {D}), view<const double>(upper, "upper"), margin, f,
+              C);
         });
       },
       nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("pressure").noconvert(),

@@ -83,6 +83,9 @@ class CoreOptions(Protocol):
     surface: int
     subcell: bool
     wall_flux: bool
+    # pressure_matrix holds the sealed pockets at 0 at their top; False leaves them (0
+    # pockets), for a caller owning part of the domain that decides them across the parts
+    pockets: bool
     theta_min: float
     expansion: float
     tol: float
@@ -152,7 +155,42 @@ class CoreState(Protocol):
         correct: bool,
         affine: Floats | None = None,
     ) -> int:
-        """The step up to the pressure system; returns the pressure unknowns."""
+        """The step up to the pressure system (scatter, then classify); returns the
+        pressure unknowns."""
+        ...
+
+    def scatter(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        correct: bool,
+        affine: Floats | None = None,
+    ) -> None:
+        """The particles to the grid: binning (theta), node_mass, node_vol, v_old, v_star
+        (and cell_vol when correct), v_star into the obstacles, node_f."""
+        ...
+
+    def classify(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+    ) -> int:
+        """The enclosed cells, the cells' integrals and the unknowns (node_row, rows) from
+        scatter's arrays, for the particles scatter was given (ValueError otherwise); returns
+        the pressure unknowns."""
+        ...
+
+    def renumber(self) -> int:
+        """The rows again from node_row (>= 0: an unknown, -1: not) in classify's order
+        (an image node of a periodic axis shares its master's row); returns the unknowns."""
         ...
 
     def warm_start(self) -> None: ...
@@ -185,7 +223,28 @@ class CoreState(Protocol):
         report: CoreReport,
         affine: Floats | None = None,
     ) -> int:
-        """The step after the pressure solve; returns a ``Status``."""
+        """The step after the pressure solve (correct, the volume correction when
+        correct, to_particles); returns a ``Status``."""
+        ...
+
+    def correct(self, options: CoreOptions) -> None:
+        """v_new: the corrected velocity with the walls' and obstacles' conditions."""
+        ...
+
+    def to_particles(
+        self,
+        x: Floats,
+        v: Floats,
+        mass: Floats,
+        volume: Floats,
+        pressure: Floats,
+        options: CoreOptions,
+        displaced: bool,
+        affine: Floats | None = None,
+    ) -> int:
+        """Grid to particles (with the volume correction's displacements when displaced),
+        push-out of obstacles, the periodic wrap; the particles may be the first n of those
+        scatter was given. Returns the particles put back inside."""
         ...
 
     @property
@@ -206,6 +265,25 @@ class CoreState(Protocol):
     def volume_q(self) -> Floats: ...
     @property
     def rows(self) -> Ints: ...
+    # scatter's and classify's arrays (views: a caller may write them between the phases)
+    @property
+    def node_mass(self) -> Floats: ...
+    @property
+    def node_vol(self) -> Floats: ...
+    @property
+    def v_old(self) -> Floats: ...
+    @property
+    def v_star(self) -> Floats: ...
+    @property
+    def node_f(self) -> Floats: ...
+    @property
+    def node_row(self) -> Ints: ...
+    @property
+    def theta(self) -> Floats: ...
+    @property
+    def cell_vol(self) -> Floats: ...  # empty without the volume correction
+    @property
+    def anchored(self) -> Bools: ...  # the rows next to a free surface (pressure_matrix)
     @property
     def matrix_cols(self) -> Ints: ...
     @property
@@ -225,13 +303,17 @@ def step_state(
     volume_correction: bool,
     viscous: bool,
     outlets: Sequence[bool] | Bools = (),
+    lower: Sequence[float] | Floats | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
     (``mpmflow.boundaries.obstacles.Tables``), ``viscous_T`` the full cell's gradient products (empty
     for inviscid material), ``margin`` (m) how far inside the walls particles are put back,
     ``outlets`` one flag per side (x_min, x_max, y_min, ...; empty: none): the open sides,
-    which have no wall pairs and retire the particles that cross them (mass 0).
+    which have no wall pairs and retire the particles that cross them (mass 0), ``lower``
+    the domain's lower corner in the grid's coordinates (m; None: zeros), below which
+    particles are put back inside: 0 for a grid on the whole domain, the global domain's
+    corner for a grid on a part of it.
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -241,6 +323,7 @@ def step_state(
         float(grid.spacing),
         [int(c) for c in grid.cells],
         float(grid.cell_volume),
+        [0.0] * D if lower is None else [float(c) for c in lower],
         [float(u) for u in grid.size],
         float(margin),
         arrays.ints(node),
