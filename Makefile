@@ -41,8 +41,8 @@ setup-mpi: $(MPI_VENV)/.installed
 
 # the MPI tests on one process and on two (a rank that hangs cannot hold CI: timeout)
 test-mpi: setup-mpi
-	timeout 600 $(MPI_VENV)/bin/python -m pytest -p no:cacheprovider -q tests/mpi
-	timeout 600 $(MPIRUN) -n 2 $(MPI_VENV)/bin/python -m pytest -p no:cacheprovider -q tests/mpi
+	timeout 600 $(MPI_VENV)/bin/python -m pytest -p no:cacheprovider -q tests/parallel
+	timeout 600 $(MPIRUN) -n 2 $(MPI_VENV)/bin/python -m pytest -p no:cacheprovider -q tests/parallel
 
 test: setup
 	$(BIN)/python -m pytest

@@ -15,6 +15,7 @@ cell exists, the last cell along that axis), so every node has one owner.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,7 +56,7 @@ class Boxes:
         return self.owner_of_cells(ijk)
 
 
-def bisect(weight: NDArray[np.float64], ranks: int) -> Boxes:
+def bisect(weight: NDArray[Any], ranks: int) -> Boxes:
     """Recursive coordinate bisection of the cells (``weight``: one value per cell, shaped
     as the grid's cells, axis 0 first) into ``ranks`` boxes, each at least one cell wide."""
     cells = tuple(int(c) for c in weight.shape)

@@ -79,5 +79,13 @@ def register(name: str) -> Callable[[type[Scheme]], type[Scheme]]:
 
 
 def make_scheme(case: Case, grid: Grid, particles: Particles) -> Scheme:
+    """The case's scheme; started on several MPI processes, its form over the ranks
+    (``parallel.scheme``)."""
     _load()
+    from ..parallel.comm import launched_size
+
+    if launched_size() > 1:
+        from ..parallel.scheme import distributed
+
+        return distributed(case, grid, particles)
     return SCHEMES[case.solver.scheme](case, grid, particles)

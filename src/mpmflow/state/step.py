@@ -304,6 +304,7 @@ def step_state(
     viscous: bool,
     outlets: Sequence[bool] | Bools = (),
     lower: Sequence[float] | Floats | None = None,
+    upper: Sequence[float] | Floats | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
@@ -313,7 +314,8 @@ def step_state(
     which have no wall pairs and retire the particles that cross them (mass 0), ``lower``
     the domain's lower corner in the grid's coordinates (m; None: zeros), below which
     particles are put back inside: 0 for a grid on the whole domain, the global domain's
-    corner for a grid on a part of it.
+    corner for a grid on a part of it; ``upper`` likewise the upper corner (None: the
+    grid's extent).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -324,7 +326,7 @@ def step_state(
         [int(c) for c in grid.cells],
         float(grid.cell_volume),
         [0.0] * D if lower is None else [float(c) for c in lower],
-        [float(u) for u in grid.size],
+        [float(u) for u in (grid.size if upper is None else upper)],
         float(margin),
         arrays.ints(node),
         arrays.ints(axis),

@@ -1,0 +1,372 @@
+"""The projection scheme on several MPI ranks (issue 28; docs/design/mpi.md, section 2).
+
+Each rank steps the particles of its box of cells (``boxes``) on its local grid (the box and
+one ghost layer, ``subgrid``) with the core's phases, and the ranks meet where a step needs
+its neighbours:
+
+1. the halo: copies of the neighbours' particles in the ghost layer (``exchange.halo``);
+2. ``scatter`` (particle-to-grid, nodal fractions), then the owners' node values at the
+   nodes a rank holds without owning them (``NodeExchange.fill``), then ``classify``;
+3. which nodes are pressure unknowns is the owner's decision (``renumber``); each rank's
+   owned unknowns are numbered after those of the ranks before it;
+4. the pressure system: each rank assembles its rows, PETSc solves (``petsc``), the
+   solution reaches the nodes round each box, the walls release and the system is solved
+   again while any rank released one;
+5. the ghost pressures, the owners' values again, the corrector, grid-to-particle on the
+   owned particles; then each particle goes to the rank that owns its new cell.
+
+Between chunks (at the output times) every rank holds the whole particle set and nodal
+pressure, gathered in the particles' original order: the Simulation's measures, probes,
+outputs and checkpoints see what a one-process run sees, and a checkpoint restarts on any
+number of ranks. The boxes are split again at a chunk's start when the particles per rank
+fall below ``BALANCE`` of their mean.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import materials, state
+from ..boundaries import obstacles, walls
+from ..errors import CaseError, SolverError
+from ..grid import Grid
+from ..particles import Particles
+from ..schemes import pressure
+from ..schemes.projection import MARGIN, ProjectionScheme, StepReport
+from ..state import CoreOptions, CoreReport
+from ..state.arrays import Floats, Ints
+from .boxes import Boxes, bisect, cell_weights
+from .comm import Comm, world
+from .exchange import NodeExchange, ParticleArrays, halo, migrate
+from .petsc import DistributedSystem
+from .pockets import sealed_pockets
+from .subgrid import restrict_obstacles, restrict_walls, subgrid
+
+if TYPE_CHECKING:
+    from ..case import Case
+
+# re-split when the fewest-loaded measure falls below this share of the largest: the step
+# waits for the slowest rank, so below 0.8 a fifth of the machine idles; measured at chunk
+# starts only (a re-split costs a rebuild of the local state, a few steps' time)
+BALANCE = 0.8
+FIELDS = ("x", "v", "mass", "volume", "pressure")
+
+
+def refusals(case: Case) -> list[str]:
+    """What this first decomposition does not run yet, each with the setting to change."""
+    s = case.solver
+    out = []
+    if s.scheme != "projection":
+        out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
+    if s.volume_correction:
+        out.append(
+            "the volume correction is not split over ranks yet: set solver.volume_correction = 0"
+        )
+    if case.time.dt == "auto":
+        out.append('time.dt = "auto" is not split over ranks yet: give time.dt a number')
+    if s.transfer == "apic":
+        out.append('APIC transfers are not split over ranks yet: set solver.transfer = "flip"')
+    if materials.is_viscous(case.material):
+        out.append("viscous materials are not split over ranks yet: use inviscid water")
+    if case.domain.periodic and any(case.domain.periodic):
+        out.append("periodic axes are not split over ranks yet: remove domain.periodic")
+    if s.linear_solver in ("amg", "direct"):
+        out.append(
+            f'solver.linear_solver = "{s.linear_solver}" runs on one process: on several '
+            'ranks the pressure is solved by PETSc ("petsc", or the default "multigrid")'
+        )
+    return out
+
+
+def distributed(case: Case, grid: Grid, particles: Particles) -> ProjectionScheme:
+    """The case's scheme over the run's MPI ranks, or a CaseError naming what it lacks."""
+    from ..boundaries import outlets
+
+    missing = refusals(case)
+    if outlets.sides(case).any():
+        missing.append("outlets are not split over ranks yet: close domain.walls' outlets")
+    if missing:
+        raise CaseError(
+            "This case cannot run on several MPI ranks yet (issue 28, first "
+            "decomposition): " + "; ".join(missing) + ". Or run it on one process."
+        )
+    return DistributedProjection(case, grid, particles)
+
+
+class DistributedProjection(ProjectionScheme):
+    """``ProjectionScheme`` over the ranks of ``comm`` (the run's MPI world)."""
+
+    SUPPORTS: ClassVar[frozenset[str]] = frozenset({"obstacles"})
+
+    def __init__(self, case: Case, grid: Grid, particles: Particles) -> None:
+        s = case.solver
+        self.case = case
+        self.grid = grid
+        self.comm: Comm = world()
+        self.apic = False
+        self.open = False
+        self.viscous = False
+        self.affine = None
+        self.solids = obstacles.of_case(case, grid)
+        self._walls = walls.of_case(case, grid).as_tuple()
+        self.python_pressure = None
+        self.system = DistributedSystem(s.tolerance, s.max_iterations, s.petsc_preconditioner)
+        self.steps = 0
+        self.last_unknowns = 0
+        self.auto = False
+        self.dt_range = [np.inf, 0.0]
+        self.p_global = np.zeros(grid.nnodes)
+        self.boxes: Boxes | None = None
+        self.balance = 1.0  # particles per rank: the least loaded over the most
+        self.splits = 0
+        self._P = particles
+
+    # the particles: every rank holds them all between chunks
+    @property
+    def particles(self) -> Particles:
+        return self._P
+
+    @particles.setter
+    def particles(self, P: Particles) -> None:
+        self._P = P
+
+    @property
+    def p_node(self) -> Floats:
+        return self.p_global
+
+    # --- the split and the local state ---------------------------------------------------
+    def _split(self) -> None:
+        """Split the grid into boxes on the particles' places (again when the load is
+        uneven), and build this rank's local grid, tables and compiled state."""
+        g = self.grid
+        load = None
+        if self.boxes is not None:
+            owner = self.boxes.owner_of_points(self._P.x, g.spacing)
+            load = np.bincount(owner, minlength=self.comm.size)
+            self.balance = float(load.min() / max(load.max(), 1))
+            if self.balance >= BALANCE:
+                return
+        self.boxes = bisect(cell_weights(self._P.x, g.spacing, g.cells), self.comm.size)
+        self.splits += 1
+        sub = subgrid(g, self.boxes, self.comm.rank)
+        self.sub = sub
+        self.nodes = NodeExchange(self.comm, sub)
+        self.foreign = ~sub.owned_nodes
+        offset = sub.offset
+        self.core = state.step_state(
+            sub.grid,
+            restrict_walls(self._walls, sub),
+            restrict_obstacles(self.solids, sub),
+            np.zeros((0, 0, 0, 0)),
+            MARGIN * g.spacing,
+            False,
+            False,
+            (),
+            lower=[-float(o) for o in offset],
+            upper=[float(u) - float(o) for u, o in zip(g.size, offset)],
+        )
+        owner = self.boxes.owner_of_points(self._P.x, g.spacing)
+        load = np.bincount(owner, minlength=self.comm.size)
+        self.balance = float(load.min() / max(load.max(), 1))
+
+    def _distribute(self) -> ParticleArrays:
+        """This rank's particles (global coordinates) with their numbers."""
+        assert self.boxes is not None
+        mine = np.flatnonzero(
+            self.boxes.owner_of_points(self._P.x, self.grid.spacing) == self.comm.rank
+        )
+        owned = {f: getattr(self._P, f)[mine].copy() for f in FIELDS}
+        owned["id"] = mine.astype(np.int64)
+        return owned
+
+    def _gather(self, owned: ParticleArrays) -> None:
+        """Every rank's particles back into the whole set, in their original order, and
+        the nodal pressure of the owned nodes into the whole grid's."""
+        parts = self.comm.allgather(owned)
+        ids = np.concatenate([p["id"] for p in parts])
+        if ids.size != self._P.count or np.unique(ids).size != ids.size:
+            raise SolverError(
+                f"Particles were lost or doubled between ranks: {ids.size} gathered, "
+                f"{self._P.count} in the run."
+            )
+        for f in FIELDS:
+            getattr(self._P, f)[ids] = np.concatenate([p[f] for p in parts])
+        sub = self.sub
+        mine = sub.owned_nodes
+        pieces = self.comm.allgather((sub.node_global[mine], self.core.p_node[mine]))
+        for index, values in pieces:
+            self.p_global[index] = values
+
+    # --- one step -------------------------------------------------------------------------
+    def _local(self, owned: ParticleArrays) -> tuple[Floats, ...]:
+        """The core's particle arrays: the owned particles, then the halo, in the local
+        grid's coordinates."""
+        assert self.boxes is not None
+        ghosts = halo(self.comm, self.boxes, self.grid.spacing, owned)
+        arrays = {f: np.concatenate([owned[f], ghosts[f]]) for f in FIELDS}
+        arrays["x"] -= self.sub.offset
+        return tuple(
+            np.ascontiguousarray(arrays[f]) for f in ("x", "v", "mass", "volume", "pressure")
+        )
+
+    def _owned_contacts(self) -> int:
+        mine = self.sub.owned_nodes
+        return int(self.core.contact[mine].sum() + self.core.ocontact[mine].sum())
+
+    def _number(self, O: CoreOptions) -> tuple[Ints, int, int, Floats]:
+        """Classify with the owners' say on the nodes round the box; number the owned
+        unknowns after the ranks before. Returns the owned rows (local row numbers), the
+        first global row, the global count and each local row's global number."""
+        core = self.core
+        unknown = (core.node_row >= 0).astype(float)
+        self.nodes.fill(unknown)
+        rows = core.node_row
+        rows[self.foreign] = np.where(unknown[self.foreign] > 0, 0, -1)
+        core.renumber()
+        local_rows = core.rows
+        owned = np.flatnonzero(self.sub.owned_nodes[local_rows])
+        counts = self.comm.allgather(int(owned.size))
+        first = int(sum(counts[: self.comm.rank]))
+        number = np.full(self.sub.grid.nnodes, -1.0)
+        number[local_rows[owned]] = first + np.arange(owned.size)
+        self.nodes.fill(number)
+        return owned, first, int(sum(counts)), number[local_rows]
+
+    def _pressure(self, O: CoreOptions, report: CoreReport, where: str) -> None:
+        core = self.core
+        owned, first, n, number = self._number(O)
+        report.unknowns = max(int(report.unknowns), n)
+        report.last_unknowns = n
+        core.warm_start()
+        x0 = core.x0[owned].copy()
+        core.pressure_matrix(O)
+        if n == 0:
+            return
+        anchored = self.comm.allreduce(int(core.anchored[owned].any()))
+        if not anchored:
+            raise pressure.singular(where)
+        cols = core.matrix_cols[owned]
+        global_cols = np.where(cols >= 0, number[np.maximum(cols, 0)], -1).astype(np.int64)
+        if np.any((cols >= 0) & (global_cols < 0)):
+            raise SolverError(f"A pressure row{where} couples to a node no rank numbered.")
+        if sealed_pockets(self.comm, self.nodes, core, owned, number):
+            raise SolverError(
+                f"Water sealed off from the free surface{where} lies across ranks: such "
+                "pockets are held at their top on one process only. Run this case on one "
+                "process."
+            )
+        self.system.prepare(first, global_cols, core.matrix_vals[owned].copy(), n)
+        iterations = 0
+        while True:
+            core.pressure_rhs(O)
+            result = self.system.solve(core.rhs[owned].copy(), x0)
+            report.solves += 1
+            report.iterations += result.iterations
+            iterations += result.iterations
+            report.residual = max(float(report.residual), result.residual)
+            if not result.converged:
+                raise pressure.not_converged(
+                    where,
+                    result.residual,
+                    result.iterations,
+                    self.case.solver,
+                    n,
+                    np.full(self.grid.dim, np.nan),
+                )
+            p = np.zeros(self.sub.grid.nnodes)
+            p[core.rows[owned]] = result.x
+            self.nodes.fill(p)
+            before = self._owned_contacts()
+            core.release_walls(np.ascontiguousarray(p[core.rows]))
+            released = self.comm.allreduce(before - self._owned_contacts())
+            if released == 0:
+                break
+            report.released += released
+            x0 = result.x
+        report.max_iterations = max(int(report.max_iterations), iterations)
+        core.extend_pressure(O)
+        self.nodes.fill(core.p_node)
+
+    def _step(
+        self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str
+    ) -> ParticleArrays:
+        core = self.core
+        x, v, mass, volume, pressure_ = self._local(owned)
+        core.scatter(x, v, mass, volume, pressure_, O, False)
+        self.nodes.fill(core.node_mass, core.node_vol, core.v_old, core.v_star, core.node_f)
+        core.classify(x, v, mass, volume, pressure_, O)
+        self._pressure(O, report, where)
+        core.correct(O)
+        m = owned["x"].shape[0]
+        core.to_particles(x[:m], v[:m], mass[:m], volume[:m], pressure_[:m], O, False)
+        moved = {
+            "x": x[:m] + self.sub.offset,
+            "v": v[:m],
+            "mass": mass[:m],
+            "volume": volume[:m],
+            "pressure": pressure_[:m],
+            "id": owned["id"],
+        }
+        assert self.boxes is not None
+        return migrate(self.comm, self.boxes, self.grid.spacing, moved)
+
+    def advance(
+        self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""
+    ) -> StepReport:
+        self._split()
+        O = self.options(dt)
+        O.pockets = False
+        report = state.Report()
+        self.core.p_node[:] = self.p_global[self.sub.node_global]
+        owned = self._distribute()
+        try:
+            for k in range(nsteps):
+                report.step = k
+                owned = self._step(owned, O, report, where(k))
+        finally:
+            self._gather(owned)
+        self.steps += nsteps
+        self.last_unknowns = int(report.last_unknowns)
+        r = StepReport.of(report)
+        r.moved_inside = int(self.comm.allreduce(int(report.moved)))
+        return r
+
+    def check_free_surface(self) -> None:
+        """As ``ProjectionScheme.check_free_surface``, over the ranks."""
+        self._split()
+        O = self.options(1.0)
+        O.pockets = False
+        owned = self._distribute()
+        x, v, mass, volume, pressure_ = self._local(owned)
+        self.core.scatter(x, v, mass, volume, pressure_, O, False)
+        self.nodes.fill(
+            self.core.node_mass,
+            self.core.node_vol,
+            self.core.v_old,
+            self.core.v_star,
+            self.core.node_f,
+        )
+        self.core.classify(x, v, mass, volume, pressure_, O)
+        rows, _, n, _ = self._number(O)
+        self.core.pressure_matrix(O)
+        anchored = self.comm.allreduce(int(self.core.anchored[rows].any()))
+        if n and not anchored:
+            raise pressure.singular(" at the start")
+
+    def state(self) -> dict[str, NDArray[Any]]:
+        return {
+            "p_node": self.p_global.copy(),
+            "last_unknowns": np.array(self.last_unknowns),
+            "steps": np.array(self.steps),
+            "since_volume": np.array(0.0),
+            "dt_range": np.array(self.dt_range),
+        }
+
+    def restore(self, saved: dict[str, NDArray[Any]]) -> None:
+        np.copyto(self.p_global, saved["p_node"])
+        self.last_unknowns = int(saved["last_unknowns"])
+        self.steps = int(saved["steps"])
