@@ -262,12 +262,21 @@ def _run(args: argparse.Namespace) -> int:
     early.check()
     out = Path(args.out)
     _check_out_dir(out, create=False)
-    if args.restart:
-        if args.overwrite:
-            raise CaseError(
-                "--restart continues the run in --out and --overwrite replaces it; "
-                "give one of them."
-            )
+    if args.restart and args.overwrite:
+        raise CaseError(
+            "--restart continues the run in --out and --overwrite replaces it; give one of them."
+        )
+    from .parallel.comm import launched_size
+
+    rank0 = True  # the process that speaks (one process, or rank 0 of an MPI run)
+    if launched_size() > 1:  # mpirun: every rank steps the case, rank 0 writes
+        from .parallel.comm import world
+        from .parallel.run import start
+
+        sim = start(case, out, args.restart, args.overwrite, CLI_HINTS)
+        rank0 = world().rank == 0
+        args.quiet = args.quiet or not rank0
+    elif args.restart:
         if not out.is_dir():
             raise CaseError(
                 f"--restart: --out {out} does not exist; give the folder of the "
@@ -279,7 +288,7 @@ def _run(args: argparse.Namespace) -> int:
         early.check()
         sim.claim(CLI_HINTS)
     with sim:  # releases the folder if anything below fails before the run
-        if args.restart:
+        if args.restart and rank0:
             print(
                 f"mpmflow: continuing from {sim.resumed_from} (t = {sim.time:.6g} s, step "
                 f"{sim.steps})",
@@ -288,7 +297,7 @@ def _run(args: argparse.Namespace) -> int:
         if not args.quiet:
             for line in sim.describe():
                 print(f"mpmflow: {line}", file=sys.stderr)
-        for note in sim.notices:
+        for note in sim.notices if rank0 else []:
             print(f"mpmflow: note: {note}", file=sys.stderr)
         early.check()
         bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time, step=sim.steps)
@@ -315,7 +324,7 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_seconds']:.2f} s wall; results in {out}",
             file=sys.stderr,
         )
-    if sim.fallbacks:
+    if sim.fallbacks and rank0:
         print(f"mpmflow: note: {sim.fallbacks.line()}", file=sys.stderr)
     return 0
 

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import materials, state
-from ..boundaries import obstacles, walls
+from ..boundaries import obstacles, outlets, walls
 from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..particles import Particles
@@ -84,8 +84,6 @@ def refusals(case: Case) -> list[str]:
 
 def distributed(case: Case, grid: Grid, particles: Particles) -> ProjectionScheme:
     """The case's scheme over the run's MPI ranks, or a CaseError naming what it lacks."""
-    from ..boundaries import outlets
-
     missing = refusals(case)
     if outlets.sides(case).any():
         missing.append("outlets are not split over ranks yet: close domain.walls' outlets")
@@ -109,6 +107,7 @@ class DistributedProjection(ProjectionScheme):
         self.comm: Comm = world()
         self.apic = False
         self.open = False
+        self.outflow = outlets.Outflow()  # none: outlets are refused on several ranks
         self.viscous = False
         self.affine = None
         self.solids = obstacles.of_case(case, grid)
