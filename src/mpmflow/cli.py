@@ -324,6 +324,16 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_seconds']:.2f} s wall; results in {out}",
             file=sys.stderr,
         )
+    mpi = summary.get("mpi")
+    if mpi and not args.quiet:
+        print(
+            f"mpmflow: {mpi['ranks']} ranks: particles {min(mpi['particles'])}-"
+            f"{max(mpi['particles'])} a rank (balance {mpi['balance']:.2f}, split "
+            f"{mpi['splits']} time{'s' if mpi['splits'] > 1 else ''}), steps "
+            f"{max(mpi['step_seconds']):.2f} s, of which the pressure ({mpi['pressure']}) "
+            f"{max(mpi['solve_seconds']):.2f} s on the slowest rank",
+            file=sys.stderr,
+        )
     if sim.fallbacks and rank0:
         print(f"mpmflow: note: {sim.fallbacks.line()}", file=sys.stderr)
     return 0

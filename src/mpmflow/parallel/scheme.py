@@ -24,6 +24,7 @@ fall below ``BALANCE`` of their mean.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -122,6 +123,10 @@ class DistributedProjection(ProjectionScheme):
         self.boxes: Boxes | None = None
         self.balance = 1.0  # particles per rank: the least loaded over the most
         self.splits = 0
+        self.step_seconds = 0.0  # this rank's time in steps, and in PETSc's set-up and solves
+        self.solve_seconds = 0.0
+        self.ranks_report: dict[str, Any] = {}
+        self.last_owned = 0  # this rank's pressure unknowns in the last step
         self._P = particles
 
     # the particles: every rank holds them all between chunks
@@ -200,6 +205,23 @@ class DistributedProjection(ProjectionScheme):
         for index, values in pieces:
             self.p_global[index] = values
 
+    def _report(self, owned: ParticleArrays) -> None:
+        """The load of each rank (summary.json's "mpi"): particles now, unknowns of the
+        last step, seconds in steps and in PETSc so far; balance = least / most particles."""
+        mine = (int(owned["id"].size), int(self.last_owned), self.step_seconds, self.solve_seconds)
+        loads = self.comm.allgather(mine)
+        particles = [p for p, _, _, _ in loads]
+        self.ranks_report = {
+            "ranks": self.comm.size,
+            "particles": particles,
+            "unknowns": [u for _, u, _, _ in loads],
+            "step_seconds": [round(t, 3) for _, _, t, _ in loads],
+            "solve_seconds": [round(t, 3) for _, _, _, t in loads],
+            "balance": round(min(particles) / max(max(particles), 1), 3),
+            "splits": self.splits,
+            "pressure": f"PETSc CG + {self.case.solver.petsc_preconditioner}",
+        }
+
     # --- one step -------------------------------------------------------------------------
     def _local(self, owned: ParticleArrays) -> tuple[Floats, ...]:
         """The core's particle arrays: the owned particles, then the halo, in the local
@@ -238,6 +260,7 @@ class DistributedProjection(ProjectionScheme):
     def _pressure(self, O: CoreOptions, report: CoreReport, where: str) -> None:
         core = self.core
         owned, first, n, number = self._number(O)
+        self.last_owned = owned.size
         report.unknowns = max(int(report.unknowns), n)
         report.last_unknowns = n
         core.warm_start()
@@ -258,11 +281,15 @@ class DistributedProjection(ProjectionScheme):
                 "pockets are held at their top on one process only. Run this case on one "
                 "process."
             )
+        clock = time.perf_counter()
         self.system.prepare(first, global_cols, core.matrix_vals[owned].copy(), n)
+        self.solve_seconds += time.perf_counter() - clock
         iterations = 0
         while True:
             core.pressure_rhs(O)
+            clock = time.perf_counter()
             result = self.system.solve(core.rhs[owned].copy(), x0)
+            self.solve_seconds += time.perf_counter() - clock
             report.solves += 1
             report.iterations += result.iterations
             iterations += result.iterations
@@ -322,12 +349,15 @@ class DistributedProjection(ProjectionScheme):
         report = state.Report()
         self.core.p_node[:] = self.p_global[self.sub.node_global]
         owned = self._distribute()
+        clock = time.perf_counter()
         try:
             for k in range(nsteps):
                 report.step = k
                 owned = self._step(owned, O, report, where(k))
         finally:
+            self.step_seconds += time.perf_counter() - clock
             self._gather(owned)
+            self._report(owned)
         self.steps += nsteps
         self.last_unknowns = int(report.last_unknowns)
         r = StepReport.of(report)

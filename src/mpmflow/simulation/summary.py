@@ -42,6 +42,12 @@ def _adaptive(sim: Simulation) -> dict[str, dict[str, float | None]]:
     }
 
 
+def _ranks(sim: Simulation) -> dict[str, Any]:
+    """A run over MPI ranks: its load per rank (``parallel.scheme``)."""
+    report = getattr(sim.scheme, "ranks_report", None)
+    return {"mpi": report} if report else {}
+
+
 def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JSON
     """The summary dict of ``sim`` as it stands, with its ``status`` and ``message``."""
     P, c, case, grid = sim.particles, sim.counters, sim.case, sim.grid
@@ -70,6 +76,7 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         "dt": sim.dt,
         **_explicit(sim),
         **_adaptive(sim),
+        **_ranks(sim),
         "grid": {
             "spacing": grid.spacing,
             "cells": list(grid.cells),

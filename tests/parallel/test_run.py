@@ -1,0 +1,86 @@
+"""``mpirun -n N mpmflow run``: the command line over 4 and 2 ranks against one process,
+and a run written on 4 ranks continued on 2 (``parallel.run``). Run from the one-process
+invocation of ``make test-mpi`` (it starts mpirun itself); skipped where mpirun or the MPI
+environment is missing, and under mpirun.
+
+Tolerances: the acceptance's 0.002 a (a = 0.114 m, the column's width) for the surge front
+and the column height against one process; the restart to the pressure solver's tolerance
+(relative 1e-8; the particles then agree to far better than 1e-8 m)."""
+
+import csv
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import EXAMPLES
+
+from mpmflow import load_case
+from mpmflow.simulation import Simulation
+
+pytest.importorskip("petsc4py")
+mpi = pytest.importorskip("mpi4py.MPI")
+if mpi.COMM_WORLD.size > 1 or shutil.which("mpirun") is None:
+    pytest.skip("starts mpirun itself: run on one process", allow_module_level=True)
+
+A = 0.114  # m
+SETTINGS = [
+    "--set",
+    "solver.volume_correction=0",
+    "--set",
+    "time.end=0.2",
+    "--set",
+    "checkpoint.interval=0.1",
+    "--set",
+    "output.snapshots=false",
+]
+
+
+def mpirun(ranks: int, out: Path, *extra: str) -> None:
+    mpmflow = Path(sys.executable).parent / "mpmflow"
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    env["OMP_NUM_THREADS"] = "1"
+    command = ["mpirun", "--oversubscribe", "-n", str(ranks), str(mpmflow), "run"]
+    command += [str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", *SETTINGS, *extra]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+
+
+def series(folder: Path, name: str) -> np.ndarray:
+    with open(folder / "timeseries.csv") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    return np.array([float(r[name]) for r in rows])
+
+
+@pytest.fixture(scope="module")
+def four(tmp_path_factory):
+    out = tmp_path_factory.mktemp("mpi") / "four"
+    mpirun(4, out)
+    return out
+
+
+def test_four_ranks_follow_one_process(four):
+    over = [s for s in SETTINGS if s != "--set"]
+    one = Simulation(load_case(EXAMPLES / "dam_break.toml", over))
+    one.run()
+    for name in ("front", "height"):
+        assert series(four, name).size == one.series(name).size == 21
+        assert np.abs(series(four, name) - one.series(name)).max() <= 0.002 * A
+    summary = (four / "summary.json").read_text()
+    assert '"ranks": 4' in summary
+
+
+def test_a_run_written_on_four_ranks_continues_on_two(four, tmp_path):
+    again = tmp_path / "again"
+    shutil.copytree(four, again)
+    (again / "checkpoint_000000200.npz").unlink()  # continue from t = 0.1 s
+    (again / "summary.json").unlink()
+    mpirun(2, again, "--restart")
+    a = np.load(four / "checkpoint_000000200.npz")
+    b = np.load(again / "checkpoint_000000200.npz")
+    assert np.abs(a["x"] - b["x"]).max() < 1e-8  # m
+    assert np.array_equal(a["mass"], b["mass"])
+    assert np.abs(series(four, "front") - series(again, "front")).max() < 1e-8
