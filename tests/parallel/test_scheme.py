@@ -13,7 +13,7 @@ import pytest
 from conftest import EXAMPLES
 
 from mpmflow import load_case
-from mpmflow.errors import CaseError
+from mpmflow.errors import CaseError, SolverError
 from mpmflow.schemes.projection import ProjectionScheme
 from mpmflow.simulation import Simulation
 
@@ -107,3 +107,56 @@ def test_what_is_not_split_yet_is_refused_by_name(override, named):
     case = load_case(EXAMPLES / "dam_break.toml", over)
     with pytest.raises(CaseError, match=named.replace(".", r"\.")):
         distributed(case, None, None)  # type: ignore[arg-type]
+
+
+def test_a_column_cut_across_its_depth_is_not_a_sealed_pocket():
+    """The tall column: the boxes' first cut is across y, so the lower rank's rows touch no
+    free surface of their own; joined with the upper rank's they do (no pocket), and the
+    column stays at rest."""
+    over = ["time.end=0.1", "output.snapshots=false", "solver.volume_correction=0"]
+    sim = split(Simulation(load_case(EXAMPLES / "hydrostatic.toml", over)))
+    sim.run()
+    if world().size > 1:
+        assert sim.scheme.boxes.lo[:, 1].max() > 0  # a cut across the depth
+    assert np.nanmax(sim.series("max_speed")) <= 1e-8
+
+
+LID = """
+title = "water sealed under a lid across the tank, more water above it"
+[domain]
+size = [0.4, 0.3]
+[grid]
+spacing = 0.01
+[[bodies]]
+type = "box"
+min = [0.0, 0.0]
+max = [0.4, 0.2]
+particles_per_cell = 2
+around_obstacles = true
+[[obstacles]]
+type = "box"
+min = [0.0, 0.1]
+max = [0.4, 0.12]
+[physics]
+gravity = [0.0, -9.81]
+[time]
+dt = 1e-3
+end = 0.01
+[output]
+interval = 0.01
+snapshots = false
+[solver]
+volume_correction = 0
+"""
+
+
+def test_water_sealed_across_the_ranks_is_refused(tmp_path):
+    """The layer under the lid spans the cut between the boxes: each rank holds part of a
+    pocket, and only their join shows it has no free surface."""
+    path = tmp_path / "lid.toml"
+    path.write_text(LID)
+    sim = split(Simulation(load_case(path)))
+    with pytest.raises(SolverError, match="sealed off"):
+        sim.scheme.advance(sim.dt, 1)
+    if world().size > 1:
+        assert np.any(sim.scheme.boxes.hi[:, 0] < 40)  # the cut crosses the layer

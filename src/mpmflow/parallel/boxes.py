@@ -38,6 +38,9 @@ class Boxes:
     def owner_of_cells(self, ijk: Ints) -> Ints:
         """The rank owning each cell, given its coordinates (n x D)."""
         owner = np.full(ijk.shape[0], -1, dtype=np.int64)
+        if self.ranks == 1:
+            owner[np.all((ijk >= 0) & (ijk < np.asarray(self.cells)), axis=1)] = 0
+            return owner
         for r in range(self.ranks):
             inside = np.all((ijk >= self.lo[r]) & (ijk < self.hi[r]), axis=1)
             owner[inside] = r
@@ -52,7 +55,7 @@ class Boxes:
         """The rank owning the cell of each point (n x D, m); points beyond the grid go to
         the nearest cell, as the core bins them."""
         top = np.asarray(self.cells, dtype=np.int64) - 1
-        ijk = np.clip(np.floor(x / spacing).astype(np.int64), 0, top)
+        ijk = np.minimum(np.maximum(np.floor(x / spacing).astype(np.int64), 0), top)
         return self.owner_of_cells(ijk)
 
 

@@ -82,7 +82,7 @@ class NodeExchange:
 
 def _cells(x: NDArray[np.float64], spacing: float, cells: tuple[int, ...]) -> NDArray[np.int64]:
     top = np.asarray(cells, dtype=np.int64) - 1
-    return np.clip(np.floor(x / spacing).astype(np.int64), 0, top)
+    return np.minimum(np.maximum(np.floor(x / spacing).astype(np.int64), 0), top)
 
 
 def _take(arrays: ParticleArrays, mask: NDArray[Any]) -> ParticleArrays:
@@ -96,17 +96,27 @@ def _join(parts: list[ParticleArrays], like: ParticleArrays) -> ParticleArrays:
 def migrate(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) -> ParticleArrays:
     """The particles (global coordinates in ``arrays["x"]``) this rank owns after they
     moved: those that stayed, then those that arrived, by sending rank. Collective."""
+    if comm.size == 1:
+        return arrays
     owner = boxes.owner_of_cells(_cells(arrays["x"], spacing, boxes.cells))
     me = comm.rank
-    out = [_take(arrays, owner == r) if r != me else None for r in range(comm.size)]
+    leaving = owner != me
+    out = [
+        _take(arrays, owner == r) if r != me and leaving.any() else None for r in range(comm.size)
+    ]
     got = comm.alltoall(out)
-    kept = _take(arrays, owner == me)
-    return _join([kept, *[g for r, g in enumerate(got) if r != me]], arrays)
+    arrived = [g for r, g in enumerate(got) if r != me and g is not None]
+    if not leaving.any() and not arrived:
+        return arrays
+    kept = _take(arrays, ~leaving) if leaving.any() else arrays
+    return _join([kept, *arrived], arrays)
 
 
 def halo(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) -> ParticleArrays:
     """Copies of the neighbours' particles in this rank's ghost layer (by sending rank).
     Collective."""
+    if comm.size == 1:
+        return {k: a[:0] for k, a in arrays.items()}
     ijk = _cells(arrays["x"], spacing, boxes.cells)
     me = comm.rank
     out: list[ParticleArrays | None] = []

@@ -37,10 +37,14 @@ def sealed_pockets(
         (np.ones(int(inside.sum())), (r[inside], position[c[inside]])), shape=(m, m)
     )
     parts, label = connected_components(graph, directed=False) if m else (0, np.zeros(0, int))
-    counts = comm.allgather(int(parts))
-    first = int(sum(counts[: comm.rank]))
     anchored = np.zeros(parts, dtype=bool)
     np.logical_or.at(anchored, label, core.anchored[owned])
+    # a part of the whole system joins parts of the ranks': when every rank's parts touch
+    # a free surface, so do the whole system's
+    if not comm.allreduce(int(not anchored.all())):
+        return False
+    counts = comm.allgather(int(parts))
+    first = int(sum(counts[: comm.rank]))
     # each owned row's part, at its node, for the neighbours
     at_nodes = np.full(core.node_row.shape[0], -1.0)
     at_nodes[rows[owned]] = first + label
