@@ -27,6 +27,16 @@ def test_every_local_node_gets_its_owners_value():
     assert np.array_equal(rows, sub.node_global)
 
 
+def test_every_local_cell_gets_its_owners_value():
+    comm = world()
+    boxes = bisect(np.ones(GRID.cells), comm.size)
+    sub = subgrid(GRID, boxes, comm.rank)
+    exchange = NodeExchange(comm, sub, cells=True)
+    value = np.where(sub.owned_cells, sub.cell_global * 0.5, np.nan)
+    exchange.fill(value)
+    assert np.array_equal(value, sub.cell_global * 0.5)
+
+
 def test_particles_migrate_to_their_owners_once():
     comm = world()
     boxes = bisect(np.ones(GRID.cells), comm.size)

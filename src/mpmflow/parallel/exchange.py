@@ -26,31 +26,36 @@ ParticleArrays = dict[str, NDArray[Any]]
 
 
 class NodeExchange:
-    """The owners' values at a rank's local nodes that it does not own."""
+    """The owners' values at a rank's local nodes (or cells: ``cells=True``) that it does
+    not own."""
 
-    def __init__(self, comm: Comm, sub: Subgrid) -> None:
+    def __init__(self, comm: Comm, sub: Subgrid, cells: bool = False) -> None:
         self.comm = comm
+        self.sent = 0  # bytes this rank has sent in fills
         size = comm.size
-        foreign = np.flatnonzero(sub.node_owner != sub.rank)
-        owners = sub.node_owner[foreign]
+        owner = sub.cell_owner if cells else sub.node_owner
+        number = sub.cell_global if cells else sub.node_global
+        local_of = sub.local_cells if cells else sub.local_nodes
+        foreign = np.flatnonzero(owner != sub.rank)
+        owners = owner[foreign]
         # what this rank receives from each owner (local indices) and asks for (global)
         self.receive = {int(r): foreign[owners == r] for r in np.unique(owners)}
         asks: list[NDArray[np.int64]] = [
-            sub.node_global[self.receive[r]] if r in self.receive else np.zeros(0, np.int64)
+            number[self.receive[r]] if r in self.receive else np.zeros(0, np.int64)
             for r in range(size)
         ]
         asked = comm.alltoall(asks)
         self.send: dict[int, NDArray[np.int64]] = {}
         for r in range(size):
             if r != sub.rank and len(asked[r]):
-                local = sub.local_nodes(np.asarray(asked[r], dtype=np.int64))
-                if np.any(local < 0) or np.any(sub.node_owner[local] != sub.rank):
-                    raise RuntimeError(f"rank {r} asked rank {sub.rank} for nodes it lacks")
+                local = local_of(np.asarray(asked[r], dtype=np.int64))
+                if np.any(local < 0) or np.any(owner[local] != sub.rank):
+                    raise RuntimeError(f"rank {r} asked rank {sub.rank} for places it lacks")
                 self.send[r] = local
 
     def fill(self, *arrays: NDArray[Any]) -> None:
-        """Overwrite each array's rows (first axis: local nodes) at the nodes this rank does
-        not own with their owners' values. Collective."""
+        """Overwrite each array's rows (first axis: local nodes, or cells) where this rank
+        does not own them with their owners' values. Collective."""
         if self.comm.size == 1:
             return
         from mpi4py import MPI
@@ -66,6 +71,7 @@ class NodeExchange:
                 buf[:, col : col + w] = a[idx].reshape(idx.size, w)
                 col += w
             outgoing[r] = buf
+            self.sent += buf.nbytes
             requests.append(self.comm.Isend(buf, dest=r, tag=11))
         incoming = {}
         for r, idx in self.receive.items():

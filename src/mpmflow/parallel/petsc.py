@@ -122,6 +122,10 @@ class DistributedSystem:
         self._b, self._x = A.createVecs()
         self._r = A.createVecLeft()
         self.first, self.rows, self.size = int(first), m, int(size)
+        # the other ranks' unknowns a product with A reads (each CG iteration's exchange)
+        outside = c[keep]
+        outside = outside[(outside < first) | (outside >= first + m)]
+        self.ghost_columns = int(np.unique(outside).size)
 
     def solve(self, b: Floats, x0: Floats, tolerance: float | None = None) -> SolveResult:
         """Solve for this rank's block of x (warm-started from ``x0``, its block of the

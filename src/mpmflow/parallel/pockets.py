@@ -13,22 +13,29 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..state import CoreState
-from ..state.arrays import Floats, Ints
+from ..state.arrays import Bools, Ints
 from .comm import Comm
 from .exchange import NodeExchange
 
 
 def sealed_pockets(
-    comm: Comm, nodes: NodeExchange, core: CoreState, owned: Ints, number: Floats
+    comm: Comm,
+    exchange: NodeExchange,
+    cols: Ints,
+    places: Ints,
+    owned: Ints,
+    open_: Bools,
+    count: int,
 ) -> bool:
-    """True when some connected part of the distributed pressure system has no anchored
-    row. ``owned``: this rank's rows (local row numbers); ``number``: each local row's
-    global number. Collective."""
-    cols = core.matrix_cols[owned]
+    """True when some connected part of a distributed system (the pressure's on nodes, the
+    volume correction's on cells) has no row next to an empty cell. ``cols``: the local
+    rows' columns (local row numbers, -1: empty); ``places``: each local row's node or cell;
+    ``owned``: this rank's rows; ``open_``: whether each owned row touches a free surface;
+    ``exchange``: the owners' values at the nodes or cells this rank does not own;
+    ``count``: the local nodes or cells. Collective."""
+    cols = cols[owned]
     m = owned.size
-    rows = core.rows
-    position = np.full(rows.size, -1, dtype=np.int64)  # local row -> place among owned
+    position = np.full(places.size, -1, dtype=np.int64)  # local row -> place among owned
     position[owned] = np.arange(m)
     r, s = np.nonzero(cols >= 0)
     c = cols[r, s]
@@ -38,19 +45,19 @@ def sealed_pockets(
     )
     parts, label = connected_components(graph, directed=False) if m else (0, np.zeros(0, int))
     anchored = np.zeros(parts, dtype=bool)
-    np.logical_or.at(anchored, label, core.anchored[owned])
+    np.logical_or.at(anchored, label, open_)
     # a part of the whole system joins parts of the ranks': when every rank's parts touch
     # a free surface, so do the whole system's
     if not comm.allreduce(int(not anchored.all())):
         return False
     counts = comm.allgather(int(parts))
     first = int(sum(counts[: comm.rank]))
-    # each owned row's part, at its node, for the neighbours
-    at_nodes = np.full(core.node_row.shape[0], -1.0)
-    at_nodes[rows[owned]] = first + label
-    nodes.fill(at_nodes)
+    # each owned row's part, at its node or cell, for the neighbours
+    at = np.full(count, -1.0)
+    at[places[owned]] = first + label
+    exchange.fill(at)
     across = ~inside
-    edges = np.stack([first + label[r[across]], at_nodes[rows[c[across]]]], axis=1)
+    edges = np.stack([first + label[r[across]], at[places[c[across]]]], axis=1)
     pieces = comm.allgather((np.unique(edges.astype(np.int64), axis=0), anchored))
     if comm.rank == 0:
         total = int(sum(counts))

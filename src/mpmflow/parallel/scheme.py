@@ -127,6 +127,11 @@ class DistributedProjection(ProjectionScheme):
         self.solve_seconds = 0.0
         self.ranks_report: dict[str, Any] = {}
         self.last_owned = 0  # this rank's pressure unknowns in the last step
+        self.node_bytes = 0  # sent in node fills under earlier splits
+        # what this rank received or sent, summed over its steps (benchmarks/mpi/)
+        self.traffic = dict.fromkeys(
+            ("steps", "halo particles", "migrated particles", "ghost columns", "iterations"), 0
+        )
         self._P = particles
 
     # the particles: every rank holds them all between chunks
@@ -158,7 +163,9 @@ class DistributedProjection(ProjectionScheme):
         self.splits += 1
         sub = subgrid(g, self.boxes, self.comm.rank)
         self.sub = sub
-        self.nodes = NodeExchange(self.comm, sub)
+        if self.splits > 1:  # what the last split's exchange sent
+            self.node_bytes += self.nodes.sent
+        self.nodes: NodeExchange = NodeExchange(self.comm, sub)
         self.foreign = ~sub.owned_nodes
         offset = sub.offset
         self.core = state.step_state(
@@ -220,6 +227,8 @@ class DistributedProjection(ProjectionScheme):
             "balance": round(min(particles) / max(max(particles), 1), 3),
             "splits": self.splits,
             "pressure": f"PETSc CG + {self.case.solver.petsc_preconditioner}",
+            "node_bytes_sent": self.comm.allgather(self.node_bytes + self.nodes.sent),
+            "traffic": self.comm.allgather(dict(self.traffic)),
         }
 
     # --- one step -------------------------------------------------------------------------
@@ -228,6 +237,7 @@ class DistributedProjection(ProjectionScheme):
         grid's coordinates."""
         assert self.boxes is not None
         ghosts = halo(self.comm, self.boxes, self.grid.spacing, owned)
+        self.traffic["halo particles"] += int(ghosts["id"].size)
         arrays = {f: np.concatenate([owned[f], ghosts[f]]) for f in FIELDS}
         arrays["x"] -= self.sub.offset
         return tuple(
@@ -275,7 +285,9 @@ class DistributedProjection(ProjectionScheme):
         global_cols = np.where(cols >= 0, number[np.maximum(cols, 0)], -1).astype(np.int64)
         if np.any((cols >= 0) & (global_cols < 0)):
             raise SolverError(f"A pressure row{where} couples to a node no rank numbered.")
-        if sealed_pockets(self.comm, self.nodes, core, owned, number):
+        air = core.anchored[owned]
+        nn = self.sub.grid.nnodes
+        if sealed_pockets(self.comm, self.nodes, core.matrix_cols, core.rows, owned, air, nn):
             raise SolverError(
                 f"Water sealed off from the free surface{where} lies across ranks: such "
                 "pockets are held at their top on one process only. Run this case on one "
@@ -284,6 +296,7 @@ class DistributedProjection(ProjectionScheme):
         clock = time.perf_counter()
         self.system.prepare(first, global_cols, core.matrix_vals[owned].copy(), n)
         self.solve_seconds += time.perf_counter() - clock
+        self.traffic["ghost columns"] += self.system.ghost_columns
         iterations = 0
         while True:
             core.pressure_rhs(O)
@@ -292,6 +305,7 @@ class DistributedProjection(ProjectionScheme):
             self.solve_seconds += time.perf_counter() - clock
             report.solves += 1
             report.iterations += result.iterations
+            self.traffic["iterations"] += result.iterations
             iterations += result.iterations
             report.residual = max(float(report.residual), result.residual)
             if not result.converged:
@@ -338,6 +352,9 @@ class DistributedProjection(ProjectionScheme):
             "id": owned["id"],
         }
         assert self.boxes is not None
+        stayed = self.boxes.owner_of_points(moved["x"], self.grid.spacing) == self.comm.rank
+        self.traffic["migrated particles"] += int(m - stayed.sum())
+        self.traffic["steps"] += 1
         return migrate(self.comm, self.boxes, self.grid.spacing, moved)
 
     def advance(

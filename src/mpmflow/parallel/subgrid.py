@@ -74,6 +74,14 @@ class Subgrid:
         out[inside] = _flat(ijk[inside], self.grid.nodes)
         return out
 
+    def local_cells(self, global_index: Ints) -> Ints:
+        """The local index of global cells (-1 where the local grid does not hold one)."""
+        ijk = _unflat(global_index, self.whole.cells) - self.origin
+        inside = np.all((ijk >= 0) & (ijk < np.asarray(self.grid.cells)), axis=1)
+        out = np.full(global_index.shape[0], -1, dtype=np.int64)
+        out[inside] = _flat(ijk[inside], self.grid.cells)
+        return out
+
 
 def _unflat(index: Ints, dims: tuple[int, ...]) -> Ints:
     return np.stack(np.unravel_index(index, dims, order="F"), axis=1).astype(np.int64)

@@ -1,0 +1,84 @@
+"""Weak scaling of the split projection step (issue 28): N dam breaks' worth of water on N
+ranks, the per-rank time per step and what each rank sends per step.
+
+The case is the paper's dam break (0.004 m, volume correction off: it is not split yet)
+widened N times: a column N x 0.114 m wide in a tank N x 0.42 m wide, so each rank starts
+with one column's particles (26k). Run under mpirun from the MPI environment:
+
+    mpirun -n N .venv-mpi/bin/python benchmarks/mpi/weak_scaling.py [--steps 200]
+
+Prints (rank 0) one JSON line: ranks, steps, the median and slowest rank's seconds per step
+(after a 20-step warm-up), the PETSc share, and per rank and step: node-fill bytes sent,
+halo particles received, particles migrated, the pressure matrix's off-rank columns (each
+CG iteration exchanges them), CG iterations. Times are only comparable at N <= cores.
+"""
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from mpmflow import load_case
+from mpmflow.parallel.comm import world
+from mpmflow.parallel.scheme import DistributedProjection
+from mpmflow.simulation import Simulation
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--warm", type=int, default=20)
+    args = parser.parse_args()
+    comm = world()
+    n = comm.size
+    case = load_case(
+        "examples/dam_break.toml",
+        [
+            f"domain.size=[{0.42 * n}, 0.44]",
+            f"bodies.0.max=[{0.114 * n}, 0.228]",
+            "solver.volume_correction=0",
+            "time.end=10",
+        ],
+    )
+    sim = Simulation(case)
+    if not isinstance(sim.scheme, DistributedProjection):
+        sim.scheme = DistributedProjection(case, sim.grid, sim.particles)
+    scheme = sim.scheme
+    scheme.advance(sim.dt, args.warm)
+    step0, solve0 = scheme.step_seconds, scheme.solve_seconds
+    traffic0 = dict(scheme.traffic)
+    bytes0 = scheme.node_bytes + scheme.nodes.sent
+    comm.Barrier()
+    wall = time.perf_counter()
+    scheme.advance(sim.dt, args.steps)
+    wall = time.perf_counter() - wall
+    mine = {
+        "step": (scheme.step_seconds - step0) / args.steps,
+        "solve": (scheme.solve_seconds - solve0) / args.steps,
+        "node_bytes": (scheme.node_bytes + scheme.nodes.sent - bytes0) / args.steps,
+        **{k: (scheme.traffic[k] - traffic0[k]) / args.steps for k in traffic0 if k != "steps"},
+        "particles": scheme.ranks_report["particles"][comm.rank],
+    }
+    everyone = comm.allgather(mine)
+    if comm.rank == 0:
+        step = [e["step"] for e in everyone]
+        out = {
+            "ranks": n,
+            "steps": args.steps,
+            "particles": [e["particles"] for e in everyone],
+            "seconds_per_step_median": float(np.median(step)),
+            "seconds_per_step_max": float(max(step)),
+            "wall_per_step": wall / args.steps,
+            "petsc_share": float(np.median([e["solve"] / e["step"] for e in everyone])),
+            "per_rank_per_step": {
+                k: [round(e[k], 1) for e in everyone]
+                for k in mine
+                if k not in ("step", "solve", "particles")
+            },
+        }
+        print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()
