@@ -96,6 +96,8 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
     vol_vals_.reserve(nc * NS);
     vol_rhs_.reserve(nc);
     vol_rows_.reserve(nc);
+    vol_air_.reserve(nc);
+    for (index_t c = 0; c < nc; ++c) cell_row_.view(nc)(c) = -1;
     q_.reserve(nc);
     qx_.reserve(nc);
     for (index_t c = 0; c < nc; ++c) q_.view(nc)(c) = 0.0;
@@ -510,7 +512,10 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
 }
 
 template <int D>
-int State<D>::volume_correction(const Options<D>& O, Report& report) {
+index_t State<D>::volume_system(const Options<D>& O) {
+  if (!volume_on_)
+    throw std::logic_error("State::volume_system: a State built without the volume correction");
+  PhaseClock clock(phase_seconds_);
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
   const double inv = 1.0 / cell_volume_;
   auto density = density_.view(nc);
@@ -522,74 +527,112 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
   const VolumeSystem assembled = mpmflow::assemble<D>(
       grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}), T_.static_slot,
       cell_row, all_cols, all_vals, vol_rhs_.view(nc), vol_rows_.view(nc));
-  const index_t n = assembled.n;
-  std::array<View<double>, D> faces;
-  for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
-  if (n == 0 || !assembled.anchored) {
-    // nothing, or material filling the whole domain: its volume cannot change
-    for (int k = 0; k < D; ++k)
-      for (index_t i = 0; i < faces[k].size(); ++i) faces[k](i) = 0.0;
-    return OK;
-  }
-  auto rows = vol_rows_.view(n);
+  const index_t n = vol_n_ = assembled.n;
+  vol_anchored_ = assembled.anchored;
   auto cols = vol_cols_.template view<2>({n, NS});
   auto vals = vol_vals_.template view<2>({n, NS});
   auto rhs = vol_rhs_.view(n);
-  {
+  // A row touches air where its diagonal (every face with flux) exceeds its couplings to
+  // other rows: unit couplings, so the sum of its values is 0 or a whole number. Taken before
+  // the pockets below change the held rows' values.
+  auto air = vol_air_.view(n);
+  for (index_t r = 0; r < n; ++r) {
+    double sum = 0.0;
+    for (int s = 0; s < NS; ++s) sum += vals(r, s);
+    air(r) = sum > 0.5;
+  }
+  if (n > 0 && vol_anchored_ && O.pockets) {
     // water sealed off from every empty cell (src/core/pockets.hpp) keeps its volume: only
-    // its mean-free excess is moved about within it. A row touches air where its diagonal
-    // (every face with flux) exceeds its couplings to other rows.
+    // its mean-free excess is moved about within it
     auto part = vol_part_.sized(n);
     auto anchors = vol_anchors_.sized(n);
     const index_t pockets = find_pockets(
-        cols, vals,
-        [&](index_t r) {
-          double sum = 0.0;
-          for (int s = 0; s < NS; ++s) sum += vals(r, s);
-          return sum > 0.5;  // unit couplings: 0 or a whole number
-        },
-        [](index_t) { return 0.0; }, part, vol_order_.sized(n), anchors);
+        cols, vals, [&](index_t r) { return air(r); }, [](index_t) { return 0.0; }, part,
+        vol_order_.sized(n), anchors);
     if (pockets > 0) {
       auto mean = vol_mean_.sized(2 * pockets);
       apply_pockets(part, anchors.head(pockets), mean.head(pockets),
                     View<double>(mean.data() + pockets, {pockets}), rhs);
     }
   }
+  clock.lap(PHASE_VOLUME);
+  return n;
+}
+
+template <int D>
+index_t State<D>::volume_apply(const Options<D>& O, View<const double> q) {
+  if (!volume_on_)
+    throw std::logic_error("State::volume_apply: a State built without the volume correction");
+  PhaseClock clock(phase_seconds_);
+  const index_t nc = grid_.ncells;
+  const index_t n = vol_n_;
+  std::array<View<double>, D> faces;
+  for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());
+  if (n == 0 || !vol_anchored_) {
+    // nothing, or material filling the whole domain: its volume cannot change
+    for (int k = 0; k < D; ++k)
+      for (index_t i = 0; i < faces[k].size(); ++i) faces[k](i) = 0.0;
+    clock.lap(PHASE_VOLUME);
+    return 0;
+  }
+  if (q.size() != n)
+    throw std::invalid_argument("State::volume_apply: q needs one value per row of the volume " +
+                                std::string("system, ") + std::to_string(n) + ", not " +
+                                std::to_string(q.size()));
+  auto rows = vol_rows_.view(n);
   auto Q = q_.view(nc);
-  auto q = qx_.view(n);
-  for (index_t r = 0; r < n; ++r) q(r) = Q(rows(r));
-  std::array<index_t, D> dims{}, period{};
-  for (int k = 0; k < D; ++k) {
-    dims[k] = grid_.cells[k];
-    if (grid_.periodic[k]) period[k] = grid_.cells[k];
-  }
-  volume_mg_.setup(cols, vals, rows, dims, COARSEST, period);
-  const SolveResult res = volume_mg_.pcg(rhs, q, O.volume_tol, O.volume_max_iterations, 1);
-  report.volume_iterations += res.iterations;
-  if (!(res.residual <= O.volume_tol)) {
-    report.fail_iterations = res.iterations;
-    report.fail_residual = res.residual;
-    report.fail_node = rows(worst_row(cols, vals, q, rhs, scratch_.sized(n)));
-    report.fail_size = n;
-    return VOLUME_NOT_CONVERGED;
-  }
   for (index_t c = 0; c < nc; ++c) Q(c) = 0.0;
   for (index_t r = 0; r < n; ++r) Q(rows(r)) = q(r);
   const double dmax = O.volume_dmax * grid_.h;
-  face_displacements<D>(grid_, cell_row, T_.static_slot, q, O.volume_rate * grid_.h, dmax, faces);
+  face_displacements<D>(grid_, cell_row_.view(nc), T_.static_slot, q, O.volume_rate * grid_.h, dmax,
+                        faces);
+  index_t clamped = 0;
   for (int k = 0; k < D; ++k)
     for (index_t i = 0; i < faces[k].size(); ++i)
-      if (std::abs(faces[k](i)) >= dmax) report.clamped += 1;
+      if (std::abs(faces[k](i)) >= dmax) clamped += 1;
+  clock.lap(PHASE_VOLUME);
+  return clamped;
+}
+
+template <int D>
+int State<D>::volume_correction(const Options<D>& O, Report& report) {
+  const index_t n = volume_system(O);
+  auto q = qx_.view(n);
+  if (n > 0 && vol_anchored_) {
+    PhaseClock clock(phase_seconds_);
+    const index_t nc = grid_.ncells;
+    auto rows = vol_rows_.view(n);
+    auto cols = vol_cols_.template view<2>({n, NS});
+    auto vals = vol_vals_.template view<2>({n, NS});
+    auto rhs = vol_rhs_.view(n);
+    auto Q = q_.view(nc);
+    for (index_t r = 0; r < n; ++r) q(r) = Q(rows(r));  // the last correction's solution
+    std::array<index_t, D> dims{}, period{};
+    for (int k = 0; k < D; ++k) {
+      dims[k] = grid_.cells[k];
+      if (grid_.periodic[k]) period[k] = grid_.cells[k];
+    }
+    volume_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+    const SolveResult res = volume_mg_.pcg(rhs, q, O.volume_tol, O.volume_max_iterations, 1);
+    report.volume_iterations += res.iterations;
+    clock.lap(PHASE_VOLUME);
+    if (!(res.residual <= O.volume_tol)) {
+      report.fail_iterations = res.iterations;
+      report.fail_residual = res.residual;
+      report.fail_node = rows(worst_row(cols, vals, q, rhs, scratch_.sized(n)));
+      report.fail_size = n;
+      return VOLUME_NOT_CONVERGED;
+    }
+  }
+  report.clamped += volume_apply(O, q);
   return OK;
 }
 
 template <int D>
 int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
   this->correct(O);
-  if (correct) {
-    PhaseClock clock(phase_seconds_);
+  if (correct) {  // volume_system, volume_apply and the solve time themselves
     const int status = volume_correction(O, report);
-    clock.lap(PHASE_VOLUME);
     if (status != OK) return status;
   }
   report.moved += to_particles(P, O, correct);

@@ -6,7 +6,8 @@
 //     -> viscous_predictor (viscous materials only)
 //     -> pressure (contact walls, assembly, solve, release, ghost values)
 //     -> finish: correct (correct_velocity and the walls) -> volume_correction (every few
-//        steps) -> to_particles (grid_to_particles -> push out of obstacles)
+//        steps: volume_system -> solve -> volume_apply) -> to_particles (grid_to_particles
+//        -> push out of obstacles)
 //
 // The phases are public, so that a caller can run a step in parts: the pressure solvers run
 // from Python, and a domain decomposition over MPI (issue 28, docs/design/mpi.md, section 2),
@@ -225,6 +226,22 @@ class State {
   int finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
   // v_new: the corrected velocity (eq. 16) with the walls' and obstacles' conditions.
   void correct(const Options<D>& O);
+  // The volume correction in parts, for a caller that solves its cell-centred system itself
+  // (MPI: docs/design/mpi.md, section 2): volume_correction = volume_system, the solve (when
+  // the system has rows and is anchored), volume_apply. Both throw std::logic_error on a State
+  // built without the volume correction.
+  // volume_system: the cells' density from cell_vol (a scatter with correct), the system on
+  // the cells holding material (volume_rows, volume_cols, volume_vals, volume_rhs, cell_row,
+  // volume_air, volume_anchored) and, when O.pockets and the system is anchored, its sealed
+  // pockets made solvable (pockets.hpp); O.pockets false leaves them, for a caller that owns
+  // part of the domain and decides them across its parts. Returns the rows.
+  index_t volume_system(const Options<D>& O);
+  // volume_apply: q, one value per row of the last volume_system (std::invalid_argument
+  // otherwise), into volume_q (0 off the rows) and the faces' displacements that
+  // to_particles(displaced) adds. When that system had no rows or was not anchored (it touched
+  // no empty cell: its volume cannot change) the faces are zero, q and volume_q untouched.
+  // Returns the faces clamped at O.volume_dmax cells.
+  index_t volume_apply(const Options<D>& O, View<const double> q);
   // Grid to particles (with the last volume correction's face displacements when displaced),
   // push-out of obstacles, the periodic wrap; returns the particles put back inside. Reads
   // no binning array: P may hold fewer particles than scatter was given (the first n of
@@ -254,6 +271,17 @@ class State {
   View<const double, 2> matrix_vals() { return vals_.template view<2>({nrows_, NS}); }
   View<double> rhs() { return rhs_.view(nrows_); }
   View<double> x0() { return x_.view(nrows_); }
+  // the last volume_system's cell-centred system (empty before one, and without the volume
+  // correction): the cell of each row, the ELL matrix (n x 3^D, -1: no column), the
+  // right-hand side, the rows that touch an empty cell (their values sum to more than 0.5:
+  // unit couplings) and whether any does (anchored); each cell's row (-1: none)
+  View<const index_t> volume_rows() { return vol_rows_.view(vol_n_); }
+  View<const index_t, 2> volume_cols() { return vol_cols_.template view<2>({vol_n_, NS}); }
+  View<const double, 2> volume_vals() { return vol_vals_.template view<2>({vol_n_, NS}); }
+  View<double> volume_rhs() { return vol_rhs_.view(vol_n_); }
+  View<const bool> volume_air() { return vol_air_.view(vol_n_); }
+  bool volume_anchored() const { return vol_anchored_; }
+  View<const index_t> cell_row() { return cell_row_.view(volume_on_ ? grid_.ncells : 0); }
   const Grid<D>& grid() const { return grid_; }
   // wall-clock seconds spent in each phase (Phase) since construction
   const std::array<double, NPHASES>& phase_seconds() const { return phase_seconds_; }
@@ -300,6 +328,9 @@ class State {
   // volume correction
   Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];
   Buffer<index_t> cell_row_, vol_cols_, vol_rows_;
+  Buffer<bool> vol_air_;
+  index_t vol_n_ = 0;                                   // the last volume_system's rows
+  bool vol_anchored_ = false;                           // and whether one touches an empty cell
   Buffer<index_t> vol_part_, vol_order_, vol_anchors_;  // its sealed pockets
   Buffer<double> vol_mean_;
   Multigrid<D> volume_mg_;
