@@ -281,6 +281,22 @@ void bind_dim(nb::module_& m) {
           "correct", [](S& self, const O& opt) { self.state->correct(opt); }, nb::arg("options"),
           "v_new: the corrected velocity with the walls' and obstacles' conditions.")
       .def(
+          "volume_system", [](S& self, const O& opt) { return self.state->volume_system(opt); },
+          nb::arg("options"),
+          "The volume correction's cell-centred system from cell_vol (a scatter with correct) "
+          "and the pressure step's wall contact: volume_rows, volume_cols, volume_vals, "
+          "volume_rhs, volume_air, volume_anchored, cell_row; its sealed pockets made "
+          "solvable when options.pockets and the system is anchored. Returns the rows.")
+      .def(
+          "volume_apply",
+          [](S& self, const O& opt, Array<const double> q) {
+            return self.state->volume_apply(opt, view<const double>(q, "q"));
+          },
+          nb::arg("options"), nb::arg("q"),
+          "q (one value per row of the last volume_system) into volume_q and the faces' "
+          "displacements to_particles(displaced=True) adds; zero faces, q ignored, when that "
+          "system had no rows or was not anchored. Returns the faces clamped.")
+      .def(
           "to_particles",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
              Array<double> pressure, const O& opt, bool displaced, const Affine& affine) {
@@ -324,7 +340,20 @@ void bind_dim(nb::module_& m) {
       .def_prop_ro("matrix_vals",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_vals(), h); })
       .def_prop_ro("rhs", [](nb::handle h) { return out(nb::cast<S&>(h).state->rhs(), h); })
-      .def_prop_ro("x0", [](nb::handle h) { return out(nb::cast<S&>(h).state->x0(), h); });
+      .def_prop_ro("x0", [](nb::handle h) { return out(nb::cast<S&>(h).state->x0(), h); })
+      .def_prop_ro("volume_rows",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_rows(), h); })
+      .def_prop_ro("volume_cols",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_cols(), h); })
+      .def_prop_ro("volume_vals",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_vals(), h); })
+      .def_prop_ro("volume_rhs",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_rhs(), h); })
+      .def_prop_ro("volume_air",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_air(), h); })
+      .def_prop_ro("volume_anchored", [](S& self) { return self.state->volume_anchored(); })
+      .def_prop_ro("cell_row",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_row(), h); });
 }
 
 }  // namespace

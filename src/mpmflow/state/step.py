@@ -231,6 +231,22 @@ class CoreState(Protocol):
         """v_new: the corrected velocity with the walls' and obstacles' conditions."""
         ...
 
+    def volume_system(self, options: CoreOptions) -> int:
+        """The volume correction's cell-centred system from cell_vol (a scatter with
+        correct) and the pressure step's wall contact: ``volume_rows``, ``volume_cols``,
+        ``volume_vals``, ``volume_rhs``, ``volume_air``, ``volume_anchored``, ``cell_row``;
+        its sealed pockets made solvable when ``options.pockets`` and it is anchored (False
+        leaves them to a caller owning part of the domain). Returns the rows.
+        RuntimeError on a state built without the volume correction."""
+        ...
+
+    def volume_apply(self, options: CoreOptions, q: Floats) -> int:
+        """q (one value per row of the last ``volume_system``, ValueError otherwise) into
+        ``volume_q`` and the faces' displacements ``to_particles(displaced=True)`` adds;
+        zero faces, q ignored, when that system had no rows or was not anchored. Returns the
+        faces clamped at ``options.volume_dmax`` cells (``Report.clamped``)."""
+        ...
+
     def to_particles(
         self,
         x: Floats,
@@ -292,6 +308,24 @@ class CoreState(Protocol):
     def rhs(self) -> Floats: ...
     @property
     def x0(self) -> Floats: ...
+    # the last volume_system's cell-centred system (empty before one and without the
+    # volume correction): the cell of each row (n), the ELL matrix (n x 3^D, -1: no column),
+    # the right-hand side (a view: writable), the rows that touch an empty cell (their values
+    # sum to more than 0.5), whether any does; each cell's row (ncells, -1: none)
+    @property
+    def volume_rows(self) -> Ints: ...
+    @property
+    def volume_cols(self) -> Ints: ...
+    @property
+    def volume_vals(self) -> Floats: ...
+    @property
+    def volume_rhs(self) -> Floats: ...
+    @property
+    def volume_air(self) -> Bools: ...
+    @property
+    def volume_anchored(self) -> bool: ...
+    @property
+    def cell_row(self) -> Ints: ...
 
 
 def step_state(
