@@ -281,6 +281,9 @@ class State {
   View<double> volume_rhs() { return vol_rhs_.view(vol_n_); }
   View<const bool> volume_air() { return vol_air_.view(vol_n_); }
   bool volume_anchored() const { return vol_anchored_; }
+  // a caller that owns part of the domain (MPI) says whether the whole system touches an
+  // empty cell: volume_apply zeroes the faces of a system that does not
+  void set_volume_anchored(bool anchored) { vol_anchored_ = anchored; }
   View<const index_t> cell_row() { return cell_row_.view(volume_on_ ? grid_.ncells : 0); }
   const Grid<D>& grid() const { return grid_; }
   // wall-clock seconds spent in each phase (Phase) since construction

@@ -351,7 +351,9 @@ void bind_dim(nb::module_& m) {
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_rhs(), h); })
       .def_prop_ro("volume_air",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_air(), h); })
-      .def_prop_ro("volume_anchored", [](S& self) { return self.state->volume_anchored(); })
+      .def_prop_rw(
+          "volume_anchored", [](S& self) { return self.state->volume_anchored(); },
+          [](S& self, bool anchored) { self.state->set_volume_anchored(anchored); })
       .def_prop_ro("cell_row",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_row(), h); });
 }

@@ -37,7 +37,7 @@ from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..particles import Particles
 from ..schemes import pressure
-from ..schemes.projection import MARGIN, ProjectionScheme, StepReport
+from ..schemes.projection import MARGIN, ProjectionScheme, StepReport, preset
 from ..state import CoreOptions, CoreReport
 from ..state.arrays import Floats, Ints
 from .boxes import Boxes, bisect, cell_weights
@@ -46,6 +46,7 @@ from .exchange import NodeExchange, ParticleArrays, halo, migrate
 from .petsc import DistributedSystem
 from .pockets import sealed_pockets
 from .subgrid import restrict_obstacles, restrict_walls, subgrid
+from .volume import DistributedVolume
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -63,10 +64,6 @@ def refusals(case: Case) -> list[str]:
     out = []
     if s.scheme != "projection":
         out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
-    if s.volume_correction:
-        out.append(
-            "the volume correction is not split over ranks yet: set solver.volume_correction = 0"
-        )
     if case.time.dt == "auto":
         out.append('time.dt = "auto" is not split over ranks yet: give time.dt a number')
     if s.transfer == "apic":
@@ -115,6 +112,8 @@ class DistributedProjection(ProjectionScheme):
         self._walls = walls.of_case(case, grid).as_tuple()
         self.python_pressure = None
         self.system = DistributedSystem(s.tolerance, s.max_iterations, s.petsc_preconditioner)
+        self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
+        self.volume = DistributedVolume(self.comm, s.petsc_preconditioner)
         self.steps = 0
         self.last_unknowns = 0
         self.auto = False
@@ -166,6 +165,7 @@ class DistributedProjection(ProjectionScheme):
         if self.splits > 1:  # what the last split's exchange sent
             self.node_bytes += self.nodes.sent
         self.nodes: NodeExchange = NodeExchange(self.comm, sub)
+        self.cells = NodeExchange(self.comm, sub, cells=True)
         self.foreign = ~sub.owned_nodes
         offset = sub.offset
         self.core = state.step_state(
@@ -174,7 +174,7 @@ class DistributedProjection(ProjectionScheme):
             restrict_obstacles(self.solids, sub),
             np.zeros((0, 0, 0, 0)),
             MARGIN * g.spacing,
-            False,
+            self.corrects,
             False,
             (),
             lower=[-float(o) for o in offset],
@@ -315,7 +315,7 @@ class DistributedProjection(ProjectionScheme):
                     result.iterations,
                     self.case.solver,
                     n,
-                    np.full(self.grid.dim, np.nan),
+                    self._worst(core.rhs[owned].copy(), result.x, core.rows[owned]),
                 )
             p = np.zeros(self.sub.grid.nnodes)
             p[core.rows[owned]] = result.x
@@ -331,18 +331,34 @@ class DistributedProjection(ProjectionScheme):
         core.extend_pressure(O)
         self.nodes.fill(core.p_node)
 
+    def _worst(self, b: Floats, x: Floats, nodes: Ints) -> Floats:
+        """The position of the largest residual over all ranks (collective)."""
+        r = np.abs(self.system.residual(b, x))
+        mine = (-1.0, np.zeros(self.grid.dim))
+        if r.size:
+            k = int(np.argmax(r))
+            mine = (float(r[k]), self.sub.node_position(int(nodes[k])))
+        worst: Floats = max(self.comm.allgather(mine), key=lambda item: item[0])[1]
+        return worst
+
     def _step(
-        self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str
+        self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str, number: int
     ) -> ParticleArrays:
+        """Step ``number`` (1-based, from the run's start) of the owned particles."""
         core = self.core
+        correct = O.volume_every > 0 and number % O.volume_every == 0
         x, v, mass, volume, pressure_ = self._local(owned)
-        core.scatter(x, v, mass, volume, pressure_, O, False)
+        core.scatter(x, v, mass, volume, pressure_, O, correct)
         self.nodes.fill(core.node_mass, core.node_vol, core.v_old, core.v_star, core.node_f)
+        if correct:  # the cells' particle volume reaches past a cell: the owners' sums
+            self.cells.fill(core.cell_vol)
         core.classify(x, v, mass, volume, pressure_, O)
         self._pressure(O, report, where)
         core.correct(O)
+        if correct:
+            self.volume.correct(core, self.sub, self.cells, O, report, where)
         m = owned["x"].shape[0]
-        core.to_particles(x[:m], v[:m], mass[:m], volume[:m], pressure_[:m], O, False)
+        core.to_particles(x[:m], v[:m], mass[:m], volume[:m], pressure_[:m], O, correct)
         moved = {
             "x": x[:m] + self.sub.offset,
             "v": v[:m],
@@ -370,7 +386,7 @@ class DistributedProjection(ProjectionScheme):
         try:
             for k in range(nsteps):
                 report.step = k
-                owned = self._step(owned, O, report, where(k))
+                owned = self._step(owned, O, report, where(k), self.steps + k + 1)
         finally:
             self.step_seconds += time.perf_counter() - clock
             self._gather(owned)

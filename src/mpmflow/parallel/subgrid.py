@@ -74,6 +74,12 @@ class Subgrid:
         out[inside] = _flat(ijk[inside], self.grid.nodes)
         return out
 
+    def node_position(self, local: int) -> Floats:
+        """The position (m) of a local node in the domain's coordinates."""
+        ijk = _unflat(self.node_global[[local]], self.whole.nodes)[0]
+        out: Floats = ijk * self.grid.spacing
+        return out
+
     def local_cells(self, global_index: Ints) -> Ints:
         """The local index of global cells (-1 where the local grid does not hold one)."""
         ijk = _unflat(global_index, self.whole.cells) - self.origin
