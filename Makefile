@@ -9,7 +9,7 @@ BIN := $(VENV)/bin
 
 MPI_VENV ?= .venv-mpi
 # Open MPI refuses to start as root unless told, and more ranks than cores unless told
-MPIRUN := OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1 \
+MPIRUN := env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1 \
 	mpirun --oversubscribe
 
 .PHONY: setup setup-mpi test test-mpi test-fast lint dam-break validate bench figures clean
