@@ -38,6 +38,7 @@ from ..grid import Grid
 from ..particles import Particles
 from ..schemes import pressure
 from ..schemes.projection import MARGIN, ProjectionScheme, StepReport, preset
+from ..schemes.projection import ParticleArrays as CoreParticles
 from ..state import CoreOptions, CoreReport
 from ..state.arrays import Floats, Ints
 from .boxes import Boxes, bisect, cell_weights
@@ -66,8 +67,6 @@ def refusals(case: Case) -> list[str]:
         out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
     if case.time.dt == "auto":
         out.append('time.dt = "auto" is not split over ranks yet: give time.dt a number')
-    if s.transfer == "apic":
-        out.append('APIC transfers are not split over ranks yet: set solver.transfer = "flip"')
     if materials.is_viscous(case.material):
         out.append("viscous materials are not split over ranks yet: use inviscid water")
     if case.domain.periodic and any(case.domain.periodic):
@@ -103,11 +102,10 @@ class DistributedProjection(ProjectionScheme):
         self.case = case
         self.grid = grid
         self.comm: Comm = world()
-        self.apic = False
+        self.apic = s.transfer == "apic"
         self.open = False
         self.outflow = outlets.Outflow()  # none: outlets are refused on several ranks
         self.viscous = False
-        self.affine = None
         self.solids = obstacles.of_case(case, grid)
         self._walls = walls.of_case(case, grid).as_tuple()
         self.python_pressure = None
@@ -131,7 +129,7 @@ class DistributedProjection(ProjectionScheme):
         self.traffic = dict.fromkeys(
             ("steps", "halo particles", "migrated particles", "ghost columns", "iterations"), 0
         )
-        self._P = particles
+        self.particles = particles
 
     # the particles: every rank holds them all between chunks
     @property
@@ -140,7 +138,20 @@ class DistributedProjection(ProjectionScheme):
 
     @particles.setter
     def particles(self, P: Particles) -> None:
+        """The whole particle set; with APIC also their affine matrices (zero, as the
+        one-process scheme starts them)."""
         self._P = P
+        D = self.grid.dim
+        self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
+        self.fields = FIELDS + (("affine",) if self.apic else ())
+
+    def _whole(self, field: str) -> NDArray[Any]:
+        """The whole set's array of a field (the particles', or the affine matrices)."""
+        if field == "affine":
+            assert self.affine is not None
+            return self.affine
+        whole: NDArray[Any] = getattr(self._P, field)
+        return whole
 
     @property
     def p_node(self) -> Floats:
@@ -190,7 +201,7 @@ class DistributedProjection(ProjectionScheme):
         mine = np.flatnonzero(
             self.boxes.owner_of_points(self._P.x, self.grid.spacing) == self.comm.rank
         )
-        owned = {f: getattr(self._P, f)[mine].copy() for f in FIELDS}
+        owned = {f: self._whole(f)[mine].copy() for f in self.fields}
         owned["id"] = mine.astype(np.int64)
         return owned
 
@@ -204,8 +215,8 @@ class DistributedProjection(ProjectionScheme):
                 f"Particles were lost or doubled between ranks: {ids.size} gathered, "
                 f"{self._P.count} in the run."
             )
-        for f in FIELDS:
-            getattr(self._P, f)[ids] = np.concatenate([p[f] for p in parts])
+        for f in self.fields:
+            self._whole(f)[ids] = np.concatenate([p[f] for p in parts])
         sub = self.sub
         mine = sub.owned_nodes
         pieces = self.comm.allgather((sub.node_global[mine], self.core.p_node[mine]))
@@ -232,17 +243,21 @@ class DistributedProjection(ProjectionScheme):
         }
 
     # --- one step -------------------------------------------------------------------------
-    def _local(self, owned: ParticleArrays) -> tuple[Floats, ...]:
+    def _local(self, owned: ParticleArrays) -> ParticleArrays:
         """The core's particle arrays: the owned particles, then the halo, in the local
         grid's coordinates."""
         assert self.boxes is not None
         ghosts = halo(self.comm, self.boxes, self.grid.spacing, owned)
         self.traffic["halo particles"] += int(ghosts["id"].size)
-        arrays = {f: np.concatenate([owned[f], ghosts[f]]) for f in FIELDS}
+        arrays = {f: np.concatenate([owned[f], ghosts[f]]) for f in self.fields}
         arrays["x"] -= self.sub.offset
-        return tuple(
-            np.ascontiguousarray(arrays[f]) for f in ("x", "v", "mass", "volume", "pressure")
-        )
+        return {f: np.ascontiguousarray(a) for f, a in arrays.items()}
+
+    @staticmethod
+    def _core_arrays(arrays: ParticleArrays, m: int | None = None) -> CoreParticles:
+        """x, v, mass, volume, pressure (the first m particles: None, all) for the core."""
+        a = arrays
+        return a["x"][:m], a["v"][:m], a["mass"][:m], a["volume"][:m], a["pressure"][:m]
 
     def _owned_contacts(self) -> int:
         mine = self.sub.owned_nodes
@@ -347,26 +362,23 @@ class DistributedProjection(ProjectionScheme):
         """Step ``number`` (1-based, from the run's start) of the owned particles."""
         core = self.core
         correct = O.volume_every > 0 and number % O.volume_every == 0
-        x, v, mass, volume, pressure_ = self._local(owned)
-        core.scatter(x, v, mass, volume, pressure_, O, correct)
+        local = self._local(owned)
+        affine = local.get("affine")
+        core.scatter(*self._core_arrays(local), O, correct, affine=affine)
         self.nodes.fill(core.node_mass, core.node_vol, core.v_old, core.v_star, core.node_f)
         if correct:  # the cells' particle volume reaches past a cell: the owners' sums
             self.cells.fill(core.cell_vol)
-        core.classify(x, v, mass, volume, pressure_, O)
+        core.classify(*self._core_arrays(local), O)
         self._pressure(O, report, where)
         core.correct(O)
         if correct:
             self.volume.correct(core, self.sub, self.cells, O, report, where)
         m = owned["x"].shape[0]
-        core.to_particles(x[:m], v[:m], mass[:m], volume[:m], pressure_[:m], O, correct)
-        moved = {
-            "x": x[:m] + self.sub.offset,
-            "v": v[:m],
-            "mass": mass[:m],
-            "volume": volume[:m],
-            "pressure": pressure_[:m],
-            "id": owned["id"],
-        }
+        mine = None if affine is None else affine[:m]
+        core.to_particles(*self._core_arrays(local, m), O, correct, affine=mine)
+        moved = {f: a[:m] for f, a in local.items()}
+        moved["x"] = moved["x"] + self.sub.offset
+        moved["id"] = owned["id"]
         assert self.boxes is not None
         stayed = self.boxes.owner_of_points(moved["x"], self.grid.spacing) == self.comm.rank
         self.traffic["migrated particles"] += int(m - stayed.sum())
@@ -403,8 +415,8 @@ class DistributedProjection(ProjectionScheme):
         O = self.options(1.0)
         O.pockets = False
         owned = self._distribute()
-        x, v, mass, volume, pressure_ = self._local(owned)
-        self.core.scatter(x, v, mass, volume, pressure_, O, False)
+        local = self._local(owned)
+        self.core.scatter(*self._core_arrays(local), O, False, affine=local.get("affine"))
         self.nodes.fill(
             self.core.node_mass,
             self.core.node_vol,
@@ -412,7 +424,7 @@ class DistributedProjection(ProjectionScheme):
             self.core.v_star,
             self.core.node_f,
         )
-        self.core.classify(x, v, mass, volume, pressure_, O)
+        self.core.classify(*self._core_arrays(local), O)
         rows, _, n, _ = self._number(O)
         self.core.pressure_matrix(O)
         anchored = self.comm.allreduce(int(self.core.anchored[rows].any()))
@@ -420,15 +432,22 @@ class DistributedProjection(ProjectionScheme):
             raise pressure.singular(" at the start")
 
     def state(self) -> dict[str, NDArray[Any]]:
-        return {
+        """As ``ProjectionScheme.state``: a checkpoint of the whole run, readable by one
+        process or any number of ranks."""
+        saved = {
             "p_node": self.p_global.copy(),
             "last_unknowns": np.array(self.last_unknowns),
             "steps": np.array(self.steps),
             "since_volume": np.array(0.0),
             "dt_range": np.array(self.dt_range),
         }
+        if self.affine is not None:
+            saved["affine"] = self.affine.copy()
+        return saved
 
     def restore(self, saved: dict[str, NDArray[Any]]) -> None:
         np.copyto(self.p_global, saved["p_node"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
+        if self.affine is not None:
+            np.copyto(self.affine, saved["affine"])
