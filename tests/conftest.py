@@ -32,6 +32,35 @@ def make_case(
     return validate(data)
 
 
+# water trapped between a disc and two walls: a sealed pocket at every step
+# (tests/boundaries/test_obstacles.py, tests/state/)
+POCKET_2D = """
+title = "disc in the corner of a pool"
+[domain]
+size = [0.4, 0.4]
+[grid]
+spacing = 0.01
+[[bodies]]
+type = "box"
+min = [0.0, 0.0]
+max = [0.4, 0.2]
+particles_per_cell = 2
+around_obstacles = true
+[[obstacles]]
+type = "disc"
+centre = [0.06, 0.06]
+radius = 0.06
+[physics]
+gravity = [0.0, -9.81]
+[time]
+dt = 1e-3
+end = 0.1
+[output]
+interval = 0.01
+snapshots = false
+"""
+
+
 @pytest.fixture(scope="session")
 def shared_data():
     """The reference data folder; a test that needs it fails (not skips) without it."""

@@ -3,7 +3,7 @@ the column at rest around them, flow round them, and the face terms' geometry.""
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES
+from conftest import EXAMPLES, POCKET_2D
 
 from mpmflow import Simulation, load_case, state
 from mpmflow.boundaries import obstacles
@@ -211,32 +211,6 @@ def test_the_paper_formulation_runs_with_obstacles():
     assert sim.time == pytest.approx(0.05)
     assert np.all(sim.scheme.solids.distance(sim.particles.x) > -1e-3)
 
-
-POCKET_2D = """
-title = "disc in the corner of a pool"
-[domain]
-size = [0.4, 0.4]
-[grid]
-spacing = 0.01
-[[bodies]]
-type = "box"
-min = [0.0, 0.0]
-max = [0.4, 0.2]
-particles_per_cell = 2
-around_obstacles = true
-[[obstacles]]
-type = "disc"
-centre = [0.06, 0.06]
-radius = 0.06
-[physics]
-gravity = [0.0, -9.81]
-[time]
-dt = 1e-3
-end = 0.1
-[output]
-interval = 0.01
-snapshots = false
-"""
 
 # the property test's case (tests/test_input_fuzz.py, MESH_STEPS_CASE) with a sphere
 POCKET_3D = """

@@ -5,40 +5,12 @@ caller, and the State's lower corner is where particles are put back inside."""
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES, make_case
+from conftest import EXAMPLES, POCKET_2D, make_case
 
 from mpmflow import Simulation, load_case, state
 from mpmflow.boundaries import walls
 
 DT = 1e-3
-
-# water trapped between a disc and two walls: a sealed pocket at every step
-# (tests/boundaries/test_obstacles.py)
-POCKET_2D = """
-title = "disc in the corner of a pool"
-[domain]
-size = [0.4, 0.4]
-[grid]
-spacing = 0.01
-[[bodies]]
-type = "box"
-min = [0.0, 0.0]
-max = [0.4, 0.2]
-particles_per_cell = 2
-around_obstacles = true
-[[obstacles]]
-type = "disc"
-centre = [0.06, 0.06]
-radius = 0.06
-[physics]
-gravity = [0.0, -9.81]
-[time]
-dt = 1e-3
-end = 0.1
-[output]
-interval = 0.01
-snapshots = false
-"""
 
 # the arrays scatter and classify write, and the system pressure_matrix and pressure_rhs
 # assemble from them
