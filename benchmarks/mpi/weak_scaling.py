@@ -5,7 +5,8 @@ The case is the paper's dam break (0.004 m, volume correction off: it is not spl
 widened N times: a column N x 0.114 m wide in a tank N x 0.42 m wide, so each rank starts
 with one column's particles (26k). Run under mpirun from the MPI environment:
 
-    mpirun -n N .venv-mpi/bin/python benchmarks/mpi/weak_scaling.py [--steps 200]
+    mpirun -n N .venv-mpi/bin/python benchmarks/mpi/weak_scaling.py [--steps 200] [--pc hypre]
+    .venv-mpi/bin/python benchmarks/mpi/weak_scaling.py --alone   # one process, compiled step
 
 Prints (rank 0) one JSON line: ranks, steps, the median and slowest rank's seconds per step
 (after a 20-step warm-up), the PETSc share, and per rank and step: node-fill bytes sent,
@@ -29,6 +30,10 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--steps", type=int, default=200)
     parser.add_argument("--warm", type=int, default=20)
+    parser.add_argument("--pc", default="gamg", choices=["gamg", "hypre"])
+    parser.add_argument(
+        "--alone", action="store_true", help="the one-process scheme (compiled multigrid) instead"
+    )
     args = parser.parse_args()
     comm = world()
     n = comm.size
@@ -39,9 +44,24 @@ def main() -> None:
             f"bodies.0.max=[{0.114 * n}, 0.228]",
             "solver.volume_correction=0",
             "time.end=10",
+            f"solver.petsc_preconditioner={args.pc}",
         ],
     )
     sim = Simulation(case)
+    if args.alone:
+        sim.scheme.advance(sim.dt, args.warm)
+        wall = time.perf_counter()
+        sim.scheme.advance(sim.dt, args.steps)
+        print(
+            json.dumps(
+                {
+                    "ranks": 1,
+                    "alone": True,
+                    "wall_per_step": (time.perf_counter() - wall) / args.steps,
+                }
+            )
+        )
+        return
     if not isinstance(sim.scheme, DistributedProjection):
         sim.scheme = DistributedProjection(case, sim.grid, sim.particles)
     scheme = sim.scheme
@@ -65,6 +85,7 @@ def main() -> None:
         step = [e["step"] for e in everyone]
         out = {
             "ranks": n,
+            "pc": args.pc,
             "steps": args.steps,
             "particles": [e["particles"] for e in everyone],
             "seconds_per_step_median": float(np.median(step)),

@@ -7,7 +7,7 @@ import numpy as np
 from mpmflow.grid import Grid
 from mpmflow.parallel.boxes import bisect
 from mpmflow.parallel.comm import world
-from mpmflow.parallel.exchange import NodeExchange, halo, migrate
+from mpmflow.parallel.exchange import Halo, NodeExchange, migrate, owners
 from mpmflow.parallel.subgrid import extended, subgrid
 
 GRID = Grid(0.1, (12, 8))
@@ -46,7 +46,9 @@ def test_particles_migrate_to_their_owners_once():
     ids = np.arange(n)
     # each rank starts with every comm.size-th particle, wherever it lies
     mine = ids % comm.size == comm.rank
-    moved = migrate(comm, boxes, GRID.spacing, {"x": everyone[mine], "id": ids[mine]})
+    sub = subgrid(GRID, boxes, comm.rank)
+    x = everyone[mine]
+    moved = migrate(comm, owners(boxes, sub, x), {"x": x, "id": ids[mine]})
     owner = boxes.owner_of_points(moved["x"], GRID.spacing)
     assert np.all(owner == comm.rank)
     got = np.sort(np.concatenate(comm.allgather(moved["id"])))
@@ -62,7 +64,7 @@ def test_the_halo_is_every_neighbour_particle_in_the_ghost_layer():
     owner = boxes.owner_of_points(everyone, GRID.spacing)
     mine = owner == comm.rank
     ids = np.arange(400)
-    got = halo(comm, boxes, GRID.spacing, {"x": everyone[mine], "id": ids[mine]})
+    got = Halo(comm, boxes, subgrid(GRID, boxes, comm.rank))({"x": everyone[mine], "id": ids[mine]})
     lo, hi = extended(boxes, comm.rank)
     ijk = np.floor(everyone / GRID.spacing).astype(int)
     expected = np.flatnonzero(~mine & np.all((ijk >= lo) & (ijk < hi), axis=1))

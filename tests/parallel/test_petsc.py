@@ -105,6 +105,9 @@ def multigrid() -> Run:
     return run("multigrid")
 
 
+# one process only: on several ranks each would step the whole case (the split scheme's
+# tests, test_scheme.py, run the distributed solve on real cases there)
+@pytest.mark.skipif(world().size > 1, reason="the whole case on every rank: one process")
 @pytest.mark.parametrize("preconditioner", ["gamg", "hypre"])
 def test_the_dam_break_with_petsc_matches_the_core_multigrid(multigrid, preconditioner):
     sim = run("petsc", petsc_preconditioner=preconditioner)

@@ -99,12 +99,25 @@ def _join(parts: list[ParticleArrays], like: ParticleArrays) -> ParticleArrays:
     return {k: np.concatenate([p[k] for p in parts] or [like[k][:0]]) for k in like}
 
 
-def migrate(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) -> ParticleArrays:
-    """The particles (global coordinates in ``arrays["x"]``) this rank owns after they
-    moved: those that stayed, then those that arrived, by sending rank. Collective."""
+def owners(boxes: Boxes, sub: Subgrid, x: NDArray[np.float64]) -> NDArray[np.int64]:
+    """The rank owning the cell of each point (global coordinates, m): looked up in the
+    local grid's table where the point lies in it (after a step, every particle of the
+    rank), by the boxes elsewhere."""
+    ijk = _cells(x, sub.grid.spacing, boxes.cells) - sub.origin
+    inside = np.all((ijk >= 0) & (ijk < np.asarray(sub.grid.cells)), axis=1)
+    owner = np.empty(x.shape[0], dtype=np.int64)
+    flat = np.ravel_multi_index(tuple(ijk[inside].T), sub.grid.cells, order="F")
+    owner[inside] = sub.cell_owner[flat]
+    if not inside.all():
+        owner[~inside] = boxes.owner_of_cells(ijk[~inside] + sub.origin)
+    return owner
+
+
+def migrate(comm: Comm, owner: NDArray[np.int64], arrays: ParticleArrays) -> ParticleArrays:
+    """The particles this rank owns after they moved (``owner``: each one's rank now):
+    those that stayed, then those that arrived, by sending rank. Collective."""
     if comm.size == 1:
         return arrays
-    owner = boxes.owner_of_cells(_cells(arrays["x"], spacing, boxes.cells))
     me = comm.rank
     leaving = owner != me
     out = [
@@ -118,19 +131,38 @@ def migrate(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) ->
     return _join([kept, *arrived], arrays)
 
 
-def halo(comm: Comm, boxes: Boxes, spacing: float, arrays: ParticleArrays) -> ParticleArrays:
-    """Copies of the neighbours' particles in this rank's ghost layer (by sending rank).
-    Collective."""
-    if comm.size == 1:
-        return {k: a[:0] for k, a in arrays.items()}
-    ijk = _cells(arrays["x"], spacing, boxes.cells)
-    me = comm.rank
-    out: list[ParticleArrays | None] = []
-    for r in range(comm.size):
-        if r == me:
-            out.append(None)
-            continue
-        lo, hi = extended(boxes, r)
-        out.append(_take(arrays, np.all((ijk >= lo) & (ijk < hi), axis=1)))
-    got = comm.alltoall(out)
-    return _join([g for r, g in enumerate(got) if r != me], arrays)
+class Halo:
+    """Copies of the neighbours' particles in a rank's ghost layer: which of this rank's
+    cells lie in each other rank's ghost layer is listed once per split."""
+
+    def __init__(self, comm: Comm, boxes: Boxes, sub: Subgrid) -> None:
+        self.comm, self.sub, self.boxes = comm, sub, boxes
+        cells = (
+            np.stack(
+                np.unravel_index(np.arange(sub.grid.ncells), sub.grid.cells, order="F"), axis=1
+            )
+            + sub.origin
+        )
+        mine = sub.owned_cells
+        self.wanted: dict[int, NDArray[np.bool_]] = {}
+        for r in range(comm.size):
+            if r != comm.rank:
+                lo, hi = extended(boxes, r)
+                wanted = mine & np.all((cells >= lo) & (cells < hi), axis=1)
+                if wanted.any():
+                    self.wanted[r] = wanted
+
+    def __call__(self, arrays: ParticleArrays) -> ParticleArrays:
+        """The halo of this rank's (owned) particles' neighbours, by sending rank.
+        Collective."""
+        comm = self.comm
+        if comm.size == 1:
+            return {k: a[:0] for k, a in arrays.items()}
+        sub = self.sub
+        ijk = _cells(arrays["x"], sub.grid.spacing, self.boxes.cells) - sub.origin
+        local = np.ravel_multi_index(tuple(ijk.T), sub.grid.cells, order="F")
+        out: list[ParticleArrays | None] = [None] * comm.size
+        for r, wanted in self.wanted.items():
+            out[r] = _take(arrays, wanted[local])
+        got = comm.alltoall(out)
+        return _join([g for g in got if g is not None], arrays)

@@ -43,7 +43,7 @@ from ..state import CoreOptions, CoreReport
 from ..state.arrays import Floats, Ints
 from .boxes import Boxes, bisect, cell_weights
 from .comm import Comm, world
-from .exchange import NodeExchange, ParticleArrays, halo, migrate
+from .exchange import Halo, NodeExchange, ParticleArrays, migrate, owners
 from .petsc import DistributedSystem
 from .pockets import sealed_pockets
 from .subgrid import restrict_obstacles, restrict_walls, subgrid
@@ -177,6 +177,7 @@ class DistributedProjection(ProjectionScheme):
             self.node_bytes += self.nodes.sent
         self.nodes: NodeExchange = NodeExchange(self.comm, sub)
         self.cells = NodeExchange(self.comm, sub, cells=True)
+        self.halo = Halo(self.comm, self.boxes, sub)
         self.foreign = ~sub.owned_nodes
         offset = sub.offset
         self.core = state.step_state(
@@ -247,7 +248,7 @@ class DistributedProjection(ProjectionScheme):
         """The core's particle arrays: the owned particles, then the halo, in the local
         grid's coordinates."""
         assert self.boxes is not None
-        ghosts = halo(self.comm, self.boxes, self.grid.spacing, owned)
+        ghosts = self.halo(owned)
         self.traffic["halo particles"] += int(ghosts["id"].size)
         arrays = {f: np.concatenate([owned[f], ghosts[f]]) for f in self.fields}
         arrays["x"] -= self.sub.offset
@@ -380,10 +381,10 @@ class DistributedProjection(ProjectionScheme):
         moved["x"] = moved["x"] + self.sub.offset
         moved["id"] = owned["id"]
         assert self.boxes is not None
-        stayed = self.boxes.owner_of_points(moved["x"], self.grid.spacing) == self.comm.rank
-        self.traffic["migrated particles"] += int(m - stayed.sum())
+        owner = owners(self.boxes, self.sub, moved["x"])
+        self.traffic["migrated particles"] += int((owner != self.comm.rank).sum())
         self.traffic["steps"] += 1
-        return migrate(self.comm, self.boxes, self.grid.spacing, moved)
+        return migrate(self.comm, owner, moved)
 
     def advance(
         self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""
