@@ -60,7 +60,7 @@ class LinearSolver:
         method: Method,
         tolerance: float,
         max_iterations: int,
-        preconditioner: Literal["gamg", "hypre"] = "gamg",
+        preconditioner: Literal["gamg", "hypre"] = "hypre",
     ) -> None:
         self.method = method
         self.preconditioner = preconditioner

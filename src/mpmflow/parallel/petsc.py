@@ -60,7 +60,7 @@ class DistributedSystem:
         self,
         tolerance: float,
         max_iterations: int,
-        preconditioner: Preconditioner = "gamg",
+        preconditioner: Preconditioner = "hypre",
         comm: Any = None,
     ) -> None:
         self.PETSc = petsc()
@@ -112,8 +112,16 @@ class DistributedSystem:
         ksp.setInitialGuessNonzero(True)
         pc = ksp.getPC()
         if self.preconditioner == "hypre":
-            pc.setType(P.PC.Type.HYPRE)
-            pc.setHYPREType("boomeramg")
+            try:
+                pc.setType(P.PC.Type.HYPRE)
+                pc.setHYPREType("boomeramg")
+            except P.Error:
+                ksp.destroy()
+                A.destroy()
+                raise CaseError(
+                    "This PETSc was built without hypre, so solver.petsc_preconditioner = "
+                    '"hypre" (the default) is not available: set it to "gamg".'
+                ) from None
         else:
             pc.setType(P.PC.Type.GAMG)
         ksp.setFromOptions()
