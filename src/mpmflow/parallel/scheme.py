@@ -299,7 +299,9 @@ class DistributedProjection(ProjectionScheme):
             raise pressure.singular(where)
         cols = core.matrix_cols[owned]
         global_cols = np.where(cols >= 0, number[np.maximum(cols, 0)], -1).astype(np.int64)
-        if np.any((cols >= 0) & (global_cols < 0)):
+        # every rank decides together: one rank raising alone would leave the others
+        # waiting in the next exchange
+        if self.comm.allreduce(int(np.any((cols >= 0) & (global_cols < 0)))):
             raise SolverError(f"A pressure row{where} couples to a node no rank numbered.")
         air = core.anchored[owned]
         nn = self.sub.grid.nnodes

@@ -62,7 +62,7 @@ class DistributedVolume:
             return
         cols = core.volume_cols[owned]
         global_cols = np.where(cols >= 0, number[rows[np.maximum(cols, 0)]], -1)
-        if np.any((cols >= 0) & (global_cols < 0)):
+        if comm.allreduce(int(np.any((cols >= 0) & (global_cols < 0)))):  # together
             raise SolverError(
                 f"A volume-correction row{where} couples to a cell its owner does not count "
                 "as wet: the ranks disagree on the ghost layer."
