@@ -10,13 +10,15 @@ or of one process, continues on any other number.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 from .. import checkpoint
 from ..case import Case
 from ..output.folder import Hints
 from ..simulation import Simulation, checkpointer
-from .comm import world
+from .comm import Comm, world
 
 
 def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -> Simulation:
@@ -26,12 +28,32 @@ def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -
     if restart:
         path = comm.bcast(checkpoint.latest(out) if root else None, root=0)
         if root:
-            return Simulation.resume(case, out, path=path, hints=hints)
-        sim = checkpointer.resume_from(Simulation, case, out, path, None)
-        sim.out_dir = None  # read from the folder; rank 0 alone writes to it
-        return sim
-    if root:
+            sim = Simulation.resume(case, out, path=path, hints=hints)
+        else:
+            sim = checkpointer.resume_from(Simulation, case, out, path, None)
+            sim.out_dir = None  # read from the folder; rank 0 alone writes to it
+    elif root:
         sim = Simulation(case, out, overwrite=overwrite)
         sim.claim(hints)
-        return sim
-    return Simulation(case, None)
+    else:
+        sim = Simulation(case, None)
+    agree_on_stops(sim, comm)
+    return sim
+
+
+def agree_on_stops(sim: Simulation, comm: Comm) -> None:
+    """A signal reaches the ranks at different moments (mpirun forwards SIGINT and SIGTERM
+    to each): the ranks agree on it after every chunk, before the run acts on it, so that
+    they stop at the same output time instead of one leaving the others waiting."""
+    for k, action in enumerate(sim.actions):
+        if action.name == "stop_on_signal":
+            sim.actions[k] = replace(action, func=_agreed(comm, action.func))
+
+
+def _agreed(comm: Comm, stop: Callable[[Simulation], None]) -> Callable[[Simulation], None]:
+    def act(sim: Simulation) -> None:
+        signals = comm.allgather(sim.stop_signal)
+        sim.stop_signal = next((s for s in signals if s is not None), None)
+        stop(sim)
+
+    return act

@@ -1,0 +1,33 @@
+"""A run over MPI ranks stops together (``parallel.run``): a signal that reaches one rank
+first is the ranks' signal after the chunk it arrived in. On one process and under
+``mpirun -n 2`` (make test-mpi)."""
+
+import signal
+
+import pytest
+from conftest import EXAMPLES
+
+from mpmflow import load_case
+from mpmflow.output.folder import API_HINTS
+
+pytest.importorskip("petsc4py")
+pytest.importorskip("mpi4py")
+
+from mpmflow.parallel.comm import world  # noqa: E402
+from mpmflow.parallel.run import start  # noqa: E402
+
+
+def test_a_signal_on_the_last_rank_stops_every_rank_at_the_same_output(tmp_path):
+    comm = world()
+    case = load_case(EXAMPLES / "hydrostatic.toml", ["time.end=0.1", "output.snapshots=false"])
+    with start(case, tmp_path / "run", restart=False, overwrite=False, hints=API_HINTS) as sim:
+
+        def signal_on_the_last_rank(sim):
+            if comm.rank == comm.size - 1 and sim.time >= 0.03 - 1e-9:
+                sim.stop_signal = signal.SIGTERM
+
+        sim.add_callback(signal_on_the_last_rank)
+        summary = sim.run()
+    assert summary["status"] == "interrupted"
+    times = comm.allgather(sim.time)
+    assert times == [pytest.approx(0.03)] * comm.size
