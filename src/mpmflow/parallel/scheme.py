@@ -37,7 +37,7 @@ from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..particles import Particles
 from ..schemes import pressure
-from ..schemes.projection import MARGIN, ProjectionScheme, StepReport, preset
+from ..schemes.projection import MARGIN, AdaptiveReport, ProjectionScheme, StepReport, preset
 from ..schemes.projection import ParticleArrays as CoreParticles
 from ..state import CoreOptions, CoreReport
 from ..state.arrays import Floats, Ints
@@ -65,8 +65,6 @@ def refusals(case: Case) -> list[str]:
     out = []
     if s.scheme != "projection":
         out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
-    if case.time.dt == "auto":
-        out.append('time.dt = "auto" is not split over ranks yet: give time.dt a number')
     if materials.is_viscous(case.material):
         out.append("viscous materials are not split over ranks yet: use inviscid water")
     if case.domain.periodic and any(case.domain.periodic):
@@ -114,7 +112,8 @@ class DistributedProjection(ProjectionScheme):
         self.volume = DistributedVolume(self.comm, s.petsc_preconditioner)
         self.steps = 0
         self.last_unknowns = 0
-        self.auto = False
+        self.auto = case.time.dt == "auto"  # steps set by the flow (``_span``)
+        self.since_volume = 0.0  # the flow time since the last volume correction (auto)
         self.dt_range = [np.inf, 0.0]
         self.p_global = np.zeros(grid.nnodes)
         self.boxes: Boxes | None = None
@@ -360,11 +359,10 @@ class DistributedProjection(ProjectionScheme):
         return worst
 
     def _step(
-        self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str, number: int
+        self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str, correct: bool
     ) -> ParticleArrays:
-        """Step ``number`` (1-based, from the run's start) of the owned particles."""
+        """One step of the owned particles (``correct``: with the volume correction)."""
         core = self.core
-        correct = O.volume_every > 0 and number % O.volume_every == 0
         local = self._local(owned)
         affine = local.get("affine")
         core.scatter(*self._core_arrays(local), O, correct, affine=affine)
@@ -391,26 +389,85 @@ class DistributedProjection(ProjectionScheme):
     def advance(
         self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""
     ) -> StepReport:
+        """nsteps steps of dt, or with time.dt = "auto" steps set by the flow over the span
+        dt x nsteps (the rule of the core's ``State::advance_span``)."""
         self._split()
         O = self.options(dt)
         O.pockets = False
         report = state.Report()
         self.core.p_node[:] = self.p_global[self.sub.node_global]
-        owned = self._distribute()
+        self._owned = self._distribute()
         clock = time.perf_counter()
         try:
-            for k in range(nsteps):
-                report.step = k
-                owned = self._step(owned, O, report, where(k), self.steps + k + 1)
+            if self.auto:
+                done = self._span(O, dt * nsteps, report, where)
+            else:
+                for k in range(nsteps):
+                    report.step = k
+                    number = self.steps + k + 1  # the volume correction every n-th step
+                    correct = O.volume_every > 0 and number % O.volume_every == 0
+                    self._owned = self._step(self._owned, O, report, where(k), correct)
+                done = nsteps
         finally:
             self.step_seconds += time.perf_counter() - clock
-            self._gather(owned)
-            self._report(owned)
-        self.steps += nsteps
+            self._gather(self._owned)
+            self._report(self._owned)
+        self.steps += done
         self.last_unknowns = int(report.last_unknowns)
         r = StepReport.of(report)
         r.moved_inside = int(self.comm.allreduce(int(report.moved)))
-        return r
+        if not self.auto:
+            return r
+        self.dt_range = [min(self.dt_range[0], report.dt_min), max(self.dt_range[1], report.dt_max)]
+        return AdaptiveReport(
+            **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
+        )
+
+    def _span(
+        self, O: CoreOptions, span: float, report: CoreReport, where: Callable[[int], str]
+    ) -> int:
+        """Steps of adaptive size over the span (s), as ``State::advance_span`` takes them:
+        dt = min(time.max_dt, courant h / the largest particle speed over all ranks), the
+        last two steps shortened to land on the span's end, the volume correction after
+        each volume interval of flow. Returns the steps taken."""
+        s = self.case.solver
+        h = self.grid.spacing
+        most = int(np.ceil(span * s.max_speed / (O.courant * h))) + 3
+        elapsed, done = 0.0, 0
+        while done < most and elapsed < span:
+            report.step = done
+            v = self._owned["v"]
+            mine = float(np.max(np.sum(v * v, axis=1))) if v.shape[0] else 0.0
+            vmax2 = max(self.comm.allgather(mine))
+            dt = O.dt_max
+            if vmax2 > 0.0:
+                dt = min(dt, O.courant * h / np.sqrt(vmax2))
+            rest = span - elapsed
+            if dt >= rest * (1.0 - 1e-9):
+                dt = rest
+            elif 2.0 * dt > rest:
+                dt = 0.5 * rest
+            O.dt = dt
+            O.flip = state.flip_per_step(O.flip_rate, dt)
+            correct = False
+            if O.volume_rate > 0.0:
+                self.since_volume += dt
+                if self.since_volume >= O.volume_interval * (1.0 - 1e-9):
+                    correct, self.since_volume = True, 0.0
+            self._owned = self._step(self._owned, O, report, where(done), correct)
+            done += 1
+            report.steps = done
+            report.dt_min = dt if done == 1 else min(report.dt_min, dt)
+            report.dt_max = max(report.dt_max, dt)
+            elapsed = span if dt >= rest else elapsed + dt
+        if elapsed < span * (1 - 1e-9):
+            raise SolverError(
+                f"The adaptive steps{where(done)} took {done} steps without reaching the next "
+                f"output time: the flow is faster than solver.max_speed = {s.max_speed:g} m/s "
+                "allows for. Raise solver.max_speed if such speeds are real, or use a fixed "
+                "time.dt."
+            )
+        return done
 
     def check_free_surface(self) -> None:
         """As ``ProjectionScheme.check_free_surface``, over the ranks."""
@@ -441,7 +498,7 @@ class DistributedProjection(ProjectionScheme):
             "p_node": self.p_global.copy(),
             "last_unknowns": np.array(self.last_unknowns),
             "steps": np.array(self.steps),
-            "since_volume": np.array(0.0),
+            "since_volume": np.array(self.since_volume),
             "dt_range": np.array(self.dt_range),
         }
         if self.affine is not None:
@@ -452,5 +509,8 @@ class DistributedProjection(ProjectionScheme):
         np.copyto(self.p_global, saved["p_node"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
+        if "since_volume" in saved:
+            self.since_volume = float(saved["since_volume"])
+            self.dt_range = [float(t) for t in saved["dt_range"]]
         if self.affine is not None:
             np.copyto(self.affine, saved["affine"])
