@@ -122,10 +122,15 @@ def test_the_column_at_rest_is_exact_across_the_rank_boundaries(obstacle):
 
 @pytest.mark.parametrize(
     "override, named",
-    [('time.dt="auto"', "time.dt"), ("solver.linear_solver=amg", "solver.linear_solver")],
+    [
+        ("solver.linear_solver=amg", "solver.linear_solver"),
+        ("domain.periodic=[true,false]", "domain.periodic"),
+        ("material.model=newtonian material.viscosity=0.01", "viscous materials"),
+        ("solver.scheme=explicit time.dt=2e-6", "solver.scheme"),
+    ],
 )
 def test_what_is_not_split_yet_is_refused_by_name(override, named):
-    over = [override]
+    over = [*override.split(), "domain.size=[0.416, 0.44]"]
     case = load_case(EXAMPLES / "dam_break.toml", over)
     with pytest.raises(CaseError, match=named.replace(".", r"\.")):
         distributed(case, None, None)  # type: ignore[arg-type]
