@@ -22,7 +22,8 @@ pytest.importorskip("petsc4py")
 pytest.importorskip("mpi4py")
 
 from mpmflow.parallel.comm import world  # noqa: E402
-from mpmflow.parallel.scheme import DistributedProjection, distributed  # noqa: E402
+from mpmflow.parallel.scheme import DistributedProjection  # noqa: E402
+from mpmflow.parallel.support import distributed  # noqa: E402
 
 RHO, G = 1000.0, 9.81
 

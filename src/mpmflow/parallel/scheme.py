@@ -31,9 +31,9 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import materials, state
+from .. import state
 from ..boundaries import obstacles, outlets, walls
-from ..errors import CaseError, SolverError
+from ..errors import SolverError
 from ..grid import Grid
 from ..particles import Particles
 from ..schemes import pressure
@@ -57,37 +57,6 @@ if TYPE_CHECKING:
 # starts only (a re-split costs a rebuild of the local state, a few steps' time)
 BALANCE = 0.8
 FIELDS = ("x", "v", "mass", "volume", "pressure")
-
-
-def refusals(case: Case) -> list[str]:
-    """What this first decomposition does not run yet, each with the setting to change."""
-    s = case.solver
-    out = []
-    if s.scheme != "projection":
-        out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
-    if materials.is_viscous(case.material):
-        out.append("viscous materials are not split over ranks yet: use inviscid water")
-    if case.domain.periodic and any(case.domain.periodic):
-        out.append("periodic axes are not split over ranks yet: remove domain.periodic")
-    if s.linear_solver in ("amg", "direct"):
-        out.append(
-            f'solver.linear_solver = "{s.linear_solver}" runs on one process: on several '
-            'ranks the pressure is solved by PETSc ("petsc", or the default "multigrid")'
-        )
-    return out
-
-
-def distributed(case: Case, grid: Grid, particles: Particles) -> ProjectionScheme:
-    """The case's scheme over the run's MPI ranks, or a CaseError naming what it lacks."""
-    missing = refusals(case)
-    if outlets.sides(case).any():
-        missing.append("outlets are not split over ranks yet: close domain.walls' outlets")
-    if missing:
-        raise CaseError(
-            "This case cannot run on several MPI ranks yet (issue 28, first "
-            "decomposition): " + "; ".join(missing) + ". Or run it on one process."
-        )
-    return DistributedProjection(case, grid, particles)
 
 
 class DistributedProjection(ProjectionScheme):

@@ -85,7 +85,7 @@ def make_scheme(case: Case, grid: Grid, particles: Particles) -> Scheme:
     from ..parallel.comm import launched_size
 
     if launched_size() > 1:
-        from ..parallel.scheme import distributed
+        from ..parallel.support import distributed
 
         return distributed(case, grid, particles)
     return SCHEMES[case.solver.scheme](case, grid, particles)
