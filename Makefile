@@ -32,9 +32,9 @@ $(VENV)/.installed: pyproject.toml $(CORE) $(PACKAGE)
 setup: $(VENV)/.installed
 
 # the MPI environment (scripts/setup_mpi.sh): Debian's PETSc, petsc4py and Open MPI with
-# numpy < 2 and the core built for it; the one-process .venv stays free of MPI
-$(MPI_VENV)/.installed: pyproject.toml scripts/setup_mpi.sh $(CORE) $(PACKAGE)
-	scripts/setup_mpi.sh $(PYTHON) $(MPI_VENV)
+# numpy < 2, the package from src/ with the core .venv's set-up built; .venv stays free of MPI
+$(MPI_VENV)/.installed: $(VENV)/.installed pyproject.toml scripts/setup_mpi.sh
+	scripts/setup_mpi.sh $(PYTHON) $(MPI_VENV) $(VENV)
 	touch $@
 
 setup-mpi: $(MPI_VENV)/.installed

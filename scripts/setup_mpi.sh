@@ -1,19 +1,19 @@
 #!/usr/bin/env bash
 # The MPI environment (issue 28; docs/design/mpi.md section 1): `make setup-mpi` runs this.
 #
-#   scripts/setup_mpi.sh PYTHON VENV
+#   scripts/setup_mpi.sh PYTHON VENV [ONE_VENV]
 #
 # PETSc has no wheels on PyPI (a source build takes about an hour on 2 cores), so PETSc,
 # petsc4py, Open MPI and mpi4py come from Debian's packages (python3-petsc4py 3.18 with
 # hypre and MUMPS, python3-mpi4py, openmpi-bin). Debian's petsc4py is built against numpy
 # 1.x and refuses numpy 2, so the MPI runs get their own virtual environment (VENV) with
 # numpy < 2, which reaches Debian's two packages through a .pth file; the one-process
-# environment (.venv, numpy 2) stays free of MPI. The core is built again for VENV in its
-# own build folder (build/mpi-<tag>), so that the two environments never rebuild each
-# other's.
+# environment (.venv, numpy 2) stays free of MPI. VENV runs the package from src/ with the
+# core that `make setup` built for .venv (a link in src/mpmflow, ignored by git).
 set -euo pipefail
 PYTHON=${1:-python3}
 VENV=${2:-.venv-mpi}
+ONE_VENV=${3:-.venv}  # the one-process environment, whose compiled core this one loads
 PETSC4PY=/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real/lib/python3/dist-packages/petsc4py
 MPI4PY=/usr/lib/python3/dist-packages/mpi4py
 
@@ -30,19 +30,44 @@ if [ ! -d "$PETSC4PY" ] || [ ! -d "$MPI4PY" ] || ! command -v mpirun >/dev/null;
   fi
 fi
 
+CORE=$(ls "$ONE_VENV"/lib/python*/site-packages/mpmflow/_core.*.so 2>/dev/null | head -1)
+if [ -z "$CORE" ]; then
+  echo "setup-mpi needs the one-process set-up's compiled core: run make setup first" >&2
+  exit 2
+fi
 test -d "$VENV" || "$PYTHON" -m venv "$VENV"
 "$VENV/bin/python" -m pip install --quiet --upgrade pip
-"$VENV/bin/python" -m pip install --quiet "numpy<2" "scikit-build-core>=0.10" "nanobind>=2.4" \
-  "cmake>=3.18" ninja
-# Debian's mpi4py and petsc4py, and nothing else of Debian's Python, on the venv's path
+# the project's dependencies (and its test extra) with numpy < 2, from pyproject.toml
+"$ONE_VENV/bin/python" - <<'PY' >"$VENV/requirements.txt"
+import sys
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # a dependency of the package on 3.10
+    import tomli as tomllib
+project = tomllib.load(open("pyproject.toml", "rb"))["project"]
+for line in project["dependencies"] + project["optional-dependencies"]["test"]:
+    print(line)
+print("numpy<2")
+PY
+"$VENV/bin/python" -m pip install --quiet -r "$VENV/requirements.txt"
+# Debian's mpi4py and petsc4py, and nothing else of Debian's Python, on the venv's path;
+# the package from src/, its compiled core the one-process set-up built (the same
+# interpreter; nanobind's extension does not depend on numpy's ABI), so it is not built twice
 SITE=$("$VENV/bin/python" -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
 mkdir -p "$VENV/debian"
 ln -sfn "$MPI4PY" "$VENV/debian/mpi4py"
 ln -sfn "$PETSC4PY" "$VENV/debian/petsc4py"
 echo "$(cd "$VENV/debian" && pwd)" >"$SITE/debian-mpi.pth"
-echo "building the core for $VENV (about a minute on 2 cores the first time)"
-TAG=$("$VENV/bin/python" -c "import sys; print(f'cp{sys.version_info[0]}{sys.version_info[1]}')")
-"$VENV/bin/python" -m pip install --quiet --no-build-isolation \
-  -C "build-dir=build/mpi-$TAG" -e ".[test]"
+echo "$(pwd)/src" >"$SITE/mpmflow-src.pth"
+ln -sfn "$(cd "$(dirname "$CORE")" && pwd)/$(basename "$CORE")" "src/mpmflow/$(basename "$CORE")"
+cat >"$VENV/bin/mpmflow" <<PY
+#!$(cd "$VENV" && pwd)/bin/python
+import sys
+from mpmflow.cli import main
+sys.exit(main())
+PY
+chmod +x "$VENV/bin/mpmflow"
 "$VENV/bin/python" -c "import petsc4py, mpi4py, numpy; petsc4py.init(); from petsc4py import PETSc; \
+import mpmflow._core; \
 print(f'MPI environment: numpy {numpy.__version__}, petsc4py {petsc4py.__version__}, mpi4py {mpi4py.__version__}')"
