@@ -60,7 +60,15 @@ ln -sfn "$MPI4PY" "$VENV/debian/mpi4py"
 ln -sfn "$PETSC4PY" "$VENV/debian/petsc4py"
 echo "$(cd "$VENV/debian" && pwd)" >"$SITE/debian-mpi.pth"
 echo "$(pwd)/src" >"$SITE/mpmflow-src.pth"
-ln -sfn "$(cd "$(dirname "$CORE")" && pwd)/$(basename "$CORE")" "src/mpmflow/$(basename "$CORE")"
+TARGET="$(cd "$(dirname "$CORE")" && pwd)/$(basename "$CORE")"
+LINK="src/mpmflow/$(basename "$CORE")"
+if [ "$(readlink "$LINK" 2>/dev/null)" != "$TARGET" ]; then
+  # the link is no change of the package: the folder keeps its time, or the Makefile would
+  # take it for a moved module and install .venv again
+  STAMP=$(stat -c %Y src/mpmflow)
+  ln -sfn "$TARGET" "$LINK"
+  touch -d "@$STAMP" src/mpmflow
+fi
 cat >"$VENV/bin/mpmflow" <<PY
 #!$(cd "$VENV" && pwd)/bin/python
 import sys
