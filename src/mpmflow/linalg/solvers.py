@@ -150,11 +150,6 @@ class LinearSolver:
         x = system.gather(part.x)
         return SolveResult(x, part.iterations, part.residual, part.converged)
 
-    def close(self) -> None:
-        """Free what the solver holds outside Python (PETSc's objects; collective)."""
-        if self.method == "petsc" and self._setup is not None:
-            self._setup.destroy()
-
     def residual_vector(self, b: Floats, x: Floats) -> Floats:
         """b - A x for the prepared matrix."""
         out = np.empty_like(b)

@@ -54,9 +54,7 @@ class Boxes:
     def owner_of_points(self, x: NDArray[np.float64], spacing: float) -> Ints:
         """The rank owning the cell of each point (n x D, m); points beyond the grid go to
         the nearest cell, as the core bins them."""
-        top = np.asarray(self.cells, dtype=np.int64) - 1
-        ijk = np.minimum(np.maximum(np.floor(x / spacing).astype(np.int64), 0), top)
-        return self.owner_of_cells(ijk)
+        return self.owner_of_cells(cells_of(x, spacing, self.cells))
 
 
 def bisect(weight: NDArray[Any], ranks: int) -> Boxes:
@@ -95,10 +93,17 @@ def bisect(weight: NDArray[Any], ranks: int) -> Boxes:
     return Boxes(lo, hi, cells)
 
 
+def cells_of(x: NDArray[np.float64], spacing: float, cells: tuple[int, ...]) -> Ints:
+    """The cell (coordinates, n x D) of each point (n x D, m); points beyond the grid go to
+    the nearest cell, as the core bins them."""
+    top = np.asarray(cells, dtype=np.int64) - 1
+    ijk: Ints = np.minimum(np.maximum(np.floor(x / spacing).astype(np.int64), 0), top)
+    return ijk
+
+
 def cell_weights(x: NDArray[np.float64], spacing: float, cells: tuple[int, ...]) -> Ints:
     """The particles in each cell (shaped as the cells, axis 0 first)."""
-    top = np.asarray(cells, dtype=np.int64) - 1
-    ijk = np.clip(np.floor(x / spacing).astype(np.int64), 0, top)
+    ijk = cells_of(x, spacing, cells)
     flat = np.ravel_multi_index(tuple(ijk.T), cells, order="C")
     counts: Ints = np.bincount(flat, minlength=int(np.prod(cells))).reshape(cells)
     return counts

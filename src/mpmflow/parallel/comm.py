@@ -11,9 +11,6 @@ import os
 from functools import cache
 from typing import Any, Protocol
 
-import numpy as np
-from numpy.typing import NDArray
-
 from ..errors import CaseError
 
 # the world size as the launchers of Open MPI, MPICH (Hydra) and Slurm give it
@@ -94,10 +91,3 @@ def world() -> Comm:
         return Single()
     comm: Comm = MPI.COMM_WORLD
     return comm
-
-
-def allgather_rows(comm: Comm, local: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The ranks' blocks of a vector, in rank order, on every rank."""
-    if comm.size == 1:
-        return local
-    return np.concatenate(comm.allgather(local))

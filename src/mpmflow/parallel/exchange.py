@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .boxes import Boxes
+from .boxes import Boxes, cells_of
 from .comm import Comm
 from .subgrid import Subgrid, extended
 
@@ -86,11 +86,6 @@ class NodeExchange:
                 col += w
 
 
-def _cells(x: NDArray[np.float64], spacing: float, cells: tuple[int, ...]) -> NDArray[np.int64]:
-    top = np.asarray(cells, dtype=np.int64) - 1
-    return np.minimum(np.maximum(np.floor(x / spacing).astype(np.int64), 0), top)
-
-
 def _take(arrays: ParticleArrays, mask: NDArray[Any]) -> ParticleArrays:
     return {k: a[mask] for k, a in arrays.items()}
 
@@ -103,7 +98,7 @@ def owners(boxes: Boxes, sub: Subgrid, x: NDArray[np.float64]) -> NDArray[np.int
     """The rank owning the cell of each point (global coordinates, m): looked up in the
     local grid's table where the point lies in it (after a step, every particle of the
     rank), by the boxes elsewhere."""
-    ijk = _cells(x, sub.grid.spacing, boxes.cells) - sub.origin
+    ijk = cells_of(x, sub.grid.spacing, boxes.cells) - sub.origin
     inside = np.all((ijk >= 0) & (ijk < np.asarray(sub.grid.cells)), axis=1)
     owner = np.empty(x.shape[0], dtype=np.int64)
     flat = np.ravel_multi_index(tuple(ijk[inside].T), sub.grid.cells, order="F")
@@ -159,7 +154,7 @@ class Halo:
         if comm.size == 1:
             return {k: a[:0] for k, a in arrays.items()}
         sub = self.sub
-        ijk = _cells(arrays["x"], sub.grid.spacing, self.boxes.cells) - sub.origin
+        ijk = cells_of(arrays["x"], sub.grid.spacing, self.boxes.cells) - sub.origin
         local = np.ravel_multi_index(tuple(ijk.T), sub.grid.cells, order="F")
         out: list[ParticleArrays | None] = [None] * comm.size
         for r, wanted in self.wanted.items():

@@ -130,11 +130,8 @@ class DistributedProjection(ProjectionScheme):
         """Split the grid into boxes on the particles' places (again when the load is
         uneven), and build this rank's local grid, tables and compiled state."""
         g = self.grid
-        load = None
         if self.boxes is not None:
-            owner = self.boxes.owner_of_points(self._P.x, g.spacing)
-            load = np.bincount(owner, minlength=self.comm.size)
-            self.balance = float(load.min() / max(load.max(), 1))
+            self._owners()
             if self.balance >= BALANCE:
                 return
         self.boxes = bisect(cell_weights(self._P.x, g.spacing, g.cells), self.comm.size)
@@ -160,16 +157,19 @@ class DistributedProjection(ProjectionScheme):
             lower=[-float(o) for o in offset],
             upper=[float(u) - float(o) for u, o in zip(g.size, offset)],
         )
-        owner = self.boxes.owner_of_points(self._P.x, g.spacing)
-        load = np.bincount(owner, minlength=self.comm.size)
+        self._owners()
+
+    def _owners(self) -> None:
+        """Each particle's rank under the current boxes, and the balance they give."""
+        assert self.boxes is not None
+        self._owner = self.boxes.owner_of_points(self._P.x, self.grid.spacing)
+        load = np.bincount(self._owner, minlength=self.comm.size)
         self.balance = float(load.min() / max(load.max(), 1))
 
     def _distribute(self) -> ParticleArrays:
-        """This rank's particles (global coordinates) with their numbers."""
-        assert self.boxes is not None
-        mine = np.flatnonzero(
-            self.boxes.owner_of_points(self._P.x, self.grid.spacing) == self.comm.rank
-        )
+        """This rank's particles (global coordinates) with their numbers (``_split`` has
+        just found each one's rank)."""
+        mine = np.flatnonzero(self._owner == self.comm.rank)
         owned = {f: self._whole(f)[mine].copy() for f in self.fields}
         owned["id"] = mine.astype(np.int64)
         return owned
@@ -262,8 +262,8 @@ class DistributedProjection(ProjectionScheme):
         core.pressure_matrix(O)
         if n == 0:
             return
-        anchored = self.comm.allreduce(int(core.anchored[owned].any()))
-        if not anchored:
+        air = core.anchored[owned]  # the rows next to a free surface
+        if not self.comm.allreduce(int(air.any())):
             raise pressure.singular(where)
         cols = core.matrix_cols[owned]
         global_cols = np.where(cols >= 0, number[np.maximum(cols, 0)], -1).astype(np.int64)
@@ -271,7 +271,6 @@ class DistributedProjection(ProjectionScheme):
         # waiting in the next exchange
         if self.comm.allreduce(int(np.any((cols >= 0) & (global_cols < 0)))):
             raise SolverError(f"A pressure row{where} couples to a node no rank numbered.")
-        air = core.anchored[owned]
         nn = self.sub.grid.nnodes
         if sealed_pockets(self.comm, self.nodes, core.matrix_cols, core.rows, owned, air, nn):
             raise SolverError(
@@ -327,18 +326,26 @@ class DistributedProjection(ProjectionScheme):
         worst: Floats = max(self.comm.allgather(mine), key=lambda item: item[0])[1]
         return worst
 
+    def _predict(self, owned: ParticleArrays, O: CoreOptions, correct: bool) -> ParticleArrays:
+        """The step up to the pressure system (the core's ``predict``), with the owners'
+        values at the nodes (and cells) round the box; returns the core's particle arrays
+        (owned, then the halo)."""
+        core = self.core
+        local = self._local(owned)
+        core.scatter(*self._core_arrays(local), O, correct, affine=local.get("affine"))
+        self.nodes.fill(core.node_mass, core.node_vol, core.v_old, core.v_star, core.node_f)
+        if correct:  # the cells' particle volume reaches past a cell: the owners' sums
+            self.cells.fill(core.cell_vol)
+        core.classify(*self._core_arrays(local), O)
+        return local
+
     def _step(
         self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str, correct: bool
     ) -> ParticleArrays:
         """One step of the owned particles (``correct``: with the volume correction)."""
         core = self.core
-        local = self._local(owned)
+        local = self._predict(owned, O, correct)
         affine = local.get("affine")
-        core.scatter(*self._core_arrays(local), O, correct, affine=affine)
-        self.nodes.fill(core.node_mass, core.node_vol, core.v_old, core.v_star, core.node_f)
-        if correct:  # the cells' particle volume reaches past a cell: the owners' sums
-            self.cells.fill(core.cell_vol)
-        core.classify(*self._core_arrays(local), O)
         self._pressure(O, report, where)
         core.correct(O)
         if correct:
@@ -443,17 +450,7 @@ class DistributedProjection(ProjectionScheme):
         self._split()
         O = self.options(1.0)
         O.pockets = False
-        owned = self._distribute()
-        local = self._local(owned)
-        self.core.scatter(*self._core_arrays(local), O, False, affine=local.get("affine"))
-        self.nodes.fill(
-            self.core.node_mass,
-            self.core.node_vol,
-            self.core.v_old,
-            self.core.v_star,
-            self.core.node_f,
-        )
-        self.core.classify(*self._core_arrays(local), O)
+        self._predict(self._distribute(), O, False)
         rows, _, n, _ = self._number(O)
         self.core.pressure_matrix(O)
         anchored = self.comm.allreduce(int(self.core.anchored[rows].any()))
