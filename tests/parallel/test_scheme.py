@@ -14,7 +14,6 @@ from conftest import EXAMPLES
 
 from mpmflow import load_case
 from mpmflow.errors import CaseError, SolverError
-from mpmflow.schemes import volume_correction
 from mpmflow.schemes.projection import ProjectionScheme
 from mpmflow.simulation import Simulation
 
@@ -73,13 +72,11 @@ def test_the_dam_break_over_the_ranks_is_the_one_process_run(transfer):
         assert np.abs(many.scheme.affine - one.scheme.affine).max() * 0.004 < 1e-5
 
 
-def test_the_volume_correction_over_the_ranks_is_the_one_process_one(monkeypatch):
-    """The dam break with the volume correction (every 2 ms), its cell system solved to
-    1e-10 on both sides: at the correction's own tolerance (1e-2) two solvers differ as
-    much as one process does between 1e-2 and 1e-4 (the front by 0.0026 a at 0.3 s,
-    benchmarks/README.md), which would hide a fault of the split."""
-    monkeypatch.setattr(volume_correction, "TOLERANCE", 1e-10)
-    case = load_case(EXAMPLES / "dam_break.toml", ["time.end=0.3"])
+def test_the_volume_correction_over_the_ranks_is_the_one_process_one():
+    """The dam break with the volume correction (every 2 ms), every system solved to
+    1e-10 on both sides, so that what the two solvers leave (1e-8 of the residual) does not
+    hide a fault of the split."""
+    case = load_case(EXAMPLES / "dam_break.toml", ["time.end=0.3", "solver.tolerance=1e-10"])
     one = alone(Simulation(case))
     many = split(Simulation(case))
     a = one.scheme.advance(one.dt, 300)

@@ -186,8 +186,9 @@ class Solver(Section):
         1e-8,
         gt=0,
         lt=1,
-        description="Relative residual the pressure "
-        "solve must reach every step; the run stops if it does not.",
+        description="Relative residual every linear solve of a step must reach (the "
+        "pressure, the viscous predictor, the volume correction); the run stops if one "
+        "does not.",
     )
     max_iterations: int = Field(
         200, ge=1, le=100000, description="Iteration limit of the pressure solve."

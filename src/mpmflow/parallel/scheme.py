@@ -78,7 +78,7 @@ class DistributedProjection(ProjectionScheme):
         self.python_pressure = None
         self.system = DistributedSystem(s.tolerance, s.max_iterations, s.petsc_preconditioner)
         self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
-        self.volume = DistributedVolume(self.comm, s.petsc_preconditioner)
+        self.volume = DistributedVolume(self.comm, s.tolerance, s.petsc_preconditioner)
         self.steps = 0
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (``_span``)

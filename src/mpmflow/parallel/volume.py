@@ -5,8 +5,8 @@ On a step that corrects, the particle volume each cell holds (``cell_vol``, from
 ``scatter``) is completed at the cells a rank holds without owning them by their owners'
 values; ``volume_system`` assembles the rows of the local cells (the ghost layer's cells
 have every particle of theirs in the halo, so a rank and the owner agree on which cells are
-rows); the owned rows are numbered after the ranks before, PETSc solves to the volume
-correction's tolerance, the solution reaches the ghost layer, and ``volume_apply`` moves the
+rows); the owned rows are numbered after the ranks before, PETSc solves to
+``solver.tolerance``, the solution reaches the ghost layer, and ``volume_apply`` moves the
 faces the particles are displaced by in ``to_particles``.
 """
 
@@ -27,11 +27,9 @@ from .subgrid import Subgrid
 class DistributedVolume:
     """The volume correction's solve over the ranks (its own PETSc system)."""
 
-    def __init__(self, comm: Comm, preconditioner: Preconditioner) -> None:
+    def __init__(self, comm: Comm, tolerance: float, preconditioner: Preconditioner) -> None:
         self.comm = comm
-        self.system = DistributedSystem(
-            volume_correction.TOLERANCE, volume_correction.MAX_ITERATIONS, preconditioner
-        )
+        self.system = DistributedSystem(tolerance, volume_correction.MAX_ITERATIONS, preconditioner)
         self.iterations = 0
 
     def correct(

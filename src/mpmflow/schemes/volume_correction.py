@@ -16,7 +16,11 @@ volume conserving liquids"):
    cells and no flux through walls. Near the free surface (a cell within one cell of a cell
    less than half full) the density reads low because part of its kernel lies in air, so only
    an excess counts there: the surface is never pulled inward by its own thinness, and the
-   interior's gaps are closed by drawing the surface down;
+   interior's gaps are closed by drawing the surface down. It is solved to
+   ``solver.tolerance``, as the pressure is: at a looser 1e-2 the run depended on the
+   solver (one process moved the 2D dam break's front by 0.0026 a between 1e-2 and 1e-4,
+   and a run over MPI ranks, solved by PETSc, the 3D column's height by a cell), at 1e-8 it
+   does not, for about three more multigrid iterations a step (benchmarks/README.md);
 3. the displacement d = -beta h grad q on the cell faces (0 on walls, so nothing is pushed
    into a wall), interpolated to each particle from its own faces and added to the particle's
    position in the grid-to-particle step (src/core/transfer).
@@ -33,7 +37,6 @@ kernels of src/core/volume_correction); this module holds its constants and its 
 
 from ..errors import SolverError
 
-TOLERANCE = 1e-2  # relative residual of the solve: a correction, not a constraint (measured: 1e-4 and 1e-1 give the same runs)
 MAX_ITERATIONS = 200
 MAX_DISPLACEMENT = 0.5  # cells per step, a safety bound (Kugelstadt et al.)
 
