@@ -446,8 +446,9 @@ int State<D>::pressure_multigrid(const Options<D>& O, Report& report) {
 }
 
 template <int D>
-int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
-  if (!O.viscous) return OK;
+void State<D>::viscous_start(const Options<D>& O, Report& report) {
+  vis_n_ = 0;
+  if (!O.viscous) return;
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
   auto v_old = v_old_.template view<2>({nn, D});
   auto v_star = v_star_.template view<2>({nn, D});
@@ -475,13 +476,23 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   }
   auto base = v_c_.template view<2>({nn, D});
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
+}
+
+template <int D>
+index_t State<D>::viscous_system(const Options<D>& O) {
+  vis_n_ = 0;
+  if (!O.viscous) return 0;
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  auto base = v_c_.template view<2>({nn, D});
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
   const index_t n =
       number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact,
                          T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff, &grid_);
-  if (n == 0) return OK;
+  if (n == 0) return 0;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});
   auto rhs = vrhs_.sized(n);
@@ -492,6 +503,21 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   for (index_t i = 0; i < nn; ++i)
     for (int k = 0; k < D; ++k)
       if (vrow(i, k) >= 0) x(vrow(i, k)) = vu(i, k);
+  vis_n_ = n;
+  return n;
+}
+
+template <int D>
+int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
+  viscous_start(O, report);
+  const index_t n = viscous_system(O);
+  if (n == 0) return OK;
+  auto cols = vcols_.template view<3>({D, n, NS});
+  auto vals = vvals_.template view<3>({D, n, NS});
+  auto rhs = vrhs_.view(n);
+  auto node = vnode_.view(n);
+  auto voff = voff_.view(D + 1);
+  auto x = vx_.view(n);
   auto work = vwork_.template sized<2>({5, n});
   const SolveResult res = mpmflow::solve<D>(grid_, cols, vals, node, voff, rhs, x, O.tol,
                                             O.max_iterations, O.sweeps, viscous_mg_, work);
@@ -503,12 +529,26 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
     report.fail_size = n;
     return VISCOUS_NOT_CONVERGED;
   }
+  viscous_apply(x);
+  return OK;
+}
+
+template <int D>
+void State<D>::viscous_apply(View<const double> x) {
+  if (x.size() != vis_n_)
+    throw std::invalid_argument("State::viscous_apply: x must hold one value per unknown of the "
+                                "last viscous_system");
+  if (vis_n_ == 0) return;
+  const index_t nn = grid_.nnodes;
+  auto v_star = v_star_.template view<2>({nn, D});
+  auto base = v_c_.template view<2>({nn, D});
+  auto vu = vu_.template view<2>({nn, D});
+  auto vrow = vrow_.template view<2>({nn, D});
   for (index_t i = 0; i < nn; ++i)
     for (int k = 0; k < D; ++k) {
       const index_t r = vrow(i, k);
       v_star(i, k) += (r >= 0 ? x(r) : vu(i, k)) - base(i, k);
     }
-  return OK;
 }
 
 template <int D>

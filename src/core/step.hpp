@@ -221,7 +221,24 @@ class State {
   void warm_start();  // the last pressure at this step's unknowns into x0, p_node cleared
   // the sealed pockets of the last pressure_matrix (pockets.hpp), each held at 0 at its top
   index_t pockets() const { return npockets_; }
+  // viscous_predictor = viscous_start, viscous_system, the solve (when it has unknowns),
+  // viscous_apply: in parts for a caller that solves the system itself (MPI:
+  // docs/design/mpi.md). O.viscous false: none of them does anything.
   int viscous_predictor(const Options<D>& O, Report& report);
+  // viscous_start: the walls' starting contact, the cells' viscosity (eta; report.capped
+  // counts the local cells held at the cap) and the velocity the solve starts from
+  // (viscous_base, nn x D: v* corrected by the last pressure; a caller that holds only part
+  // of the grid overwrites it at the nodes whose corrector reaches past its cells).
+  void viscous_start(const Options<D>& O, Report& report);
+  // viscous_system: the unknowns (viscous_rows: nn x D, -1 where held or massless;
+  // viscous_off: D + 1, the first row of each component) and the system (viscous_cols,
+  // viscous_vals: D x n x 3^D, columns numbered within their component; viscous_rhs;
+  // viscous_x: the start at each row) from viscous_base. Returns n.
+  index_t viscous_system(const Options<D>& O);
+  // viscous_apply: x (n values of the last viscous_system, m/s; std::invalid_argument
+  // otherwise) into v_star, the held nodes set to their held values; nothing when that system
+  // had no unknowns.
+  void viscous_apply(View<const double> x);
   // finish = correct, volume_correction (when correct), to_particles.
   int finish(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
   // v_new: the corrected velocity (eq. 16) with the walls' and obstacles' conditions.
@@ -280,6 +297,13 @@ class State {
   View<const double, 2> volume_vals() { return vol_vals_.template view<2>({vol_n_, NS}); }
   View<double> volume_rhs() { return vol_rhs_.view(vol_n_); }
   View<const bool> volume_air() { return vol_air_.view(vol_n_); }
+  View<const index_t, 2> viscous_rows() { return vrow_.template view<2>({vis_nn(), D}); }
+  View<const index_t> viscous_off() { return voff_.view(viscous_on_ ? D + 1 : 0); }
+  View<const index_t, 3> viscous_cols() { return vcols_.template view<3>({D, vis_n_, NS}); }
+  View<const double, 3> viscous_vals() { return vvals_.template view<3>({D, vis_n_, NS}); }
+  View<const double> viscous_rhs() { return vrhs_.view(vis_n_); }
+  View<double> viscous_x() { return vx_.view(vis_n_); }
+  View<double, 2> viscous_base() { return v_c_.template view<2>({vis_nn(), D}); }
   bool volume_anchored() const { return vol_anchored_; }
   // a caller that owns part of the domain (MPI) says whether the whole system touches an
   // empty cell: volume_apply zeroes the faces of a system that does not
@@ -340,6 +364,8 @@ class State {
   // viscous predictor
   Buffer<double> eta_, eta_weight_, vu_, v_rate_, vvals_, vrhs_, vx_, vwork_;
   Buffer<index_t> vrow_, voff_, vcols_, vnode_;
+  index_t vis_n_ = 0;  // the last viscous_system's unknowns
+  index_t vis_nn() const { return viscous_on_ ? grid_.nnodes : 0; }
   Buffer<double> v_save_;  // scratch (MPMFLOW_PICARD): v* before the viscous step
   bool rate_from_new_ = false;
   std::array<Multigrid<D>, D> viscous_mg_;

@@ -268,6 +268,26 @@ void bind_dim(nb::module_& m) {
              return self.state->viscous_predictor(opt, report);
            })
       .def(
+          "viscous_start",
+          [](S& self, const O& opt, Report& report) { self.state->viscous_start(opt, report); },
+          nb::arg("options"), nb::arg("report"),
+          "The viscous predictor's start: the walls' contact, eta, viscous_base (v* corrected "
+          "by the last pressure).")
+      .def(
+          "viscous_system", [](S& self, const O& opt) { return self.state->viscous_system(opt); },
+          nb::arg("options"),
+          "The viscous predictor's system from viscous_base, not solved: viscous_rows, "
+          "viscous_off, viscous_cols, viscous_vals, viscous_rhs and viscous_x (the start). "
+          "Returns the unknowns (0 without a viscous material).")
+      .def(
+          "viscous_apply",
+          [](S& self, Array<const double> x) {
+            self.state->viscous_apply(view<const double>(x, "x"));
+          },
+          nb::arg("x"),
+          "x (one value per unknown of the last viscous_system, m/s) into v_star, the held "
+          "nodes at their held values.")
+      .def(
           "finish",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
              Array<double> pressure, const O& opt, bool correct, Report& report,
@@ -354,6 +374,20 @@ void bind_dim(nb::module_& m) {
       .def_prop_rw(
           "volume_anchored", [](S& self) { return self.state->volume_anchored(); },
           [](S& self, bool anchored) { self.state->set_volume_anchored(anchored); })
+      .def_prop_ro("viscous_rows",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_rows(), h); })
+      .def_prop_ro("viscous_off",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_off(), h); })
+      .def_prop_ro("viscous_cols",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_cols(), h); })
+      .def_prop_ro("viscous_vals",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_vals(), h); })
+      .def_prop_ro("viscous_rhs",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_rhs(), h); })
+      .def_prop_ro("viscous_base",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_base(), h); })
+      .def_prop_ro("viscous_x",
+                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_x(), h); })
       .def_prop_ro("cell_row",
                    [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_row(), h); });
 }

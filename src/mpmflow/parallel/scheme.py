@@ -8,7 +8,8 @@ its neighbours:
 2. ``scatter`` (particle-to-grid, nodal fractions), then the owners' node values at the
    nodes a rank holds without owning them (``NodeExchange.fill``), then ``classify``;
 3. which nodes are pressure unknowns is the owner's decision (``renumber``); each rank's
-   owned unknowns are numbered after those of the ranks before it;
+   owned unknowns are numbered after those of the ranks before it; a viscous material's
+   predictor is solved over the ranks likewise (``viscous``);
 4. the pressure system: each rank assembles its rows, PETSc solves (``petsc``), the
    solution reaches the nodes round each box, the walls release and the system is solved
    again while any rank released one;
@@ -31,7 +32,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import state
+from .. import materials, state
 from ..boundaries import obstacles, outlets, walls
 from ..errors import SolverError
 from ..grid import Grid
@@ -47,6 +48,7 @@ from .exchange import Halo, NodeExchange, ParticleArrays, migrate, owners
 from .petsc import DistributedSystem
 from .pockets import sealed_pockets
 from .subgrid import restrict_obstacles, restrict_walls, subgrid
+from .viscous import DistributedViscous
 from .volume import DistributedVolume
 
 if TYPE_CHECKING:
@@ -56,6 +58,7 @@ if TYPE_CHECKING:
 # waits for the slowest rank, so below 0.8 a fifth of the machine idles; measured at chunk
 # starts only (a re-split costs a rebuild of the local state, a few steps' time)
 BALANCE = 0.8
+Numbered = tuple[Ints, int, int, Floats]  # owned rows, first global row, count, global numbers
 FIELDS = ("x", "v", "mass", "volume", "pressure")
 
 
@@ -72,7 +75,10 @@ class DistributedProjection(ProjectionScheme):
         self.apic = s.transfer == "apic"
         self.open = False
         self.outflow = outlets.Outflow()  # none: outlets are refused on several ranks
-        self.viscous = False
+        self.viscous = materials.is_viscous(case.material)
+        self.viscous_solve = DistributedViscous(
+            self.comm, s.tolerance, s.max_iterations, s.petsc_preconditioner
+        )
         self.solids = obstacles.of_case(case, grid)
         self._walls = walls.of_case(case, grid).as_tuple()
         self.python_pressure = None
@@ -145,14 +151,19 @@ class DistributedProjection(ProjectionScheme):
         self.halo = Halo(self.comm, self.boxes, sub)
         self.foreign = ~sub.owned_nodes
         offset = sub.offset
+        cells = tuple(int(c) for c in sub.grid.cells)
         self.core = state.step_state(
             sub.grid,
             restrict_walls(self._walls, sub),
             restrict_obstacles(self.solids, sub),
-            np.zeros((0, 0, 0, 0)),
+            (
+                state.gauss_gradients(cells, float(g.spacing))
+                if self.viscous
+                else np.zeros((0, 0, 0, 0))
+            ),
             MARGIN * g.spacing,
             self.corrects,
-            False,
+            self.viscous,
             (),
             lower=[-float(o) for o in offset],
             upper=[float(u) - float(o) for u, o in zip(g.size, offset)],
@@ -232,7 +243,7 @@ class DistributedProjection(ProjectionScheme):
         mine = self.sub.owned_nodes
         return int(self.core.contact[mine].sum() + self.core.ocontact[mine].sum())
 
-    def _number(self, O: CoreOptions) -> tuple[Ints, int, int, Floats]:
+    def _number(self, O: CoreOptions) -> Numbered:
         """Classify with the owners' say on the nodes round the box; number the owned
         unknowns after the ranks before. Returns the owned rows (local row numbers), the
         first global row, the global count and each local row's global number."""
@@ -251,9 +262,10 @@ class DistributedProjection(ProjectionScheme):
         self.nodes.fill(number)
         return owned, first, int(sum(counts)), number[local_rows]
 
-    def _pressure(self, O: CoreOptions, report: CoreReport, where: str) -> None:
+    def _pressure(self, O: CoreOptions, report: CoreReport, where: str, numbered: Numbered) -> None:
+        """The pressure solve on the unknowns ``_number`` numbered."""
         core = self.core
-        owned, first, n, number = self._number(O)
+        owned, first, n, number = numbered
         self.last_owned = owned.size
         report.unknowns = max(int(report.unknowns), n)
         report.last_unknowns = n
@@ -346,7 +358,11 @@ class DistributedProjection(ProjectionScheme):
         core = self.core
         local = self._predict(owned, O, correct)
         affine = local.get("affine")
-        self._pressure(O, report, where)
+        # the owners' classification first: the viscous step's walls hold by it
+        numbered = self._number(O)
+        if self.viscous:
+            self.viscous_solve.predict(core, self.sub, self.nodes, O, report, where)
+        self._pressure(O, report, where, numbered)
         core.correct(O)
         if correct:
             self.volume.correct(core, self.sub, self.cells, O, report, where)
@@ -392,6 +408,7 @@ class DistributedProjection(ProjectionScheme):
         self.last_unknowns = int(report.last_unknowns)
         r = StepReport.of(report)
         r.moved_inside = int(self.comm.allreduce(int(report.moved)))
+        r.capped = int(self.comm.allreduce(int(report.capped)))
         if not self.auto:
             return r
         self.dt_range = [min(self.dt_range[0], report.dt_min), max(self.dt_range[1], report.dt_max)]

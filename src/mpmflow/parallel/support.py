@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .. import materials
 from ..boundaries import outlets
 from ..errors import CaseError
 from ..grid import Grid
@@ -23,8 +22,6 @@ def refusals(case: Case) -> list[str]:
     out = []
     if s.scheme != "projection":
         out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
-    if materials.is_viscous(case.material):
-        out.append("viscous materials are not split over ranks yet: use inviscid water")
     if case.domain.periodic and any(case.domain.periodic):
         out.append("periodic axes are not split over ranks yet: remove domain.periodic")
     if s.linear_solver in ("amg", "direct"):

@@ -211,6 +211,19 @@ class CoreState(Protocol):
         """Returns a ``Status``."""
         ...
 
+    def viscous_start(self, options: CoreOptions, report: CoreReport) -> None:
+        """The viscous predictor's start: the walls' contact, eta, ``viscous_base``."""
+        ...
+
+    def viscous_system(self, options: CoreOptions) -> int:
+        """The viscous predictor's system from ``viscous_base``, not solved
+        (``viscous_*``); returns its unknowns."""
+        ...
+
+    def viscous_apply(self, x: Floats) -> None:
+        """x (one value per unknown of the last viscous_system, m/s) into v_star."""
+        ...
+
     def finish(
         self,
         x: Floats,
@@ -328,6 +341,26 @@ class CoreState(Protocol):
 
     @property
     def cell_row(self) -> Ints: ...
+
+    # the last viscous_start's velocity the solve starts from (v* corrected by the last
+    # pressure) and the last viscous_system (empty without a viscous material): each node's
+    # row per component (nn x D, -1: held or massless), each component's first row (D + 1),
+    # the blocks (D x n x 3^D: the couplings of each row to component m, columns numbered
+    # within component m, -1 empty), the right-hand side and the start (n, writable)
+    @property
+    def viscous_rows(self) -> Ints: ...
+    @property
+    def viscous_off(self) -> Ints: ...
+    @property
+    def viscous_cols(self) -> Ints: ...
+    @property
+    def viscous_vals(self) -> Floats: ...
+    @property
+    def viscous_rhs(self) -> Floats: ...
+    @property
+    def viscous_x(self) -> Floats: ...
+    @property
+    def viscous_base(self) -> Floats: ...  # nn x D (m/s), writable
 
 
 def step_state(
