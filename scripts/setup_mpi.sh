@@ -51,6 +51,8 @@ for line in project["dependencies"] + project["optional-dependencies"]["test"]:
 print("numpy<2")
 PY
 "$VENV/bin/python" -m pip install --quiet -r "$VENV/requirements.txt"
+# an installed copy of the package (an earlier set-up built one) would shadow src/ and its core
+"$VENV/bin/python" -m pip uninstall --quiet --yes mpmflow 2>/dev/null || true
 # Debian's mpi4py and petsc4py, and nothing else of Debian's Python, on the venv's path;
 # the package from src/, its compiled core the one-process set-up built (the same
 # interpreter; nanobind's extension does not depend on numpy's ABI), so it is not built twice
@@ -77,5 +79,5 @@ sys.exit(main())
 PY
 chmod +x "$VENV/bin/mpmflow"
 "$VENV/bin/python" -c "import petsc4py, mpi4py, numpy; petsc4py.init(); from petsc4py import PETSc; \
-import mpmflow._core; \
+import mpmflow._core; assert mpmflow._core.__file__.startswith('$(pwd)/src/'), mpmflow._core.__file__; \
 print(f'MPI environment: numpy {numpy.__version__}, petsc4py {petsc4py.__version__}, mpi4py {mpi4py.__version__}')"
