@@ -408,7 +408,7 @@ def _validate(args: argparse.Namespace) -> int:
     check_report_folder(out)
     _check_out_dir(out)
 
-    def report(res: CaseResult) -> None:
+    def report(res: "CaseResult") -> None:  # quoted: imported for the type checker only
         misses = sum(r.status == "miss" for r in res.rows)
         print(
             f"mpmflow: {res.title}: {len(res.rows)} rows, {misses} missed, {res.wall_s:.0f} s",

@@ -269,6 +269,16 @@ def test_validate_refuses_a_readme_it_did_not_write(tmp_path, capsys):
     check_report_folder(out)  # an earlier report may be replaced
 
 
+def test_validate_runs_a_case_from_the_command_line(tmp_path, capsys, shared_data):
+    """The command end to end: each case's line as it finishes, the report written (an
+    annotation of its progress callback once raised NameError before any case ran)."""
+    out = tmp_path / "report"
+    assert main(["validate", "--out", str(out), "--quick", "--case", "hydrostatic"]) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "rows pass" in err
+    assert "## Hydrostatic column" in (out / "README.md").read_text()
+
+
 def test_validate_checks_matplotlib_and_the_examples_before_running(tmp_path, capsys, monkeypatch):
     """Both used to fail only after the runs (a traceback, or a CaseError per case)."""
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib fails
