@@ -49,6 +49,10 @@ def main():
         "-q",
         *sets,
     ]
+    # the commit the run starts from (a long run outlives commits made meanwhile)
+    commit = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+    ).stdout.strip()
     t0 = time.perf_counter()
     res = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
@@ -69,9 +73,6 @@ def main():
             return run.probes[name]
 
     m = spheric.measures(Series, spheric.data(), args.end)
-    commit = subprocess.run(
-        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-    ).stdout.strip()
     record = {
         "benchmark": "spheric",
         "commit": commit,
