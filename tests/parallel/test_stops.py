@@ -8,6 +8,7 @@ import pytest
 from conftest import EXAMPLES
 
 from mpmflow import load_case
+from mpmflow.errors import CaseError
 from mpmflow.output.folder import API_HINTS
 
 pytest.importorskip("petsc4py")
@@ -31,3 +32,15 @@ def test_a_signal_on_the_last_rank_stops_every_rank_at_the_same_output(tmp_path)
     assert summary["status"] == "interrupted"
     times = comm.allgather(sim.time)
     assert times == [pytest.approx(0.03)] * comm.size
+
+
+def test_a_wall_budget_over_several_ranks_is_refused(tmp_path):
+    """Each rank would stop on its own clock, at its own output time, and the others would
+    wait for it in the next exchange: refused before the run starts."""
+    comm = world()
+    if comm.size == 1:
+        pytest.skip("one rank: the budget is the one process's (tests/simulation)")
+    case = load_case(EXAMPLES / "hydrostatic.toml", ["time.end=0.1", "output.snapshots=false"])
+    with start(case, tmp_path / "run", restart=False, overwrite=False, hints=API_HINTS) as sim:
+        with pytest.raises(CaseError, match=r"wall_budget"):
+            sim.run(wall_budget=10.0)
