@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import CaseError, SimulationError
 from ..interrupts import StopNow
 from .schedules import Schedule
 
@@ -129,6 +129,17 @@ def stop_on_signal(sim: Simulation) -> None:
     else:
         message += "no checkpoint: no output folder"
     sim.stop(message, status="interrupted", checkpoint=False)
+
+
+def refuse_budget_over_ranks(scheme: object) -> None:
+    """``run(wall_budget=...)`` on several MPI ranks: each rank would read its own clock and
+    stop at its own output time, leaving the others waiting in the next exchange."""
+    if getattr(getattr(scheme, "comm", None), "size", 1) > 1:
+        raise CaseError(
+            "run(wall_budget=...) is not agreed between MPI ranks yet: run without a wall "
+            "budget on several ranks (Ctrl-C or SIGTERM stops every rank at the same output "
+            "time), or on one process."
+        )
 
 
 def wall_budget(budget: float) -> Callable[[Simulation], None]:

@@ -39,7 +39,7 @@ from ..diagnostics.measures import (
     pressure_noise,
     volume_measures,
 )
-from ..errors import CaseError, SimulationError
+from ..errors import SimulationError
 from ..fallbacks import Fallbacks
 from ..interrupts import StopNow
 from ..output.folder import API_HINTS, Hints, Mode, RunFolder
@@ -391,14 +391,7 @@ class Simulation:
         NumPy call took them away (measured: 2 threads 4.4 times slower than 1 at 416k
         particles; with BLAS on one thread, 1.5 times faster)."""
         if wall_budget is not None:
-            if getattr(getattr(self.scheme, "comm", None), "size", 1) > 1:
-                # each rank would read its own clock and stop at its own output time, leaving
-                # the others waiting in the next exchange
-                raise CaseError(
-                    "run(wall_budget=...) is not agreed between MPI ranks yet: run without a "
-                    "wall budget on several ranks (Ctrl-C or SIGTERM stops every rank at the "
-                    "same output time), or on one process."
-                )
+            callbacks.refuse_budget_over_ranks(self.scheme)
             after = next(k for k, a in enumerate(self.actions) if a.name == "stop_on_signal")
             self.actions.insert(
                 after + 1,
