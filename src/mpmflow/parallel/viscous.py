@@ -44,7 +44,6 @@ class DistributedViscous:
     ) -> None:
         self.comm = comm
         self.system = DistributedSystem(tolerance, max_iterations, preconditioner)
-        self.iterations = 0
 
     def predict(
         self,
@@ -103,7 +102,6 @@ class DistributedViscous:
         self.system.prepare(first, gcols, gvals, total)
         result = self.system.solve(core.viscous_rhs[owned].copy(), core.viscous_x[owned].copy())
         report.viscous_iterations += result.iterations
-        self.iterations += result.iterations
         if not result.converged:
             raise SolverError(
                 f"The viscous solve did not converge{where} over the MPI ranks: relative "
