@@ -34,8 +34,11 @@ def _run_record(sim: Simulation, h: float, H: float) -> Measures:
     }
 
 
-def measure_poiseuille(h: float, end: float, example: str = "poiseuille_film.toml") -> Measures:
-    """Run the film at spacing ``h`` to ``end`` (s); the start-up and steady measures."""
+def measure_poiseuille(
+    h: float, end: float, dt: float | None = None, example: str = "poiseuille_film.toml"
+) -> Measures:
+    """Run the film at spacing ``h`` to ``end`` (s) with the step ``dt`` (s; None: the
+    example's); the start-up and steady measures."""
     snaps: dict[str, tuple[float, FloatArray, FloatArray]] = {}
     state: dict[str, float] = {}
 
@@ -53,7 +56,8 @@ def measure_poiseuille(h: float, end: float, example: str = "poiseuille_film.tom
             )
 
     # the example's output interval is 0.1 T_visc, so the start-up time is an output time
-    sim = run_example(example, [f"grid.spacing={h}", f"time.end={end}"], on_output=grab)
+    over = [f"grid.spacing={h}", f"time.end={end}"] + ([f"time.dt={dt}"] if dt else [])
+    sim = run_example(example, over, on_output=grab)
     theta, g = incline(sim.case)
     gs, H, nu = g * math.sin(theta), state["H"], state["nu"]
     r = {
@@ -62,6 +66,7 @@ def measure_poiseuille(h: float, end: float, example: str = "poiseuille_film.tom
         "nu": nu,
         "gs": gs,
         "T": state["T"],
+        "dt": sim.dt,
         "end": sim.time,
         "wall": sim.summary["wall_seconds"],
         "particles": sim.particles.count,

@@ -29,3 +29,10 @@ class Meshes(TypedDict):
 
     spacings: tuple[float, ...]
     end: float
+
+
+class StepMeshes(Meshes):
+    """Meshes with a time step (s) for each spacing: for a measure of a transient, whose
+    error is the step's as well as the mesh's, so dt must be refined with h."""
+
+    dts: tuple[float, ...]
