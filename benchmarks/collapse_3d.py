@@ -30,50 +30,21 @@ from pathlib import Path
 import numpy as np
 
 from mpmflow.validation import common
+from mpmflow.validation.granular_3d import R0, lube_3d, quarter_cylinder_obj
 
 args = [a for a in sys.argv[1:] if a != "--whole"]
 whole = "--whole" in sys.argv[1:]
 a, cells = float(args[0]), float(args[1])
 extra = args[2:]
-r0 = 0.05
+r0 = R0
 H0 = a * r0
 h = r0 / cells
-law = 1.24 * a if a < 1.7 else 1.6 * a**0.5
+law = lube_3d(a)
 L = r0 * (1 + 2.5 * law) + 0.02  # wide: APIC over-runs the law
 L = h * math.ceil(L / h)
 dt = min(5e-4, 0.35 * h / math.sqrt(2 * 9.81 * H0))
 end = 0.6 + 6 * math.sqrt(H0 / 9.81)
 folder = Path(tempfile.mkdtemp())
-
-
-def quarter_cylinder_obj(path, n=128):
-    """The quarter of the column in x, y >= 0 as a closed OBJ mesh (n facets on the arc: the
-    facets lie within r0 (1 - cos(pi / 4 n)) = 4 um of the circle)."""
-    arc = [
-        (r0 * math.cos(0.5 * math.pi * i / n), r0 * math.sin(0.5 * math.pi * i / n))
-        for i in range(n + 1)
-    ]
-    v = [(0.0, 0.0, 0.0), (0.0, 0.0, H0)] + [(x, y, z) for z in (0.0, H0) for x, y in arc]
-    bot = lambda i: 3 + i  # noqa: E731  (OBJ numbers vertices from 1)
-    top = lambda i: 3 + n + 1 + i  # noqa: E731
-    f = []
-    for i in range(n):
-        f += [
-            (1, bot(i + 1), bot(i)),
-            (2, top(i), top(i + 1)),  # bottom and top, outward
-            (bot(i), bot(i + 1), top(i + 1)),
-            (bot(i), top(i + 1), top(i)),
-        ]  # the arc
-    f += [
-        (1, bot(0), top(0)),
-        (1, top(0), 2),  # the face on y = 0
-        (1, 2, top(n)),
-        (1, top(n), bot(n)),
-    ]  # the face on x = 0
-    path.write_text(
-        "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v)
-        + "".join(f"f {i} {j} {k}\n" for i, j, k in f)
-    )
 
 
 if whole:
@@ -86,7 +57,7 @@ length = {H0}"""
 else:
     size, centre = [L, L], [0.0, 0.0]
     walls = '{x = "slip", y = "slip", z_min = "no_slip", z_max = "slip"}'
-    quarter_cylinder_obj(folder / "quarter.obj")
+    (folder / "quarter.obj").write_text(quarter_cylinder_obj(r0, H0))
     body = 'type = "mesh"\npath = "quarter.obj"'
 src = (Path(__file__).resolve().parent.parent / "examples" / "granular_collapse.toml").read_text()
 src = (

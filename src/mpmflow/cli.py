@@ -82,6 +82,7 @@ VALIDATION_CASES = (
     "spheric",
     "viscous_wave",
     "granular_collapse",
+    "granular_collapse_3d",
     "bingham_slump",
     "poiseuille",
     "bingham_plug",
