@@ -58,6 +58,8 @@ NU = 1e-3  # m^2/s
 
 TOL_RUNOUT = 0.15
 WHY_RUNOUT = "the issue's criterion; Lube et al.'s data scatter about their laws by about 10%"
+TOL_REST = 5e-3  # m/s
+WHY_REST = "the issue's criterion: each deposit at rest when its run-out is read"
 ASPECTS, ASPECTS_QUICK = (0.5, 1.0, 2.0, 4.0, 7.0, 10.0), (0.5, 2.0)
 L0 = 0.05  # m, half-width of the column
 SPLIT = 2.3  # aspect ratio between Lube's two laws
@@ -262,6 +264,19 @@ def run_collapse(out: Path, quick: bool = False, context: Context | None = None)
                 WHY_RUNOUT,
                 miss="the deposit spreads short of the law with PIC transfer (and "
                 "past it with FLIP); see the text",
+            )
+        )
+        res.rows.append(
+            Row(
+                "granular_collapse",
+                f"at rest, a = {r['a']:g}",
+                "largest particle speed when the run-out is read",
+                r["speed"],
+                TOL_REST,
+                WHY_REST,
+                unit="m/s",
+                miss="PIC's deposit creeps at its toe and surface (a shear PIC drags but "
+                "does not stop)",
             )
         )
     plt = pyplot()
