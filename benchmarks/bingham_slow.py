@@ -4,7 +4,7 @@ middle half of each side), the half-length, the top and the largest speed every 
 
     python benchmarks/bingham_slow.py --consistency 20 --transfer apic --end 30
 
-``--transfer``: apic, or a FLIP fraction (0: PIC, the example's). Prints one line a second.
+``--transfer``: apic (the example's), or a FLIP fraction (0: PIC). Prints one line a second.
 """
 
 import argparse
@@ -32,7 +32,9 @@ def main() -> None:
         "output.interval=0.1",
     ]
     over += (
-        ["solver.transfer=apic"] if args.transfer == "apic" else [f"solver.flip={args.transfer}"]
+        ["solver.transfer=apic"]
+        if args.transfer == "apic"
+        else ["solver.transfer=flip", f"solver.flip={args.transfer}"]
     )
     case = load_case(ROOT / "examples" / "bingham_slump.toml", over)
     m = case.material
