@@ -50,7 +50,7 @@ def main() -> None:
         print(
             f"t = {sim.time:4.1f} s  ratio {(right + left) / 2:.3f} (left {left:.3f}, right "
             f"{right:.3f})  half-length {np.abs(P.x[:, 0] - centre).max():.4f} m  top "
-            f"{P.x[:, 1].max():.4f} m  largest speed {np.abs(P.v).max():.2e} m/s",
+            f"{P.x[:, 1].max():.4f} m  largest speed {np.linalg.norm(P.v, axis=1).max():.2e} m/s",
             flush=True,
         )
 

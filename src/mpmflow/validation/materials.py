@@ -232,7 +232,7 @@ def _collapse(a: float, quick: bool, width: float = 1.6) -> Measures:
         "law": lube(a),
         "height": x[:, 1].max() / H0,
         "walled": walled,
-        "speed": float(np.abs(sim.particles.v).max()),
+        "speed": float(np.linalg.norm(sim.particles.v, axis=1).max()),
         "wall": sim.summary["wall_seconds"],
         "h": h,
         "particles": sim.particles.count,
@@ -392,7 +392,9 @@ def run_slump(out: Path, quick: bool = False, context: Context | None = None) ->
         scale = m.yield_stress / (m.density * G)
         spacing = sim.case.grid.spacing / sim.case.bodies[0].particles_per_cell
         right, left = arrest_ratios(sim.particles.x, 0.5 * sim.case.domain.size[0], spacing, scale)
-        readings.append((sim.time, right, left, float(np.abs(sim.particles.v).max())))
+        readings.append(
+            (sim.time, right, left, float(np.linalg.norm(sim.particles.v, axis=1).max()))
+        )
 
     def each_second(sim: Simulation) -> None:
         t = sim.time
@@ -406,7 +408,7 @@ def run_slump(out: Path, quick: bool = False, context: Context | None = None) ->
     values = np.array([[r, l] for _, r, l, _ in readings])
     means = values.mean(axis=1)
     ratio = float(means.mean())
-    speed = float(np.abs(sim.particles.v).max())
+    speed = float(np.linalg.norm(sim.particles.v, axis=1).max())
     res.rows.append(
         Row(
             "bingham_slump",
