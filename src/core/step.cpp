@@ -536,8 +536,9 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
 template <int D>
 void State<D>::viscous_apply(View<const double> x) {
   if (x.size() != vis_n_)
-    throw std::invalid_argument("State::viscous_apply: x must hold one value per unknown of the "
-                                "last viscous_system");
+    throw std::invalid_argument(
+        "State::viscous_apply: x must hold one value per unknown of the "
+        "last viscous_system");
   if (vis_n_ == 0) return;
   const index_t nn = grid_.nnodes;
   auto v_star = v_star_.template view<2>({nn, D});

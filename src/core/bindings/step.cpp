@@ -86,6 +86,13 @@ nb::ndarray<nb::numpy, T> out(View<T, R> v, nb::handle owner) {
   return nb::ndarray<nb::numpy, T>(v.data(), R, shape.data(), owner);
 }
 
+// A read-only property: the state's array Get() as a NumPy view that keeps the bound state
+// (and so the array) alive.
+template <int D, auto Get>
+auto state_view(nb::handle h) {
+  return out((nb::cast<BoundState<D>&>(h).state.get()->*Get)(), h);
+}
+
 using Affine = std::optional<Array<double>>;
 
 // The particles; affine (n x D x D): APIC's matrices, None: FLIP/PIC transfers.
@@ -332,64 +339,42 @@ void bind_dim(nb::module_& m) {
                      const auto& t = self.state->phase_seconds();
                      return std::vector<double>(t.begin(), t.end());
                    })
-      .def_prop_ro("p_node", [](nb::handle h) { return out(nb::cast<S&>(h).state->p_node(), h); })
-      .def_prop_ro("v_new", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_new(), h); })
-      .def_prop_ro("contact", [](nb::handle h) { return out(nb::cast<S&>(h).state->contact(), h); })
-      .def_prop_ro("eta", [](nb::handle h) { return out(nb::cast<S&>(h).state->eta(), h); })
-      .def_prop_ro("ocontact",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->ocontact(), h); })
-      .def_prop_ro("volume_q",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_q(), h); })
-      .def_prop_ro("rows", [](nb::handle h) { return out(nb::cast<S&>(h).state->rows(), h); })
-      .def_prop_ro("node_mass",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_mass(), h); })
-      .def_prop_ro("node_vol",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_vol(), h); })
-      .def_prop_ro("v_old", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_old(), h); })
-      .def_prop_ro("v_star", [](nb::handle h) { return out(nb::cast<S&>(h).state->v_star(), h); })
-      .def_prop_ro("node_f", [](nb::handle h) { return out(nb::cast<S&>(h).state->node_f(), h); })
-      .def_prop_ro("node_row",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->node_row(), h); })
-      .def_prop_ro("theta", [](nb::handle h) { return out(nb::cast<S&>(h).state->theta(), h); })
-      .def_prop_ro("cell_vol",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_vol(), h); })
-      .def_prop_ro("anchored",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->anchored(), h); })
-      .def_prop_ro("matrix_cols",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_cols(), h); })
-      .def_prop_ro("matrix_vals",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->matrix_vals(), h); })
-      .def_prop_ro("rhs", [](nb::handle h) { return out(nb::cast<S&>(h).state->rhs(), h); })
-      .def_prop_ro("x0", [](nb::handle h) { return out(nb::cast<S&>(h).state->x0(), h); })
-      .def_prop_ro("volume_rows",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_rows(), h); })
-      .def_prop_ro("volume_cols",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_cols(), h); })
-      .def_prop_ro("volume_vals",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_vals(), h); })
-      .def_prop_ro("volume_rhs",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_rhs(), h); })
-      .def_prop_ro("volume_air",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->volume_air(), h); })
+      .def_prop_ro("p_node", &state_view<D, &State<D>::p_node>)
+      .def_prop_ro("v_new", &state_view<D, &State<D>::v_new>)
+      .def_prop_ro("contact", &state_view<D, &State<D>::contact>)
+      .def_prop_ro("eta", &state_view<D, &State<D>::eta>)
+      .def_prop_ro("ocontact", &state_view<D, &State<D>::ocontact>)
+      .def_prop_ro("volume_q", &state_view<D, &State<D>::volume_q>)
+      .def_prop_ro("rows", &state_view<D, &State<D>::rows>)
+      .def_prop_ro("node_mass", &state_view<D, &State<D>::node_mass>)
+      .def_prop_ro("node_vol", &state_view<D, &State<D>::node_vol>)
+      .def_prop_ro("v_old", &state_view<D, &State<D>::v_old>)
+      .def_prop_ro("v_star", &state_view<D, &State<D>::v_star>)
+      .def_prop_ro("node_f", &state_view<D, &State<D>::node_f>)
+      .def_prop_ro("node_row", &state_view<D, &State<D>::node_row>)
+      .def_prop_ro("theta", &state_view<D, &State<D>::theta>)
+      .def_prop_ro("cell_vol", &state_view<D, &State<D>::cell_vol>)
+      .def_prop_ro("anchored", &state_view<D, &State<D>::anchored>)
+      .def_prop_ro("matrix_cols", &state_view<D, &State<D>::matrix_cols>)
+      .def_prop_ro("matrix_vals", &state_view<D, &State<D>::matrix_vals>)
+      .def_prop_ro("rhs", &state_view<D, &State<D>::rhs>)
+      .def_prop_ro("x0", &state_view<D, &State<D>::x0>)
+      .def_prop_ro("volume_rows", &state_view<D, &State<D>::volume_rows>)
+      .def_prop_ro("volume_cols", &state_view<D, &State<D>::volume_cols>)
+      .def_prop_ro("volume_vals", &state_view<D, &State<D>::volume_vals>)
+      .def_prop_ro("volume_rhs", &state_view<D, &State<D>::volume_rhs>)
+      .def_prop_ro("volume_air", &state_view<D, &State<D>::volume_air>)
       .def_prop_rw(
           "volume_anchored", [](S& self) { return self.state->volume_anchored(); },
           [](S& self, bool anchored) { self.state->set_volume_anchored(anchored); })
-      .def_prop_ro("viscous_rows",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_rows(), h); })
-      .def_prop_ro("viscous_off",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_off(), h); })
-      .def_prop_ro("viscous_cols",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_cols(), h); })
-      .def_prop_ro("viscous_vals",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_vals(), h); })
-      .def_prop_ro("viscous_rhs",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_rhs(), h); })
-      .def_prop_ro("viscous_base",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_base(), h); })
-      .def_prop_ro("viscous_x",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->viscous_x(), h); })
-      .def_prop_ro("cell_row",
-                   [](nb::handle h) { return out(nb::cast<S&>(h).state->cell_row(), h); });
+      .def_prop_ro("viscous_rows", &state_view<D, &State<D>::viscous_rows>)
+      .def_prop_ro("viscous_off", &state_view<D, &State<D>::viscous_off>)
+      .def_prop_ro("viscous_cols", &state_view<D, &State<D>::viscous_cols>)
+      .def_prop_ro("viscous_vals", &state_view<D, &State<D>::viscous_vals>)
+      .def_prop_ro("viscous_rhs", &state_view<D, &State<D>::viscous_rhs>)
+      .def_prop_ro("viscous_base", &state_view<D, &State<D>::viscous_base>)
+      .def_prop_ro("viscous_x", &state_view<D, &State<D>::viscous_x>)
+      .def_prop_ro("cell_row", &state_view<D, &State<D>::cell_row>);
 }
 
 }  // namespace
