@@ -10,7 +10,8 @@ By default the quarter column: the column's axis is the domain's edge x = y = 0,
 walls are slip symmetry planes (domain.walls = {x = "slip", y = "slip", z_min = "no_slip"}):
 the floor is rough, the far walls at x = L and y = L are slip and far enough (L = r0 (1 +
 2.5 law) + 0.02 m) that the law's run-out stays 1.5 law r0 off them. --whole: the whole
-column in the middle of a tank of side 2 L with every wall no-slip, as before.
+column in the middle of a tank of side 2 L with every wall no-slip, as before. The set-up
+and the measures are the validation's (mpmflow.validation.granular_3d).
 
 Prints one JSON line: the furthest particle's radius as (r_inf - r0) / r0 (runout_max), the
 deposit's toe, the outermost radius where the deposit is one particle layer thick (the
@@ -22,102 +23,16 @@ speed).
 """
 
 import json
-import math
 import sys
-import tempfile
-from pathlib import Path
 
-import numpy as np
-
-from mpmflow.validation import common
-from mpmflow.validation.granular_3d import R0, lube_3d, quarter_cylinder_obj
+from mpmflow.validation.granular_3d import measure_column
 
 args = [a for a in sys.argv[1:] if a != "--whole"]
 whole = "--whole" in sys.argv[1:]
 a, cells = float(args[0]), float(args[1])
 extra = args[2:]
-r0 = R0
-H0 = a * r0
-h = r0 / cells
-law = lube_3d(a)
-L = r0 * (1 + 2.5 * law) + 0.02  # wide: APIC over-runs the law
-L = h * math.ceil(L / h)
-dt = min(5e-4, 0.35 * h / math.sqrt(2 * 9.81 * H0))
-end = 0.6 + 6 * math.sqrt(H0 / 9.81)
-folder = Path(tempfile.mkdtemp())
-
-
-if whole:
-    size, walls, centre = [2 * L, 2 * L], '"no_slip"', [L, L]
-    body = f"""type = "cylinder"
-centre = [{L}, {L}, 0.0]   # the base's centre
-axis = [0.0, 0.0, 1.0]
-radius = {r0}
-length = {H0}"""
-else:
-    size, centre = [L, L], [0.0, 0.0]
-    walls = '{x = "slip", y = "slip", z_min = "no_slip", z_max = "slip"}'
-    (folder / "quarter.obj").write_text(quarter_cylinder_obj(r0, H0))
-    body = 'type = "mesh"\npath = "quarter.obj"'
-src = (Path(__file__).resolve().parent.parent / "examples" / "granular_collapse.toml").read_text()
-src = (
-    src.split("[domain]")[0]
-    + f"""
-[domain]
-size = [{size[0]}, {size[1]}, {H0 * 1.15 + 2 * h}]
-walls = {walls}
-[grid]
-spacing = {h}
-[[bodies]]
-{body}
-particles_per_cell = 2
-"""
-    + "[material]"
-    + src.split("[material]")[1]
-)
-src = src.replace("gravity = [0.0, -9.81]", "gravity = [0.0, 0.0, -9.81]")
-p = folder / f"col3d_{a}.toml"
-p.write_text(src)
-case = common.load_case(
-    p,
-    [
-        "output.snapshots=false",
-        f"time.dt={dt:.4g}",
-        f"time.end={end:.3f}",
-        "output.interval=0.05",
-        *extra,
-    ],
-)
-sim = common.Simulation(case)
-fr = []
-
-
-def radius(x):
-    return np.hypot(x[:, 0] - centre[0], x[:, 1] - centre[1])
-
-
-def rec(s):
-    fr.append(
-        (
-            s.time,
-            radius(s.particles.x).max() / r0 - 1,
-            float(np.linalg.norm(s.particles.v, axis=1).max()),
-        )
-    )
-
-
-sim.on_output = rec
-sim.run()
-x = sim.particles.x
-r = radius(x)
-# the deposit's thickness on rings one cell wide: the particles' volume over the ring's area
-edges = np.arange(0.0, r.max() + 2 * h, h)
-vol, _ = np.histogram(r, bins=edges, weights=sim.particles.volume)
-area = (1.0 if whole else 0.25) * math.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-thick = np.nonzero(vol / area >= h / 2)[0]
-toe = edges[thick[-1] + 1] if len(thick) else 0.0
-far = (x[:, :2].max() > 2 * L - h or x[:, :2].min() < h) if whole else x[:, :2].max() > L - h
-law_off = lambda q: (q - law) / law  # noqa: E731
+m = measure_column(a, cells, whole, extra)
+law = m["law"]
 print(
     json.dumps(
         {
@@ -125,18 +40,18 @@ print(
             "cells": cells,
             "whole": whole,
             "extra": extra,
-            "particles": sim.particles.count,
-            "runout_max": r.max() / r0 - 1,
-            "runout_toe": toe / r0 - 1,
+            "particles": m["particles"],
+            "runout_max": m["runout"],
+            "runout_toe": m["toe"],
             "law": law,
-            "off_max": law_off(r.max() / r0 - 1),
-            "off_toe": law_off(toe / r0 - 1),
-            "H_inf/H0": float(x[:, 2].max()) / H0,
-            "vmax_end": fr[-1][2],
-            "far_wall_reached": bool(far),
-            "closest_to_far_wall": float(L - x[:, :2].max()) if not whole else None,
-            "wall": sim.summary["wall_seconds"],
+            "off_max": (m["runout"] - law) / law,
+            "off_toe": (m["toe"] - law) / law,
+            "H_inf/H0": m["height"],
+            "vmax_end": m["speed"],
+            "far_wall_reached": m["far"],
+            "closest_to_far_wall": m["closest"],
+            "wall": m["wall"],
         }
     )
 )
-print(" ".join(f"{t:.2f}:{q:.2f}:{v:.3f}" for t, q, v in fr[::2]))
+print(" ".join(f"{t:.2f}:{q:.2f}:{v:.3f}" for t, q, v in m["history"][::2]))

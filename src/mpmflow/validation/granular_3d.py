@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,7 +30,7 @@ import numpy as np
 from ..case import load_case
 from ..simulation import Simulation
 from .common import EXAMPLES, CaseResult, Row, fmt, markdown_table
-from .types import Context, Measures
+from .types import Context, FloatArray, Measures
 
 G = 9.81
 R0 = 0.05  # m, the column's radius
@@ -76,10 +77,13 @@ def quarter_cylinder_obj(r0: float, H0: float, n: int = 128) -> str:
 
 @dataclass(frozen=True)
 class Column3D:
-    """The quarter column of aspect ratio ``a`` with ``cells`` across r0."""
+    """The quarter column of aspect ratio ``a`` with ``cells`` across r0; ``whole``: the whole
+    column in the middle of a tank of side 2 x ``side``, every wall no-slip (the check of the
+    symmetry planes, benchmarks/collapse_3d.py --whole)."""
 
     a: float
     cells: float
+    whole: bool = False
 
     @property
     def H0(self) -> float:
@@ -96,6 +100,11 @@ class Column3D:
         return self.h * math.ceil(L / self.h - 1e-9)
 
     @property
+    def centre(self) -> tuple[float, float]:
+        """The column's axis (x, y; m)."""
+        return (self.side, self.side) if self.whole else (0.0, 0.0)
+
+    @property
     def dt(self) -> float:
         return min(5e-4, 0.35 * self.h / math.sqrt(2 * G * self.H0))
 
@@ -106,23 +115,31 @@ class Column3D:
     def write(self, folder: Path) -> Path:
         """The case file (and its OBJ body) in ``folder``: granular_collapse.toml's
         material, transfer and output sections with this column's domain, grid and body."""
-        (folder / "quarter.obj").write_text(quarter_cylinder_obj(R0, self.H0))
         src = (EXAMPLES / "granular_collapse.toml").read_text()
         head, rest = src.split("[domain]", 1)
         tail = "[material]" + rest.split("[material]", 1)[1]
         L, h = self.side, self.h
+        if self.whole:
+            size, walls = 2 * L, '"no_slip"'
+            body = (
+                f'type = "cylinder"\ncentre = [{L!r}, {L!r}, 0.0]\naxis = [0.0, 0.0, 1.0]\n'
+                f"radius = {R0!r}\nlength = {self.H0!r}"
+            )
+        else:
+            (folder / "quarter.obj").write_text(quarter_cylinder_obj(R0, self.H0))
+            size, walls = L, '{x = "slip", y = "slip", z_min = "no_slip", z_max = "slip"}'
+            body = 'type = "mesh"\npath = "quarter.obj"'
         text = (
             head
             + f"""[domain]
-size = [{L!r}, {L!r}, {self.H0 * 1.15 + 2 * h!r}]
-walls = {{x = "slip", y = "slip", z_min = "no_slip", z_max = "slip"}}
+size = [{size!r}, {size!r}, {self.H0 * 1.15 + 2 * h!r}]
+walls = {walls}
 
 [grid]
 spacing = {h!r}
 
 [[bodies]]
-type = "mesh"
-path = "quarter.obj"
+{body}
 particles_per_cell = 2
 
 """
@@ -141,38 +158,61 @@ particles_per_cell = 2
         ]
 
 
-def measure_column(a: float, cells: float) -> Measures:
-    """Run the quarter column and measure its deposit."""
-    col = Column3D(a, cells)
-    h, law = col.h, lube_3d(a)
-    fronts: list[tuple[float, float]] = []
+def deposit_toe(r: FloatArray, volume: FloatArray, h: float, share: float) -> float:
+    """The deposit's toe (m from the axis): the outer edge of the outermost ring one cell
+    (``h``) wide whose particles' volume over the ring's area is at least one particle
+    layer, h / 2 (two particles per cell along an axis); ``r`` the particles' distances
+    from the axis, ``share`` the part of the full circle the domain holds (1/4: the quarter
+    column)."""
+    edges = np.arange(0.0, r.max() + 2 * h, h)
+    vol, _ = np.histogram(r, bins=edges, weights=volume)
+    thick = np.nonzero(vol / (share * math.pi * (edges[1:] ** 2 - edges[:-1] ** 2)) >= h / 2)[0]
+    return float(edges[thick[-1] + 1]) if len(thick) else 0.0
 
-    def front(sim: Simulation) -> None:
-        fronts.append((sim.time, float(np.hypot(*sim.particles.x[:, :2].T).max())))
+
+def measure_column(
+    a: float, cells: float, whole: bool = False, overrides: Sequence[str] = ()
+) -> Measures:
+    """Run the column (the quarter, or ``whole``; ``overrides`` of the case's settings) and
+    measure its deposit. "history": (t, the furthest particle's (r - r0) / r0, the largest
+    speed) at each output."""
+    col = Column3D(a, cells, whole)
+    h, law, (cx, cy) = col.h, lube_3d(a), col.centre
+    history: list[tuple[float, float, float]] = []
+
+    def radius(x: FloatArray) -> FloatArray:
+        return np.hypot(x[:, 0] - cx, x[:, 1] - cy)
+
+    def record(sim: Simulation) -> None:
+        v = float(np.linalg.norm(sim.particles.v, axis=1).max())
+        history.append((sim.time, float(radius(sim.particles.x).max()) / R0 - 1, v))
 
     with tempfile.TemporaryDirectory() as tmp:
-        case = load_case(col.write(Path(tmp)), col.overrides())
+        case = load_case(col.write(Path(tmp)), [*col.overrides(), *overrides])
         sim = Simulation(case)
-        sim.on_output = front
+        sim.on_output = record
         sim.run()
     x = sim.particles.x
-    r = np.hypot(x[:, 0], x[:, 1])
-    edges = np.arange(0.0, r.max() + 2 * h, h)
-    vol, _ = np.histogram(r, bins=edges, weights=sim.particles.volume)
-    thick = np.nonzero(vol / (0.25 * math.pi * (edges[1:] ** 2 - edges[:-1] ** 2)) >= h / 2)[0]
-    toe = float(edges[thick[-1] + 1]) if len(thick) else 0.0
-    moving = [t for t, q in fronts if r.max() - q > h / 2]
+    r = radius(x)
+    toe = deposit_toe(r, sim.particles.volume, h, 1.0 if whole else 0.25)
+    runout = r.max() / R0 - 1
+    # the last output at which the furthest particle was more than a particle spacing short
+    moving = [t for t, q, _ in history if (runout - q) * R0 > h / 2]
+    xy = x[:, :2]
+    far = xy.max() > 2 * col.side - h or xy.min() < h if whole else xy.max() > col.side - h
     return {
         "a": a,
         "cells": cells,
         "particles": sim.particles.count,
-        "runout": r.max() / R0 - 1,
+        "runout": runout,
         "toe": toe / R0 - 1,
         "law": law,
         "height": float(x[:, 2].max()) / col.H0,
         "speed": float(np.linalg.norm(sim.particles.v, axis=1).max()),
         "duration": moving[-1] if moving else 0.0,
-        "far": bool(x[:, :2].max() > col.side - h),
+        "far": bool(far),
+        "closest": None if whole else float(col.side - xy.max()),
+        "history": history,
         "wall": sim.summary["wall_seconds"],
     }
 
