@@ -2,11 +2,14 @@
 name the key and the fix (``CaseError``)."""
 
 import difflib
+import json
+import re
 import sys
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from pydantic import BaseModel, ValidationError
 
 from ..errors import CaseError
@@ -220,8 +223,49 @@ def _shape_loc(parts: Sequence[str | int]) -> tuple[str, str | None]:
         if isinstance(p, str) and p in SHAPE_TYPES and out and isinstance(out[-1], int):
             kind = p
             continue
+        if isinstance(p, str) and _UNION_MEMBER.match(p):
+            continue  # the member of a union the value was tried as: time.dt.float
         out.append(p)
     return ".".join(str(p) for p in out), kind
+
+
+# the names pydantic gives the members of a union in an error's loc (time.dt's
+# "literal['auto']" and "float"): no case key is named so
+_UNION_MEMBER = re.compile(r"^(float|int|bool|str|none|[a-z-]+\[.*\])$")
+
+
+def _toml(value: Any) -> str:
+    """A value as the case file writes it: true, "no", [0.0, -9.81], {name = "p1"}."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + "}"
+    return repr(value)
+
+
+def _type_hint(kind: str, value: Any) -> str:
+    """Why a value of the wrong TOML type is refused, and how to write it (strict types,
+    ``sections.Section``); "" for other errors."""
+    number = kind in ("int_type", "float_type")
+    if number and isinstance(value, bool):
+        return " (true and false are booleans, not numbers: give a number)"
+    if number and isinstance(value, str):
+        try:
+            float(value)
+        except ValueError:
+            return " (a string is not a number: give a number, without quotes)"
+        return f" (in quotes it is a string, not a number: write {value.strip()} without quotes)"
+    if kind == "int_type" and isinstance(value, float) and value.is_integer():
+        return f" (a whole number: write {int(value)}, without the decimal point)"
+    if kind == "bool_type":
+        return " (a boolean is true or false, without quotes)"
+    if kind == "string_type":
+        return " (a string: write it in quotes)"
+    return ""
 
 
 def _shape_keys(kind: str, table: str) -> str:
@@ -230,10 +274,26 @@ def _shape_keys(kind: str, table: str) -> str:
     return ", ".join(model.model_fields)
 
 
-def _format_error(err: ValidationError, source: str) -> CaseError:
-    lines = []
+def _errors(err: ValidationError) -> list[tuple[str, str | None, Any]]:
+    """(loc, shape type, error) of each error, a union's members' errors of the same value
+    joined into one (time.dt = "0.001": neither "auto" nor a number)."""
+    out: list[tuple[str, str | None, Any]] = []
     for e in err.errors():
         loc, kind = _shape_loc(e["loc"])
+        union = any(isinstance(p, str) and _UNION_MEMBER.match(p) for p in e["loc"])
+        if union and out and out[-1][0] == loc and out[-1][2].get("union"):
+            previous = out[-1][2]
+            previous["msg"] = previous["msg"].rstrip(".") + ", or " + e["msg"][0].lower()
+            previous["msg"] += e["msg"][1:]
+            previous["types"].append(e["type"])
+            continue
+        out.append((loc, kind, {**e, "union": union, "types": [e["type"]]}))
+    return out
+
+
+def _format_error(err: ValidationError, source: str) -> CaseError:
+    lines = []
+    for loc, kind, e in _errors(err):
         if e["type"] == "union_tag_invalid":
             given = e.get("input", {}).get("type") if isinstance(e.get("input"), dict) else None
             lines.append(
@@ -270,13 +330,14 @@ def _format_error(err: ValidationError, source: str) -> CaseError:
         row = _REFERENCE.get(_generic(key))
         if row is not None:
             fix = f" Set a valid value, e.g. {key} = {_example(row)}." if _example(row) else ""
+            hint = next(filter(None, (_type_hint(t, e.get("input")) for t in e["types"])), "")
             lines.append(
-                f"`{loc}`{entry} = {e.get('input')!r} is not allowed: {msg}. {key}: "
+                f"`{loc}`{entry} = {_toml(e.get('input'))} is not allowed: {msg}{hint}. {key}: "
                 f"{row['description']}{fix}"
             )
         elif _is_section(loc) and e["type"] == "model_type":
             lines.append(
-                f"`{loc}` = {e.get('input')!r} is not allowed: {loc} is a section; "
+                f"`{loc}` = {_toml(e.get('input'))} is not allowed: {loc} is a section; "
                 f"write it as a [{loc}] table of keys (`mpmflow keys` lists them)."
             )
         else:
@@ -326,9 +387,24 @@ def validate(data: Any, source: str = "", base_dir: str | Path | None = None) ->
     if base_dir is None and source and not source.startswith("("):
         base_dir = str(Path(source).resolve().parent)
     try:
-        return Case.model_validate(data, context={"base_dir": base_dir, "folder": base_dir})
+        return Case.model_validate(_plain(data), context={"base_dir": base_dir, "folder": base_dir})
     except ValidationError as err:
         raise _format_error(err, source) from None
+
+
+def _plain(value: Any) -> Any:
+    """A case built in Python as TOML would hold it, so that the strict types take NumPy's
+    numbers and arrays and tuples as the numbers and lists they stand for (a NumPy bool
+    stays a bool, never a number)."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
 
 
 def _folder_of(path: str | Path) -> Path:

@@ -107,7 +107,8 @@ def reference_page() -> str:
         "overridden on the command line with `--set dotted.key=value`; `mpmflow keys` prints "
         "this list. Unknown keys "
         "are errors (with a suggestion), and a bad value stops with a message naming the "
-        "key, the value, the allowed range and the fix (exit code 2).\n\n"
-        + reference_markdown()
-        + "\n"
+        "key, the value, the allowed range and the fix (exit code 2). Values keep their "
+        "TOML types: a number is written without quotes (an integer stands for a float), a "
+        'boolean is `true` or `false`; `"0.02"`, `"no"` or `1` for a boolean are refused, '
+        "not converted.\n\n" + reference_markdown() + "\n"
     )

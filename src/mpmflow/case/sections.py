@@ -20,9 +20,15 @@ MAX_CASE_BYTES = 16 * 2**20  # a case file is a page of TOML; anything larger is
 
 
 class Section(BaseModel):
-    """A table of the case file: unknown keys refused, values checked on assignment too."""
+    """A table of the case file: unknown keys refused, values checked on assignment too,
+    and values kept as the types TOML gives them (strict): a number is an integer or a
+    float, never a boolean or a string in quotes, and a boolean is true or false, never 1
+    or "no" (pydantic's lax mode had turned `particles_per_cell = true` into 1 and
+    `snapshots = "no"` into false without a word). An integer stands for a float."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
+    model_config = ConfigDict(
+        extra="forbid", validate_assignment=True, allow_inf_nan=False, strict=True
+    )
 
 
 class GridSettings(Section):
