@@ -303,6 +303,7 @@ def _run(args: argparse.Namespace) -> int:
         early.check()
         bar, update = _progress_bar(case.time.end, args.quiet, start=sim.time, step=sim.steps)
         sim.progress = update
+        told = len(sim.notices)  # those the run adds are told at its end
         try:
             with stop_on_signals(sim):
                 summary = sim.run()
@@ -335,6 +336,8 @@ def _run(args: argparse.Namespace) -> int:
             f"{max(mpi['solve_seconds']):.2f} s on the slowest rank",
             file=sys.stderr,
         )
+    for note in sim.notices[told:] if rank0 else []:
+        print(f"mpmflow: note: {note}", file=sys.stderr)
     if sim.fallbacks and rank0:
         print(f"mpmflow: note: {sim.fallbacks.line()}", file=sys.stderr)
     return 0

@@ -47,6 +47,15 @@ class Snapshot:
                 "index particles.pvd lists it, but the file was deleted or "
                 "moved."
             )
+        if _no_points(self.path):  # every particle had left through the outlets: meshio
+            # writes such a file but cannot read it back ("Inconsistent data!")
+            empty = np.zeros((0, self.dim))
+            return {
+                "x": empty,
+                "velocity": empty.copy(),
+                "pressure": np.zeros(0),
+                "mass": np.zeros(0),
+            }
         try:
             # the VTU reader itself: meshio.read prints a damaged file's error and calls
             # sys.exit(1) (mpmflow plot exited 1 on a truncated snapshot)
@@ -74,6 +83,17 @@ class Snapshot:
                 "arrays have different lengths."
             )
         return data
+
+
+def _no_points(path: Path) -> bool:
+    """Whether the VTU file ``path`` (as mpmflow writes it) holds no particle: its header
+    says NumberOfPoints="0" (False when it cannot be read: ``read`` says why)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(512)
+    except OSError:
+        return False
+    return b'<Piece NumberOfPoints="0"' in head
 
 
 class RunResults:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 
+import mpmflow
 from mpmflow import Simulation, load_case
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
@@ -105,3 +106,42 @@ def test_an_obstacle_takes_the_walls_condition_beside_an_outlet():
     )
     assert case.domain.uniform_walls() == "no_slip"
     assert case.domain.outlet_sides() == [False, True, False, False]
+
+
+@pytest.mark.parametrize("step", ["time.dt=0.001", "time.dt=auto"])
+def test_an_outlet_that_drains_every_particle_ends_the_run_normally(tmp_path, capsys, step):
+    """The column at rest over an outlet floor falls out of the tank in about 0.2 s: the run
+    ends there, "completed", with a notice, the outflow holding the initial mass to
+    rounding; every writer (time series, snapshots, centre of mass, probes) and the summary
+    take the empty state, and the results read back (an empty snapshot too)."""
+    out = tmp_path / "o"
+    overrides = [
+        "domain.walls.y_min=outlet",
+        "bodies.0.particles_per_cell=2",
+        step,
+        "output.snapshot_interval=0.01",
+        "output.centre_of_mass=true",
+        "probes=[{name='p', quantity='pressure', position=[0.05, 0.01]}]",
+    ]
+    args = ["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(out), "-q"]
+    code = main(args + [a for o in overrides for a in ("--set", o)])
+    err = capsys.readouterr().err
+    assert code == 0 and "Traceback" not in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "completed", summary["message"]
+    assert summary["message"].startswith("every particle left through the outlets by t = ")
+    assert (
+        f"mpmflow: note: {summary['message']}" in err and summary["message"] in summary["notices"]
+    )
+    assert 0.1 < summary["time"] < 0.5 and summary["particles"] == 0  # time.end is 1 s
+    # 2 particles a cell along each axis: 20 columns of 39 (0.195 m deep)
+    assert summary["outflow"]["particles"] == 20 * 39 and summary["particles_lost"] == 0
+    assert summary["outflow"]["mass"] == pytest.approx(summary["mass_initial"], rel=1e-12, abs=0)
+    assert summary["mass_final"] == 0.0 and abs(summary["mass_relative_change"]) < 1e-12
+    run = mpmflow.open_run(out)
+    assert run.timeseries["time"][-1] == pytest.approx(summary["time"])
+    assert run.timeseries["kinetic_energy"][-1] == 0.0 and np.isnan(run.timeseries["max_speed"][-1])
+    last = run.snapshots[-1]
+    assert last.time == pytest.approx(summary["time"]) and last.read()["x"].shape == (0, 2)
+    centre = np.loadtxt(out / "centre_of_mass.csv", delimiter=",", skiprows=1)[:, 2]  # y
+    assert np.isnan(centre[-1]) and np.isfinite(centre[:-1]).all()

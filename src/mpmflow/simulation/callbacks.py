@@ -5,6 +5,8 @@ built-in ones, in the order they act:
 
 - ``blow_up_guard``: every chunk, the particles must be finite and no faster than
   ``solver.max_speed``; SimulationError otherwise (the outputs so far are kept);
+- ``drained``: every chunk, when no particle is left (all through the outlets), the run
+  stops, "completed", with a notice;
 - ``progress``: every chunk, ``sim.progress(t, step, end)`` when set (the CLI's bar);
 - (the writers, ``writers``), then ``on_output``: at the output times, ``sim.on_output(sim)``
   when set;
@@ -67,7 +69,8 @@ class Stop:
 
 def blow_up_guard(sim: Simulation) -> None:
     """SimulationError when a particle's velocity or position is not finite, or a particle
-    is faster than solver.max_speed, after the last chunk (``sim.last_chunk``)."""
+    is faster than solver.max_speed, after the last chunk (``sim.last_chunk``). No particle
+    left (all through the outlets): nothing to check."""
     assert sim.last_chunk is not None  # the guard acts after a chunk
     first, n, t0, dt = sim.last_chunk
     span = (
@@ -76,6 +79,8 @@ def blow_up_guard(sim: Simulation) -> None:
         else f" at step {first} (t = {t0 + dt:.6g} s)"
     )
     P = sim.particles
+    if P.count == 0:
+        return
     if not (np.isfinite(P.v).all() and np.isfinite(P.x).all()):
         bad = np.flatnonzero(~np.isfinite(P.v).all(axis=1) | ~np.isfinite(P.x).all(axis=1))
         raise SimulationError(
@@ -95,6 +100,18 @@ def blow_up_guard(sim: Simulation) -> None:
             f"up to t = {t0:.6g} s are kept. Try a smaller time.dt, or raise "
             "solver.max_speed if such speeds are real."
         )
+
+
+def drained(sim: Simulation) -> None:
+    """Every particle has left through the outlets: the run ends here, completed, with a
+    notice (nothing is left to step; no checkpoint: nothing to continue)."""
+    if sim.particles.count == 0 and sim.stopping is None:
+        message = (
+            f"every particle left through the outlets by t = {sim.time:.6g} s (step "
+            f"{sim.steps}): the run ends there"
+        )
+        sim.notices.append(message)
+        sim.stop(message, status="completed", checkpoint=False)
 
 
 def progress(sim: Simulation) -> None:

@@ -78,9 +78,8 @@ class Simulation:
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.overwrite = bool(overwrite)
         self.progress = progress
-        self.on_output: Callable[[Simulation], None] | None = (
-            None  # optional callable(sim), called after each output row
-        )
+        # optional callable(sim), called after each output row
+        self.on_output: Callable[[Simulation], None] | None = None
         self.time = 0.0
         self.steps = 0
         self.counters = Counters()
@@ -91,19 +90,15 @@ class Simulation:
         self.threads: ThreadGovernor | None = None  # while a run goes
         self.last_checkpoint: Path | None = None
         self.resumed_from: Path | None = None  # the checkpoint this run continues, if any
-        self.resume_state: dict[str, Any] | None = (
-            None  # what that checkpoint recorded of the outputs and schedules (its JSON)
-        )
-        self.stop_signal: int | None = (
-            None  # set (to a signal number) to stop at the next output time
-        )
-        self.stop_now: int | None = (
-            None  # set (to a signal number) to stop after the current chunk,
-        )
-        # without a checkpoint (the CLI's second signal: its StopNow may be lost in a __del__)
-        self.last_chunk: tuple[int, int, float, float] | None = (
-            None  # (first step, steps, t0, dt) of the last chunk
-        )
+        # what that checkpoint recorded of the outputs and schedules (its JSON)
+        self.resume_state: dict[str, Any] | None = None
+        # set (to a signal number) to stop at the next output time
+        self.stop_signal: int | None = None
+        # set (to a signal number) to stop after the current chunk, without a checkpoint
+        # (the CLI's second signal: its StopNow may be lost in a __del__)
+        self.stop_now: int | None = None
+        # (first step, steps, t0, dt) of the last chunk
+        self.last_chunk: tuple[int, int, float, float] | None = None
         self.wall_before = 0.0  # wall seconds of the runs this one continues
         self._wall0: float | None = None
         self._folder: RunFolder | None = None  # the claimed output folder
@@ -135,6 +130,7 @@ class Simulation:
         builtin = partial(Action, builtin=True)
         self.actions = [
             builtin("blow_up_guard", callbacks.blow_up_guard, chunks),
+            builtin("drained", callbacks.drained, chunks),
             builtin("progress", callbacks.progress, chunks),
             *[
                 builtin(
@@ -343,6 +339,7 @@ class Simulation:
         bins = bins if bins is not None else self._bins()
         front, height = front_and_height(g, bins.theta)
         speed = np.sqrt(np.sum(P.v**2, axis=1))
+        empty = P.count == 0  # every particle left through the outlets: no largest value
         return {
             "time": self.time,
             "front": front,
@@ -350,8 +347,8 @@ class Simulation:
             "step": self.steps,
             "kinetic_energy": kinetic_energy(P),
             "potential_energy": potential_energy(P, self.case.physics.gravity),
-            "max_speed": float(speed.max()),
-            "max_pressure": float(P.pressure.max()),
+            "max_speed": np.nan if empty else float(speed.max()),
+            "max_pressure": np.nan if empty else float(P.pressure.max()),
             "pressure_noise": pressure_noise(g, P),
             **volume_measures(bins.theta, g.cell_volume, self.volume0, self._open()),
             "max_particles_per_cell": int(np.diff(bins.start).max()),

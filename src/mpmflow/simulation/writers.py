@@ -21,6 +21,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from ..diagnostics import probes
 from ..output.snapshots import SnapshotWriter
 from ..output.timeseries import (
@@ -130,7 +132,10 @@ class CentreOfMass(_Rows):
 
     def __call__(self, sim: Simulation) -> None:
         P = sim.particles
-        c = (P.mass[:, None] * P.x).sum(axis=0) / P.mass.sum()
+        if P.count == 0:  # every particle left through the outlets: no centre
+            c = np.full(P.x.shape[1], np.nan)
+        else:
+            c = (P.mass[:, None] * P.x).sum(axis=0) / P.mass.sum()
         self.append({"time": sim.time, **{f"{a}_c": float(v) for a, v in zip("xyz", c)}})
 
 
