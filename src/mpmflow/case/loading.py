@@ -50,8 +50,8 @@ def _read_toml(path: str | Path) -> dict[str, Any]:
             "is not a case file (a case is a page of TOML text); give the path of "
             "a .toml case file, e.g. examples/dam_break.toml."
         )
-    try:
-        text = raw.decode("utf-8")
+    try:  # a byte-order mark (some Windows editors write one) is not part of the TOML
+        text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise CaseError(
             f"Case file {path} is not a UTF-8 text file; give a TOML case file, "

@@ -95,7 +95,8 @@ class Case(Section):
 
     def _shape(self, kind: str, k: int) -> Shape:
         spec = getattr(self, kind)[k]
-        key = (kind, k, spec.model_dump_json(), str(self.base_dir))
+        key = (kind, k, repr(spec.model_dump()), str(self.base_dir))  # (not JSON: a path
+        # that is not UTF-8 has no JSON text)
         if key not in self._shapes:
             self._shapes[key] = from_spec(
                 spec, len(self.domain.size), self.base_dir, key=f"{kind}.{k}"
@@ -183,7 +184,7 @@ class Case(Section):
     def particle_counts(self) -> list[float]:
         """The exact number of particles each body is seeded with (obstacles left out)."""
         key = (
-            self.model_dump_json(include={"bodies", "obstacles", "grid", "domain"}),
+            repr(self.model_dump(include={"bodies", "obstacles", "grid", "domain"})),
             str(self.base_dir),
         )
         if key not in self._counts:

@@ -4,7 +4,7 @@ classes (``mpmflow.geometry`` builds the geometry from them)."""
 
 from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import Discriminator, Field, Tag, model_validator
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 from typing_extensions import Self
 
 from ..geometry import shapes
@@ -127,7 +127,6 @@ class _MeshShape(Section):
         description="A mesh's file (STL or OBJ, read with trimesh): the closed surface of a "
         "solid, relative to the case file's folder. Its coordinates are taken in metres "
         "(times scale).",
-        min_length=1,
         examples=["geometry/pier.stl"],
     )
     scale: float = Field(
@@ -142,6 +141,15 @@ class _MeshShape(Section):
         min_length=3,
         max_length=3,
     )
+
+    @field_validator("path")
+    @classmethod
+    def _given(cls, path: str) -> str:
+        # not Field(min_length=1): pydantic's length check refuses a path that is not
+        # UTF-8 (a folder named in another encoding, held in str by surrogate escapes)
+        if not path:
+            raise ValueError("give the path of the mesh file (STL or OBJ)")
+        return path
 
 
 class _BodyFields(Section):
