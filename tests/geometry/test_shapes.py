@@ -14,6 +14,7 @@ import pytest
 import trimesh
 
 from mpmflow.case import validate
+from mpmflow.cli import main
 from mpmflow.errors import CaseError
 from mpmflow.geometry import meshes, shapes
 from mpmflow.geometry.seeding import build_particles
@@ -129,6 +130,23 @@ def test_only_simple_polygons_are_accepted():
         "around the boundary"
     )
     assert "lie on one line" in shapes.polygon_problem([[0, 0], [1, 0], [2, 0], [3, 0]])
+
+
+def test_a_polygon_on_one_line_but_for_rounding_is_refused_by_the_case(tmp_path, capsys):
+    """Three corners on the line y = x + 0.02 whose cross products round to 1e-19 m^2, not
+    0: the polygon was accepted and seeded the 3 lattice points on its edge (issue 40). A
+    thin polygon that is not a line still passes."""
+    line = [[0.005, 0.025], [0.015, 0.035], [0.025, 0.045]]
+    assert "lie on one line" in shapes.polygon_problem(line)
+    assert shapes.polygon_problem([[0.0, 0.0], [1.0, 0.0], [0.5, 1e-6]]) is None
+    vertices = ", ".join(f"[{x}, {y}]" for x, y in line)
+    (tmp_path / "case.toml").write_text(
+        "[domain]\nsize = [0.2, 0.2]\n[grid]\nspacing = 0.02\n[[bodies]]\n"
+        f'type = "polygon"\nvertices = [{vertices}]\n[time]\ndt = 1e-3\nend = 2e-3\n'
+    )
+    code = main(["run", str(tmp_path / "case.toml"), "--out", str(tmp_path / "o"), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2 and "bodies.0: vertices: the polygon's corners lie on one line" in err
 
 
 def test_polygon_against_a_box_on_random_points():
@@ -589,3 +607,45 @@ def test_the_cli_refuses_an_open_mesh_in_one_paragraph(tmp_path):
     assert res.returncode == 2 and "Traceback" not in res.stderr
     assert "obstacles.0.path = 'open.stl' is not a closed surface" in res.stderr
     assert "fill_holes" in res.stderr and res.stderr.count("\n") == 1
+
+
+D2 = {"domain": {"size": [0.2, 0.2]}, "grid": {"spacing": 0.02}, "time": {"dt": 1e-3, "end": 0.01}}
+D3 = {**D2, "domain": {"size": [0.2, 0.2, 0.2]}}
+
+
+@pytest.mark.parametrize(
+    ("case", "shape", "said"),
+    [
+        (D2, {"type": "disc", "centre": [0.1, 0.1], "radius": 0.0}, "radius` = 0.0"),
+        (D2, {"min": [0.1, 0.1], "max": [0.1, 0.15]}, "along x max = [0.1, 0.15] does not"),
+        (D3, {"type": "sphere", "centre": [0.1, 0.1, 0.1], "radius": 0.0}, "radius` = 0.0"),
+        (
+            D3,
+            {"type": "cylinder", "centre": [0.1, 0.1, 0], "axis": [0, 0, 1], "radius": 0.05}
+            | {"length": 0.0},
+            "length` = 0.0",
+        ),
+        (D2, {"type": "polygon", "vertices": [[0.0, 0.0], [0.0, 0.0], [0.1, 0.0]]}, "one line"),
+        (D2, {"type": "polygon", "vertices": [[0.05, 0.05]] * 3}, "one line"),
+        (
+            D3,
+            {"type": "cylinder", "centre": [0.1, 0.1, 0], "axis": [0, 0, 1], "radius": 1e-300}
+            | {"length": 0.1},
+            "seeds no particle",
+        ),
+    ],
+)
+@pytest.mark.parametrize("kind", ["bodies", "obstacles"])
+def test_degenerate_shapes_are_refused_by_key(case, shape, said, kind):
+    """A shape of no size (zero radius, length or width, corners on one point or line) is
+    refused as a body and as an obstacle, by key (issue 40)."""
+    body = {"min": [0.0] * len(case["domain"]["size"]), "max": [0.04] * len(case["domain"]["size"])}
+    data = {**case, "bodies": [shape]} if kind == "bodies" else {**case, "bodies": [body]}
+    if kind == "obstacles":
+        data["obstacles"] = [shape]
+        said = said.replace("bodies.0", "obstacles.0")
+        if said == "seeds no particle":
+            said = "thin"  # an obstacle is refused for being thinner than two cells
+    with pytest.raises(CaseError) as err:
+        validate(data)
+    assert said in str(err.value) and f"{kind}.0" in str(err.value), str(err.value)

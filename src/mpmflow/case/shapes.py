@@ -57,8 +57,14 @@ class _BoxShape(Section):
 
     @model_validator(mode="after")
     def _ordered(self) -> Self:
-        if any(b <= a for a, b in zip(self.min, self.max)):
-            raise ValueError("each entry of max must be larger than the entry of min")
+        flat = [k for k, (a, b) in enumerate(zip(self.min, self.max)) if not b > a]
+        if flat:
+            raise ValueError(
+                "each entry of max must be larger than the entry of min: along "
+                + " and ".join("xyz"[k] for k in flat)
+                + f" max = {self.max} does not exceed min = {self.min}, so the box has no "
+                "size there; give max larger than min"
+            )
         return self
 
 

@@ -25,6 +25,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 ON_SURFACE = 1e-12  # m: a point this close to the surface counts as inside
+# a polygon whose area is below this share of its extent squared has none: its corners lie
+# on one line but for the rounding of their coordinates
+FLAT = 1e-9
 
 DIM_OF = {
     "box": (2, 3),
@@ -225,7 +228,11 @@ def polygon_problem(vertices: Any) -> str | None:
     v = np.asarray(vertices, dtype=float)
     d = v - v[0]
     far = d[np.argmax(np.abs(d).sum(axis=1))]
-    if not np.any(far[0] * d[:, 1] - far[1] * d[:, 0]):
+    # on one line to rounding: no corner further from the line through the first and the
+    # farthest than FLAT times their distance ([0.005, 0.025], [0.015, 0.035], [0.025, 0.045]
+    # has cross products of 1e-19 m^2, not 0, and seeded the lattice points on its edge)
+    scale = float(far @ far)
+    if not np.any(np.abs(far[0] * d[:, 1] - far[1] * d[:, 0]) > FLAT * scale):
         return (
             "vertices: the polygon's corners lie on one line, so they enclose no area; "
             "give its corners in order around its boundary"
@@ -234,7 +241,7 @@ def polygon_problem(vertices: Any) -> str | None:
     if crossing:
         return crossing
     area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
-    if not abs(area) > 0:
+    if not abs(area) > FLAT * scale:
         return (
             "vertices: the polygon's corners enclose no area; give its corners in order "
             "around its boundary"
