@@ -19,6 +19,14 @@ TIGHT = 1e-12
 # differ by at most cond(A) 1e-12 |q| (cond(A) ~ the rows, a few hundred: ~1e-9 |q|, |q| ~
 # 0.01), and the displacement is volume_rate h grad q (0.5 x 0.01 m x 2 |dq|): ~1e-13 m
 POSITION = 1e-12
+# the sealed pool as stepped is at rest and at its volume: the volume system's right-hand
+# side there (a cell's volume fraction - 1, dimensionless) is 0 while every wall holds the
+# water. A wall's reaction at rest is 0 +- round-off, so whether it lets go is decided by
+# the last bits of the direct pressure solve, which follow the BLAS kernels (OpenBLAS's
+# SkylakeX and Nehalem kernels release a node at the second step, its Haswell, Zen and
+# Prescott kernels none): released, the water moves by mm/s and its cells read up to 1.5e-4.
+# The test compresses cells by 10% and more; 1e-3 (0.1% of a cell) tells the two apart
+UNCOMPRESSED = 1e-3
 
 
 def simulation(path, settings=(), steps=30):
@@ -209,7 +217,9 @@ def test_options_pockets_false_leaves_the_volume_systems_sealed_pockets(tmp_path
     check_pockets(on, off, pockets)
     # as stepped, every cell of the pocket lies next to the disc, where only an excess
     # counts, and the trapped water is not compressed: its right-hand side is 0 either way
-    assert np.array_equal(on[2], off[2]) and not off[2][pockets[0]].any()
+    # (to UNCOMPRESSED: on some BLAS kernels the pool has started to move)
+    assert np.abs(off[2][pockets[0]]).max() <= UNCOMPRESSED
+    assert np.abs(on[2] - off[2]).max() <= UNCOMPRESSED
     # compressed (the cells' volume is a view a caller may write before volume_system, as
     # a rank writes its ring's): an excess that differs from cell to cell, moved about
     cells = core.volume_rows[pockets[0]]
@@ -218,7 +228,7 @@ def test_options_pockets_false_leaves_the_volume_systems_sealed_pockets(tmp_path
     assert [list(rows) for rows in again] == [list(pockets[0])]
     assert (off[2][pockets[0]] > 0).sum() >= 2  # an excess where the cells were full
     check_pockets(on, off, again)
-    assert not np.array_equal(on[2], off[2])
+    assert np.abs(on[2] - off[2]).max() > 10 * UNCOMPRESSED  # the pocket's mean taken off
 
 
 def test_volume_apply_ignores_q_without_a_system_and_refuses_one_of_another_size():
