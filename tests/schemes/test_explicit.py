@@ -294,6 +294,9 @@ def test_study_quick(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
     rows = (tmp_path / "study.csv").read_text().splitlines()
     assert len(rows) == 4  # header + projection, explicit real K, explicit reduced K
+    # each run's outputs written from nothing into OUT/runs (git keeps none: issue 40)
+    runs = sorted((tmp_path / "runs").iterdir())
+    assert len(runs) == 3 and all((r / "summary.json").is_file() for r in runs)
     assert "time-step ratio" in (tmp_path / "study.md").read_text()
 
 
