@@ -10,6 +10,7 @@ the documentation and the error messages show. One module per concern:
 - ``shapes``: the shapes of bodies and obstacles ([[bodies]], [[obstacles]]);
 - ``model``: the whole case (``Case``) and the rules between its sections;
 - ``loading``: reading the TOML file, ``--set`` overrides, messages that name the key;
+- ``probe_data``: a probe's measured series (probes.N.data), read and checked;
 - ``reference``: the key reference generated from the schema (docs/reference.md,
   ``mpmflow keys``).
 """

@@ -13,6 +13,7 @@ from ..geometry.shapes import DIM_OF, Shape
 from ..geometry.specs import from_spec
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
+from . import probe_data
 from .domain import Domain
 from .sections import (
     MAX_STEPS,
@@ -260,7 +261,7 @@ class Case(Section):
         folder = (info.context or {}).get("folder") if info is not None else None
         for k, probe in enumerate(self.probes):
             if probe.data is not None:
-                _check_probe_data(k, probe, folder)
+                probe_data.check(k, probe.data, folder)
         if any(s < 2 * self.grid.spacing * (1 - 1e-9) for s in size):
             raise ValueError(
                 f"grid.spacing = {self.grid.spacing:g} m is larger than half the domain "
@@ -352,6 +353,18 @@ class Case(Section):
                     f"probes.{k}.position = {probe.position} m lies outside the "
                     f"domain {box} m; move it inside"
                 )
+            spacing = min(self.grid.spacing / b.particles_per_cell for b in self.bodies)
+            if probe.quantity == "pressure" and probe.window is not None:
+                if probe.window < spacing * (1 - 1e-9):
+                    raise ValueError(
+                        f"probes.{k}.window = {probe.window:g} m is narrower than the "
+                        f"particles' spacing, {spacing:.4g} m (grid.spacing / particles_per_cell "
+                        "of the densest body): it holds at most one particle at a time and none "
+                        "most of the time, so the probe would read 0 (a dry sensor) in water; "
+                        f"give a window of a few particle spacings (at least {spacing:.4g} m), "
+                        "or none for the default (the fewest whole grid cells that hold the "
+                        "particles of a fit)"
+                    )
             if probe.window is not None and probe.window > max(size):
                 raise ValueError(
                     f"probes.{k}.window = {probe.window:g} m is wider than the "
@@ -419,40 +432,3 @@ class Case(Section):
                 if path.is_file():
                     object.__setattr__(spec, "path", str(path))
         return self
-
-
-def _check_probe_data(k: int, probe: Probe, folder: Path | None) -> None:
-    """probes.k.data: its file exists and names its columns (ValueError otherwise); the path
-    is made absolute (relative to ``folder``, the case file's, else the working folder), so
-    that the resolved case in summary.json finds it from anywhere."""
-    data = probe.data
-    assert data is not None  # called for the probes that have data
-    path = Path(data.path).expanduser()
-    if not path.is_absolute():
-        path = (Path(folder) if folder is not None else Path.cwd()) / path
-    path = path.resolve()
-    key = f"probes.{k}.data"
-    try:
-        with open(path, encoding="utf-8") as f:
-            first = f.readline()
-    except OSError as err:
-        raise ValueError(
-            f"{key}.path = {data.path!r}: the file {path} cannot be read ({err.strerror}); give "
-            "the path of the measured series' CSV file, relative to the case file's folder"
-        ) from None
-    except UnicodeDecodeError:
-        raise ValueError(
-            f"{key}.path = {data.path!r}: {path} is not a text file; give the "
-            "path of the measured series' CSV file (a header line, then numbers)"
-        ) from None
-    names = [c.strip().strip('"') for c in first.rstrip("\r\n").split(",")]
-    for field in ("time_column", "column"):
-        name = getattr(data, field)
-        if name not in names:
-            raise ValueError(
-                f"{key}.{field} = {name!r} is not a column of {path.name}, whose header names "
-                + ", ".join(repr(n) for n in names[:20])
-                + (" ..." if len(names) > 20 else "")
-                + f"; set {key}.{field} to one of them, exactly as written"
-            )
-    object.__setattr__(data, "path", str(path))

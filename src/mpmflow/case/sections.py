@@ -216,7 +216,9 @@ class ProbeData(Section):
     path: str = Field(
         description="The measured series' CSV file (a header line naming the columns, then "
         "rows of numbers separated by commas), relative to the case file's folder (to the "
-        "working folder for a case built in Python). Checked when the case is loaded.",
+        "working folder for a case built in Python). Checked when the case is loaded: in "
+        "the two columns the probe reads every row holds a finite number (no text, nan or "
+        "inf) and the times do not decrease; a line that breaks this is refused by number.",
         examples=[
             "../shared/data/validation/spheric_test2_kleefsman2005_marin_exp_P1-P8_H1-H4.csv"
         ],
@@ -265,7 +267,9 @@ class Probe(Section):
         "whole grid cells that hold the 2 (D + 1) particles of a fit at the sparsest body's "
         "particles_per_cell (one cell at 3 or more per axis in 2D, 2 or more in 3D; two "
         "cells at the default 2 in 2D). A larger window averages more particles (less "
-        "noise, less resolution).",
+        "noise, less resolution). At least the particles' spacing (grid.spacing / "
+        "particles_per_cell of the densest body): a narrower window holds one particle at "
+        "most and reads 0 in water most of the time.",
     )
     estimate: Literal["fit", "mean"] = Field(
         "fit",

@@ -109,20 +109,14 @@ QUANTITY = {"Pa": ("pressure", "pressure [Pa]"), "m": ("level", "water level [m]
 
 def measured_series(data: Mapping[str, str]) -> tuple[Floats, Floats]:
     """(time, values) of a probe's measured series, ``probes.N.data`` as the resolved case
-    holds it ({"path", "column", "time_column"}); CaseError when the file cannot be read."""
-    path = Path(data["path"])
+    holds it ({"path", "column", "time_column"}), checked as the case's loading checks it
+    (``case.probe_data``); CaseError when the file cannot be read or no longer holds it."""
+    from ..case.probe_data import read_series
+
     try:
-        with open(path, encoding="utf-8") as f:
-            names = [c.strip().strip('"') for c in f.readline().rstrip("\r\n").split(",")]
-        cols = (names.index(data["time_column"]), names.index(data["column"]))
-        values = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=cols, ndmin=2)
-    except (OSError, UnicodeDecodeError, ValueError) as err:
-        raise CaseError(
-            f"the measured series {path} (column {data['column']!r}) cannot be "
-            f"read ({type(err).__name__}: {err})"
-        ) from None
-    keep = np.all(np.isfinite(values), axis=1)
-    return values[keep, 0], values[keep, 1]
+        return read_series(data["path"], data["time_column"], data["column"])
+    except ValueError as err:
+        raise CaseError(str(err)) from None
 
 
 # probes a panel names in a legend: while each has its own colour of matplotlib's cycle
