@@ -38,7 +38,8 @@ point method, solving the pressure implicitly with Chorin's projection (Kularath
 RUN_HELP = """\
 Run a case and write its outputs to DIR:
   timeseries.csv   one row per output.interval: time [s], front [m], height [m], ...
-  summary.json     status, steps, particles, wall_seconds, solver statistics, resolved case
+  summary.json     status, steps, particles, wall_seconds, solver statistics, the energy
+                   check, resolved case
   particles.pvd    ParaView time series of particle snapshots (particles_NNNNNN.vtu)
 
 Any case key can be overridden with --set, using the dotted names of the case-file

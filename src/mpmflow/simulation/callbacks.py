@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import CaseError, SimulationError
 from ..interrupts import StopNow
+from . import energy
 from .schedules import Schedule
 
 if TYPE_CHECKING:
@@ -69,8 +70,10 @@ class Stop:
 
 def blow_up_guard(sim: Simulation) -> None:
     """SimulationError when a particle's velocity or position is not finite, or a particle
-    is faster than solver.max_speed, after the last chunk (``sim.last_chunk``). No particle
-    left (all through the outlets): nothing to check."""
+    is faster than solver.max_speed, after the last chunk (``sim.last_chunk``). The message
+    names the settings that likely caused it (``energy.advice``) and how far KE + PE had
+    risen by the last output (``energy.so_far``). No particle left (all through the
+    outlets): nothing to check."""
     assert sim.last_chunk is not None  # the guard acts after a chunk
     first, n, t0, dt = sim.last_chunk
     span = (
@@ -86,7 +89,7 @@ def blow_up_guard(sim: Simulation) -> None:
         raise SimulationError(
             f"The run blew up{span}: {bad.size} particles have non-finite velocity or "
             f"position (first: particle {bad[0]}). The outputs up to t = {t0:.6g} s are "
-            "kept. Try a smaller time.dt."
+            f"kept.{energy.so_far(sim)} {energy.advice(sim)}"
         )
     with np.errstate(over="ignore"):  # a speed beyond 1e154 m/s is inf: still caught
         speed = np.sqrt(np.sum(P.v**2, axis=1))
@@ -97,8 +100,8 @@ def blow_up_guard(sim: Simulation) -> None:
         raise SimulationError(
             f"The run blew up{span}: particle {fastest} at ({xy}) m moves at "
             f"{speed[fastest]:.4g} m/s, above solver.max_speed = {limit:g} m/s. The outputs "
-            f"up to t = {t0:.6g} s are kept. Try a smaller time.dt, or raise "
-            "solver.max_speed if such speeds are real."
+            f"up to t = {t0:.6g} s are kept.{energy.so_far(sim)} {energy.advice(sim)} Raise "
+            "solver.max_speed only if such speeds are real."
         )
 
 

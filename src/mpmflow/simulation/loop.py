@@ -46,7 +46,7 @@ from ..output.folder import API_HINTS, Hints, Mode, RunFolder
 from ..output.summary import write_summary
 from ..output.timeseries import COLUMNS
 from ..threads import ThreadGovernor
-from . import callbacks, checkpointer, setup, writers
+from . import callbacks, checkpointer, energy, setup, writers
 from .callbacks import Action, Stop
 from .counters import ChunkReport, Counters, add_report
 from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterval
@@ -438,6 +438,7 @@ class Simulation:
             message = f"internal error: {type(err).__name__}: {err}"
             raise
         finally:
+            self.notices += energy.notices(self)  # a rise of KE + PE above its start
             self.summary = _summary(self, status, message)
             if self.out_dir is not None and self.out_dir.is_dir():
                 try:

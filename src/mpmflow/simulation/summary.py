@@ -11,6 +11,7 @@ from ..case import resolved
 from ..diagnostics import probes
 from ..output.timeseries import units as timeseries_units
 from ..stability import case_stable_time_step, sound_speed
+from . import energy
 
 if TYPE_CHECKING:
     from .loop import Simulation
@@ -69,6 +70,8 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         # through the outlets (domain.walls = "outlet"): particles, kg, m^3
         "outflow": {"particles": out.count, "mass": out.mass, "volume": out.volume},
         "max_particles_per_cell": int(np.diff(bins.start).max()),
+        # the largest rise of KE + PE above its start, against the threshold (energy.py)
+        "energy": energy.record(sim),
         "wall_seconds": sim.wall_seconds(),
         "restarted_from": sim.resumed_from.name if sim.resumed_from else None,
         "last_checkpoint": sim.last_checkpoint.name if sim.last_checkpoint else None,
@@ -115,6 +118,8 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         "units": dict(
             timeseries_units(grid.dim),
             mass="kg/m" if grid.dim == 2 else "kg",
+            initial_energy="J/m" if grid.dim == 2 else "J",
+            at_time="s",
             wall_seconds="s",
             domain_used="m",
             spacing="m",
