@@ -1,6 +1,7 @@
 """The whole case (``Case``): its sections and the rules between them (bodies inside the
 domain and apart, time step against end, probes inside, ...), checked as one."""
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +17,7 @@ from ..stability import case_stable_time_step, initial_speed, sound_speed, time_
 from . import probe_data
 from .domain import Domain
 from .sections import (
+    MAX_PRESSURE,
     MAX_STEPS,
     Checkpoint,
     Execution,
@@ -240,6 +242,24 @@ class Case(Section):
                         "box in 3D (surface_amplitude = 0)"
                     )
 
+    def _pressure_scale(self, size: list[float]) -> None:
+        """The hydrostatic pressure over the domain's height, rho |g| H, below MAX_PRESSURE:
+        density and gravity within their ranges can still make it meaningless in a domain
+        of absurd size (the pressure solve's sums of squares overflow near 1e150 Pa)."""
+        g = math.hypot(*self.physics.gravity)
+        if g == 0:
+            return
+        height = sum(abs(c) / g * s for c, s in zip(self.physics.gravity, size))
+        scale = self.material.density * g * height
+        if not scale <= MAX_PRESSURE:
+            raise ValueError(
+                f"the hydrostatic pressure over the domain's height, material.density x "
+                f"|physics.gravity| x {height:.4g} m = {scale:.3g} Pa, is above "
+                f"{MAX_PRESSURE:g} Pa, where no liquid or granular material is "
+                "incompressible (water's bulk modulus is 2.2e9 Pa): a mistake of units? Give "
+                "domain.size in m, material.density in kg/m^3 and physics.gravity in m/s^2"
+            )
+
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo) -> Self:
         if info.context and info.context.get("base_dir") is not None:
@@ -274,18 +294,9 @@ class Case(Section):
                 f"of the domain ({size} m), beyond what any computer holds; give a larger "
                 "grid.spacing (the paper's dam break uses 0.004 m)"
             )
-        D = len(size)
-        for k, body in enumerate(self.bodies):
-            volume = (self.grid.spacing / body.particles_per_cell) ** D
-            mass = self.material.density * volume
-            # (a particle volume that underflows is the spacing's: the memory check's)
-            if volume >= np.finfo(float).tiny and not mass >= np.finfo(float).tiny:
-                raise ValueError(
-                    f"material.density = {self.material.density:g} kg/m^3 gives the particles "
-                    f"of bodies.{k} a mass of {mass:g} kg, too small for a floating-point "
-                    "number to hold (masses and energies would be zero); give the density "
-                    "in kg/m^3 (water: 1000)"
-                )
+        # (a density of at least MIN_DENSITY keeps the particles' mass above underflow
+        # wherever their volume is: a volume that underflows is the memory check's)
+        self._pressure_scale(size)
         for k, body in enumerate(self.bodies):
             if not isinstance(body, BoxBody):
                 continue  # placement.check

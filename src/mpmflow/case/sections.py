@@ -4,9 +4,10 @@ The domain (its size, walls and periodic axes) is in ``case.domain``, the shapes
 bodies and obstacles in ``case.shapes``; the whole case and its
 cross-field rules in ``case.model``."""
 
+import math
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from typing_extensions import Self
 
 from .. import materials
@@ -17,6 +18,12 @@ MAX_STEPS = 999_999_999
 COURANT = 1.0  # time.courant's default (docs/method.md, "Adaptive steps")
 MAX_DT = 1e-2  # s: time.max_dt's default, the paper's step for its dam break
 MAX_CASE_BYTES = 16 * 2**20  # a case file is a page of TOML; anything larger is not one
+# the scales of a case that a flow of liquid or grains can have (the keys' descriptions say
+# why); beyond them the input is a mistake of units, and the pressure solve overflowed
+MIN_DENSITY = 1.0  # kg/m^3: about the air the method leaves out (1.2)
+MAX_DENSITY = 1e5  # kg/m^3: four times osmium, the densest element
+MAX_GRAVITY = 1e4  # m/s^2: about 1,000 g, geotechnical centrifuges' top
+MAX_PRESSURE = 1e12  # Pa: rho |g| H; water's bulk modulus is 2.2e9 Pa
 
 
 class Section(BaseModel):
@@ -54,9 +61,15 @@ class Material(Section):
     )
     density: float = Field(
         1000.0,
-        gt=0,
+        ge=MIN_DENSITY,
+        le=MAX_DENSITY,
         description="Density (kg/m^3); with model = "
-        '"mu_i" the bulk density, solid fraction x grain_density.',
+        '"mu_i" the bulk density, solid fraction x grain_density. From '
+        f"{MIN_DENSITY:g} to {MAX_DENSITY:g} kg/m^3: the method leaves out the air "
+        "above the material (1.2 kg/m^3), which only a much denser material allows, and no "
+        "material is denser than a few times osmium (22,590 kg/m^3; mercury: 13,546); "
+        "outside the range the value is a mistake of units (at 1e300 the pressure solve "
+        "overflowed).",
     )
     viscosity: float = Field(
         0.0,
@@ -124,10 +137,24 @@ class Physics(Section):
     gravity: list[float] = Field(
         [0.0, -9.81],
         description="Gravitational acceleration (m/s^2); "
-        "the default points down the last axis, [0, 0, -9.81] in 3D.",
+        "the default points down the last axis, [0, 0, -9.81] in 3D. Its magnitude is at "
+        f"most {MAX_GRAVITY:g} m/s^2 (about 1,000 g, the top of the geotechnical "
+        "centrifuges that scale flows of soil and water up by g); more is a mistake of "
+        "units (at 1e300 the pressure solve overflowed).",
         min_length=2,
         max_length=3,
     )
+
+    @field_validator("gravity")
+    @classmethod
+    def _magnitude(cls, gravity: list[float]) -> list[float]:
+        g = math.hypot(*gravity)  # (hypot: no overflow on the way)
+        if not g <= MAX_GRAVITY:
+            raise ValueError(
+                f"its magnitude is {g:.4g} m/s^2, above {MAX_GRAVITY:g} m/s^2; give the "
+                "acceleration in m/s^2 (Earth: 9.81)"
+            )
+        return gravity
 
 
 class Time(Section):
