@@ -1,16 +1,15 @@
 """Whole-process wall time of `mpmflow run examples/dam_break.toml` (1.0 s of flow, 0.004 m,
 26k particles, 1000 steps, outputs at the example's intervals).
 
-One warm-up run first (it fills the page cache), then --repeat timed runs; prints the median, min and max and the machine, and appends a JSON
-record to benchmarks/results.jsonl.
+One warm-up run first (it fills the page cache), then --repeat timed runs; prints the
+median, min and max and the machine, appends the medians to benchmarks/history.csv and the
+whole record to benchmarks/results.jsonl (not tracked). `make bench` runs it.
 
     python benchmarks/dam_break.py [--repeat 5] [--set key=value ...]
 """
 
 import argparse
 import json
-import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -19,42 +18,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def machine():
-    cpu = platform.processor()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import subprocess
-
-    import numpy
-
-    try:
-        commit = subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-        ).stdout.strip()
-    except OSError:
-        commit = "?"
-    return {
-        "cpu": cpu,
-        "cores": os.cpu_count(),
-        "python": platform.python_version(),
-        "numpy": numpy.__version__,
-        "commit": commit,
-        "threads": os.environ.get("OMP_NUM_THREADS", "default"),
-    }
-
-
-def save(record):
-    """Print the machine and append the record to benchmarks/results.jsonl."""
-    print(f"machine: {record['machine']}")
-    with open(ROOT / "benchmarks" / "results.jsonl", "a") as f:
-        f.write(json.dumps(record) + "\n")
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from history import append, machine, save  # noqa: E402
 
 
 def run_once(case, out, overrides):
@@ -85,6 +50,7 @@ def main():
     ap.add_argument("--set", action="append", default=[], dest="overrides")
     ap.add_argument("--label", default="")
     args = ap.parse_args()
+    start = machine()
     with tempfile.TemporaryDirectory() as tmp:
         run_once(args.case, tmp, args.overrides)  # warm-up: JIT cache
         walls, loops = [], []
@@ -103,7 +69,7 @@ def main():
         "time_loop_median_s": statistics.median(loops),
         "steps": summary["steps"],
         "particles": summary["particles"],
-        "machine": machine(),
+        "machine": start,
         "date": time.strftime("%Y-%m-%d"),
     }
     print(
@@ -114,6 +80,18 @@ def main():
         f"{record['particles']} particles"
     )
     save(record)
+    # the case and its overrides name the benchmark: rows of one name measure one thing
+    append(
+        " ".join([Path(args.case).stem, *args.overrides]),
+        [
+            ("whole process (median)", record["process_median_s"], "s"),
+            ("time loop (median)", record["time_loop_median_s"], "s"),
+        ],
+        note="; ".join(
+            [f"{args.repeat} runs after a warm-up", *([args.label] if args.label else [])]
+        ),
+        start=start,
+    )
 
 
 if __name__ == "__main__":

@@ -7,14 +7,18 @@ the run's wall time; what is left is the outputs, checkpoints and Python between
 
     python benchmarks/profile_step.py [--case examples/dam_break.toml] [--set key=value ...]
 
-Prints a Markdown table of milliseconds per step.
+Prints a Markdown table of milliseconds per step and appends each phase's to
+benchmarks/history.csv.
 """
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from history import append, machine  # noqa: E402
 
 
 def main():
@@ -24,6 +28,7 @@ def main():
     args = ap.parse_args()
     from mpmflow import Simulation, load_case, state
 
+    start = machine()
     Simulation(
         load_case(args.case, [*args.overrides, "time.end=0.003", "output.interval=0.001"])
     ).run()
@@ -45,6 +50,17 @@ def main():
     for phase, t in [*totals.items(), ("outputs, checkpoints, Python between chunks", rest)]:
         print(f"| {phase} | {1e3 * t / steps:.3f} | {100 * t / wall:.0f}% |")
     print(f"| total | {1e3 * wall / steps:.3f} | 100% |")
+    append(
+        " ".join(["profile_step", Path(args.case).name, *args.overrides]),
+        [
+            *((phase, 1e3 * t / steps, "ms") for phase, t in totals.items()),
+            ("outputs and Python", 1e3 * rest / steps, "ms"),
+            ("total", 1e3 * wall / steps, "ms"),
+        ],
+        note=f"per step, {steps} steps, {sim.particles.count} particles",
+        start=start,
+        threads=state.max_threads(),
+    )
 
 
 if __name__ == "__main__":

@@ -12,7 +12,9 @@ memory of each process, and the speed-up from 1 to 2 threads on the largest case
 With --dim 3: examples/dam_break_3d.toml at 0.008, 0.004 and 0.002 m (16k, 128k, 1M
 particles; use a short --end, e.g. 0.01).
 
-Appends a JSON record to benchmarks/results.jsonl (not tracked).
+Appends a JSON record to benchmarks/results.jsonl (not tracked) and the time per step and
+peak memory of each run to benchmarks/history.csv. The suite's 3D step: `python
+benchmarks/scaling.py --dim 3 --end 0.005` (the time per step at 0.002 m, 1.04M particles).
 """
 
 import argparse
@@ -29,7 +31,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import append, machine, save  # noqa: E402
 
 MESHES = {
     2: [(0.004, 1e-3), (0.002, 5e-4), (0.001, 2.5e-4)],
@@ -115,6 +117,7 @@ def main():
         child(*args.child)
         return
     meshes = MESHES[args.dim]
+    start = machine()
     run_child(meshes[0][0], 1e-3, 0.003, max(args.threads), args.dim)  # warm-up: the cache
     results = {}
     for threads in args.threads:
@@ -146,7 +149,7 @@ def main():
         "repeat": args.repeat,
         "exponent": exponent,
         "runs": {f"{k[0]}threads_{k[1]}m": v for k, v in results.items()},
-        "machine": machine(),
+        "machine": start,
         "date": time.strftime("%Y-%m-%d"),
     }
     if len(args.threads) > 1:
@@ -158,6 +161,22 @@ def main():
         record["speedup"] = speedup
         print(f"speed-up from {min(args.threads)} to {top} threads at {largest} m: {speedup:.2f}x")
     save(record)
+    for threads in args.threads:
+        append(
+            f"scaling {args.dim}D",
+            [
+                (f"{what}, {spacing:g} m", r[key], unit)
+                for spacing, _ in meshes
+                if (r := results.get((threads, spacing)))
+                for what, key, unit in (
+                    ("time per step", "s_per_step", "s"),
+                    ("peak memory", "peak_mb", "MiB"),
+                )
+            ],
+            note=f"median of {args.repeat}, {args.end:g} s of flow from rest",
+            start=start,
+            threads=threads,
+        )
 
 
 if __name__ == "__main__":

@@ -6,7 +6,9 @@ peak memory of `mpmflow run`, as a user runs it, with the validation's measures 
 The run is a child process (`mpmflow run ... -q`, snapshots off), timed from the outside;
 the peak resident memory is that child's (``ru_maxrss`` of RUSAGE_CHILDREN). Where 3.22 m
 is not a whole number of cells the end wall is an obstacle (``validation.spheric.overrides``).
-Prints one JSON line and appends it to benchmarks/results.jsonl (not tracked).
+Prints one JSON line and appends it to benchmarks/results.jsonl (not tracked); the wall
+time, steps and peak memory to benchmarks/history.csv. The suite's run is SPHERIC at 0.04 m:
+`python benchmarks/spheric.py --spacing 0.04 --set time.dt=auto` (about 2 minutes on 2 cores).
 """
 
 import argparse
@@ -19,7 +21,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import append, machine, save  # noqa: E402
 
 
 def main():
@@ -49,10 +51,8 @@ def main():
         "-q",
         *sets,
     ]
-    # the commit the run starts from (a long run outlives commits made meanwhile)
-    commit = subprocess.run(
-        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-    ).stdout.strip()
+    # the machine and commit the run starts from (a long run outlives commits made meanwhile)
+    start = machine()
     t0 = time.perf_counter()
     res = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
@@ -75,7 +75,7 @@ def main():
     m = spheric.measures(Series, spheric.data(), args.end)
     record = {
         "benchmark": "spheric",
-        "commit": commit,
+        "commit": start["commit"],
         "spacing": args.spacing,
         "end": args.end,
         "overrides": args.set,
@@ -85,10 +85,21 @@ def main():
         "loop_s": run.summary["wall_seconds"],
         "peak_mb": peak,
         "measures": m,
-        "machine": machine(),
+        "machine": start,
     }
     print(json.dumps(record))
     save(record)
+    append(
+        " ".join([f"spheric {args.spacing:g} m", *args.set]),
+        [
+            ("whole process", wall, "s"),
+            ("time loop", run.summary["wall_seconds"], "s"),
+            ("steps", run.summary["steps"], ""),
+            ("peak memory", peak, "MiB"),
+        ],
+        note=f"{args.end:g} s of flow, {run.summary['particles']} particles",
+        start=start,
+    )
 
 
 if __name__ == "__main__":

@@ -27,10 +27,67 @@ def test_documentation_pages_are_linked_and_present():
         "docs/reference.md",
         "docs/method.md",
         "benchmarks/README.md",
+        "docs/notes/benchmarks-diary.md",
     ):
         assert f"({page})" in readme, page
         assert (ROOT / page).is_file(), page
     assert "(docs/validation/README.md)" in readme  # written with the validation work
+
+
+BENCHMARKS = ROOT / "benchmarks"
+
+
+def test_benchmarks_are_a_suite_that_keeps_its_history():
+    """benchmarks/ (issue 40): each script of the suite is named in its README with a
+    command and appends its figures to history.csv; each one-off study stands under
+    investigations/ and is named there too; the README's links resolve."""
+    import re
+
+    readme = (BENCHMARKS / "README.md").read_text()
+    suite = [
+        p
+        for p in [
+            *BENCHMARKS.glob("*.py"),
+            *BENCHMARKS.glob("mpi/*.py"),
+            *BENCHMARKS.glob("peers/*.py"),
+        ]
+        if p.name != "history.py"
+    ]
+    assert len(suite) >= 7
+    for p in suite:
+        name = p.relative_to(ROOT).as_posix()
+        assert name in readme, name
+        assert "append(" in p.read_text(), f"{name} does not append to history.csv"
+    studies = [
+        p.relative_to(BENCHMARKS / "investigations")
+        for p in BENCHMARKS.glob("investigations/**/*.py")
+    ]
+    assert studies
+    for p in studies:
+        assert f"`{p.as_posix()}`" in readme, p
+    for link in re.findall(r"\]\(([^)#]+)\)", readme):
+        assert (BENCHMARKS / link).exists(), link
+
+
+def test_a_benchmark_appends_a_row_per_figure_to_the_history(tmp_path, monkeypatch):
+    import csv
+
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    import history
+
+    with open(history.HISTORY, newline="") as f:
+        assert tuple(next(csv.reader(f))) == history.COLUMNS  # the tracked file's header
+    monkeypatch.setattr(history, "HISTORY", tmp_path / "history.csv")
+    start = history.machine()
+    history.append("dam_break", [("whole process (median)", 4.2612345, "s")], "a test", start)
+    history.append("scaling 3D", [("time per step, 0.002 m", 0.4, "s")], start=start, threads=1)
+    with open(tmp_path / "history.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["benchmark"] for r in rows] == ["dam_break", "scaling 3D"]
+    first = rows[0]
+    assert first["value"] == "4.26123" and first["unit"] == "s" and first["note"] == "a test"
+    assert first["commit"] == start["commit"] and first["machine"] == history.cpu_model()
+    assert rows[1]["threads"] == "1" and rows[1]["cores"] == str(start["cores"])
 
 
 def test_every_example_says_what_it_shows_and_how_long_it_takes():

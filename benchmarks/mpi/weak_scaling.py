@@ -12,11 +12,15 @@ Prints (rank 0) one JSON line: ranks, steps, the median and slowest rank's secon
 (after a 20-step warm-up), the PETSc share, and per rank and step: node-fill bytes sent,
 halo particles received, particles migrated, the pressure matrix's off-rank columns (each
 CG iteration exchanges them), CG iterations. Times are only comparable at N <= cores.
+Rank 0 appends the slowest and median rank's seconds per step and PETSc's share to
+benchmarks/history.csv (--alone: the compiled step's).
 """
 
 import argparse
 import json
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -24,6 +28,9 @@ from mpmflow import load_case
 from mpmflow.parallel.comm import world
 from mpmflow.parallel.scheme import DistributedProjection
 from mpmflow.simulation import Simulation
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from history import append, machine  # noqa: E402
 
 
 def main() -> None:
@@ -37,6 +44,7 @@ def main() -> None:
     args = parser.parse_args()
     comm = world()
     n = comm.size
+    start = machine() if comm.rank == 0 else None
     case = load_case(
         "examples/dam_break.toml",
         [
@@ -52,14 +60,13 @@ def main() -> None:
         sim.scheme.advance(sim.dt, args.warm)
         wall = time.perf_counter()
         sim.scheme.advance(sim.dt, args.steps)
-        print(
-            json.dumps(
-                {
-                    "ranks": 1,
-                    "alone": True,
-                    "wall_per_step": (time.perf_counter() - wall) / args.steps,
-                }
-            )
+        per_step = (time.perf_counter() - wall) / args.steps
+        print(json.dumps({"ranks": 1, "alone": True, "wall_per_step": per_step}))
+        append(
+            "mpi/weak_scaling",
+            [("1 rank, compiled step (--alone)", per_step, "s")],
+            note=f"per step, {args.steps} steps after {args.warm}",
+            start=start,
         )
         return
     if not isinstance(sim.scheme, DistributedProjection):
@@ -99,6 +106,16 @@ def main() -> None:
             },
         }
         print(json.dumps(out))
+        append(
+            "mpi/weak_scaling",
+            [
+                (f"{n} ranks, slowest rank", out["seconds_per_step_max"], "s"),
+                (f"{n} ranks, median rank", out["seconds_per_step_median"], "s"),
+                (f"{n} ranks, PETSc share", out["petsc_share"], ""),
+            ],
+            note=f"per step, {args.pc}, {args.steps} steps after {args.warm}",
+            start=start,
+        )
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import append, machine, save  # noqa: E402
 
 REFERENCE = ROOT.parent / "shared" / "data" / "reference" / "vof_interfoam_ar2_dx0.004_slip.csv"
 A = 0.114  # m, the column width
@@ -291,6 +291,7 @@ def main():
         )
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="peers_"))
     base.mkdir(parents=True, exist_ok=True)
+    start = machine()
     run_mpmflow(base / "mpmflow_warmup")  # the page cache, as any first run fills it
     ours, theirs = [], []
     for k in range(args.pairs):
@@ -333,10 +334,20 @@ def main():
             "ratio_median": statistics.median(ratios),
             "deviation_mpmflow": dev_ours,
             "deviation_interfoam": dev_theirs,
-            "machine": machine(),
+            "machine": start,
             "openfoam": shutil.which("interFoam"),
             "date": time.strftime("%Y-%m-%d"),
         }
+    )
+    append(
+        "peers/interfoam_dam_break",
+        [
+            ("mpmflow whole process (median)", statistics.median(ours), "s"),
+            ("interFoam whole process (median)", statistics.median(theirs), "s"),
+            ("interFoam / mpmflow", statistics.median(ratios), "x"),
+        ],
+        note=f"{args.pairs} pairs; interFoam serial",
+        start=start,
     )
     if not args.keep:
         shutil.rmtree(base, ignore_errors=True)

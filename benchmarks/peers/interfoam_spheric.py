@@ -68,7 +68,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from dam_break import machine, save  # noqa: E402
+from history import append, machine, save  # noqa: E402
 from interfoam_dam_break import FV_SCHEMES, HEADER, openfoam_command  # noqa: E402
 
 EXAMPLE = ROOT / "examples" / "spheric_test2.toml"
@@ -454,6 +454,7 @@ def main():
         )
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="peers_spheric_"))
     base.mkdir(parents=True, exist_ok=True)
+    start = machine()
     n = cells(args.spacing)
     h = [side / k for side, k in zip(TANK, n)]
     print(
@@ -528,13 +529,31 @@ def main():
             }
         )
     record.update(
-        {
-            "machine": machine(),
-            "openfoam": shutil.which("interFoam"),
-            "date": time.strftime("%Y-%m-%d"),
-        }
+        {"machine": start, "openfoam": shutil.which("interFoam"), "date": time.strftime("%Y-%m-%d")}
     )
     save(record)
+    figures = [
+        (
+            f"interFoam whole process, {args.spacing:g} m",
+            statistics.median(record["interfoam_s"]),
+            "s",
+        )
+    ]
+    if args.pairs:
+        figures += [
+            (
+                f"mpmflow whole process, {args.spacing:g} m",
+                statistics.median(record["mpmflow_s"]),
+                "s",
+            ),
+            (f"interFoam / mpmflow, {args.spacing:g} m", record["ratio_median"], "x"),
+        ]
+    append(
+        "peers/interfoam_spheric",
+        figures,
+        note=f"{args.end:g} s of flow; {max(args.pairs, 1)} run(s); interFoam serial, {args.solver}",
+        start=start,
+    )
     if not args.keep:
         shutil.rmtree(base, ignore_errors=True)
 

@@ -6,8 +6,9 @@ SciPy and the compiled core), the particles, the grid's arrays, the pressure sol
 matrix and multigrid hierarchy, by pressure unknowns), the time series kept in memory, and
 the largest passing need: writing a particle snapshot (meshio builds copies of the arrays),
 or measuring an output row (binning the particles again). The bytes per particle, node and
-unknown were measured on the dam break at six meshes (benchmarks/memory.py, which also
-checks the estimate against the measured peak; benchmarks/README.md has the numbers).
+unknown were measured on the dam break at six meshes (benchmarks/investigations/memory.py,
+which also checks the estimate against the measured peak; the numbers are in
+docs/notes/benchmarks-diary.md).
 
 A case whose estimate is above what the machine can give is refused before the run
 (CaseError, exit code 2) with the estimate and the settings that size it; the size limits
@@ -34,7 +35,7 @@ if TYPE_CHECKING:
     from .case import Case
 
 MB = 2**20
-# measured (benchmarks/memory.py): see the module docstring
+# measured (benchmarks/investigations/memory.py): see the module docstring
 PROGRAM = 70 * MB  # Python, NumPy, SciPy and the compiled core
 PER_PARTICLE = 84  # B: x, v (2 each), pressure, mass, volume, the cell index and order
 AFFINE = 8  # B per entry of a particle's D x D affine matrix (solver.transfer = "apic")

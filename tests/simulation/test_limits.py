@@ -47,7 +47,7 @@ def test_a_case_too_large_for_the_machine_is_refused_at_once(tmp_path):
 @pytest.mark.slow
 def test_the_limit_comes_from_the_estimate_not_a_fixed_count(tmp_path):
     """1.7e6 particles passed the old fixed limits (5e7) whatever the memory; with 300 MB
-    to give, the estimate (about 800 MB: 801 MB measured by benchmarks/memory.py) refuses them, and 2 GB holds them."""
+    to give, the estimate (about 800 MB: 801 MB measured by benchmarks/investigations/memory.py) refuses them, and 2 GB holds them."""
     fine = ["--set", "grid.spacing=0.0005", "--set", "time.dt=1e-4"]
     res, wall = _cli(
         "run", DAM, "--out", tmp_path / "o", *fine, env={"MPMFLOW_MEMORY_LIMIT": "300M"}
@@ -86,7 +86,7 @@ def test_counts_too_large_for_a_float_are_refused_too():
 def test_the_estimate_is_near_the_measured_peak(tmp_path):
     """The dam break at 0.001 m (416k particles), three steps with a snapshot and a
     checkpoint: the estimate printed before the run is within 30% of the process's peak
-    resident memory (benchmarks/memory.py measures more sizes)."""
+    resident memory (benchmarks/investigations/memory.py measures more sizes)."""
     args = [
         "run",
         DAM,

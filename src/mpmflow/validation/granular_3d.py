@@ -13,7 +13,7 @@ ring one cell wide whose particles' volume over its area is at least one particl
 h / 2), H_inf / H0, the largest speed at the end, the flow's duration (the last output,
 every 0.05 s, at which the furthest particle was more than a particle spacing short of
 where it ends) and whether a far wall was reached. (The whole column, every wall no-slip,
-gives the quarter's run-out to 1%: benchmarks/README.md, "The 3D column as a quarter
+gives the quarter's run-out to 1%: docs/notes/benchmarks-diary.md, "The 3D column as a quarter
 column".)
 """
 
@@ -79,7 +79,7 @@ def quarter_cylinder_obj(r0: float, H0: float, n: int = 128) -> str:
 class Column3D:
     """The quarter column of aspect ratio ``a`` with ``cells`` across r0; ``whole``: the whole
     column in the middle of a tank of side 2 x ``side``, every wall no-slip (the check of the
-    symmetry planes, benchmarks/collapse_3d.py --whole)."""
+    symmetry planes, benchmarks/investigations/collapse_3d.py --whole)."""
 
     a: float
     cells: float

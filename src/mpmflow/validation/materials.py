@@ -151,7 +151,8 @@ def run_wave(out: Path, quick: bool = False, context: Context | None = None) -> 
     return res
 
 
-# the transfers the collapse studies compare (benchmarks/collapse_energy.py, granular_mesh.py)
+# the transfers the collapse studies compare (benchmarks/investigations/collapse_energy.py,
+# granular_mesh.py)
 TRANSFERS = {
     "pic": ["solver.flip=0"],
     "flip": ["solver.flip=0.99"],

@@ -73,7 +73,7 @@ MISS_TOP = (
     "against MARIN's 1.03-1.07 s at 200 Pa; interFoam at 0.04 m: P5 1.40 s, P7 "
     "1.19 s); no thin water lies on the top before (P7's window holds no particle): "
     "where and when the jet lands is not converged at these meshes "
-    '(benchmarks/README.md, "The box\'s front face and top face")'
+    '(docs/notes/benchmarks-diary.md, "The box\'s front face and top face")'
 )
 MISS_FRONT = (
     "after the impact peak the face pressure falls off towards the box's top faster "
@@ -82,7 +82,7 @@ MISS_FRONT = (
     "interFoam 2.1-2.3 kPa at 0.04 m): the jet up the face is thin and fast and the "
     "water piles up lower at the face (0.20-0.26 m at 0.04 m, interFoam "
     "0.24-0.31 m); the mean also falls with the time step (P3 3.4, 3.0, 2.5 kPa at "
-    "5, 2.5, 1 ms at 0.04 m; benchmarks/README.md, \"The box's front face and top "
+    "5, 2.5, 1 ms at 0.04 m; docs/notes/benchmarks-diary.md, \"The box's front face and top "
     'face")'
 )
 _RETURN = (
@@ -90,7 +90,7 @@ _RETURN = (
     "(x = 0) and runs back: at 0.04 m H1 (integral gauge) averages 0.227 m over 1-2 s "
     "against the measured 0.293 m (the first-drop gauge read 0.130 m there: its "
     "drop-outs were 0.10 m of the deficit, the flow the other 0.07 m; "
-    "benchmarks/spheric_gauges.py)"
+    "benchmarks/investigations/spheric_gauges.py)"
 )
 MISS_LEVEL = {"H1": _RETURN, "H2": _RETURN, "H3": _RETURN, "H4": _RETURN}
 TOL_IMPULSE = 0.3

@@ -3,7 +3,7 @@
 noise = RMS of (series - its 50 ms centred moving average: 11 outputs of 5 ms), over the
 outputs in 0.45-1.0 s whose average is whole. time.dt = "auto" unless an override sets it.
 
-    python benchmarks/spheric_noise.py TAG [--spacing 0.04] [--end 1.0] [--set key=value ...]
+    python benchmarks/investigations/spheric_noise.py TAG [--spacing 0.04] [--end 1.0] [--set key=value ...]
 
 Reads at every output (one run, several readings): fit (the probe as configured), mean
 (the window's mean), fit9/mean9 (a 9 mm window, MARIN's sensor; empty at these meshes),
@@ -23,7 +23,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.diagnostics import probes as P
 from mpmflow.validation import spheric
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -1,8 +1,8 @@
-"""Tables of benchmarks/README.md, "Why the water returns late behind the box": mpmflow's
+"""Tables of docs/notes/benchmarks-diary.md, "Why the water returns late behind the box": mpmflow's
 runs/spheric_return_TAG.npz (spheric_return.py) beside interFoam's DIR/return.npz
 (peers/interfoam_spheric_return.py) on the same column lines.
 
-    python benchmarks/spheric_return_table.py TAG [TAG ...] [--foam DIR]
+    python benchmarks/investigations/spheric_return_table.py TAG [TAG ...] [--foam DIR]
 
 Depth = particle volume (low: of the water below z = 0.2 m) / h^2 (mpmflow) or the sum of alpha times the cell height (interFoam)
 in the column; front = the smallest x of a column deeper than 1 cm; u = mean u of the
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ap = argparse.ArgumentParser()
 ap.add_argument("tags", nargs="+")
 ap.add_argument("--foam", default=None)

@@ -6,7 +6,7 @@ water column (sum of alpha times the cell height, the highest cell above alpha 0
 0.05), its pressure and vertical velocity, the rows of the validation (first p > 500 Pa,
 impulse over [t_exp - 0.05, t_exp + 0.3] s) and the level gauges.
 
-    python benchmarks/peers/interfoam_spheric_face.py [--spacing 0.04] [--end 1.5] --keep DIR
+    python benchmarks/investigations/peers/interfoam_spheric_face.py [--spacing 0.04] [--end 1.5] --keep DIR
 """
 
 import argparse
@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "peers"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 import interfoam_spheric as F  # noqa: E402
 
 from mpmflow.validation import spheric  # noqa: E402

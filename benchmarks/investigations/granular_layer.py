@@ -1,7 +1,7 @@
 """A layer of the granular collapse's material on a periodic no-slip floor (issue 26, item 4:
 does the pressure the friction sees, and the friction of the floor, hold in thin layers?).
 
-    python benchmarks/granular_layer.py [--cells 0.5 1 2 4] [--transfer apic flip]
+    python benchmarks/investigations/granular_layer.py [--cells 0.5 1 2 4] [--transfer apic flip]
         [--u0 0] [--model mu_i] [--end 0.3] [--set key=value ...]
 
 The material of examples/granular_collapse.toml (4 mm cells, 2 particles per cell axis), a

@@ -2,8 +2,8 @@
 and by the split scheme side by side, every 10 steps the surge front and column height
 compared, at the end the largest particle difference.
 
-    mpirun -n N .venv-mpi/bin/python benchmarks/mpi/against_one.py STEPS TOL [CASE]
-    .venv-mpi/bin/python benchmarks/mpi/against_one.py STEPS TOL [CASE] --self TOL2
+    mpirun -n N .venv-mpi/bin/python benchmarks/investigations/mpi/against_one.py STEPS TOL [CASE]
+    .venv-mpi/bin/python benchmarks/investigations/mpi/against_one.py STEPS TOL [CASE] --self TOL2
 
 TOL: ``solver.tolerance`` on both sides, the relative residual of every linear solve of the
 step (the pressure and the volume correction; its default is 1e-8; the volume correction

@@ -1,7 +1,7 @@
 """SPHERIC Test 2: the water that comes back behind the box (issue 25, rows P5/P7;
-benchmarks/README.md, "The water behind the box").
+docs/notes/benchmarks-diary.md, "The water behind the box").
 
-    python benchmarks/spheric_return.py TAG [--spacing 0.04] [--end 1.5] [--set key=value ...]
+    python benchmarks/investigations/spheric_return.py TAG [--spacing 0.04] [--end 1.5] [--set key=value ...]
         [--trace T ...]
 
 time.dt = "auto" unless --set says otherwise. At every output, on three vertical-column
@@ -29,7 +29,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.diagnostics import probes as P
 from mpmflow.validation import spheric
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "runs"
 OUT.mkdir(exist_ok=True)
 FACE, Y0, Y1, TOP, BACK = 0.8245, 0.2955, 0.6985, 0.161, 0.6635

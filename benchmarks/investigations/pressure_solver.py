@@ -6,7 +6,7 @@ them), then times on each: the set-up (multigrid hierarchy, AMG hierarchy, LU fa
 one solve from zero to the run's tolerance (1e-8 relative), median of --repeat, and checks
 that the three solutions agree.
 
-    python benchmarks/pressure_solver.py [--repeat 50]
+    python benchmarks/investigations/pressure_solver.py [--repeat 50]
 """
 
 import argparse
@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import machine, save  # noqa: E402
 
 TIMES = (0.1, 0.3, 0.5)
 

@@ -1,9 +1,9 @@
 """interFoam on the 2D dam break (interfoam_dam_break.py's case), fields every 5 ms to 0.6 s,
-then the run-up at the right wall and the water's energy as benchmarks/runup_2d.py measures
+then the run-up at the right wall and the water's energy as benchmarks/investigations/runup_2d.py measures
 them for mpmflow (alpha-weighted cell sums; run-up: the highest cell with alpha > 0.5 in the
 last two columns).
 
-    python benchmarks/peers/interfoam_runup_2d.py DIR [run]   (without "run": a kept case)
+    python benchmarks/investigations/peers/interfoam_runup_2d.py DIR [run]   (without "run": a kept case)
 """
 
 import re
@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "peers"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 import interfoam_dam_break as F  # noqa: E402
 
 case = Path(sys.argv[1])

@@ -1,7 +1,7 @@
 """SPHERIC Test 2: what the water does at the box's front face (issue 25, rows P3 impulse and
 first water on the top face).
 
-    python benchmarks/spheric_face.py TAG [--spacing 0.04] [--end 1.4] [--start 0.3]
+    python benchmarks/investigations/spheric_face.py TAG [--spacing 0.04] [--end 1.4] [--start 0.3]
         [--dump T ...] [--set key=value ...]
 
 time.dt = "auto" unless --set says otherwise. At every output from --start (0.3 s) records
@@ -35,7 +35,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.diagnostics import probes as P
 from mpmflow.validation import spheric
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FACE, Y0, Y1, TOP, BACK = 0.8245, 0.2955, 0.6985, 0.161, 0.6635
 YC = 0.471
 

@@ -4,7 +4,7 @@ on vertical lines of cell centres at y = 0.1, 0.471 and 0.9 m for x from the end
 1.6 m, written every 0.01 s. Writes DIR/return.npz (t, x, z, alpha[t, line, x, z],
 u[t, line, x, z]; NaN inside the box) and DIR/probes.csv (P1-P8, H1-H4).
 
-    python benchmarks/peers/interfoam_spheric_return.py [--spacing 0.04] [--end 1.3] --keep DIR
+    python benchmarks/investigations/peers/interfoam_spheric_return.py [--spacing 0.04] [--end 1.3] --keep DIR
 """
 
 import argparse
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "peers"))
 import interfoam_spheric as F  # noqa: E402
 
 LINES = (0.1, 0.471, 0.9)

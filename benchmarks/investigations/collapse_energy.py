@@ -1,7 +1,7 @@
 """Energy budget, front speed and viscosity of the granular column collapse (issue 26, item 4:
 why the mu(I) column runs out too far).
 
-    python benchmarks/collapse_energy.py [--aspect 2] [--transfer apic] [--model water]
+    python benchmarks/investigations/collapse_energy.py [--aspect 2] [--transfer apic] [--model water]
         [--cells 6.25] [--dt-factor 1] [--width 3] [--interval 0.01] [--csv out.csv]
 
 The validation's column (``mpmflow.validation.materials._collapse``: examples/

@@ -2,7 +2,7 @@
 item 3): the same cases of `mpmflow validate`, run twice, the second time with every case
 file loaded with ``solver.transfer=apic`` added to its overrides.
 
-    python benchmarks/apic_validation.py [--quick] [--case dam_break --case sloshing ...]
+    python benchmarks/investigations/apic_validation.py [--quick] [--case dam_break --case sloshing ...]
         [--out runs/apic_validation] [--set key=value ...]
 
 Writes the two reports (OUT/flip, OUT/apic: README.md and summary.csv, as `mpmflow
@@ -19,7 +19,7 @@ from pathlib import Path
 
 from mpmflow.validation import common, run_validation
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 ap.add_argument(

@@ -2,7 +2,7 @@
 shape (issue 26, item 4: is the over-run a discretisation error, i.e. does it go away with the
 mesh, and do the transfers agree when refined?).
 
-    python benchmarks/granular_mesh.py --aspect 2 --cells 25 --transfer flip [--width 3]
+    python benchmarks/investigations/granular_mesh.py --aspect 2 --cells 25 --transfer flip [--width 3]
         [--set key=value ...]
 
 The column of ``mpmflow.validation.materials._collapse`` (examples/granular_collapse.toml at

@@ -4,7 +4,7 @@ MARIN's measurement: RMS over 0-6 s in units of H0 = 0.55 m, the outputs between
 3.5 s that read under 2 cm (drop-outs; the measured levels stay at 0.15-0.35 m), and the
 mean over 1-2 s. time.dt = "auto".
 
-    python benchmarks/spheric_gauges.py 0.04      # about 4 minutes on 2 cores
+    python benchmarks/investigations/spheric_gauges.py 0.04      # about 4 minutes on 2 cores
 
 Prints one JSON object; the series go to runs/spheric_gauges_<spacing>.npz.
 """
@@ -18,7 +18,7 @@ import numpy as np
 from mpmflow import Simulation, load_case
 from mpmflow.validation import spheric
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def main(spacing, end=6.0):

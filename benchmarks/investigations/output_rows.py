@@ -19,7 +19,7 @@ steps cost the same all along, which a dam break's do not) with an output row ev
 - the bytes: timeseries.csv, and the largest checkpoint (fixed size when checkpoints hold
   state, not history).
 
-    python benchmarks/output_rows.py [--rows 10000] [--src OTHER_CHECKOUT/src]
+    python benchmarks/investigations/output_rows.py [--rows 10000] [--src OTHER_CHECKOUT/src]
 
 --src runs another checkout (e.g. the commit before issue 17) with this environment.
 Run it with OMP_NUM_THREADS=1 on a shared machine. Appends a JSON record to
@@ -35,9 +35,9 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import machine, save  # noqa: E402
 
 CASE = ROOT / "examples" / "hydrostatic.toml"
 SETTINGS = [

@@ -1,7 +1,7 @@
 """A 3D granular column (mu(I), as examples/granular_collapse.toml) on a rough floor: run-out
 radius against Lube et al. (2004), (r_inf - r0) / r0 = 1.24 a (a < 1.7), 1.6 a^(1/2) above.
 
-    python benchmarks/collapse_3d.py A CELLS [--whole] [key=value ...]
+    python benchmarks/investigations/collapse_3d.py A CELLS [--whole] [key=value ...]
 
 A = H0 / r0 (r0 = 0.05 m), CELLS across r0; key=value are case overrides (e.g.
 solver.flip=0.99, solver.transfer=apic; the example's transfer is PIC, flip = 0).

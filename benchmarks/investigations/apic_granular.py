@@ -1,7 +1,7 @@
 """Granular column collapse (mu(I)) with each transfer: the run-out against Lube et al.'s law
 and whether the deposit stops (issue 26, item 3: does APIC earn the default for materials?).
 
-    python benchmarks/apic_granular.py [--aspect 2 ...] [--quick]
+    python benchmarks/investigations/apic_granular.py [--aspect 2 ...] [--quick]
 
 Runs the validation's collapse (``mpmflow.validation.materials._collapse``: the column of
 examples/granular_collapse.toml at aspect ratio a, 12.5 cells across the half-width, to

@@ -19,7 +19,7 @@ process, the threads "auto" chose (summary.json's threads), and the ratio of eac
 during the busy settings. the core's pool is --pool threads (OMP_NUM_THREADS; default: the
 usable CPUs); MPMFLOW_THREADS is removed from the runs' environment.
 
-    python benchmarks/contention.py [--repeat 5] [--pool 2] [--set key=value ...]
+    python benchmarks/investigations/contention.py [--repeat 5] [--pool 2] [--set key=value ...]
 
 Needs a quiet machine: other programs running beside it are more busy processes. Appends
 a JSON record to benchmarks/results.jsonl (not tracked).
@@ -35,9 +35,9 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import machine, save  # noqa: E402
 
 CASE = ROOT / "examples" / "dam_break.toml"
 TARGET = 1.3

@@ -8,7 +8,7 @@ x = 3.22 m, 8 inside the water; "fit") and 4 level gauges, after the binning tha
 output does anyway (timed apart: ``cells.bin_particles``). Prints the median of 5 and the
 largest pressure error against rho g (H - z) (Pa).
 
-    python benchmarks/probes.py
+    python benchmarks/investigations/probes.py
 """
 
 import statistics
@@ -23,7 +23,7 @@ from mpmflow.diagnostics import probes
 from mpmflow.geometry.seeding import build_particles
 from mpmflow.grid import Grid
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 RHO, G, DEPTH = 1000.0, 9.81, 0.55
 
 

@@ -7,7 +7,7 @@ its own `mpmflow run` process, and compares the estimate the run printed (summar
 ``memory_estimate_bytes``) with the process's peak resident memory (``ru_maxrss`` of
 os.wait4, the same number /usr/bin/time -v reports as "Maximum resident set size").
 
-    python benchmarks/memory.py [--spacing 0.002 0.001 0.0005] [--steps 3]
+    python benchmarks/investigations/memory.py [--spacing 0.002 0.001 0.0005] [--steps 3]
 
 Run it with OMP_NUM_THREADS=1 on a shared machine (threads change the peak little).
 Appends a JSON record to
@@ -23,9 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from dam_break import machine, save  # noqa: E402
+from history import machine, save  # noqa: E402
 
 CASE = ROOT / "examples" / "dam_break.toml"
 

@@ -21,7 +21,7 @@ from mpmflow.simulation import Simulation
 comm = MPI.COMM_WORLD
 rank, size = comm.rank, comm.size
 case = load_case(
-    str(__import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "dam_break.toml"),
+    str(__import__("pathlib").Path(__file__).resolve().parents[3] / "examples" / "dam_break.toml"),
     ["time.end=0.06"],
 )
 sim = Simulation(case)

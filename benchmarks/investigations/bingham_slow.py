@@ -2,7 +2,7 @@
 run long: the validation's arrest measure h |dh/dx| rho g / tau_y (``arrest_ratios``, the
 middle half of each side), the half-length, the top and the largest speed every second.
 
-    python benchmarks/bingham_slow.py --consistency 20 --transfer apic --end 30
+    python benchmarks/investigations/bingham_slow.py --consistency 20 --transfer apic --end 30
 
 ``--transfer``: apic (the example's), or a FLIP fraction (0: PIC). Prints one line a second.
 """
@@ -16,7 +16,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.simulation.schedules import TimeInterval
 from mpmflow.validation.materials import arrest_ratios
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def main() -> None:

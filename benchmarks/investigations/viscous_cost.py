@@ -8,7 +8,7 @@ phase clock, ``State.phase_seconds``), and the viscous step's share. Materials: 
 (inviscid), Newtonian water (1e-3 Pa s: the viscous solve with a viscosity too small to
 matter to the flow) and a Bingham fluid (the viscosity from the strain rate each step).
 
-    python benchmarks/viscous_cost.py [--repeat 3] [--end 0.2]
+    python benchmarks/investigations/viscous_cost.py [--repeat 3] [--end 0.2]
 """
 
 import argparse
@@ -16,7 +16,7 @@ import statistics
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MESHES = (0.008, 0.004)  # m: 6.5k and 26k particles
 MATERIALS = {
     "water (inviscid)": [],

@@ -1,7 +1,7 @@
 """The 2D dam break's run-up at the right wall and the water's energy (issue 25;
-benchmarks/README.md, "Why the jet at the box's face rises faster than its feed").
+docs/notes/benchmarks-diary.md, "Why the jet at the box's face rises faster than its feed").
 
-    python benchmarks/runup_2d.py TAG [--case dam_break] [--end 0.6] [--set key=value ...]
+    python benchmarks/investigations/runup_2d.py TAG [--case dam_break] [--end 0.6] [--set key=value ...]
 
 Every 5 ms: kinetic and potential energy of the particles, the largest specific energy
 v^2/2 + g z and speed, the run-up (highest particle within 2 h of the right wall, mean
@@ -24,7 +24,7 @@ ap.add_argument("--set", action="append", default=[])
 ap.add_argument("--end", type=float, default=0.6)
 cli = ap.parse_args()
 case = load_case(
-    Path(__file__).resolve().parents[1] / "examples" / f"{cli.case}.toml",
+    Path(__file__).resolve().parents[2] / "examples" / f"{cli.case}.toml",
     ["output.snapshots=false", f"time.end={cli.end}", "output.interval=0.005", *cli.set],
 )
 sim = Simulation(case)
@@ -67,7 +67,7 @@ sim.run()
 t = np.array(rec["t"])
 E = np.array(rec["ke"]) + np.array(rec["pe"])
 out = {"tag": cli.tag, "set": cli.set, "steps": sim.steps, "wall": _t.time() - t0}
-runs = Path(__file__).resolve().parents[1] / "runs"
+runs = Path(__file__).resolve().parents[2] / "runs"
 runs.mkdir(exist_ok=True)
 np.savez(runs / f"runup_2d_{cli.tag}.npz", **{k: np.array(v) for k, v in rec.items()})
 for i in range(0, len(t), 4):

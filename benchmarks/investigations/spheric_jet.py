@@ -1,7 +1,7 @@
 """SPHERIC Test 2: the jet that climbs the box's front face and the water's energy (issue 25,
-rows P5/P7; benchmarks/README.md, "Why the jet at the box's face rises faster than its feed").
+rows P5/P7; docs/notes/benchmarks-diary.md, "Why the jet at the box's face rises faster than its feed").
 
-    python benchmarks/spheric_jet.py TAG [--spacing 0.04] [--end 1.6] [--set key=value ...]
+    python benchmarks/investigations/spheric_jet.py TAG [--spacing 0.04] [--end 1.6] [--set key=value ...]
         [--dump T ...]
 
 time.dt = "auto" unless --set says otherwise. At every output records the water's kinetic
@@ -24,7 +24,7 @@ from mpmflow import Simulation, load_case
 from mpmflow.diagnostics import probes as P
 from mpmflow.validation import spheric
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "runs"
 OUT.mkdir(exist_ok=True)
 FACE, Y0, Y1, TOP, BACK = 0.8245, 0.2955, 0.6985, 0.161, 0.6635
