@@ -10,7 +10,6 @@ output went away (a closed pipe).
 
 import argparse
 import json
-import os
 import shlex
 import sys
 import textwrap
@@ -22,6 +21,7 @@ from ._version import __version__
 from .errors import CaseError, MpmflowError
 from .interrupts import EarlySignals, EarlyStop, StopNow, exit_code
 from .output import check_out_dir as _check_out_dir
+from .output import os_error, silence_stdout
 
 if TYPE_CHECKING:
     from .validation.common import CaseResult
@@ -76,6 +76,7 @@ VALIDATION_CASES = (
     "sloshing",
     "dam_break",
     "dam_break_ar1",
+    "time_step_study",
     "lobovsky",
     "volume",
     "long_run",
@@ -263,7 +264,7 @@ def _run(args: argparse.Namespace) -> int:
     case = load_case(args.case, args.overrides)
     early.check()
     out = Path(args.out)
-    _check_out_dir(out, create=False)
+    _check_out_dir(args.out, create=False)
     if args.restart and args.overwrite:
         raise CaseError(
             "--restart continues the run in --out and --overwrite replaces it; give one of them."
@@ -352,7 +353,7 @@ def _study(args: argparse.Namespace) -> int:
             f"--budget {args.budget:g}: give a positive number of seconds, e.g. --budget 240."
         )
     out = Path(args.out)
-    _check_out_dir(out)
+    _check_out_dir(args.out)
 
     def report(row: dict[str, Any]) -> None:
         print(
@@ -392,7 +393,7 @@ def _validate(args: argparse.Namespace) -> int:
             + "."
         )
     out = Path(args.out)
-    _check_out_dir(out, create=False)
+    _check_out_dir(args.out, create=False)
     # everything the cases need, checked before minutes of runs: matplotlib (the plots),
     # the reference data, the example case files, and a folder whose README.md is ours
     have_matplotlib("mpmflow validate")
@@ -411,7 +412,7 @@ def _validate(args: argparse.Namespace) -> int:
     if missing:
         raise CaseError(_missing_text(missing))
     check_report_folder(out)
-    _check_out_dir(out)
+    _check_out_dir(args.out)
 
     def report(res: "CaseResult") -> None:  # quoted: imported for the type checker only
         misses = sum(r.status == "miss" for r in res.rows)
@@ -451,13 +452,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     with early.installed():
         try:
             return _main(argv)
-        except BrokenPipeError:
-            # the reader of our output went away (mpmflow keys | head -1): stop quietly,
-            # as a command killed by SIGPIPE does; stdout is pointed at /dev/null so that
-            # the interpreter's last flush does not fail again
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, sys.stdout.fileno())
+        except BrokenPipeError:  # our reader went away (keys | head -1): quiet, as SIGPIPE
+            silence_stdout()
             return 141
+        except OSError as err:  # an output file or stdout (a full disk, too long a name)
+            print(f"mpmflow: error: {os_error(err)}", file=sys.stderr)
+            return 2
 
 
 def _main(argv: Sequence[str] | None) -> int:

@@ -30,6 +30,7 @@ from . import (
     sloshing,
     spheric,
     three_d,
+    time_step_study,
     volume,
 )
 from .common import EXAMPLES, CaseResult, Row
@@ -47,6 +48,7 @@ CASES: dict[str, CaseRun] = {
     "sloshing": sloshing.run,
     "dam_break": dam_break.run,
     "dam_break_ar1": dam_break_ar1.run_ar1,
+    "time_step_study": time_step_study.run,
     "lobovsky": lobovsky.run,
     "volume": volume.run,
     "long_run": long_run.run,
@@ -66,6 +68,7 @@ EXAMPLE_FILES = {
     "sloshing": ("sloshing.toml",),
     "dam_break": ("dam_break.toml",),
     "dam_break_ar1": ("dam_break_ar1.toml",),
+    "time_step_study": ("dam_break.toml",),
     "lobovsky": ("lobovsky.toml",),
     "long_run": ("sloshing.toml", "dam_break.toml"),
     "three_d": ("hydrostatic_3d.toml", "dam_break_3d.toml", "dam_break.toml"),
