@@ -11,6 +11,7 @@ from .. import checkpoint, memory
 from ..boundaries import obstacles
 from ..case import Case
 from ..errors import CaseError, SolverError
+from ..geometry import mass
 from ..geometry.seeding import build_particles
 from ..grid import Grid
 from ..materials import stiffness
@@ -38,6 +39,11 @@ def build(case: Case) -> Setup:
     """The Setup of a validated ``case``; CaseError when it cannot run here."""
     setting_from(case.execution.threads)  # a bad MPMFLOW_THREADS is refused here
     estimate = memory.check(case)
+    try:  # each body's seeded mass against rho V: a body smaller than its particles is
+        # refused, one a few percent off is told (the counts are the estimate's)
+        notices = mass.check(case)
+    except ValueError as err:
+        raise CaseError(f"{err}.") from None
     # the content of the files the case reads, as this run reads them (checkpoints keep
     # it, and a restart with other files is refused)
     files = checkpoint.file_hashes(case)
@@ -50,7 +56,6 @@ def build(case: Case) -> Setup:
             "Enlarge the bodies or raise particles_per_cell."
         )
     scheme = make_scheme(case, grid, particles)
-    notices: list[str] = []
     solids = getattr(scheme, "solids", None)
     if solids is not None:
         inside = obstacles.in_solid_cells(solids, grid, particles.x)
