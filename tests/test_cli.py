@@ -2,6 +2,7 @@
 
 import csv
 import json
+import os
 import shlex
 import signal
 import subprocess
@@ -365,3 +366,80 @@ def test_a_whole_table_of_a_list_can_be_set(tmp_path, capsys):
         "obstacles.0={min = [0.2, 0.1], max = [0.25, 0.15]}",
     )
     assert code == 0, err
+
+
+# ----------------------------------------------------------- output paths (issue 40)
+SMALL_CASE = (
+    "[domain]\nsize = [0.2, 0.2]\n[grid]\nspacing = 0.02\n[time]\ndt = 1e-3\nend = 2e-3\n"
+    "[output]\ninterval = 1e-3\nsnapshots = false\n[[bodies]]\nmin = [0.0, 0.0]\n"
+    "max = [0.1, 0.1]\n"
+)
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", "CASE", "--out", ""],
+        ["study", "paper", "--quick", "--out", ""],
+        ["validate", "--case", "hydrostatic", "--out", ""],
+        ["plot", "RUN", "--out", ""],
+    ],
+)
+def test_an_empty_out_is_refused_not_taken_for_the_current_folder(
+    tmp_path, capsys, monkeypatch, command
+):
+    from mpmflow.cli import main
+
+    (tmp_path / "case.toml").write_text(SMALL_CASE)
+    monkeypatch.chdir(tmp_path)
+    if "RUN" in command:  # a run to plot
+        assert main(["run", "case.toml", "--out", "run", "-q"]) == 0
+    before = sorted(tmp_path.rglob("*"))
+    code = main([{"CASE": "case.toml", "RUN": "run"}.get(a, a) for a in command])
+    err = capsys.readouterr().err
+    assert code == 2 and '--out "" is empty, which would write into the current folder' in err
+    assert sorted(tmp_path.rglob("*")) == before  # nothing written
+
+
+@pytest.mark.parametrize("out", ["a" * 300, "runs/" + "b" * 300 + "/c"])
+def test_an_out_the_system_refuses_is_one_message_with_the_fix(tmp_path, capsys, out):
+    from mpmflow.cli import main
+
+    (tmp_path / "case.toml").write_text(SMALL_CASE)
+    code = main(["run", str(tmp_path / "case.toml"), "--out", str(tmp_path / out), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err and err.count("\n") == 1, err
+    assert f"--out {tmp_path / out} cannot be " in err
+    assert "File name too long. Shorten it: each name in a path may have at most 255" in err
+
+
+def test_an_os_error_of_a_path_is_exit_2_naming_it(tmp_path, capsys):
+    """An OSError that reaches the command line is one message naming the path and what the
+    system said, exit 2 (here plot's run folder, whose name is too long to look up)."""
+    from mpmflow.cli import main
+
+    run = tmp_path / ("r" * 300)
+    assert main(["plot", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"mpmflow: error: {run}: File name too long. Shorten it: each name in a " + (
+        "path may have at most 255 bytes, the whole path 4096.\n"
+    )
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full here")
+def test_keys_into_a_full_disk_is_a_message_not_a_traceback():
+    for args in (["keys"], ["keys", "--json"], ["keys", "--markdown"]):
+        with open("/dev/full", "w") as full:
+            res = subprocess.run(
+                [sys.executable, "-m", "mpmflow.cli", *args],
+                stdout=full,
+                stderr=subprocess.PIPE,
+                text=True,
+                timeout=60,
+            )
+        assert res.returncode == 2, res.stderr
+        assert res.stderr == (
+            "mpmflow: error: writing the command's output (standard output, or a file in its "
+            "output folder) failed: No space left on device. Free some space on that disk, or "
+            "write it to another disk.\n"
+        )

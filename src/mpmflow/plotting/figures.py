@@ -483,7 +483,7 @@ def plot_run(
             "plot."
         )
     out = Path(out_dir) if out_dir is not None else Path(run_dir) / "plots"
-    check_out_dir(out)
+    check_out_dir(out_dir if out_dir is not None else out)  # (--out "" is refused)
     plot_timeseries(run.timeseries, run.summary, out / "timeseries.png", plt)
     written = [out / "timeseries.png"]
     units = run.units
