@@ -13,7 +13,9 @@ not on grid lines (corners and edges are rounded within a cell). From phi:
 * ``open``: the fluid fraction of each cell, by which a cut cell's particle volume is
   divided to give its volume fraction theta (a cut cell full of water has theta = 1);
 * where an obstacle touches a domain wall, its distance at the wall's nodes is taken one cell
-  in (``node_distance``), so that it meets the wall without a gap;
+  in, and inside it extrapolated from the two nodes behind where that is lower
+  (``node_distance``), so that it meets the wall without a gap and a slanted face meets it
+  at its own slope;
 * the obstacle nodes: the nodes of cut cells, each with the unit normal int N_i n ds /
   |int N_i n ds| of the obstacle's face around it (pointing into the solid). They are
   contact conditions like the domain walls (src/core/walls): a node holds the material
@@ -209,18 +211,40 @@ def _not_last(shape: tuple[int, ...], axis: int) -> Bools:
 
 
 def in_solid_cells(tables: Tables, grid: Grid, x: Floats) -> Bools:
-    """Which of the points ``x`` (n, D) lie in cells the grid takes as wholly solid (fluid
-    fraction 0). Where an obstacle touches two or three walls, the wall shift
-    (``node_distance``) closes the corner between it and the walls within the first cell, so
-    lattice points outside the obstacle's own shape can lie there: no flow reaches them, phi
-    is flat there (no direction to push them out along) and, held by nothing, they fell
-    freely in place."""
+    """Which of the points ``x`` (n, D) lie in the solid the grid sees: in cells it takes as
+    wholly solid (fluid fraction 0), or where phi interpolated from the nodes is negative.
+    The bodies are seeded round the obstacles' own shapes, and the grid's solid differs from
+    them within a cell: where an obstacle touches two or three walls, the wall shift
+    (``node_distance``) closes the corner between it and the walls within the first cell (no
+    flow reaches a point there, phi is flat, no direction to push it out along, and held by
+    nothing it fell freely in place); under a disc or a sphere tangent to the floor, or an
+    overhang meeting it, the shift fills the thin wedge of water below within the first cell.
+    A point seeded there would be pushed out at the first step onto the face, several onto
+    one point (a disc on the floor at 0.01 m: three pairs of particles, pushed again at every
+    step of a column at rest)."""
     if not tables.present:
         return np.zeros(x.shape[0], dtype=bool)
     cells = np.array([int(c) for c in grid.cells])
     ci = np.clip(np.floor(x / grid.spacing).astype(np.int64), 0, cells - 1)
     strides = np.cumprod(np.concatenate([[1], cells[:-1]]))
-    return tables.open[ci @ strides] <= 0.0
+    solid: Bools = (tables.open[ci @ strides] <= 0.0) | (grid_distance(tables, grid, x) < 0.0)
+    return solid
+
+
+def grid_distance(tables: Tables, grid: Grid, x: Floats) -> Floats:
+    """phi (m) at the points ``x`` (n, D), interpolated multilinearly from the nodes in the
+    cell holding each: the solid the step sees (its edges and corners rounded within a cell,
+    its faces on the walls as ``node_distance`` takes them) is where this is negative."""
+    nodes = np.array([int(n) for n in grid.nodes])
+    s = x / grid.spacing
+    i0 = np.clip(np.floor(s).astype(np.int64), 0, nodes - 2)
+    w = s - i0
+    strides = np.cumprod(np.concatenate([[1], nodes[:-1]]))
+    value = np.zeros(x.shape[0])
+    for corner in np.ndindex(*(2,) * grid.dim):
+        c = np.array(corner)
+        value += np.prod(np.where(c, w, 1 - w), axis=1) * tables.phi[(i0 + c) @ strides]
+    return value
 
 
 def of_case(case: Case, grid: Grid) -> Tables:
@@ -244,19 +268,50 @@ def of_case(case: Case, grid: Grid) -> Tables:
 
 
 def node_distance(grid: Grid, shape: Shape, x: Floats) -> Floats:
-    """The shape's signed distance at the nodes ``x``, taken one cell in from a domain wall
-    the shape touches or crosses: there the shape's own face on the wall would put phi = 0
-    at every wall node under it, and the interpolated surface would open a wedge of fluid
-    under the obstacle's edge. One cell in, a face meeting the wall is taken as
-    perpendicular to it within the first cell (exact for boxes and upright cylinders)."""
+    """The shape's signed distance at the grid's nodes ``x`` (``grid.node_coordinates()``),
+    taken one cell in from a domain wall the shape touches or crosses: there the shape's own
+    face on the wall would put phi = 0 at every wall node under it, and the interpolated
+    surface would open a wedge of fluid under the obstacle's edge. One cell in, a face
+    meeting the wall would be taken as perpendicular to it within the first cell (exact for
+    boxes and upright cylinders); a slanted face (a triangle's or a ramp's slope, a mesh's
+    facet) would leave a wedge of fluid in the first cell that the particles, seeded round
+    the shape itself, do not fill, or cover one they fill. So a wall node inside the shape
+    (or on its face) also takes the distance extrapolated linearly along the wall's normal
+    from the two nodes behind it, 2 phi_1 - phi_2, where that is lower: the slanted face
+    then meets the wall at its own slope, and under a face parallel to the wall (phi falling
+    inwards, 2 phi_1 - phi_2 >= phi_1) nothing changes."""
     h = grid.spacing
     lo, hi = shape.bounds()
     size = grid.size
     tol = 1e-9 * h
     moved = x.copy()
+    touched = []  # (axis, (the wall's layer of nodes, the next two in))
     for k in range(grid.dim):
         if lo[k] <= tol:
             moved[x[:, k] <= tol, k] += h
+            touched.append((k, (0, 1, 2)))
         if hi[k] >= size[k] - tol:
             moved[x[:, k] >= size[k] - tol, k] -= h
-    return shape.signed_distance(moved)
+            touched.append((k, (-1, -2, -3)))
+    shifted = shape.signed_distance(moved)
+    nodes = [int(n) for n in grid.nodes]
+    if not touched or min(nodes) < 3:
+        return shifted
+    # the nodes as arrays indexed [i_0, i_1, ...] (flat order: axis 0 fastest)
+    phi = shifted.reshape(nodes[::-1]).transpose()
+    inside = shape.signed_distance(x).reshape(nodes[::-1]).transpose() <= tol
+    out = phi.copy()
+    for k, layers in touched:
+        wall, first, second = (_layer(grid.dim, k, i) for i in layers)
+        line = 2.0 * phi[first] - phi[second]
+        out[wall] = np.where(inside[wall], np.minimum(out[wall], line), out[wall])
+    result: Floats = out.transpose().reshape(-1)
+    return result
+
+
+def _layer(dim: int, axis: int, index: int) -> tuple[slice | int, ...]:
+    """The index of the layer of nodes ``index`` along ``axis`` (arrays indexed [i_0, i_1,
+    ...])."""
+    at: list[slice | int] = [slice(None)] * dim
+    at[axis] = index
+    return tuple(at)

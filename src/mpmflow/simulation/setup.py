@@ -61,8 +61,8 @@ def build(case: Case) -> Setup:
         inside = obstacles.in_solid_cells(solids, grid, particles.x)
         if inside.all():
             raise CaseError(
-                "Every particle lies in cells the grid takes as solid: the bodies fill "
-                "only the space that obstacles touching the walls close off on this grid. "
+                "Every particle lies in the solid the grid sees: the bodies fill only the "
+                "space that obstacles touching the walls close off on this grid. "
                 f"Refine grid.spacing (now {case.grid.spacing:g} m) or move the bodies."
             )
         if inside.any():
@@ -70,9 +70,11 @@ def build(case: Case) -> Setup:
             scheme.particles = particles
             notices.append(
                 f"{int(inside.sum())} particle{'s' if inside.sum() > 1 else ''} seeded "
-                "round an obstacle lie in cells the grid takes as solid (where an obstacle touches two or three walls, the "
-                "corner between it and the walls is closed within the first cell) and "
-                "are left out; a finer grid.spacing resolves that corner"
+                "round an obstacle lie in the solid the grid sees, which differs from the "
+                "obstacle's shape within a cell of its face (where an obstacle touches two or "
+                "three walls the corner between it and the walls is closed within the first "
+                "cell; under a disc, a sphere or an overhang the thin wedge of water against "
+                "the wall is filled) and are left out; a finer grid.spacing narrows that band"
             )
     if hasattr(scheme, "check_free_surface"):
         try:
