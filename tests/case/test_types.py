@@ -96,3 +96,13 @@ def test_python_numbers_lists_and_numpy_values_are_taken_as_toml_would_hold_them
     assert case.bodies[0].particles_per_cell == 3 and case.bodies[0].max == [0.1, 0.1]
     with pytest.raises(CaseError, match="booleans, not numbers"):
         load_case(case_file, {"bodies.0.particles_per_cell": np.bool_(True)})
+
+
+def test_a_refused_string_is_shown_escaped_on_one_line(case_file):
+    """The value is shown as TOML writes it: a line break inside a string (here U+0085,
+    which splitlines takes for one) is escaped, so the message stays one line."""
+    with pytest.raises(CaseError) as err:
+        load_case(case_file, ['grid.spacing="0.02\\u0085"'])
+    message = str(err.value)
+    assert '`grid.spacing` = "0.02\\u0085" is not allowed' in message
+    assert len(message.splitlines()) == 1

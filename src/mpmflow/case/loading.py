@@ -238,12 +238,17 @@ def _toml(value: Any) -> str:
     """A value as the case file writes it: true, "no", [0.0, -9.81], {name = "p1"}."""
     if isinstance(value, bool):
         return "true" if value else "false"
-    if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, str):  # escaped as TOML escapes: no line breaks in a message
+        text = json.dumps(value, ensure_ascii=False)
+        return "".join(
+            c if c.isprintable() else f"\\u{ord(c):04x}" if ord(c) < 0x10000 else f"\\U{ord(c):08x}"
+            for c in text
+        )
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml(v) for v in value) + "]"
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + "}"
+        keys = [k if re.fullmatch(r"[A-Za-z0-9_-]+", str(k)) else _toml(str(k)) for k in value]
+        return "{" + ", ".join(f"{k} = {_toml(v)}" for k, v in zip(keys, value.values())) + "}"
     return repr(value)
 
 
