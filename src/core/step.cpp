@@ -694,7 +694,7 @@ void State<D>::correct(const Options<D>& O) {
   // velocity of a node in the water already meets the face's condition (weakly, at the
   // face); zeroing its normal velocity held the water up to a cell short of the face, where
   // the cut cell's fluid part then stayed empty and its solid-side node fell out of the
-  // pressure system (p = 0 at the face; SPHERIC Test 2 at 0.02 m, benchmarks/README.md).
+  // pressure system (p = 0 at the face; SPHERIC Test 2 at 0.02 m, docs/notes/benchmarks-diary.md).
   // The paper's formulation constrains v* at every obstacle node, and so its result.
   apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact,
                   O.wall_flux ? T_.phi : View<const double>());

@@ -178,7 +178,7 @@ class Solver(Section):
         description="The preconditioner of PETSc's conjugate gradients (runs on several MPI "
         'ranks, and solver.linear_solver = "petsc"): "hypre" = hypre\'s BoomerAMG (the '
         "default: on the dam break half the iterations and a third less time a step than "
-        'GAMG, benchmarks/README.md), "gamg" = PETSc\'s smoothed-aggregation algebraic '
+        'GAMG, docs/notes/benchmarks-diary.md), "gamg" = PETSc\'s smoothed-aggregation algebraic '
         "multigrid (for a PETSc built without hypre). PETSc's options reach the pressure "
         "solve under the prefix mpmflow_pressure_ (PETSC_OPTIONS).",
     )

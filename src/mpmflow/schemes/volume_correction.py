@@ -20,7 +20,7 @@ volume conserving liquids"):
    ``solver.tolerance``, as the pressure is: at a looser 1e-2 the run depended on the
    solver (one process moved the 2D dam break's front by 0.0026 a between 1e-2 and 1e-4,
    and a run over MPI ranks, solved by PETSc, the 3D column's height by a cell), at 1e-8 it
-   does not, for about three more multigrid iterations a step (benchmarks/README.md);
+   does not, for about three more multigrid iterations a step (docs/notes/benchmarks-diary.md);
 3. the displacement d = -beta h grad q on the cell faces (0 on walls, so nothing is pushed
    into a wall), interpolated to each particle from its own faces and added to the particle's
    position in the grid-to-particle step (src/core/transfer).
