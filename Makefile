@@ -2,7 +2,8 @@
 #   make dam-break   set up, then run the paper's dam break (examples/dam_break.toml)
 #   make test        set up, then run the test suite
 # Developers: make test-fast (the unit tier, under a minute), make lint (ruff, mypy)
-# make test-noavx512: the unit tier with NumPy's and OpenBLAS's AVX-512 kernels off (CI)
+# make test-noavx512: the unit tier with NumPy's and OpenBLAS's AVX-512 kernels off (CI runs
+#   it against the wheel: env $(.venv/bin/python scripts/kernels.py env) make test-wheel)
 # MPI (issue 28): make setup-mpi (Open MPI, mpi4py, petsc4py into .venv-mpi), make test-mpi
 # A wheel (issue 40): make wheel (-> dist/), make test-wheel (installed where no compiler is)
 PYTHON ?= python3

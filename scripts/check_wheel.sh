@@ -34,7 +34,8 @@ keep=()
 while IFS= read -r -d '' var; do
     case $var in
     PIP_* | http_proxy=* | https_proxy=* | no_proxy=* | HTTP_PROXY=* | HTTPS_PROXY=* | NO_PROXY=* | \
-        SSL_CERT_FILE=* | SSL_CERT_DIR=* | REQUESTS_CA_BUNDLE=* | TMPDIR=* | OMP_NUM_THREADS=*)
+        SSL_CERT_FILE=* | SSL_CERT_DIR=* | REQUESTS_CA_BUNDLE=* | TMPDIR=* | OMP_NUM_THREADS=* | \
+        NPY_DISABLE_CPU_FEATURES=* | OPENBLAS_CORETYPE=*)
         keep+=("$var")
         ;;
     esac
@@ -87,6 +88,11 @@ checkout_only=(
     tests/validation/test_validation.py::test_validate_refuses_a_readme_it_did_not_write
     tests/validation/test_validation.py::test_validate_runs_a_case_from_the_command_line
 )
+# .ci/run sets scripts/kernels.py's environment here (NumPy's and OpenBLAS's AVX-512 kernels
+# off), so that this one pass proves the wheel and the other SIMD path together: check it took
+if [ -n "${NPY_DISABLE_CPU_FEATURES:-}${OPENBLAS_CORETYPE:-}" ]; then
+    "${bare[@]}" "$VENV/bin/python" scripts/kernels.py check
+fi
 echo "check_wheel: the fast tier against the installed wheel (${#checkout_only[@]} tests of a source checkout left out)"
 "${bare[@]}" "$VENV/bin/pytest" -p no:cacheprovider -m "not slow" -q \
     "${checkout_only[@]/#/--deselect=}"
