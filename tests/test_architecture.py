@@ -1,7 +1,11 @@
 """The layout the architecture page promises (docs/architecture.md): one door to the
-compiled core, boundaries decided in one package, no module too long to read."""
+compiled core, boundaries decided in one package, a case read without the engine, no import
+cycles."""
 
+import ast
 import re
+import subprocess
+import sys
 
 from conftest import ROOT
 
@@ -49,9 +53,127 @@ def test_boundaries_are_decided_in_one_package():
     assert outside == {}
 
 
-def test_no_module_is_over_500_lines():
-    long = {_rel(p): n for p in MODULES if (n := len(p.read_text().splitlines())) > 500}
-    assert long == {}
+def _module(path):
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _type_checking(node):
+    t = node.test
+    return (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
+        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(path, names):
+    """The mpmflow modules ``path`` imports at run time: at module level and inside its
+    functions (a deferred import still ties the two), not under TYPE_CHECKING. Importing
+    a.b.c imports the package a.b as well. The package face mpmflow/__init__.py is left out:
+    its imports run on attribute access only (PEP 562), to start the command line quickly."""
+    me = _module(path)
+    if me == "mpmflow":
+        return set()
+    package = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    found = set()
+
+    def walk(node):
+        if isinstance(node, ast.If) and _type_checking(node):
+            for n in node.orelse:
+                yield from walk(n)
+            return
+        yield node
+        for child in ast.iter_child_nodes(node):
+            yield from walk(child)
+
+    for node in walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(up + ([base] if base else []))
+            for a in node.names:
+                found.add(f"{base}.{a.name}" if f"{base}.{a.name}" in names else base)
+    out = set()
+    for name in found:
+        if name not in names:
+            continue
+        out.add(name)
+        parts = name.split(".")
+        for k in range(2, len(parts)):  # the packages on the way, but not my own
+            pkg = ".".join(parts[:k])
+            if pkg in names and not me.startswith(pkg + "."):
+                out.add(pkg)
+    out.discard(me)
+    return out
+
+
+def _cycles(graph):
+    """The strongly connected components of more than one module (Tarjan)."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            part = set()
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                part.add(w)
+                if w == v:
+                    break
+            if len(part) > 1:
+                found.append(sorted(part))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycles():
+    """No two modules of src/mpmflow import each other, directly or round a loop, at run
+    time (imports inside functions count; TYPE_CHECKING's do not). Layers stand on one
+    another: a module that needs a higher one's work takes it as an argument or moves."""
+    paths = {_module(p): p for p in MODULES}
+    graph = {name: _imports(path, paths) for name, path in paths.items()}
+    assert _cycles(graph) == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    """The check above can fail: a loop of three and a self-standing module."""
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert _cycles(graph) == [["a", "b", "c"]]
+
+
+def test_reading_a_case_does_not_load_the_engine():
+    """Loading and validating a case file, and `mpmflow keys`, import neither the compiled
+    core nor the schemes nor the state package: what each scheme supports and each material's
+    name and checks are data the case reads (case.capabilities, materials)."""
+    script = (
+        "import sys, io, contextlib\n"
+        "from mpmflow.case import load_case\n"
+        f"load_case({str(ROOT / 'examples' / 'dam_break.toml')!r})\n"
+        f"load_case({str(ROOT / 'examples' / 'bingham_slump.toml')!r})\n"
+        "from mpmflow.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main(['keys'])\n"
+        "engine = ('mpmflow._core', 'mpmflow.state', 'mpmflow.schemes', 'mpmflow.simulation')\n"
+        "print(sorted(m for m in sys.modules if m.startswith(engine)))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True
+    ).stdout
+    assert out.strip() == "[]"
 
 
 TESTS = ROOT / "tests"

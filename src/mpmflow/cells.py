@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import state
+from .arrays import Floats, Ints
 from .grid import Grid
 from .particles import Particles
-from .state.arrays import Floats, Ints
 
 
 @dataclass

@@ -496,3 +496,17 @@ def test_a_cap_beyond_double_precision_is_refused():
         Simulation(case)
     assert "material.max_viscosity = 1e+30 Pa s" in str(err.value)
     assert "no digits left" in str(err.value)
+
+
+def test_each_materials_code_is_the_compiled_rheologys():
+    """The materials give their code in src/core/rheology.hpp as a number (so that the case's
+    schema reads them without loading the core): each is the core's own constant."""
+    from mpmflow import materials
+
+    core = {
+        "water": state.WATER,
+        "newtonian": state.NEWTONIAN,
+        "herschel_bulkley": state.HERSCHEL_BULKLEY,
+        "mu_i": state.MU_I,
+    }
+    assert {name: m.MODEL for name, m in materials.MATERIALS.items()} == core

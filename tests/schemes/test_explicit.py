@@ -318,7 +318,8 @@ def test_study_quick(tmp_path):
 def test_what_the_explicit_scheme_does_not_support_is_refused_with_the_fix(
     override, feature, instead
 ):
-    """The rule asks the scheme (schemes.SUPPORTS) and names the schemes that would do."""
+    """The rule asks the schemes' table (case.capabilities) and names the schemes that would
+    do."""
     with pytest.raises(
         CaseError,
         match=rf'solver.scheme = "explicit" does not support '

@@ -7,7 +7,7 @@ from conftest import EXAMPLES, make_case
 from mpmflow import Simulation, load_case
 from mpmflow.geometry.seeding import build_particles
 from mpmflow.grid import Grid
-from mpmflow.schemes import make_scheme
+from mpmflow.simulation.setup import make_scheme
 
 RHO, G = 1000.0, 9.81
 

@@ -34,9 +34,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import state
+from ..arrays import Bools, Floats, Ints
 from ..geometry.shapes import Shape
 from ..grid import Grid
-from ..state.arrays import Bools, Floats, Ints
 
 if TYPE_CHECKING:  # the case builds its obstacles' shapes with geometry/, not with this module
     from ..case import Case

@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..arrays import Bools, Floats
 from ..particles import Particles
-from ..state.arrays import Bools, Floats
 
 if TYPE_CHECKING:
     from ..case import Case

@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import state
+from ..arrays import Bools, Floats, Ints
 from ..grid import Grid
-from ..state.arrays import Bools, Floats, Ints
 
 if TYPE_CHECKING:  # the case asks this package for its boundaries
     from ..case import Case

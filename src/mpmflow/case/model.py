@@ -8,13 +8,12 @@ import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 from typing_extensions import Self
 
-from .. import schemes
 from ..geometry import bodies, placement
 from ..geometry.shapes import DIM_OF, Shape
 from ..geometry.specs import from_spec
 from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
-from . import probe_data
+from . import capabilities, probe_data
 from .domain import Domain
 from .sections import (
     MAX_PRESSURE,
@@ -108,7 +107,7 @@ class Case(Section):
 
     def _unsupported(self) -> str | None:
         """The message for a feature the case uses that its scheme does not support (each
-        scheme declares its own, ``schemes.SUPPORTS``); None when there is none."""
+        scheme's, ``capabilities.SUPPORTS``); None when there is none."""
         used = {
             "obstacles": (bool(self.obstacles), "remove the [[obstacles]]"),
             "materials": (self.material.model != "water", 'set material.model = "water"'),
@@ -121,11 +120,11 @@ class Case(Section):
         }
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():
-            if uses and not schemes.supports(name, feature):
-                others = " or ".join(f'"{n}"' for n in schemes.supporting(feature))
+            if uses and not capabilities.supports(name, feature):
+                others = " or ".join(f'"{n}"' for n in capabilities.supporting(feature))
                 return (
                     f'solver.scheme = "{name}" does not support '
-                    f"{schemes.FEATURES[feature]}; set solver.scheme = {others}, or "
+                    f"{capabilities.FEATURES[feature]}; set solver.scheme = {others}, or "
                     f"{instead}"
                 )
         return None

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..state.arrays import Floats
+from ..arrays import Floats
 
 
 def _names(line: str) -> list[str]:

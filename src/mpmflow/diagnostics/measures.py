@@ -13,9 +13,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import state
+from ..arrays import Floats
 from ..grid import Grid
 from ..particles import Particles
-from ..state.arrays import Floats
 
 
 def last_crossings(f: Floats, centres: Floats, wall: float) -> Floats:

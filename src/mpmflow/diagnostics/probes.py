@@ -59,11 +59,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..arrays import Floats, Ints
 from ..cells import CellBins
 from ..fallbacks import Fallbacks
 from ..grid import Grid
 from ..particles import Particles
-from ..state.arrays import Floats, Ints
 from .measures import volume_fraction_field
 
 if TYPE_CHECKING:

@@ -19,17 +19,10 @@ from typing import Any, Literal
 import numpy as np
 
 from .. import state
-from ..state.arrays import Floats, Ints
+from ..arrays import Floats, Ints
+from .result import SolveResult
 
 SMOOTHING_SWEEPS = 1  # Gauss-Seidel sweeps before and after each coarse correction
-
-
-@dataclass
-class SolveResult:
-    x: Floats
-    iterations: int
-    residual: float  # true relative residual
-    converged: bool
 
 
 @dataclass

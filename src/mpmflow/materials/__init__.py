@@ -6,7 +6,8 @@ A material module gives:
 * ``KEYS``: the ``[material]`` keys that are its parameters (besides ``density`` and
   ``bulk_modulus``, which every material has); the schema (``mpmflow.case.sections.Material``)
   holds their descriptions and units;
-* ``MODEL``: its code in the compiled rheology (``state``: src/core/rheology.hpp);
+* ``MODEL``: its code in the compiled rheology (src/core/rheology.hpp), as a number, so that
+  the case's schema reads the materials without loading the compiled core;
 * ``check(m)``: the checks of its parameters, raising ValueError with a message that names
   the key and the fix;
 * ``parameters(m)``: its parameters as the float array the compiled rheology reads.
@@ -21,8 +22,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .. import state
-from ..state.arrays import Floats
+from ..arrays import Floats
 from . import herschel_bulkley, mu_i, newtonian, water
 
 if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
@@ -75,4 +75,4 @@ def parameters(m: Material) -> tuple[int, Floats]:
 
 
 def is_viscous(m: Material) -> bool:
-    return MATERIALS[m.model].MODEL != state.WATER
+    return MATERIALS[m.model].MODEL != water.MODEL

@@ -8,14 +8,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .. import state
-
 if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
     from ..case.sections import Material
 
 NAME = "herschel_bulkley"
 KEYS: tuple[str, ...] = ("consistency", "yield_stress", "flow_index", "max_viscosity")
-MODEL = state.HERSCHEL_BULKLEY
+MODEL = 2  # src/core/rheology.hpp's HERSCHEL_BULKLEY (tests/materials check it against the core)
 
 
 def check(m: Material) -> None:

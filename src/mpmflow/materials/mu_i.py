@@ -9,8 +9,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .. import state
-
 if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
     from ..case.sections import Material
 
@@ -23,7 +21,7 @@ KEYS: tuple[str, ...] = (
     "grain_density",
     "max_viscosity",
 )
-MODEL = state.MU_I
+MODEL = 3  # src/core/rheology.hpp's MU_I (tests/materials check it against the core)
 
 
 def check(m: Material) -> None:

@@ -5,14 +5,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .. import state
-
 if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
     from ..case.sections import Material
 
 NAME = "newtonian"
 KEYS: tuple[str, ...] = ("viscosity",)
-MODEL = state.NEWTONIAN
+MODEL = 1  # src/core/rheology.hpp's NEWTONIAN (tests/materials check it against the core)
 
 
 def check(m: Material) -> None:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..state.arrays import Ints
+from ..arrays import Ints
 
 
 @dataclass(frozen=True)

@@ -27,9 +27,9 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..arrays import Floats, Ints
 from ..errors import CaseError
-from ..linalg.solvers import SolveResult
-from ..state.arrays import Floats, Ints
+from ..linalg.result import SolveResult
 from .comm import SETUP_HINT
 
 Preconditioner = Literal["gamg", "hypre"]

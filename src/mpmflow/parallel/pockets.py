@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..state.arrays import Bools, Ints
+from ..arrays import Bools, Ints
 from .comm import Comm
 from .exchange import NodeExchange
 

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import materials, state
+from ..arrays import Floats, Ints
 from ..boundaries import obstacles, outlets, walls
 from ..errors import SolverError
 from ..grid import Grid
@@ -41,7 +42,6 @@ from ..schemes import pressure
 from ..schemes.projection import MARGIN, AdaptiveReport, ProjectionScheme, StepReport, preset
 from ..schemes.projection import ParticleArrays as CoreParticles
 from ..state import CoreOptions, CoreReport
-from ..state.arrays import Floats, Ints
 from .boxes import Boxes, bisect, cell_weights
 from .comm import Comm, world
 from .exchange import Halo, NodeExchange, ParticleArrays, migrate, owners

@@ -17,9 +17,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..arrays import Bools, Floats, Ints
 from ..boundaries.obstacles import Tables
 from ..grid import Grid
-from ..state.arrays import Bools, Floats, Ints
 from .boxes import Boxes
 
 GHOST = 1  # ghost cell layers round a box: the multilinear transfer's reach

@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..arrays import Floats, Ints
 from ..errors import SolverError
-from ..state.arrays import Floats, Ints
 from .comm import Comm
 from .exchange import NodeExchange
 from .petsc import DistributedSystem, Preconditioner

@@ -1,6 +1,6 @@
-"""Time-integration schemes, registered by the name used in ``solver.scheme``, each
-declaring what it supports (``SUPPORTS``): the case's rules ask here instead of naming
-schemes."""
+"""Time-integration schemes, registered by the name used in ``solver.scheme``. What each
+supports is data in ``case.capabilities`` (the case's rules read it there without loading
+the schemes); each class's ``SUPPORTS`` is its entry of that table."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 from numpy.typing import NDArray
 
-if TYPE_CHECKING:  # the case asks this registry what each scheme supports
+if TYPE_CHECKING:
     from ..case import Case
     from ..grid import Grid
     from ..particles import Particles
@@ -21,7 +21,7 @@ from ..boundaries.outlets import Outflow
 class Scheme(Protocol):
     """What the Simulation asks of a scheme (``projection``, ``explicit``)."""
 
-    SUPPORTS: ClassVar[frozenset[str]]  # the FEATURES it supports
+    SUPPORTS: ClassVar[frozenset[str]]  # the capabilities.FEATURES it supports
     last_unknowns: int  # the size of the last step's system (0: none)
     particles: Particles  # the particles it moves (set anew before the first step: setup)
     outflow: Outflow  # what has left through the domain's outlets
@@ -42,50 +42,10 @@ class Scheme(Protocol):
         ...
 
 
-SCHEMES: dict[str, type[Scheme]] = {}
+def registry() -> dict[str, type[Scheme]]:
+    """Every scheme by its ``solver.scheme`` name (importing their modules, which load the
+    compiled core; the names are ``case.capabilities.SUPPORTS``'s)."""
+    from .explicit import ExplicitScheme
+    from .projection import ProjectionScheme
 
-# The features a scheme may support, as the case's rules name them to the user.
-FEATURES = {
-    "obstacles": "fixed obstacles ([[obstacles]])",
-    "materials": "materials other than inviscid water (material.model)",
-    "periodic": "periodic axes (domain.periodic)",
-    "apic": 'APIC transfers (solver.transfer = "apic"; it transfers by FLIP/PIC only)',
-    "outlets": 'outlets (domain.walls = "outlet")',
-}
-
-
-def _load() -> None:
-    from . import explicit, projection  # noqa: F401  (they register themselves)
-
-
-def supports(name: str, feature: str) -> bool:
-    """True when scheme ``name`` supports ``feature`` (a key of FEATURES)."""
-    _load()
-    return feature in SCHEMES[name].SUPPORTS
-
-
-def supporting(feature: str) -> list[str]:
-    """The names of the schemes that support ``feature``."""
-    _load()
-    return [name for name, cls in SCHEMES.items() if feature in cls.SUPPORTS]
-
-
-def register(name: str) -> Callable[[type[Scheme]], type[Scheme]]:
-    def deco(cls: type[Scheme]) -> type[Scheme]:
-        SCHEMES[name] = cls
-        return cls
-
-    return deco
-
-
-def make_scheme(case: Case, grid: Grid, particles: Particles) -> Scheme:
-    """The case's scheme; started on several MPI processes, its form over the ranks
-    (``parallel.scheme``)."""
-    _load()
-    from ..parallel.comm import launched_size
-
-    if launched_size() > 1:
-        from ..parallel.support import distributed
-
-        return distributed(case, grid, particles)
-    return SCHEMES[case.solver.scheme](case, grid, particles)
+    return {"projection": ProjectionScheme, "explicit": ExplicitScheme}

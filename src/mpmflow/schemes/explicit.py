@@ -26,11 +26,11 @@ from numpy.typing import NDArray
 
 from .. import state
 from ..boundaries import outlets, walls
+from ..case import capabilities
 from ..errors import SimulationError
 from ..grid import Grid
 from ..particles import Particles
 from ..stability import sound_speed, stable_time_step
-from . import register
 from .projection import StepReport, preset
 
 if TYPE_CHECKING:  # the case asks the scheme registry what each scheme supports
@@ -42,10 +42,9 @@ class ExplicitReport(StepReport):
     steps: int = 0  # the steps taken (with time.dt = "auto", as many as the state needed)
 
 
-@register("explicit")
 class ExplicitScheme:
     # water only, walls only (the weakly compressible comparator)
-    SUPPORTS: ClassVar[frozenset[str]] = frozenset()
+    SUPPORTS: ClassVar[frozenset[str]] = capabilities.SUPPORTS["explicit"]
 
     def __init__(self, case: Case, grid: Grid, particles: Particles) -> None:
         self.grid = grid

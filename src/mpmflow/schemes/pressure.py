@@ -16,10 +16,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import state
+from ..arrays import Floats
 from ..errors import SolverError
 from ..grid import Grid
 from ..linalg.solvers import LinearSolver, PressureMatrix
-from ..state.arrays import Floats
 
 if TYPE_CHECKING:  # the case's schema asks the scheme registry what each scheme supports
     from ..case.solver import Solver

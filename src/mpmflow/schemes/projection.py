@@ -16,14 +16,15 @@ from numpy.typing import NDArray
 from typing_extensions import Self
 
 from .. import materials, state
+from ..arrays import Floats
 from ..boundaries import obstacles, outlets, walls
+from ..case import capabilities
 from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
 from ..particles import Particles
 from ..state import CoreOptions, CoreReport
-from ..state.arrays import Floats
-from . import pressure, register, volume_correction
+from . import pressure, volume_correction
 
 if TYPE_CHECKING:  # the case asks the scheme registry what each scheme supports
     from ..case import Case
@@ -103,11 +104,8 @@ class AdaptiveReport(StepReport):
     dt_max: float = 0.0
 
 
-@register("projection")
 class ProjectionScheme:
-    SUPPORTS: ClassVar[frozenset[str]] = frozenset(
-        {"obstacles", "materials", "periodic", "apic", "outlets"}
-    )
+    SUPPORTS: ClassVar[frozenset[str]] = capabilities.SUPPORTS["projection"]
 
     def __init__(self, case: Case, grid: Grid, particles: Particles) -> None:
         s = case.solver

@@ -16,7 +16,7 @@ from ..geometry.seeding import build_particles
 from ..grid import Grid
 from ..materials import stiffness
 from ..particles import Particles, subset
-from ..schemes import Scheme, make_scheme
+from ..schemes import Scheme, registry
 from ..stability import time_step
 from ..threads import setting_from
 
@@ -33,6 +33,18 @@ class Setup:
     scheme: Scheme
     dt: float
     notices: list[str]
+
+
+def make_scheme(case: Case, grid: Grid, particles: Particles) -> Scheme:
+    """The case's scheme; started on several MPI processes, its form over the ranks
+    (``parallel.scheme``)."""
+    from ..parallel.comm import launched_size
+
+    if launched_size() > 1:
+        from ..parallel.support import distributed
+
+        return distributed(case, grid, particles)
+    return registry()[case.solver.scheme](case, grid, particles)
 
 
 def build(case: Case) -> Setup:

@@ -11,11 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _core
+from .. import _core, arrays
+from ..arrays import Bools, Floats
 from ..grid import Grid
 from ..particles import Particles
-from . import arrays
-from .arrays import Bools, Floats
 
 
 @dataclass(frozen=True)

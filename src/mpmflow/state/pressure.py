@@ -8,9 +8,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .. import _core
-from . import arrays
-from .arrays import Bools, Floats, Ints
+from .. import _core, arrays
+from ..arrays import Bools, Floats, Ints
 
 
 def gauss_cell_tensors(h: float, K: Floats, C: Floats, V: Floats) -> None:

@@ -8,10 +8,9 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .. import _core
+from .. import _core, arrays
+from ..arrays import Bools, Floats, Ints
 from ..grid import Grid
-from . import arrays
-from .arrays import Bools, Floats, Ints
 
 if TYPE_CHECKING:  # obstacles builds its tables with this package's kernels
     from ..boundaries.obstacles import Tables

@@ -7,10 +7,9 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .. import _core
+from .. import _core, arrays
+from ..arrays import Bools, Floats, Ints
 from ..grid import Grid
-from . import arrays
-from .arrays import Bools, Floats, Ints
 
 # (src/core/transfer.*, corrector.*, volume_correction.*, strips.hpp.) ``grid`` is a
 # ``mpmflow.grid.Grid``; arrays the kernels write must be C-contiguous of the right dtype

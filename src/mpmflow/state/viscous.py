@@ -7,9 +7,8 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .. import _core
-from . import arrays
-from .arrays import Bools, Floats, Ints
+from .. import _core, arrays
+from ..arrays import Bools, Floats, Ints
 
 _Scalar = TypeVar("_Scalar", bound=np.generic)
 

@@ -1,15 +1,20 @@
 """Figures of the paper study (``studies.paper``): Fig. 2, 3 and 4 analogues as PNG files."""
 
+from __future__ import annotations
+
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..plotting.mpl import pyplot
-from .paper import Row, RunResult
 from .reference_data import MM_HEIGHT_AR2, VOF_AR2, G, load
+
+if TYPE_CHECKING:  # paper.py runs the study and calls write_figures
+    from .paper import Row, RunResult
 
 A = 0.114  # m, width of both columns
 MM_FRONT = "validation/martin_moyce_1952_n2eq2_a2.25in_front_table2.csv"

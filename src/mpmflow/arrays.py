@@ -1,10 +1,12 @@
 """Arrays as the core's bindings take them (C-contiguous, of the right dtype), and their
-types: the core's kernels take float64, int64 and bool arrays (src/core/view.hpp)."""
+types: the core's kernels take float64, int64 and bool arrays (src/core/view.hpp). Outside
+the ``state`` package, so that code that only names these types (the case, the geometry)
+does not load the compiled core."""
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..grid import Grid
+from .grid import Grid
 
 Floats = NDArray[np.float64]  # the core's ``double`` arrays
 Ints = NDArray[np.int64]  # the core's ``index_t`` arrays (indices, counts)
