@@ -32,6 +32,33 @@ def make_case(
     return validate(data)
 
 
+# a small 2D case that runs two steps without snapshots: the input tests write it and change
+# one thing (tests/case/)
+TINY_CASE = """
+[domain]
+size = [0.2, 0.2]
+[grid]
+spacing = 0.02
+[[bodies]]
+min = [0.0, 0.0]
+max = [0.1, 0.1]
+[time]
+dt = 1e-3
+end = 2e-3
+[output]
+interval = 1e-3
+snapshots = false
+"""
+
+
+@pytest.fixture
+def tiny_case_file(tmp_path):
+    """TINY_CASE written to tmp_path / "case.toml"."""
+    path = tmp_path / "case.toml"
+    path.write_text(TINY_CASE)
+    return path
+
+
 # water trapped between a disc and two walls: a sealed pocket at every step
 # (tests/boundaries/test_obstacles.py, tests/state/)
 POCKET_2D = """

@@ -5,26 +5,10 @@ was refused as "changed after loading" when the run validated the case again).""
 import os
 import shutil
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, TINY_CASE
 
 from mpmflow import load_case
 from mpmflow.cli import main
-
-CASE = """
-[domain]
-size = [0.2, 0.2]
-[grid]
-spacing = 0.02
-[[bodies]]
-min = [0.0, 0.0]
-max = [0.1, 0.1]
-[time]
-dt = 1e-3
-end = 2e-3
-[output]
-interval = 1e-3
-snapshots = false
-"""
 
 MESH_CASE = """
 [domain]
@@ -46,7 +30,7 @@ snapshots = false
 
 def test_a_byte_order_mark_is_read_as_the_start_of_the_text(tmp_path, capsys):
     path = tmp_path / "case.toml"
-    path.write_bytes(b"\xef\xbb\xbf" + CASE.encode())
+    path.write_bytes(b"\xef\xbb\xbf" + TINY_CASE.encode())
     assert load_case(path).grid.spacing == 0.02
     assert main(["run", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
     assert "Traceback" not in capsys.readouterr().err

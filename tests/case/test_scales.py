@@ -9,29 +9,6 @@ from mpmflow.case.sections import MAX_DENSITY, MAX_GRAVITY, MAX_PRESSURE, MIN_DE
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
 
-CASE = """
-[domain]
-size = [0.2, 0.2]
-[grid]
-spacing = 0.02
-[[bodies]]
-min = [0.0, 0.0]
-max = [0.1, 0.1]
-[time]
-dt = 1e-3
-end = 2e-3
-[output]
-interval = 1e-3
-snapshots = false
-"""
-
-
-@pytest.fixture
-def case_file(tmp_path):
-    path = tmp_path / "case.toml"
-    path.write_text(CASE)
-    return path
-
 
 @pytest.mark.parametrize(
     ("setting", "said"),
@@ -44,29 +21,35 @@ def case_file(tmp_path):
         ("domain.size=[1e9, 1e9]", "x 1e+09 m = 9.81e+12 Pa, is above 1e+12 Pa"),
     ],
 )
-def test_a_scale_no_flow_has_is_refused_before_the_run(case_file, tmp_path, capsys, setting, said):
-    code = main(["run", str(case_file), "--out", str(tmp_path / "o"), "-q", "--set", setting])
+def test_a_scale_no_flow_has_is_refused_before_the_run(
+    tiny_case_file, tmp_path, capsys, setting, said
+):
+    code = main(["run", str(tiny_case_file), "--out", str(tmp_path / "o"), "-q", "--set", setting])
     err = capsys.readouterr().err
     assert code == 2 and said in err, err
     assert "Traceback" not in err and "did not converge" not in err
     assert not (tmp_path / "o").exists()
 
 
-def test_the_ranges_hold_every_real_material_and_centrifuge(case_file):
+def test_the_ranges_hold_every_real_material_and_centrifuge(tiny_case_file):
     for density in (MIN_DENSITY, 71.0, 1000.0, 13546.0, 22590.0, MAX_DENSITY):
-        assert load_case(case_file, [f"material.density={density}"]).material.density == density
+        assert (
+            load_case(tiny_case_file, [f"material.density={density}"]).material.density == density
+        )
     # 1,000 g in a centrifuge, sideways and down
-    case = load_case(case_file, [f"physics.gravity=[{MAX_GRAVITY * 0.6}, {-MAX_GRAVITY * 0.8}]"])
+    case = load_case(
+        tiny_case_file, [f"physics.gravity=[{MAX_GRAVITY * 0.6}, {-MAX_GRAVITY * 0.8}]"]
+    )
     assert case.physics.gravity == [MAX_GRAVITY * 0.6, -MAX_GRAVITY * 0.8]
-    assert load_case(case_file, ["physics.gravity=[0, 0]"]).physics.gravity == [0.0, 0.0]
+    assert load_case(tiny_case_file, ["physics.gravity=[0, 0]"]).physics.gravity == [0.0, 0.0]
 
 
-def test_the_pressure_scale_is_measured_along_gravity(case_file):
+def test_the_pressure_scale_is_measured_along_gravity(tiny_case_file):
     """The height is the domain's extent along gravity: a tall domain with gravity along
     its short side passes where the same gravity down its long side is refused."""
     g = MAX_GRAVITY
     height = MAX_PRESSURE / (MAX_DENSITY * g) * 1.5  # over the limit along it
     tall = [f"domain.size=[0.2, {height}]", f"material.density={MAX_DENSITY}"]
-    load_case(case_file, [*tall, f"physics.gravity=[{-g}, 0]"])
+    load_case(tiny_case_file, [*tall, f"physics.gravity=[{-g}, 0]"])
     with pytest.raises(CaseError, match="hydrostatic pressure over the domain's height"):
-        load_case(case_file, [*tall, f"physics.gravity=[0, {-g}]"])
+        load_case(tiny_case_file, [*tall, f"physics.gravity=[0, {-g}]"])

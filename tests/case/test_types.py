@@ -3,33 +3,11 @@ in quotes and a boolean is never a number or a word, in the case file and in --s
 each refusal names the key and says how to write the value."""
 
 import pytest
+from conftest import TINY_CASE
 
 from mpmflow import load_case
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
-
-CASE = """
-[domain]
-size = [0.2, 0.2]
-[grid]
-spacing = 0.02
-[[bodies]]
-min = [0.0, 0.0]
-max = [0.1, 0.1]
-[time]
-dt = 1e-3
-end = 2e-3
-[output]
-interval = 1e-3
-snapshots = false
-"""
-
-
-@pytest.fixture
-def case_file(tmp_path):
-    path = tmp_path / "case.toml"
-    path.write_text(CASE)
-    return path
 
 
 @pytest.mark.parametrize(
@@ -51,16 +29,16 @@ def case_file(tmp_path):
         ("execution.threads=true", "`execution.threads` = true", "booleans"),
     ],
 )
-def test_a_value_of_another_type_is_refused_by_name(case_file, setting, shown, hint):
+def test_a_value_of_another_type_is_refused_by_name(tiny_case_file, setting, shown, hint):
     with pytest.raises(CaseError) as err:
-        load_case(case_file, [setting])
+        load_case(tiny_case_file, [setting])
     assert shown in str(err.value) and hint in str(err.value), str(err.value)
 
 
 def test_the_same_values_in_the_case_file_are_refused(tmp_path, capsys):
     path = tmp_path / "case.toml"
     path.write_text(
-        CASE.replace("spacing = 0.02", 'spacing = "0.02"').replace(
+        TINY_CASE.replace("spacing = 0.02", 'spacing = "0.02"').replace(
             "snapshots = false", 'snapshots = "no"'
         )
     )
@@ -71,21 +49,21 @@ def test_the_same_values_in_the_case_file_are_refused(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-def test_numbers_and_words_of_the_right_type_still_pass(case_file):
+def test_numbers_and_words_of_the_right_type_still_pass(tiny_case_file):
     case = load_case(
-        case_file,
+        tiny_case_file,
         ["time.dt=1e-3", "grid.spacing=0.02", "output.snapshots=true", "execution.threads=1"],
     )
     assert case.time.dt == 1e-3 and case.output.snapshots is True
-    assert load_case(case_file, ["time.dt=auto", "time.end=0.1"]).time.dt == "auto"
+    assert load_case(tiny_case_file, ["time.dt=auto", "time.end=0.1"]).time.dt == "auto"
     # an integer stands for a float (TOML writes 1 for 1.0)
-    assert load_case(case_file, ["material.density=1000"]).material.density == 1000.0
+    assert load_case(tiny_case_file, ["material.density=1000"]).material.density == 1000.0
 
 
-def test_python_numbers_lists_and_numpy_values_are_taken_as_toml_would_hold_them(case_file):
+def test_python_numbers_lists_and_numpy_values_are_taken_as_toml_would_hold_them(tiny_case_file):
     np = pytest.importorskip("numpy")
     case = load_case(
-        case_file,
+        tiny_case_file,
         {
             "grid.spacing": np.float32(0.02),
             "bodies.0.max": (0.1, 0.1),
@@ -95,14 +73,14 @@ def test_python_numbers_lists_and_numpy_values_are_taken_as_toml_would_hold_them
     )
     assert case.bodies[0].particles_per_cell == 3 and case.bodies[0].max == [0.1, 0.1]
     with pytest.raises(CaseError, match="booleans, not numbers"):
-        load_case(case_file, {"bodies.0.particles_per_cell": np.bool_(True)})
+        load_case(tiny_case_file, {"bodies.0.particles_per_cell": np.bool_(True)})
 
 
-def test_a_refused_string_is_shown_escaped_on_one_line(case_file):
+def test_a_refused_string_is_shown_escaped_on_one_line(tiny_case_file):
     """The value is shown as TOML writes it: a line break inside a string (here U+0085,
     which splitlines takes for one) is escaped, so the message stays one line."""
     with pytest.raises(CaseError) as err:
-        load_case(case_file, ['grid.spacing="0.02\\u0085"'])
+        load_case(tiny_case_file, ['grid.spacing="0.02\\u0085"'])
     message = str(err.value)
     assert '`grid.spacing` = "0.02\\u0085" is not allowed' in message
     assert len(message.splitlines()) == 1
