@@ -186,7 +186,7 @@ def _parser() -> argparse.ArgumentParser:
         "analytic or measured reference, and write DIR/README.md (summary table: case, "
         "quantity, error measure, value, tolerance, pass/miss; one section per case with "
         "plots) and DIR/summary.csv; a README.md in DIR that it did not write is never replaced. "
-        "Needs matplotlib. The full run takes 30 to 60 minutes on 2 cores (the 3D and SPHERIC cases most of it).",
+        "Needs matplotlib. The full run takes 60 to 85 minutes on 2 cores (83.5 on 2026-11-28: SPHERIC 37, the time-step study 11).",
         epilog="The reference data are read from ../shared/data (or $MPMFLOW_DATA).",
     )
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
