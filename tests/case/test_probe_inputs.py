@@ -5,32 +5,23 @@ columns it reads or times out of order (they were accepted and plotted), each wi
 file and the line."""
 
 import pytest
+from conftest import TINY_CASE
 
 from mpmflow import load_case
 from mpmflow.case.probe_data import read_series
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
 
-CASE = """
-[domain]
-size = [0.2, 0.2]
-[grid]
-spacing = 0.02
-[[bodies]]
-min = [0.0, 0.0]
-max = [0.1, 0.1]
-particles_per_cell = 2
-[time]
-dt = 1e-3
-end = 2e-3
-[output]
-interval = 1e-3
-snapshots = false
+# the input tests' small case with 2 particles per cell (a spacing of 0.01 m) and a probe
+CASE = (
+    TINY_CASE.replace("max = [0.1, 0.1]", "max = [0.1, 0.1]\nparticles_per_cell = 2")
+    + """
 [[probes]]
 name = "p1"
 quantity = "pressure"
 position = [0.0, 0.02]
 """
+)
 
 SERIES = "time [s],P1 [Pa],note\n0.0,1.0,start\n0.1,2.0,\n0.2,3.0,end\n"
 
