@@ -6,6 +6,8 @@
 #   it against the wheel: env $(.venv/bin/python scripts/kernels.py env) make test-wheel)
 # MPI (issue 28): make setup-mpi (Open MPI, mpi4py, petsc4py into .venv-mpi), make test-mpi
 # A wheel (issue 40): make wheel (-> dist/), make test-wheel (installed where no compiler is)
+# CUDA (issue 41): make check-cuda on a machine with nvcc and a GPU (not CI): builds the CUDA
+#   backend's check (src/core/cuda) into build-cuda/ and runs it; CUDA_ARCH=90 by default
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -16,7 +18,7 @@ MPIRUN := env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_
 	mpirun --oversubscribe
 
 .PHONY: setup setup-mpi test test-mpi test-fast lint dam-break validate bench figures clean \
-	wheel test-wheel
+	wheel test-wheel check-cuda
 
 CORE := CMakeLists.txt $(wildcard src/core/*.hpp src/core/*.cpp src/core/bindings/*)
 # the editable install maps the package's modules when it is made: a module added, removed
@@ -112,3 +114,10 @@ figures: setup
 
 clean:
 	rm -rf runs .pytest_cache
+
+CUDA_ARCH ?= 90
+check-cuda:
+	cmake -S src/core/cuda -B build-cuda -DCMAKE_BUILD_TYPE=Release \
+		-DCMAKE_CUDA_ARCHITECTURES=$(CUDA_ARCH)
+	cmake --build build-cuda -j
+	build-cuda/mpmflow_cuda_check build-cuda/check.jsonl

@@ -16,14 +16,17 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-# (name, example, overrides): the four cases of issue 27's acceptance, and the dam break
-# with the explicit comparator (its compressibility reduced so that 50 steps of 0.1 ms are
+# (name, example, overrides): the four cases of issue 27's acceptance, the dam break with
+# APIC transfers and with an outlet on its far side (the transfers' other branches), and
+# the dam break with the explicit comparator (its compressibility reduced so that 50 steps of 0.1 ms are
 # stable; the explicit scheme's arrays are its own)
 CASES = (
     ("dam_break", "dam_break", {}),
     ("obstacle_2d", "obstacle_2d", {}),
     ("granular_collapse", "granular_collapse", {}),
     ("hydrostatic_3d", "hydrostatic_3d", {}),
+    ("dam_break_apic", "dam_break", {"solver.transfer": "apic"}),
+    ("dam_break_outlet", "dam_break", {"domain.walls": {"x_max": "outlet"}}),
     (
         "dam_break_explicit",
         "dam_break",

@@ -27,7 +27,7 @@ constexpr int corners(int D) { return 1 << D; }
 
 // x^n for n >= 0 by repeated squaring (the roundings of Python's float ** int; for n <= 3
 // every order of the products gives the same bits): cell volumes h^D, face areas h^(D-1).
-inline double int_power(double x, int n) {
+MPMFLOW_HD inline double int_power(double x, int n) {
   double r = 1.0;
   while (true) {
     if (n & 1) r *= x;
@@ -83,27 +83,27 @@ struct Grid {
 
   // Cell coordinate j along axis k (j = -1 to cells[k]) wrapped round a periodic axis; -1
   // beyond a wall.
-  index_t wrap_cell(int k, index_t j) const {
+  MPMFLOW_HD index_t wrap_cell(int k, index_t j) const {
     if (j >= 0 && j < cells[k]) return j;
     if (!periodic[k]) return -1;
     return j < 0 ? j + cells[k] : j - cells[k];
   }
   // Node coordinate j along axis k (j = -1 to cells[k] + 1) wrapped round a periodic axis
   // (the last plane, an image, is kept); -1 beyond a wall.
-  index_t wrap_node(int k, index_t j) const {
+  MPMFLOW_HD index_t wrap_node(int k, index_t j) const {
     if (j >= 0 && j <= cells[k]) return j;
     if (!periodic[k]) return -1;
     return j < 0 ? j + cells[k] : j - cells[k];
   }
   // True for a node on the last plane of a periodic axis (an image of one on the first).
-  bool is_image(const index_t* ix) const {
+  MPMFLOW_HD bool is_image(const index_t* ix) const {
     if (!any_periodic) return false;
     for (int k = 0; k < D; ++k)
       if (periodic[k] && ix[k] == cells[k]) return true;
     return false;
   }
   // The master of node i (coordinates ix): its images' planes moved to the first plane.
-  index_t master(index_t i, const index_t* ix) const {
+  MPMFLOW_HD index_t master(index_t i, const index_t* ix) const {
     for (int k = 0; k < D; ++k)
       if (periodic[k] && ix[k] == cells[k]) i -= cells[k] * ns[k];
     return i;
@@ -111,7 +111,7 @@ struct Grid {
 
   // The cell (0 to n - 1) holding grid coordinate s = x / h; points beyond the grid go to
   // the nearest cell, NaN to cell 0.
-  static index_t cell_of(double s, index_t n) {
+  MPMFLOW_HD static index_t cell_of(double s, index_t n) {
     if (!(s > 0.0)) return 0;
     if (s >= n - 1.0) return n - 1;
     return static_cast<index_t>(s);
@@ -119,7 +119,7 @@ struct Grid {
 
   // The first node of the cell holding point x (D coordinates) and the multilinear weights
   // of its 2^D corners into w (built axis by axis, in the order of the Numba kernels).
-  index_t weights_at(const double* x, double* w) const {
+  MPMFLOW_HD index_t weights_at(const double* x, double* w) const {
     index_t base = 0;
     w[0] = 1.0;
     for (int k = 0; k < D; ++k) {
@@ -136,7 +136,7 @@ struct Grid {
   }
 
   // The first node of the cell holding x and the local coordinates in it (each in [0, 1]).
-  index_t locate(const double* x, double* frac) const {
+  MPMFLOW_HD index_t locate(const double* x, double* frac) const {
     index_t base = 0;
     for (int k = 0; k < D; ++k) {
       const double s = x[k] * inv_h;
@@ -148,27 +148,27 @@ struct Grid {
   }
 
   // The flat cell holding x.
-  index_t cell_at(const double* x) const {
+  MPMFLOW_HD index_t cell_at(const double* x) const {
     index_t c = 0;
     for (int k = 0; k < D; ++k) c += cell_of(x[k] * inv_h, cells[k]) * cs[k];
     return c;
   }
 
-  void node_coords(index_t i, index_t* out) const {
+  MPMFLOW_HD void node_coords(index_t i, index_t* out) const {
     for (int k = 0; k < D; ++k) {
       const index_t n = cells[k] + 1;
       out[k] = i % n;
       i /= n;
     }
   }
-  void cell_coords(index_t c, index_t* out) const {
+  MPMFLOW_HD void cell_coords(index_t c, index_t* out) const {
     for (int k = 0; k < D; ++k) {
       out[k] = c % cells[k];
       c /= cells[k];
     }
   }
   // The first node of cell c.
-  index_t cell_first_node(index_t c) const {
+  MPMFLOW_HD index_t cell_first_node(index_t c) const {
     index_t i = 0;
     for (int k = 0; k < D; ++k) {
       i += (c % cells[k]) * ns[k];
@@ -178,13 +178,13 @@ struct Grid {
   }
 
   // Multilinear shape function of corner a at local coordinates frac.
-  static double corner_weight(int a, const double* frac) {
+  MPMFLOW_HD static double corner_weight(int a, const double* frac) {
     double w = 1.0;
     for (int k = 0; k < D; ++k) w *= ((a >> k) & 1) ? frac[k] : 1.0 - frac[k];
     return w;
   }
   // d N_a / d x_k at local coordinates frac (1/m).
-  double corner_gradient(int a, int k, const double* frac) const {
+  MPMFLOW_HD double corner_gradient(int a, int k, const double* frac) const {
     double g = ((a >> k) & 1) ? inv_h : -inv_h;
     for (int j = 0; j < D; ++j)
       if (j != k) g *= ((a >> j) & 1) ? frac[j] : 1.0 - frac[j];

@@ -123,7 +123,7 @@ void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 
   const bool cells_too = cell_vol.size() > 0;
   const bool apic = affine.size() > 0;
   std::array<index_t, D> cx;
-  std::array<index_t, D> nx;     // APIC: the coordinates of the cell's first node
+  std::array<index_t, D> nx{};   // APIC: the coordinates of the cell's first node
   std::array<double, NS> acell;  // the cell centres around cell c: stencil slots
   for (index_t c = r0 * slab; c < r1 * slab; ++c) {
     const index_t s0 = start(c), s1 = start(c + 1);
@@ -144,34 +144,10 @@ void scatter_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 
     for (index_t s = s0; s < s1; ++s) {
       const index_t p = order(s);
       g.weights_at(&x(p, 0), w.data());
-      const double m = mass(p);
-      const double vol = volume(p);
-      std::array<double, D> vp;
-      for (int k = 0; k < D; ++k) vp[k] = v(p, k);
-      if (apic) {
-        // the particle's affine field at each corner node: v_p + C_p (x_i - x_p)
-        for (int a = 0; a < NC; ++a) {
-          const double wm = w[a] * m;
-          am[a] += wm;
-          av[a] += w[a] * vol;
-          std::array<double, D> dx;
-          for (int j = 0; j < D; ++j)
-            dx[j] = static_cast<double>(nx[j] + ((a >> j) & 1)) * g.h - x(p, j);
-          for (int k = 0; k < D; ++k) {
-            double vi = vp[k];
-            for (int j = 0; j < D; ++j) vi += affine(p, k, j) * dx[j];
-            amom[a][k] += wm * vi;
-          }
-        }
-      } else {
-        for (int a = 0; a < NC; ++a) {
-          const double wm = w[a] * m;
-          am[a] += wm;
-          av[a] += w[a] * vol;
-          for (int k = 0; k < D; ++k) amom[a][k] += wm * vp[k];
-        }
-      }
-      if (cells_too) add_cell_volume<D, P>(g, &x(p, 0), vol, cx, acell);
+      for (int a = 0; a < NC; ++a)
+        p2g_corner<D>(g, p, a, w[a], nx.data(), x, v, mass, volume, affine, am[a], av[a],
+                      amom[a].data());
+      if (cells_too) add_cell_volume<D, P>(g, &x(p, 0), volume(p), cx, acell);
     }
     if (cells_too) store_cell_volume<D, P>(g, c, cx, acell, cell_vol);
     for (int a = 0; a < NC; ++a) {
@@ -233,89 +209,6 @@ void particles_to_grid(const Grid<D>& g, View<const double, 2> x, View<const dou
   });
 }
 
-namespace {
-
-// Grid-to-particle of particles lo to hi - 1 (grid_to_particles); returns how many were put
-// back inside.
-template <int D>
-index_t gather(index_t lo, index_t hi, const Grid<D>& g, View<double, 2> x, View<double, 2> v,
-               View<double> pressure, View<const double, 2> v_old, View<const double, 2> v_new,
-               View<const double> p_node, double dt, double flip, View<const double> lower,
-               View<const double> upper, double margin,
-               const std::array<View<const double>, D>& faces, View<double, 3> affine,
-               const Outlets& outlets) {
-  constexpr int NC = Grid<D>::NC;
-  std::array<double, NC> w;
-  std::array<double, D> normal, tangent;
-  std::array<index_t, D> nlo, tlo, thi;
-  const bool correct = faces[0].size() > 0;
-  const bool apic = affine.size() > 0;
-  index_t moved = 0;
-  for (index_t p = lo; p < hi; ++p) {
-    if (outlets.any() && outlets.mass(p) == 0.0) continue;  // left through an outlet
-    const index_t base = g.weights_at(&x(p, 0), w.data());
-    std::array<double, D> pic{}, dv{}, disp{};
-    double pp = 0.0;
-    if (apic) {
-      // PIC velocity and C_p = sum_i v_i (grad N_i)^T of the corrected grid velocity
-      std::array<double, D> frac;
-      g.locate(&x(p, 0), frac.data());
-      std::array<std::array<double, D>, D> C{};
-      for (int a = 0; a < NC; ++a) {
-        const index_t i = base + g.corner[a];
-        std::array<double, D> grad;
-        for (int j = 0; j < D; ++j) grad[j] = g.corner_gradient(a, j, frac.data());
-        for (int k = 0; k < D; ++k) {
-          const double vi = v_new(i, k);
-          pic[k] += w[a] * vi;
-          for (int j = 0; j < D; ++j) C[k][j] += vi * grad[j];
-        }
-        pp += w[a] * p_node(i);
-      }
-      for (int k = 0; k < D; ++k)
-        for (int j = 0; j < D; ++j) affine(p, k, j) = C[k][j];
-    } else {
-      for (int a = 0; a < NC; ++a) {
-        const index_t i = base + g.corner[a];
-        for (int k = 0; k < D; ++k) {
-          pic[k] = pic[k] + w[a] * v_new(i, k);
-          dv[k] = dv[k] + w[a] * (v_new(i, k) - v_old(i, k));
-        }
-        pp += w[a] * p_node(i);
-      }
-    }
-    if (correct) {
-      face_samples<D>(g, View<const double, 2>(x), p, normal, nlo, tangent, tlo, thi);
-      for (int k = 0; k < D; ++k)
-        disp[k] = face_displacement<D>(g, k, faces[k], normal, nlo, tangent, tlo, thi);
-    }
-    for (int k = 0; k < D; ++k) {
-      v(p, k) = apic ? pic[k] : flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
-      x(p, k) += dt * pic[k];
-      if (correct) x(p, k) += disp[k];
-    }
-    pressure(p) = pp;
-    if (g.any_periodic) wrap_periodic<D>(g, x, p);
-    if (outlets.any() &&
-        beyond_outlet<D>(View<const double, 2>(x), p, lower, upper, outlets.side)) {
-      outlets.mass(p) = 0.0;
-      outlets.volume(p) = 0.0;
-      pressure(p) = 0.0;
-      for (int k = 0; k < D; ++k) {
-        v(p, k) = 0.0;
-        if (apic)
-          for (int j = 0; j < D; ++j) affine(p, k, j) = 0.0;
-      }
-      put_inside<D>(x, v, p, lower, upper, margin);
-    } else if (put_inside<D>(x, v, p, lower, upper, margin)) {
-      moved += 1;
-    }
-  }
-  return moved;
-}
-
-}  // namespace
-
 template <int D>
 index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
                           View<double> pressure, View<const double, 2> v_old,
@@ -323,9 +216,12 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
                           double flip, View<const double> lower, View<const double> upper,
                           double margin, const std::array<View<const double>, D>& faces,
                           View<double, 3> affine, const Outlets& outlets) {
+  const GridToParticle<D> one{g,    x,      v,     pressure, v_old, v_new,  p_node, dt,
+                              flip, margin, lower, upper,    faces, affine, outlets};
   return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
-    return gather<D>(lo, hi, g, x, v, pressure, v_old, v_new, p_node, dt, flip, lower, upper,
-                     margin, faces, affine, outlets);
+    index_t moved = 0;
+    for (index_t p = lo; p < hi; ++p) moved += one(p) ? 1 : 0;
+    return moved;
   });
 }
 

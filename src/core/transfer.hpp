@@ -33,7 +33,7 @@ inline double flip_per_step(double flip_rate, double dt) {
 // the cell against the wall, so a uniform material reads full up to the walls; a periodic
 // axis wraps round. Points beyond the grid (and NaN) count at its edge.
 template <int D, bool P = true, class F>
-inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&& body) {
+MPMFLOW_HD inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&& body) {
   std::array<double, D> frac;
   std::array<index_t, D> first;
   for (int k = 0; k < D; ++k) {
@@ -67,8 +67,8 @@ inline void cell_centre_hat(const Grid<D>& g, const double* x, double volume, F&
 
 // Add ``volume`` (m^3) at particle p to the cell centres (cell_centre_hat).
 template <int D>
-inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index_t p, double volume,
-                                View<double> cell_vol) {
+MPMFLOW_HD inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index_t p,
+                                           double volume, View<double> cell_vol) {
   cell_centre_hat<D>(g, &x(p, 0), volume, [&](const std::array<index_t, D>& i, double w) {
     index_t c = 0;
     for (int k = 0; k < D; ++k) c += i[k] * g.cs[k];
@@ -83,10 +83,10 @@ inline void scatter_cell_volume(const Grid<D>& g, View<const double, 2> x, index
 // weight tangent[j]. Points
 // beyond the grid count at its edge.
 template <int D>
-inline void face_samples(const Grid<D>& g, View<const double, 2> x, index_t p,
-                         std::array<double, D>& normal, std::array<index_t, D>& nlo,
-                         std::array<double, D>& tangent, std::array<index_t, D>& tlo,
-                         std::array<index_t, D>& thi) {
+MPMFLOW_HD inline void face_samples(const Grid<D>& g, View<const double, 2> x, index_t p,
+                                    std::array<double, D>& normal, std::array<index_t, D>& nlo,
+                                    std::array<double, D>& tangent, std::array<index_t, D>& tlo,
+                                    std::array<index_t, D>& thi) {
   for (int j = 0; j < D; ++j) {
     double s = x(p, j) * g.inv_h;
     if (!(s >= 0.0))
@@ -115,12 +115,12 @@ inline void face_samples(const Grid<D>& g, View<const double, 2> x, index_t p,
 // i_k h along axis k, i_k = 0 to cells[k], and at (i_j + 1/2) h along the others, flat
 // index with axis 0 fastest), at the samples face_samples found.
 template <int D>
-inline double face_displacement(const Grid<D>& g, int k, View<const double> f,
-                                const std::array<double, D>& normal,
-                                const std::array<index_t, D>& nlo,
-                                const std::array<double, D>& tangent,
-                                const std::array<index_t, D>& tlo,
-                                const std::array<index_t, D>& thi) {
+MPMFLOW_HD inline double face_displacement(const Grid<D>& g, int k, View<const double> f,
+                                           const std::array<double, D>& normal,
+                                           const std::array<index_t, D>& nlo,
+                                           const std::array<double, D>& tangent,
+                                           const std::array<index_t, D>& tlo,
+                                           const std::array<index_t, D>& thi) {
   double acc = 0.0;
   for (int a = 0; a < (1 << D); ++a) {
     double w = 1.0;
@@ -145,7 +145,7 @@ inline double face_displacement(const Grid<D>& g, int k, View<const double> f,
 
 // Move particle p that left a periodic axis's [0, cells h) by one period (m) back into it.
 template <int D>
-inline void wrap_periodic(const Grid<D>& g, View<double, 2> x, index_t p) {
+MPMFLOW_HD inline void wrap_periodic(const Grid<D>& g, View<double, 2> x, index_t p) {
   for (int k = 0; k < D; ++k) {
     if (!g.periodic[k]) continue;
     const double length = g.cells[k] * g.h;
@@ -164,8 +164,9 @@ inline void wrap_periodic(const Grid<D>& g, View<double, 2> x, index_t p) {
 // in the grid's coordinates for a grid on a part of it (with lower 0 the same numbers as
 // before it was given: 0 + margin and 0 - x are exact).
 template <int D>
-inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<const double> lower,
-                       View<const double> upper, double margin) {
+MPMFLOW_HD inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p,
+                                  View<const double> lower, View<const double> upper,
+                                  double margin) {
   bool out = false;
   for (int k = 0; k < D; ++k) {
     const double lo = lower(k) + margin;
@@ -197,19 +198,132 @@ inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t p, View<con
 struct Outlets {
   View<const bool> side;
   View<double> mass, volume;
-  bool any() const { return side.size() > 0; }
+  MPMFLOW_HD bool any() const { return side.size() > 0; }
 };
 
 // True when particle p lies beyond an outlet side of the box [lower, upper].
 template <int D>
-inline bool beyond_outlet(View<const double, 2> x, index_t p, View<const double> lower,
-                          View<const double> upper, View<const bool> side) {
+MPMFLOW_HD inline bool beyond_outlet(View<const double, 2> x, index_t p, View<const double> lower,
+                                     View<const double> upper, View<const bool> side) {
   for (int k = 0; k < D; ++k) {
     if (x(p, k) < lower(k) && side(2 * k)) return true;
     if (x(p, k) > upper(k) && side(2 * k + 1)) return true;
   }
   return false;
 }
+
+// Particle-to-grid's element function: particle p's share at corner a of its cell, whose
+// weight there is w (weights_at) and whose first node has coordinates nx (APIC only), added
+// to the corner's sums of mass am (kg), volume av (m^3) and momentum amom (D components,
+// kg m/s). The host's slab scatter and the device's node gather (src/core/cuda/) both add
+// through it, so a node's sums take the same terms.
+template <int D>
+MPMFLOW_HD inline void p2g_corner(const Grid<D>& g, index_t p, int a, double w, const index_t* nx,
+                                  View<const double, 2> x, View<const double, 2> v,
+                                  View<const double> mass, View<const double> volume,
+                                  View<const double, 3> affine, double& am, double& av,
+                                  double* amom) {
+  const double wm = w * mass(p);
+  am += wm;
+  av += w * volume(p);
+  if (affine.size() > 0) {
+    // the particle's affine field at the corner node: v_p + C_p (x_i - x_p)
+    double dx[D];
+    for (int j = 0; j < D; ++j) dx[j] = static_cast<double>(nx[j] + ((a >> j) & 1)) * g.h - x(p, j);
+    for (int k = 0; k < D; ++k) {
+      double vi = v(p, k);
+      for (int j = 0; j < D; ++j) vi += affine(p, k, j) * dx[j];
+      amom[k] += wm * vi;
+    }
+  } else {
+    for (int k = 0; k < D; ++k) amom[k] += wm * v(p, k);
+  }
+}
+
+// Grid-to-particle's element function (eqs. 19-21, grid_to_particles below says what it
+// does): the arrays and settings of one call, applied to one particle by operator(), which
+// returns true when the particle was put back inside the box. Plain views and numbers, so
+// the host's loop and the device's kernel (src/core/cuda/) take it by value.
+template <int D>
+struct GridToParticle {
+  Grid<D> g;
+  View<double, 2> x, v;
+  View<double> pressure;
+  View<const double, 2> v_old, v_new;
+  View<const double> p_node;
+  double dt = 0.0, flip = 1.0, margin = 0.0;
+  View<const double> lower, upper;
+  std::array<View<const double>, D> faces;
+  View<double, 3> affine;
+  Outlets outlets;
+
+  MPMFLOW_HD bool operator()(index_t p) const {
+    constexpr int NC = Grid<D>::NC;
+    if (outlets.any() && outlets.mass(p) == 0.0) return false;  // left through an outlet
+    const bool correct = faces[0].size() > 0;
+    const bool apic = affine.size() > 0;
+    double w[NC];
+    const index_t base = g.weights_at(&x(p, 0), w);
+    std::array<double, D> pic{}, dv{}, disp{};
+    double pp = 0.0;
+    if (apic) {
+      // PIC velocity and C_p = sum_i v_i (grad N_i)^T of the corrected grid velocity
+      double frac[D];
+      g.locate(&x(p, 0), frac);
+      double C[D][D] = {};
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        double grad[D];
+        for (int j = 0; j < D; ++j) grad[j] = g.corner_gradient(a, j, frac);
+        for (int k = 0; k < D; ++k) {
+          const double vi = v_new(i, k);
+          pic[k] += w[a] * vi;
+          for (int j = 0; j < D; ++j) C[k][j] += vi * grad[j];
+        }
+        pp += w[a] * p_node(i);
+      }
+      for (int k = 0; k < D; ++k)
+        for (int j = 0; j < D; ++j) affine(p, k, j) = C[k][j];
+    } else {
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        for (int k = 0; k < D; ++k) {
+          pic[k] = pic[k] + w[a] * v_new(i, k);
+          dv[k] = dv[k] + w[a] * (v_new(i, k) - v_old(i, k));
+        }
+        pp += w[a] * p_node(i);
+      }
+    }
+    if (correct) {
+      std::array<double, D> normal, tangent;
+      std::array<index_t, D> nlo, tlo, thi;
+      face_samples<D>(g, View<const double, 2>(x), p, normal, nlo, tangent, tlo, thi);
+      for (int k = 0; k < D; ++k)
+        disp[k] = face_displacement<D>(g, k, faces[k], normal, nlo, tangent, tlo, thi);
+    }
+    for (int k = 0; k < D; ++k) {
+      v(p, k) = apic ? pic[k] : flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
+      x(p, k) += dt * pic[k];
+      if (correct) x(p, k) += disp[k];
+    }
+    pressure(p) = pp;
+    if (g.any_periodic) wrap_periodic<D>(g, x, p);
+    if (outlets.any() &&
+        beyond_outlet<D>(View<const double, 2>(x), p, lower, upper, outlets.side)) {
+      outlets.mass(p) = 0.0;
+      outlets.volume(p) = 0.0;
+      pressure(p) = 0.0;
+      for (int k = 0; k < D; ++k) {
+        v(p, k) = 0.0;
+        if (apic)
+          for (int j = 0; j < D; ++j) affine(p, k, j) = 0.0;
+      }
+      put_inside<D>(x, v, p, lower, upper, margin);
+      return false;
+    }
+    return put_inside<D>(x, v, p, lower, upper, margin);
+  }
+};
 
 // RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa).
 // The smoothed field is the particle-to-grid sum of m_p p_p divided by the nodal mass,

@@ -12,6 +12,14 @@ namespace mpmflow {
 
 using index_t = std::int64_t;
 
+// Functions that kernels call run on the host and, in a CUDA build (nvcc: __CUDACC__), on
+// the device too: the same bodies for both backends (src/core/cuda/).
+#if defined(__CUDACC__)
+#define MPMFLOW_HD __host__ __device__
+#else
+#define MPMFLOW_HD
+#endif
+
 #ifndef NDEBUG
 #define MPMFLOW_BOUNDS(cond) assert(cond)
 #else
@@ -22,45 +30,45 @@ using index_t = std::int64_t;
 template <class T, int R = 1>
 class View {
  public:
-  View() { shape_.fill(0); }
-  View(T* data, std::array<index_t, R> shape) : data_(data), shape_(shape) {}
+  MPMFLOW_HD View() : shape_{} {}
+  MPMFLOW_HD View(T* data, std::array<index_t, R> shape) : data_(data), shape_(shape) {}
 
-  index_t size() const {
+  MPMFLOW_HD index_t size() const {
     index_t n = 1;
     for (int k = 0; k < R; ++k) n *= shape_[k];
     return n;
   }
-  index_t extent(int k) const { return shape_[k]; }
-  bool empty() const { return size() == 0; }
-  T* data() const { return data_; }
+  MPMFLOW_HD index_t extent(int k) const { return shape_[k]; }
+  MPMFLOW_HD bool empty() const { return size() == 0; }
+  MPMFLOW_HD T* data() const { return data_; }
 
-  T& operator[](index_t i) const {  // flat index
+  MPMFLOW_HD T& operator[](index_t i) const {  // flat index
     MPMFLOW_BOUNDS(i >= 0 && i < size());
     return data_[i];
   }
-  T& operator()(index_t i) const {
+  MPMFLOW_HD T& operator()(index_t i) const {
     static_assert(R == 1, "one index for a view of one dimension");
     MPMFLOW_BOUNDS(i >= 0 && i < shape_[0]);
     return data_[i];
   }
-  T& operator()(index_t i, index_t j) const {
+  MPMFLOW_HD T& operator()(index_t i, index_t j) const {
     static_assert(R == 2, "two indices for a view of two dimensions");
     MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1]);
     return data_[i * shape_[1] + j];
   }
-  T& operator()(index_t i, index_t j, index_t k) const {
+  MPMFLOW_HD T& operator()(index_t i, index_t j, index_t k) const {
     static_assert(R == 3, "three indices for a view of three dimensions");
     MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 && k < shape_[2]);
     return data_[(i * shape_[1] + j) * shape_[2] + k];
   }
-  T& operator()(index_t i, index_t j, index_t k, index_t l) const {
+  MPMFLOW_HD T& operator()(index_t i, index_t j, index_t k, index_t l) const {
     static_assert(R == 4, "four indices for a view of four dimensions");
     MPMFLOW_BOUNDS(i >= 0 && i < shape_[0] && j >= 0 && j < shape_[1] && k >= 0 && k < shape_[2] &&
                    l >= 0 && l < shape_[3]);
     return data_[((i * shape_[1] + j) * shape_[2] + k) * shape_[3] + l];
   }
   // Row i of a view of two or more dimensions, as a view of one dimension fewer.
-  View<T, R - 1> row(index_t i) const {
+  MPMFLOW_HD View<T, R - 1> row(index_t i) const {
     static_assert(R >= 2, "a row of a view of two or more dimensions");
     MPMFLOW_BOUNDS(i >= 0 && i < shape_[0]);
     std::array<index_t, R - 1> s{};
@@ -68,13 +76,13 @@ class View {
     return View<T, R - 1>(data_ + i * (size() / (shape_[0] ? shape_[0] : 1)), s);
   }
   // The first n rows (n <= extent(0)).
-  View head(index_t n) const {
+  MPMFLOW_HD View head(index_t n) const {
     MPMFLOW_BOUNDS(n >= 0 && n <= shape_[0]);
     auto s = shape_;
     s[0] = n;
     return View(data_, s);
   }
-  operator View<const T, R>() const { return View<const T, R>(data_, shape_); }
+  MPMFLOW_HD operator View<const T, R>() const { return View<const T, R>(data_, shape_); }
 
  private:
   T* data_ = nullptr;
