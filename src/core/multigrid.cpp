@@ -29,11 +29,7 @@ void matvec_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<c
       y(r) = subtract ? b[r] : 0.0;
       continue;
     }
-    const index_t* c = &cols(r, 0);
-    const double* v = &vals(r, 0);
-    double acc = 0.0;
-    for (index_t s = 0; s < ns; ++s)
-      if (c[s] >= 0) acc += v[s] * x(c[s]);
+    const double acc = ell_row_product<NS>(cols, vals, x, r, ns);
     y(r) = subtract ? b[r] - acc : acc;
   }
 }
@@ -54,21 +50,11 @@ void apply(View<const index_t, 2> cols, View<const double, 2> vals, View<const d
   });
 }
 
-// Gauss-Seidel update of rows[lo:hi] (one colour: the rows do not couple); the diagonal in
-// the middle slot.
+// Gauss-Seidel update of rows[lo:hi] (one colour: the rows do not couple).
 template <int NS>
 void gs_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
              View<double> x, View<const index_t> rows, index_t lo, index_t hi) {
-  constexpr int centre = NS / 2;
-  for (index_t k = lo; k < hi; ++k) {
-    const index_t r = rows(k);
-    const index_t* c = &cols(r, 0);
-    const double* v = &vals(r, 0);
-    double acc = b(r);
-    for (int s = 0; s < NS; ++s)
-      if (c[s] >= 0 && s != centre) acc -= v[s] * x(c[s]);
-    x(r) = acc / v[centre];
-  }
+  for (index_t k = lo; k < hi; ++k) gs_row<NS>(cols, vals, b, x, rows(k), nullptr, 0);
 }
 
 // One 2^D-colour Gauss-Seidel sweep, colours in order (forward) or in reverse.
@@ -91,31 +77,9 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
 }
 
 // The first forward sweep from x = 0 (no fill needed): a row of colour c reads only its
-// neighbours of colours before c (updated in this sweep); the others still hold 0, and
-// subtracting v 0 leaves the sum as it was, so skipping them gives the values of a
-// sweep after x = 0. The neighbour at slot s has colour c ^ odd(s) (odd(s): the axes
-// along which the offset of slot s is odd).
-template <int NS>
-void gs_first_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
-                   View<double> x, View<const index_t> rows, index_t lo, index_t hi,
-                   const int* slots, int nslots) {
-  constexpr int centre = NS / 2;
-  const index_t* C = cols.data();
-  const double* V = vals.data();
-  double* X = x.data();
-  for (index_t k = lo; k < hi; ++k) {
-    const index_t r = rows(k);
-    const index_t* c = C + r * NS;
-    const double* v = V + r * NS;
-    double acc = b(r);
-    for (int t = 0; t < nslots; ++t) {
-      const int s = slots[t];
-      if (c[s] >= 0) acc -= v[s] * X[c[s]];
-    }
-    X[r] = acc / v[centre];
-  }
-}
-
+// neighbours of colours before c (updated in this sweep; first_sweep_slots); the others
+// still hold 0, and subtracting v 0 leaves the sum as it was, so skipping them gives the
+// values of a sweep after x = 0.
 template <int D>
 void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
                         View<const double> b, View<double> x, View<const index_t> rows,
@@ -125,17 +89,13 @@ void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
   const index_t n = cols.extent(0);
   for (int colour = 0; colour < NCOL; ++colour) {
     int slots[NS];
-    int nslots = 0;
-    for (int s = 0, p3 = 1, odd = 0; s < NS; ++s, odd = 0, p3 = 1) {
-      for (int k = 0; k < D; ++k, p3 *= 3)
-        if ((s / p3) % 3 != 1) odd |= 1 << k;
-      if ((colour ^ odd) < colour) slots[nslots++] = s;
-    }
+    const int nslots = first_sweep_slots<D>(colour, slots);
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
     for_each_range(
         hi - lo,
         [&](index_t, index_t a, index_t z) {
-          gs_first_rows<NS>(cols, vals, b, x, rows, lo + a, lo + z, slots, nslots);
+          for (index_t k = lo + a; k < lo + z; ++k)
+            gs_row<NS>(cols, vals, b, x, rows(k), slots, nslots);
         },
         n);
   }
@@ -159,14 +119,7 @@ template <int NP>
 void prolong_add(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> ec,
                  View<double> xf) {
   for_each_range(pcols.extent(0), [&](index_t, index_t lo, index_t hi) {
-    for (index_t r = lo; r < hi; ++r) {
-      double acc = 0.0;
-      for (int a = 0; a < NP; ++a) {
-        const index_t c = pcols(r, a);
-        if (c >= 0) acc += pw(r, a) * ec(c);
-      }
-      xf(r) += acc;
-    }
+    for (index_t r = lo; r < hi; ++r) prolong_row<NP>(pcols, pw, ec, xf, r);
   });
 }
 
@@ -577,17 +530,7 @@ void Multigrid<D>::factor() {
 template <int D>
 void Multigrid<D>::cholesky_solve(View<const double> b, View<double> x) {
   const index_t n = level_[nlev_ - 1].n;
-  const double* L = factor_store_.template view<2>({n, n}).data();
-  for (index_t i = 0; i < n; ++i) {
-    double acc = b(i);
-    for (index_t k = 0; k < i; ++k) acc -= L[i * n + k] * x(k);
-    x(i) = acc / L[i * n + i];
-  }
-  for (index_t i = n - 1; i >= 0; --i) {
-    double acc = x(i);
-    for (index_t k = i + 1; k < n; ++k) acc -= L[k * n + i] * x(k);
-    x(i) = acc / L[i * n + i];
-  }
+  cholesky_solve_dense(factor_store_.template view<2>({n, n}).data(), n, b, x);
 }
 
 template <int D>
@@ -681,6 +624,30 @@ index_t Multigrid<D>::levels() const {
 template <int D>
 index_t Multigrid<D>::rows() const {
   return nlev_ > 0 ? level_[0].n : 0;
+}
+
+template <int D>
+typename Multigrid<D>::LevelView Multigrid<D>::level(index_t l) const {
+  if (l < 0 || l >= nlev_) throw std::out_of_range("multigrid: no such level");
+  const Level& lv = level_[l];
+  LevelView out;
+  out.n = lv.n;
+  out.cstart = lv.cstart;
+  out.cols = lv.cols;
+  out.vals = lv.vals;
+  out.rows = lv.rows;
+  if (l + 1 < nlev_) {
+    out.pcols = lv.pcols;
+    out.pw = lv.pw;
+  }
+  return out;
+}
+
+template <int D>
+View<const double, 2> Multigrid<D>::coarsest_factor() const {
+  if (nlev_ == 0) throw std::logic_error("multigrid: no factor before setup");
+  const index_t n = level_[nlev_ - 1].n;
+  return View<const double, 2>(factor_store_.data(), {n, n});
 }
 
 template class Multigrid<2>;

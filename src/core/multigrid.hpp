@@ -46,6 +46,87 @@ index_t largest_magnitude(View<const double> r);
 index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
                   View<const double> b, View<double> r);
 
+// The row kernels' element functions, one row each, on the host and (MPMFLOW_HD) the device
+// (src/core/cuda/multigrid.cuh): the same sums in the same order on both.
+
+// sum_s vals(r, s) x(cols(r, s)) over the row's filled slots (NS slots; 0: ns of them).
+template <int NS>
+MPMFLOW_HD inline double ell_row_product(View<const index_t, 2> cols, View<const double, 2> vals,
+                                         View<const double> x, index_t r, index_t ns) {
+  const index_t width = NS > 0 ? NS : ns;
+  const index_t* c = &cols(r, 0);
+  const double* v = &vals(r, 0);
+  double acc = 0.0;
+  for (index_t s = 0; s < width; ++s)
+    if (c[s] >= 0) acc += v[s] * x(c[s]);
+  return acc;
+}
+
+// Gauss-Seidel update of row r (the diagonal in the middle slot); slots, nslots: only these
+// off-diagonal slots (the first sweep from x = 0, gauss_seidel_first), or every slot
+// (slots null).
+template <int NS>
+MPMFLOW_HD inline void gs_row(View<const index_t, 2> cols, View<const double, 2> vals,
+                              View<const double> b, View<double> x, index_t r, const int* slots,
+                              int nslots) {
+  constexpr int centre = NS / 2;
+  const index_t* c = cols.data() + r * NS;
+  const double* v = vals.data() + r * NS;
+  double* X = x.data();
+  double acc = b(r);
+  if (slots) {
+    for (int t = 0; t < nslots; ++t) {
+      const int s = slots[t];
+      if (c[s] >= 0) acc -= v[s] * X[c[s]];
+    }
+  } else {
+    for (int s = 0; s < NS; ++s)
+      if (c[s] >= 0 && s != centre) acc -= v[s] * X[c[s]];
+  }
+  X[r] = acc / v[centre];
+}
+
+// x_f(r) += (P e_c)(r).
+template <int NP>
+MPMFLOW_HD inline void prolong_row(View<const index_t, 2> pcols, View<const double, 2> pw,
+                                   View<const double> ec, View<double> xf, index_t r) {
+  double acc = 0.0;
+  for (int a = 0; a < NP; ++a) {
+    const index_t c = pcols(r, a);
+    if (c >= 0) acc += pw(r, a) * ec(c);
+  }
+  xf(r) += acc;
+}
+
+// x = (L L^T)^-1 b with L the dense lower factor (n x n, row-major).
+MPMFLOW_HD inline void cholesky_solve_dense(const double* L, index_t n, View<const double> b,
+                                            View<double> x) {
+  for (index_t i = 0; i < n; ++i) {
+    double acc = b(i);
+    for (index_t k = 0; k < i; ++k) acc -= L[i * n + k] * x(k);
+    x(i) = acc / L[i * n + i];
+  }
+  for (index_t i = n - 1; i >= 0; --i) {
+    double acc = x(i);
+    for (index_t k = i + 1; k < n; ++k) acc -= L[k * n + i] * x(k);
+    x(i) = acc / L[i * n + i];
+  }
+}
+
+// The off-diagonal slots a row of colour ``colour`` reads in the first sweep from x = 0:
+// those of colours before it (the neighbour at slot s has colour colour ^ odd(s), odd(s)
+// the axes along which the offset of slot s is odd). Returns how many (into slots).
+template <int D>
+inline int first_sweep_slots(int colour, int* slots) {
+  int nslots = 0;
+  for (int s = 0, p3 = 1, odd = 0; s < stencil_size(D); ++s, odd = 0, p3 = 1) {
+    for (int k = 0; k < D; ++k, p3 *= 3)
+      if ((s / p3) % 3 != 1) odd |= 1 << k;
+    if ((colour ^ odd) < colour) slots[nslots++] = s;
+  }
+  return nslots;
+}
+
 template <int D>
 class Multigrid {
  public:
@@ -68,6 +149,22 @@ class Multigrid {
   SolveResult pcg(View<const double> rhs, View<double> x, double tol, index_t maxiter, int sweeps);
   index_t levels() const;
   index_t rows() const;  // unknowns of the finest level
+
+  // Level l of the last setup as views (a device copy of the hierarchy reads them:
+  // src/core/cuda/multigrid.cuh): its rows, colours (rows[cstart[k]:cstart[k + 1]]),
+  // operator and P to level l + 1 (empty on the coarsest).
+  struct LevelView {
+    index_t n = 0;
+    std::array<index_t, (1 << D) + 1> cstart{};
+    View<const index_t, 2> cols;
+    View<const double, 2> vals;
+    View<const index_t> rows;
+    View<const index_t, 2> pcols;
+    View<const double, 2> pw;
+  };
+  LevelView level(index_t l) const;
+  // The coarsest level's dense Cholesky factor L (n x n, lower, row-major).
+  View<const double, 2> coarsest_factor() const;
 
  private:
   static constexpr int NS = stencil_size(D);  // stencil slots of a row

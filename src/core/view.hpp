@@ -118,6 +118,7 @@ class Buffer {
     return true;
   }
   index_t capacity() const { return capacity_; }
+  const T* data() const { return data_.get(); }
   View<T> view(index_t n) {
     MPMFLOW_BOUNDS(n <= capacity());
     return View<T>(data_.get(), {n});

@@ -3,7 +3,10 @@
 // (2 particles per cell and direction), moved through the transfers on the host (OpenMP,
 // src/core/transfer.cpp) and on the device (cuda/transfer.cuh), compared and timed.
 //
-//   mpmflow_cuda_check [OUT.jsonl]      (MPMFLOW_CHECK_BIG=1: also 66 M particles in 3D)
+//   mpmflow_cuda_check [OUT.jsonl]
+//
+// MPMFLOW_CHECK_BIG=1: also 66 M particles in 3D; MPMFLOW_CHECK_SMALL=1: the smallest cases
+// only (for compute-sanitizer).
 //
 // Without a device it times the host's phases only (the same particles, for a baseline on
 // a machine without a GPU) and checks nothing.
@@ -14,7 +17,10 @@
 //   - grid-to-particle from the host's grid values: positions, velocities, pressures and
 //     APIC matrices bit for bit equal to the host's (the same element function; built with
 //     --fmad=false, as the host's -O3 without -march contracts nothing);
-//   - determinism: particle-to-grid twice, the same bits.
+//   - determinism: particle-to-grid twice, the same bits;
+//   - the multigrid-preconditioned CG on the column's pressure system (the Q1 Laplacian,
+//     p = 0 on top): one V-cycle bit for bit the host's; the solve to 1e-8 within one
+//     iteration of the host's count, its true residual (on the host) within the tolerance.
 // Times: each phase's median of 10 runs (CUDA events on the device; steady clock on the
 // host, all its threads), and particle-steps per second of the two transfers with binning.
 #include <omp.h>
@@ -28,8 +34,10 @@
 #include <vector>
 
 #include "../binning.hpp"
+#include "../multigrid.hpp"
 #include "../transfer.hpp"
 #include "memory.hpp"
+#include "multigrid.cuh"
 #include "transfer.cuh"
 
 using namespace mpmflow;
@@ -318,6 +326,140 @@ void run(double h, bool apic, FILE* out) {
   if (out) std::fputs(line, out);
 }
 
+// The pressure system of the column at rest: the Q1 Laplacian (eq. 13's matrix) on the
+// column's nodes, p = 0 on its top plane (the free surface), ELL rows in node order.
+template <int D>
+void run_pcg(double h, FILE* out) {
+  constexpr int NC = 1 << D, NS = stencil_size(D);
+  const double col3[3] = {0.114, 0.04, 0.228};
+  std::array<index_t, D> cells, dims;
+  for (int k = 0; k < D; ++k) {
+    cells[k] = static_cast<index_t>(std::llround(col3[D == 2 && k == 1 ? 2 : k] / h));
+    dims[k] = cells[k] + 1;
+  }
+  const Grid<D> g(h, cells);
+  // the element matrix h^(D-2) int grad N_a . grad N_b, by 2-point Gauss per axis
+  double Ke[NC][NC] = {};
+  const Grid<D> unit(1.0, [] {
+    std::array<index_t, D> one;
+    one.fill(1);
+    return one;
+  }());
+  for (int q = 0; q < NC; ++q) {
+    double frac[D];
+    for (int k = 0; k < D; ++k) frac[k] = 0.5 + (((q >> k) & 1) ? 0.5 : -0.5) / std::sqrt(3.0);
+    for (int a = 0; a < NC; ++a)
+      for (int b = 0; b < NC; ++b) {
+        double gg = 0.0;
+        for (int k = 0; k < D; ++k)
+          gg += unit.corner_gradient(a, k, frac) * unit.corner_gradient(b, k, frac);
+        Ke[a][b] += gg / NC * std::pow(h, D - 2);
+      }
+  }
+  std::vector<index_t> row_of(g.nnodes, -1), node;
+  for (index_t i = 0; i < g.nnodes; ++i) {
+    index_t ix[D];
+    g.node_coords(i, ix);
+    if (ix[D - 1] < cells[D - 1]) {
+      row_of[i] = static_cast<index_t>(node.size());
+      node.push_back(i);
+    }
+  }
+  const index_t n = static_cast<index_t>(node.size());
+  std::vector<index_t> cols(n * NS, -1);
+  std::vector<double> vals(n * NS, 0.0), rhs(n);
+  for (index_t c = 0; c < g.ncells; ++c) {
+    const index_t base = g.cell_first_node(c);
+    for (int a = 0; a < NC; ++a) {
+      const index_t r = row_of[base + g.corner[a]];
+      if (r < 0) continue;
+      for (int b = 0; b < NC; ++b) {
+        int s = 0;
+        for (int k = 0, p3 = 1; k < D; ++k, p3 *= 3)
+          s += (((b >> k) & 1) - ((a >> k) & 1) + 1) * p3;
+        const index_t cb = row_of[base + g.corner[b]];
+        if (cb < 0) continue;
+        cols[r * NS + s] = cb;
+        vals[r * NS + s] += Ke[a][b];
+      }
+    }
+  }
+  for (index_t r = 0; r < n; ++r) {  // gravity's divergence-like source, smooth, not uniform
+    index_t ix[D];
+    g.node_coords(node[r], ix);
+    rhs[r] = std::pow(h, D) * (1.0 + 0.5 * std::sin(0.3 * ix[0]) * std::cos(0.2 * ix[D - 1]));
+  }
+  View<const index_t, 2> C(cols.data(), {n, NS});
+  View<const double, 2> V(vals.data(), {n, NS});
+  View<const index_t> N(node.data(), {n});
+  View<const double> B(rhs.data(), {n});
+  const double tol = 1e-8;
+  const index_t maxiter = 500;
+  const int sweeps = 1;
+  Multigrid<D> mg;
+  const double t_setup = host_ms([&] { mg.setup(C, V, N, dims); }, 3);
+  std::vector<double> xh(n), zh(n);
+  SolveResult rh;
+  const double t_pcg_h = host_ms([&] {
+    std::fill(xh.begin(), xh.end(), 0.0);
+    rh = mg.pcg(B, View<double>(xh.data(), {n}), tol, maxiter, sweeps);
+  });
+  mg.vcycle(B, View<double>(zh.data(), {n}), sweeps);
+  if (!have_device) {
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "{\"solve\": \"pcg\", \"dim\": %d, \"h\": %g, \"unknowns\": %lld, "
+                  "\"levels\": %lld, \"host_threads\": %d, \"host_ms\": {\"setup\": %.3f, "
+                  "\"pcg\": %.3f}, \"iterations\": %lld}\n",
+                  D, h, static_cast<long long>(n), static_cast<long long>(mg.levels()),
+                  omp_get_max_threads(), t_setup, t_pcg_h, static_cast<long long>(rh.iterations));
+    std::fputs(line, stdout);
+    if (out) std::fputs(line, out);
+    return;
+  }
+  gpu::Multigrid<D> dmg;
+  const double t_upload = host_ms([&] { dmg.upload(mg); }, 3);
+  Pair<double> b({n}), x({n}), z({n});
+  b.host = rhs;
+  b.up();
+  // one V-cycle: the host's bits
+  dmg.vcycle(b.d<1>(), z.d<1>(), sweeps);
+  expect(same_bits(z.down(), zh), "multigrid: a V-cycle is not bit for bit the host's", D, n);
+  SolveResult rd;
+  const double t_pcg_d = device_ms([&] {
+    x.host.assign(n, 0.0);
+    x.up();
+    rd = dmg.pcg(b.d<1>(), x.d<1>(), tol, maxiter, sweeps);
+  });
+  // the device's answer checked on the host: its true residual, and against the host's
+  const std::vector<double> xd = x.down();
+  std::vector<double> res(n);
+  residual(C, V, View<const double>(xd.data(), {n}), B, View<double>(res.data(), {n}));
+  const double bn = std::sqrt(dot(B, B));
+  const double true_res =
+      std::sqrt(dot(View<const double>(res.data(), {n}), View<const double>(res.data(), {n}))) / bn;
+  expect(true_res <= tol, "multigrid: the device's solution misses the tolerance", D, n);
+  expect(std::abs(rd.iterations - rh.iterations) <= 1,
+         "multigrid: the device took other iterations than the host", D, n);
+  const double diff = rel_diff(xh, xd);
+  cudaDeviceProp prop;
+  cudaGetDeviceProperties(&prop, 0);
+  char line[1024];
+  std::snprintf(line, sizeof line,
+                "{\"solve\": \"pcg\", \"dim\": %d, \"h\": %g, \"unknowns\": %lld, "
+                "\"levels\": %lld, \"device\": \"%s\", \"host_threads\": %d, "
+                "\"host_ms\": {\"setup\": %.3f, \"pcg\": %.3f}, \"device_ms\": "
+                "{\"upload\": %.3f, \"pcg\": %.3f}, \"iterations\": [%lld, %lld], "
+                "\"device_true_residual\": %.3e, \"solution_rel_diff\": %.3e}\n",
+                D, h, static_cast<long long>(n), static_cast<long long>(mg.levels()), prop.name,
+                omp_get_max_threads(), t_setup, t_pcg_h, t_upload, t_pcg_d,
+                static_cast<long long>(rh.iterations), static_cast<long long>(rd.iterations),
+                true_res, diff);
+  std::fputs(line, stdout);
+  std::fflush(stdout);
+  if (out) std::fputs(line, out);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -328,16 +470,26 @@ int main(int argc, char** argv) {
   try {
     // 2D: the paper's 0.004 m and finer; 3D: examples/dam_break_3d.toml's 0.008 m, the
     // benchmark's 1.04 M particles at 0.002 m, and 66 M at 0.0005 m
+    const char* small = std::getenv("MPMFLOW_CHECK_SMALL");
+    const bool only_small = small && std::string(small) == "1";
     for (bool apic : {false, true}) {
       run<2>(0.004, apic, out);
       run<3>(0.008, apic, out);
     }
-    run<2>(0.001, false, out);
-    run<2>(0.00025, false, out);
-    run<3>(0.002, false, out);
-    run<3>(0.002, true, out);
-    const char* big = std::getenv("MPMFLOW_CHECK_BIG");
-    if (big && std::string(big) == "1") run<3>(0.0005, false, out);
+    run_pcg<2>(0.004, out);
+    run_pcg<3>(0.008, out);
+    if (!only_small) {
+      run<2>(0.001, false, out);
+      run<2>(0.00025, false, out);
+      run<3>(0.002, false, out);
+      run<3>(0.002, true, out);
+      // the column's pressure system: 2D at 0.001 and 0.00025 m; 3D at 0.002 (1.04 M
+      // particles' mesh) and 0.001 m
+      for (double hp : {0.001, 0.00025}) run_pcg<2>(hp, out);
+      for (double hp : {0.002, 0.001}) run_pcg<3>(hp, out);
+      const char* big = std::getenv("MPMFLOW_CHECK_BIG");
+      if (big && std::string(big) == "1") run<3>(0.0005, false, out);
+    }
   } catch (const std::exception& e) {
     std::printf("FAIL: %s\n", e.what());
     return 2;
