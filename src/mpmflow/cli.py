@@ -110,7 +110,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     r.add_argument("case", metavar="CASE.toml", help="case file (TOML)")
     r.add_argument(
-        "--out", "-o", metavar="DIR", required=True, help="output folder (created if needed)"
+        "--out",
+        "-o",
+        metavar="DIR",
+        default=None,
+        help="output folder (created if needed); required unless --dry-run",
     )
     r.add_argument(
         "--set",
@@ -131,6 +135,22 @@ def _parser() -> argparse.ArgumentParser:
         "a later time.end extends it)",
     )
     r.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    r.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="check the case and print what the run would be and the memory it needs, "
+        "without running it, making its particles or writing anything (exit 0 also when "
+        "it would not fit this machine: it says so)",
+    )
+    r.add_argument(
+        "--ranks",
+        type=int,
+        metavar="N",
+        default=None,
+        help="with --dry-run: the memory of each rank of the run on N MPI processes "
+        "(mpirun -n N), by term (particles and grid split as the run splits them, the "
+        "halo, the ghost layer, PETSc's matrix); default: the processes it was started on",
+    )
     st = sub.add_parser(
         "study",
         help="run the paper's study (Table 1, Figs. 2-4) with both schemes",
@@ -253,7 +273,63 @@ def _resume_command(args: argparse.Namespace) -> str:
     return " ".join(shlex.quote(str(w)) for w in words)
 
 
+def _dry_run(args: argparse.Namespace) -> int:
+    """``mpmflow run CASE --dry-run [--ranks N]``: the case checked, what the run would be
+    and its memory, one process's or each rank's; nothing allocated, run or written."""
+    from . import memory
+    from .case import load_case
+    from .grid import Grid
+    from .parallel.comm import launched_rank, launched_size
+
+    case = load_case(args.case, args.overrides)
+    ranks = args.ranks if args.ranks is not None else launched_size()
+    one = memory.estimate(case)
+    grid = Grid.covering(case.domain.size, case.grid.spacing)
+    budget, source = memory.available()
+    count = one.particles
+    particles = f"{count:,}" if isinstance(count, int) else f"{count:.3g}"
+    steps = case.time.end / case.time.dt if isinstance(case.time.dt, float) else None
+    lines = [
+        f"{case.title + ': ' if case.title else ''}{particles} particles, "
+        + " x ".join(str(n) for n in grid.cells)
+        + f" cells of {case.grid.spacing:g} m"
+        + (f", about {steps:,.0f} steps" if steps is not None else "")
+        + f" to t = {case.time.end:g} s (about {memory.size(one.disk_bytes)} on disk)"
+    ]
+    if ranks == 1:
+        lines.append(f"memory on one process: {one.text()}")
+        need, here = one.total, 1
+    else:
+        from .parallel import memory as per_rank
+
+        est = per_rank.estimate(case, ranks)
+        lines += est.lines(every=16)
+        need, here = est.here * est.largest.total, est.here
+    fits = "fits" if need <= budget else "does not fit"
+    lines.append(
+        f"this machine can give {memory.size(budget)} ({source}): "
+        + (f"{here} of the ranks on it need {memory.size(need)}; " if here > 1 else "")
+        + f"the run {fits} here"
+    )
+    if launched_rank() == 0:
+        print("\n".join(f"mpmflow: {line}" for line in lines))
+    return 0
+
+
 def _run(args: argparse.Namespace) -> int:
+    if args.dry_run:
+        return _dry_run(args)
+    if args.ranks is not None:
+        raise CaseError(
+            f"--ranks {args.ranks} goes with --dry-run (the memory of a run on that many "
+            "processes, without running it). To run on N processes, start the run with "
+            "mpirun -n N .venv-mpi/bin/mpmflow run CASE --out DIR."
+        )
+    if args.out is None:
+        raise CaseError(
+            "mpmflow run needs --out DIR, the folder for the run's outputs (or --dry-run "
+            "to check the case and print its memory without running it)."
+        )
     with early.deferred():  # the compiled extensions load here
         from .case import load_case
         from .interrupts import stop_on_signals

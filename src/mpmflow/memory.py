@@ -25,7 +25,7 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .errors import CaseError
 from .geometry import bodies
@@ -64,6 +64,8 @@ class Estimate:
     passing_bytes: float  # the largest passing need: a snapshot or a row's measures
     passing_what: str
     disk_bytes: float  # the outputs on disk at the end (timeseries, snapshots, checkpoints)
+    # a run over MPI ranks: each rank's estimate (parallel.memory.RanksEstimate), else None
+    per_rank: Any = None
 
     @property
     def total(self) -> float:
@@ -102,6 +104,7 @@ class Estimate:
                 "rows": self.rows,
             },
             "disk": self.disk_bytes,
+            **({"per_rank": self.per_rank.as_dict()} if self.per_rank is not None else {}),
         }
 
 

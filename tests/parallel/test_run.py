@@ -8,6 +8,7 @@ and the column height against one process; the restart to the pressure solver's 
 (relative 1e-8; the particles then agree to far better than 1e-8 m)."""
 
 import csv
+import json
 import os
 import shutil
 import subprocess
@@ -71,6 +72,12 @@ def test_four_ranks_follow_one_process(four):
         assert np.abs(series(four, name) - one.series(name)).max() <= 0.002 * A
     summary = (four / "summary.json").read_text()
     assert '"ranks": 4' in summary
+    # each rank's memory estimate (parallel.memory), the split the run made
+    per_rank = json.loads(summary)["memory_estimate_bytes"]["per_rank"]
+    assert per_rank["ranks"] == 4 and len(per_rank["per_rank"]) == 4
+    # at the start (the run's own counts are at its end, after the particles moved)
+    particles = sum(json.loads(summary)["mpi"]["particles"])
+    assert sum(r["counts"]["particles"] for r in per_rank["per_rank"]) == particles
 
 
 def test_a_run_written_on_four_ranks_continues_on_two(four, tmp_path):

@@ -15,6 +15,9 @@ from ..errors import CaseError
 
 # the world size as the launchers of Open MPI, MPICH (Hydra) and Slurm give it
 _SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "SLURM_NTASKS")
+_RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID")
+# the processes of the run on this machine (they share its memory)
+_LOCAL_VARIABLES = ("OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS", "SLURM_NTASKS_PER_NODE")
 
 SETUP_HINT = (
     "run `make setup-mpi` (Open MPI, mpi4py and petsc4py from Debian's packages, into "
@@ -73,6 +76,25 @@ def launched_size() -> int:
         if value and value.isdigit():
             return int(value)
     return 1
+
+
+def launched_rank() -> int:
+    """This process's rank as the launcher gave it (0 without a launcher)."""
+    return _first_number(_RANK_VARIABLES, 0)
+
+
+def ranks_here() -> int:
+    """The run's processes on this machine, as the launcher tells (all of them when it
+    does not)."""
+    return _first_number(_LOCAL_VARIABLES, launched_size())
+
+
+def _first_number(names: tuple[str, ...], default: int) -> int:
+    for name in names:
+        value = os.environ.get(name)
+        if value and value.isdigit():
+            return int(value)
+    return default
 
 
 @cache

@@ -47,10 +47,24 @@ def make_scheme(case: Case, grid: Grid, particles: Particles) -> Scheme:
     return registry()[case.solver.scheme](case, grid, particles)
 
 
+def _check_memory(case: Case) -> memory.Estimate:
+    """The memory estimate, checked against what this machine can give: one process's, or
+    under mpirun each rank's (``parallel.memory``) for the ranks this machine holds."""
+    from ..parallel.comm import launched_size
+
+    if launched_size() == 1:
+        return memory.check(case)
+    from ..parallel import memory as per_rank
+
+    estimate = memory.estimate(case)
+    estimate.per_rank = per_rank.check(case, launched_size())
+    return estimate
+
+
 def build(case: Case) -> Setup:
     """The Setup of a validated ``case``; CaseError when it cannot run here."""
     setting_from(case.execution.threads)  # a bad MPMFLOW_THREADS is refused here
-    estimate = memory.check(case)
+    estimate = _check_memory(case)
     try:  # each body's seeded mass against rho V: a body smaller than its particles is
         # refused, one a few percent off is told (the counts are the estimate's)
         notices = mass.check(case)
@@ -138,5 +152,9 @@ def describe(sim: Simulation) -> list[str]:
         f"{case.time.end:g} s; a row every {case.output.interval:g} s{snaps}"
         + (f", {len(case.probes)} probes" if case.probes else "")
         + f" (about {memory.size(est.disk_bytes)} on disk)",
-        f"memory: {est.text()}; the machine can give {memory.size(budget)} ({source})",
+        f"memory: {est.text()}; the machine can give {memory.size(budget)} ({source})"
+        if est.per_rank is None
+        else f"memory: the machine can give {memory.size(budget)} ({source}) to the "
+        f"{est.per_rank.here} ranks it holds",
+        *(est.per_rank.lines() if est.per_rank is not None else []),
     ]
