@@ -8,7 +8,8 @@ the largest passing need: writing a particle snapshot (meshio builds copies of t
 or measuring an output row (binning the particles again). The bytes per particle, node and
 unknown were measured on the dam break at six meshes (benchmarks/investigations/memory.py,
 which also checks the estimate against the measured peak; the numbers are in
-docs/notes/benchmarks-diary.md).
+docs/notes/benchmarks-diary.md); the pressure solver's bytes per unknown in 3D on the 3D
+dam break (benchmarks/investigations/mpi/memory_ranks.py --ranks 1).
 
 A case whose estimate is above what the machine can give is refused before the run
 (CaseError, exit code 2) with the estimate and the settings that size it; the size limits
@@ -40,7 +41,11 @@ PROGRAM = 70 * MB  # Python, NumPy, SciPy and the compiled core
 PER_PARTICLE = 84  # B: x, v (2 each), pressure, mass, volume, the cell index and order
 AFFINE = 8  # B per entry of a particle's D x D affine matrix (solver.transfer = "apic")
 PER_NODE = 195  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
-PER_UNKNOWN = 590  # B: matrix (9 entries), multigrid levels, CG vectors
+PER_UNKNOWN = 590  # B: matrix (9 entries), multigrid levels, CG vectors (2D)
+# 3D: rows of 27 entries, and multigrid's Galerkin levels as wide; measured on the 3D dam
+# break at 130k, 312k and 1.04M particles (benchmarks/investigations/mpi/memory_ranks.py
+# --ranks 1), where 590 B left the estimate 17-23% under the peak
+PER_UNKNOWN_3D = 1840
 SPREAD = 1.25  # unknowns over the run / unknowns at the start (the material spreads)
 PER_ROW = 8  # B per value of a row kept in memory (time series and probes)
 SNAPSHOT = 185  # B per particle while a snapshot is written (meshio's copies)
@@ -166,7 +171,7 @@ def estimate(case: Case) -> Estimate:
         program=program,
         particle_bytes=(PER_PARTICLE + affine) * particles,
         grid_bytes=PER_NODE * nodes,
-        solver_bytes=PER_UNKNOWN * unknowns,
+        solver_bytes=(PER_UNKNOWN_3D if len(case.domain.size) == 3 else PER_UNKNOWN) * unknowns,
         rows_bytes=PER_ROW * values * rows,
         passing_bytes=passing,
         passing_what=what,
