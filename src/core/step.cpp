@@ -403,7 +403,7 @@ void State<D>::extend_pressure(const Options<D>& O) {
 }
 
 template <int D>
-int State<D>::pressure_multigrid(const Options<D>& O, Report& report) {
+int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   warm_start();
   const bool anchored = pressure_matrix(O);
   report.pockets += npockets_;
@@ -418,13 +418,17 @@ int State<D>::pressure_multigrid(const Options<D>& O, Report& report) {
   auto cols = cols_.template view<2>({n, NS});
   auto vals = vals_.template view<2>({n, NS});
   auto rows = rows_.view(n);
-  pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+  if (solver_)
+    solver_->setup(cols, vals, rows);
+  else
+    pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
   auto x = x_.view(n);
   auto rhs = rhs_.view(n);
   index_t step_iterations = 0;
   while (true) {
     pressure_rhs(O);
-    const SolveResult res = pressure_mg_.pcg(rhs, x, O.tol, O.max_iterations, O.sweeps);
+    const SolveResult res = solver_ ? solver_->solve(rhs, x)
+                                    : pressure_mg_.pcg(rhs, x, O.tol, O.max_iterations, O.sweeps);
     report.solves += 1;
     report.iterations += res.iterations;
     step_iterations += res.iterations;
@@ -734,7 +738,7 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
   PhaseClock clock(phase_seconds_);
   int status = viscous_predictor(O, report);
   clock.lap(PHASE_VISCOUS);
-  if (status == OK) status = pressure_multigrid(O, report);
+  if (status == OK) status = pressure_solve(O, report);
   clock.lap(PHASE_PRESSURE);
   if (status == OK) status = finish(P, O, correct, report);
   if (status == OK) {

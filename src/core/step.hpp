@@ -4,15 +4,16 @@
 //   predict: scatter (bin_particles -> particles_to_grid -> nodal_fraction)
 //            -> classify (enclosed_cells -> cell_integrals -> classify_nodes)
 //     -> viscous_predictor (viscous materials only)
-//     -> pressure (contact walls, assembly, solve, release, ghost values)
+//     -> pressure_solve (contact walls, assembly, solve, release, ghost values)
 //     -> finish: correct (correct_velocity and the walls) -> volume_correction (every few
 //        steps: volume_system -> solve -> volume_apply) -> to_particles (grid_to_particles
 //        -> push out of obstacles)
 //
-// The phases are public, so that a caller can run a step in parts: the pressure solvers run
-// from Python, and a domain decomposition over MPI (issue 28, docs/design/mpi.md, section 2),
-// which exchanges the nodes' values between scatter and classify, renumbers the unknowns,
-// decides the sealed pockets across ranks and moves only the particles a rank owns.
+// The phases are public, so that a caller can run a step in parts: a domain decomposition
+// over MPI (issue 28, docs/design/mpi.md, section 2), which exchanges the nodes' values
+// between scatter and classify, renumbers the unknowns, decides the sealed pockets across
+// ranks and moves only the particles a rank owns. A pressure solver from Python plugs into
+// the whole step instead (PressureSolver, use_solver).
 //
 // A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
 // (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
@@ -163,6 +164,21 @@ struct GridTables {
   View<const bool> outlet;
 };
 
+// A pressure solver the step calls instead of its own multigrid (bindings/step.cpp: one
+// from Python, amg, direct or PETSc's, solver.linear_solver): set up for the step's matrix
+// (ELL rows, row r on node rows(r)), then solve for each right-hand side the wall release
+// asks for, x the initial guess in and the solution out, returning the iterations and the
+// true relative residual ||rhs - A x|| / ||rhs||. The step decides what a residual above
+// the tolerance means (PRESSURE_NOT_CONVERGED), as for its multigrid; an exception (a
+// setup that fails) stops the chunk and reaches the caller.
+class PressureSolver {
+ public:
+  virtual ~PressureSolver() = default;
+  virtual void setup(View<const index_t, 2> cols, View<const double, 2> vals,
+                     View<const index_t> rows) = 0;
+  virtual SolveResult solve(View<const double> rhs, View<double> x) = 0;
+};
+
 template <int D>
 class State {
  public:
@@ -196,8 +212,11 @@ class State {
   double since_volume() const { return since_volume_; }
   void set_since_volume(double t) { since_volume_ = t; }
 
-  // The phases, for the pressure solvers run from Python (amg, direct), for a caller that
-  // owns a part of the domain (MPI) and for checks.
+  // The pressure step's solver: solver (not owned; it must outlive its use), or the
+  // step's own multigrid (nullptr, the default).
+  void use_solver(PressureSolver* solver) { solver_ = solver; }
+
+  // The phases, for a caller that owns a part of the domain (MPI) and for checks.
   // predict = scatter, then classify; returns the pressure unknowns.
   index_t predict(const Particles<D>& P, const Options<D>& O, bool correct);
   // The particles to the grid: binning (theta), node mass, volume, v_old and v* (and the
@@ -214,6 +233,10 @@ class State {
   // image node of a periodic axis shares its master's row, the master's entry deciding).
   // Right after classify it changes nothing. Returns the unknowns.
   index_t renumber();
+  // The pressure step after predict: assembly, the solve (the solver of use_solver, or the
+  // multigrid) for each right-hand side the wall release asks for, the ghost values.
+  // Returns a Status (OK, SINGULAR, PRESSURE_NOT_CONVERGED).
+  int pressure_solve(const Options<D>& O, Report& report);
   bool pressure_matrix(const Options<D>& O);  // assemble; false: singular (no free surface)
   void pressure_rhs(const Options<D>& O);
   index_t release_walls(View<const double> x);  // the solution in; returns nodes released
@@ -314,7 +337,6 @@ class State {
   const std::array<double, NPHASES>& phase_seconds() const { return phase_seconds_; }
 
  private:
-  int pressure_multigrid(const Options<D>& O, Report& report);
   int volume_correction(const Options<D>& O, Report& report);
   void bin_particles(const Particles<D>& P);
   void cell_integrals(const Particles<D>& P, const Options<D>& O);
@@ -352,6 +374,7 @@ class State {
   Buffer<index_t> cols_;
   Buffer<double> vals_, rhs_, x_, scratch_;
   Multigrid<D> pressure_mg_;
+  PressureSolver* solver_ = nullptr;
   // volume correction
   Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];
   Buffer<index_t> cell_row_, vol_cols_, vol_rows_;

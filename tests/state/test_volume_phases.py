@@ -53,10 +53,10 @@ def pool(tmp_path, steps=5):
 
 def predicted(sim, O):
     """The next step up to its volume correction: predict (with the cells' volume), the
-    pressure solved from Python (schemes/pressure.py)."""
+    pressure step (solved by SciPy's direct solver, plugged into the core's step)."""
     core = sim.scheme.core
     core.predict(*arrays(sim), O, True)
-    sim.scheme.python_pressure.solve(core, O, state.Report(), "")
+    assert core.pressure_solve(O, state.Report()) == state.OK
     return core
 
 

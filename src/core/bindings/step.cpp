@@ -23,10 +23,51 @@ namespace mpmflow::bind {
 
 namespace {
 
+// A pressure solver from Python (State.use_solver): setup(cols, vals, rows) and
+// solve(rhs, x) -> (iterations, residual), called with the GIL (the step runs without it).
+// The arrays are read-only views of the step's storage, valid during the call only (a
+// solver keeps copies); solve writes its solution into x, which holds the initial guess.
+class PythonSolver : public PressureSolver {
+ public:
+  PythonSolver(nb::object setup, nb::object solve)
+      : setup_(std::move(setup)), solve_(std::move(solve)) {}
+  ~PythonSolver() override {
+    nb::gil_scoped_acquire acquire;
+    setup_.reset();
+    solve_.reset();
+  }
+  void setup(View<const index_t, 2> cols, View<const double, 2> vals,
+             View<const index_t> rows) override {
+    nb::gil_scoped_acquire acquire;
+    setup_(array(cols), array(vals), array(rows));
+  }
+  SolveResult solve(View<const double> rhs, View<double> x) override {
+    nb::gil_scoped_acquire acquire;
+    nb::object out = solve_(array(rhs), array(x));
+    SolveResult r;
+    r.iterations = nb::cast<index_t>(out[0]);
+    r.residual = nb::cast<double>(out[1]);
+    return r;
+  }
+
+ private:
+  // a NumPy view of the step's storage (rv_policy::reference: without an owner nanobind
+  // would hand Python a copy, and the solution written into x would be lost)
+  template <class T, int R>
+  static nb::object array(View<T, R> v) {
+    std::array<std::size_t, R> shape{};
+    for (int k = 0; k < R; ++k) shape[k] = static_cast<std::size_t>(v.extent(k));
+    return nb::cast(nb::ndarray<nb::numpy, T>(v.data(), R, shape.data(), nb::handle()),
+                    nb::rv_policy::reference);
+  }
+  nb::object setup_, solve_;
+};
+
 template <int D>
 struct BoundState {
   std::vector<nb::object> keep;      // the arrays the tables view
   std::array<bool, 2 * D> outlet{};  // the outlet sides the tables view
+  std::unique_ptr<PythonSolver> solver;
   std::unique_ptr<State<D>> state;
 };
 
@@ -199,6 +240,22 @@ void bind_dim(nb::module_& m) {
           "Build the step's state for a grid (spacing h, cell counts, periodic axes), the "
           "domain's corners (lower, upper: where particles are put back inside) and its tables.")
       .def(
+          "use_solver",
+          [](S& self, nb::object setup, nb::object solve) {
+            if (setup.is_none() != solve.is_none())
+              throw std::invalid_argument("use_solver: give both setup and solve, or neither");
+            self.state->use_solver(nullptr);
+            self.solver.reset();
+            if (setup.is_none()) return;
+            self.solver = std::make_unique<PythonSolver>(setup, solve);
+            self.state->use_solver(self.solver.get());
+          },
+          nb::arg("setup").none(), nb::arg("solve").none(),
+          "The pressure step's solver from Python: setup(cols, vals, rows) for each step's "
+          "matrix, solve(rhs, x) -> (iterations, true relative residual) for each right-hand "
+          "side, the solution written into x (the initial guess); the arrays are views valid "
+          "during the call. None, None: the step's own multigrid.")
+      .def(
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
              Array<double> pressure, const O& opt, index_t first, index_t nsteps, Report& report,
@@ -260,6 +317,15 @@ void bind_dim(nb::module_& m) {
           "renumber", [](S& self) { return self.state->renumber(); },
           "Rows again from node_row (>= 0: an unknown, -1: not), in classify's order; returns "
           "the pressure unknowns.")
+      .def(
+          "pressure_solve",
+          [](S& self, const O& opt, Report& report) {
+            nb::gil_scoped_release release;
+            return self.state->pressure_solve(opt, report);
+          },
+          nb::arg("options"), nb::arg("report"),
+          "The pressure step after predict (assembly, solves, wall release, ghost values); "
+          "returns a Status.")
       .def("warm_start", [](S& self) { self.state->warm_start(); })
       .def("pressure_matrix",
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })

@@ -391,17 +391,6 @@ class Case(Section):
                     f"solver.max_speed = {self.solver.max_speed:g} m/s, at which the run would "
                     f"stop at once; give a slower velocity or raise solver.max_speed"
                 )
-        if (
-            self.time.dt == "auto"
-            and self.solver.scheme == "projection"
-            and self.solver.linear_solver != "multigrid"
-        ):
-            raise ValueError(
-                'time.dt = "auto" runs the projection scheme\'s steps inside the compiled '
-                f"core, with the multigrid solver; solver.linear_solver = "
-                f"{self.solver.linear_solver!r} solves from Python one fixed step at a time: "
-                'set solver.linear_solver = "multigrid", or give time.dt a number'
-            )
         dt = time_step(self)
         if self.time.end < dt * (1 - 1e-9):
             raise ValueError(

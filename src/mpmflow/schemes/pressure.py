@@ -1,12 +1,12 @@
-"""The pressure step (docs/method.md, step 5) with a solver from Python, and the messages of
-every pressure failure.
+"""The pressure step's solvers from Python, and the messages of every pressure failure.
 
-The default solver (``multigrid``) runs inside the compiled step (the core's State). The
-others (``amg``, ``direct``; for comparison and tests) run the same compiled phases one step
-at a time, with this loop around the solve: assemble eq. (13) with the walls as contact
-conditions, solve, release the wall nodes whose pressure comes out negative while v* leaves
-the wall and solve again (the matrix and its preconditioner are kept), then extend the
-pressure to the ghost nodes.
+The step (docs/method.md, step 5: assemble eq. (13) with the walls as contact conditions,
+solve, release the wall nodes whose pressure comes out negative while v* leaves the wall
+and solve again, extend the pressure to the ghost nodes) runs in the compiled core for every
+solver. The default solver (``multigrid``) is the core's own; the others (``amg``,
+``direct``, ``petsc``; for comparison and tests) plug into the same step through
+``State.use_solver``: ``PythonSolver`` sets the linear solver up for each step's matrix and
+solves for each right-hand side the wall release asks for.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import state
-from ..arrays import Floats
+from ..arrays import Floats, Ints
 from ..errors import SolverError
 from ..grid import Grid
 from ..linalg.solvers import LinearSolver, PressureMatrix
@@ -56,13 +56,13 @@ def not_converged(
     )
 
 
-class PythonPressure:
-    """Step 5 with ``linsolve.LinearSolver`` (amg or direct) around the compiled phases of
-    the core's State; fills the step's report as the compiled multigrid step does."""
+class PythonSolver:
+    """``linalg.solvers.LinearSolver`` (amg, direct or petsc) as the core's pressure solver:
+    ``use(core)`` plugs it into the step (``State.use_solver``), which calls ``setup`` and
+    ``solve`` with views of its own storage (valid during the call only)."""
 
     def __init__(self, grid: Grid, settings: Solver) -> None:
         self.grid = grid
-        self.settings = settings
         self.solver = LinearSolver(
             settings.linear_solver,
             settings.tolerance,
@@ -70,50 +70,13 @@ class PythonPressure:
             settings.petsc_preconditioner,
         )
 
-    def solve(
-        self, core: state.CoreState, O: state.CoreOptions, report: state.CoreReport, where: str
-    ) -> None:
-        core.warm_start()
-        x = core.x0.copy()
-        anchored = core.pressure_matrix(O)
-        rows = core.rows.copy()
-        n = rows.size
-        if n == 0:
-            return
-        if not anchored:
-            raise singular(where)
-        try:
-            self.solver.prepare(
-                PressureMatrix(
-                    core.matrix_cols.copy(), core.matrix_vals.copy(), rows, self.grid.nodes
-                )
-            )
-        except SETUP_ERRORS as err:
-            raise setup_failed(where, err, n) from None
-        iterations = 0
-        while True:
-            core.pressure_rhs(O)
-            rhs = core.rhs.copy()
-            result = self.solver.solve(rhs, x)
-            report.solves += 1
-            report.iterations += result.iterations
-            iterations += result.iterations
-            report.residual = max(report.residual, result.residual)
-            if not result.converged:
-                r = self.solver.residual_vector(rhs, result.x)
-                worst = rows[int(np.nanargmax(np.abs(r)))]
-                raise not_converged(
-                    where,
-                    result.residual,
-                    result.iterations,
-                    self.settings,
-                    n,
-                    self.grid.node_coordinates()[worst],
-                )
-            x = result.x
-            released = core.release_walls(np.ascontiguousarray(x))
-            if not released:
-                break
-            report.released += released
-        report.max_iterations = max(report.max_iterations, iterations)
-        core.extend_pressure(O)
+    def use(self, core: state.CoreState) -> None:
+        core.use_solver(self.setup, self.solve)
+
+    def setup(self, cols: Ints, vals: Floats, rows: Ints) -> None:
+        self.solver.prepare(PressureMatrix(cols.copy(), vals.copy(), rows.copy(), self.grid.nodes))
+
+    def solve(self, rhs: Floats, x: Floats) -> tuple[int, float]:
+        result = self.solver.solve(rhs.copy(), x.copy())
+        x[...] = result.x
+        return result.iterations, result.residual

@@ -133,9 +133,12 @@ class ProjectionScheme:
             self.viscous,
             outlets.sides(case) if self.open else (),
         )
-        self.python_pressure = (
-            None if s.linear_solver == "multigrid" else pressure.PythonPressure(grid, s)
+        # amg, direct, petsc: solvers from Python, plugged into the compiled step
+        self.python_solver = (
+            None if s.linear_solver == "multigrid" else pressure.PythonSolver(grid, s)
         )
+        if self.python_solver is not None:
+            self.python_solver.use(self.core)
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (advance_span)
@@ -281,15 +284,12 @@ class ProjectionScheme:
         the steps (residual: the worst)."""
         O = self.options(dt)
         report = state.Report()
-        if self.auto and self.python_pressure is None:
+        if self.auto:
             return self._adaptive(O, dt * nsteps, report, where)
         try:
-            if self.python_pressure is None:
-                done = self.core.advance(
-                    *self._particles(), O, self.steps + 1, nsteps, report, affine=self.affine
-                )
-            else:
-                done = self._python_steps(self.python_pressure, O, nsteps, report, where)
+            done = self.core.advance(
+                *self._particles(), O, self.steps + 1, nsteps, report, affine=self.affine
+            )
         except pressure.SETUP_ERRORS as err:
             k = int(report.step)
             self.steps += k
@@ -314,6 +314,10 @@ class ProjectionScheme:
             covered = self.core.advance_span(
                 *self._particles(), O, span, most, report, affine=self.affine
             )
+        except pressure.SETUP_ERRORS as err:
+            k = int(report.steps)
+            self.steps += k
+            raise pressure.setup_failed(where(k), err, int(report.last_unknowns)) from err
         finally:
             self._drain()
         done = int(report.steps)
@@ -337,33 +341,6 @@ class ProjectionScheme:
         return AdaptiveReport(
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
-
-    def _python_steps(
-        self,
-        python_pressure: pressure.PythonPressure,
-        O: CoreOptions,
-        nsteps: int,
-        report: CoreReport,
-        where: Callable[[int], str],
-    ) -> int:
-        """The steps with the pressure solved in Python (``python_pressure``)."""
-        for k in range(nsteps):
-            report.step = k
-            correct = O.volume_every > 0 and (self.steps + k + 1) % O.volume_every == 0
-            n = self.core.predict(*self._particles(), O, correct, affine=self.affine)
-            report.unknowns = max(report.unknowns, n)
-            report.last_unknowns = n
-            status = self.core.viscous_predictor(O, report)
-            if status != state.OK:
-                report.status = status
-                return k
-            python_pressure.solve(self.core, O, report, where(k))
-            report.pockets += self.core.pockets
-            status = self.core.finish(*self._particles(), O, correct, report, affine=self.affine)
-            if status != state.OK:
-                report.status = status
-                return k
-        return nsteps
 
     def _fail(self, report: CoreReport, where: str) -> NoReturn:
         status = state.Status(int(report.status))

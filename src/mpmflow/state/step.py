@@ -192,6 +192,18 @@ class CoreState(Protocol):
         (an image node of a periodic axis shares its master's row); returns the unknowns."""
         ...
 
+    def use_solver(
+        self,
+        setup: Callable[[Ints, Floats, Ints], None] | None,
+        solve: Callable[[Floats, Floats], tuple[int, float]] | None,
+    ) -> None:
+        """The pressure step's solver from Python (None, None: the core's multigrid)."""
+        ...
+
+    def pressure_solve(self, options: CoreOptions, report: CoreReport) -> int:
+        """The pressure step after predict; returns a ``Status``."""
+        ...
+
     def warm_start(self) -> None: ...
 
     def pressure_matrix(self, options: CoreOptions) -> bool:
