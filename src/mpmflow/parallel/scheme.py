@@ -91,6 +91,9 @@ class DistributedProjection(ProjectionScheme):
         self.since_volume = 0.0  # the flow time since the last volume correction (auto)
         self.dt_range = [np.inf, 0.0]
         self.p_global = np.zeros(grid.nnodes)
+        # the volume correction's last solution on the whole grid's cells (the warm start
+        # of its next solve; in checkpoints, which one process continues too)
+        self.q_global = np.zeros(grid.ncells if self.corrects else 0)
         self.boxes: Boxes | None = None
         self.balance = 1.0  # particles per rank: the least loaded over the most
         self.splits = 0
@@ -202,6 +205,11 @@ class DistributedProjection(ProjectionScheme):
         pieces = self.comm.allgather((sub.node_global[mine], self.core.p_node[mine]))
         for index, values in pieces:
             self.p_global[index] = values
+        if self.q_global.size and self.core.volume_q.size:
+            cells = sub.owned_cells
+            parts = self.comm.allgather((sub.cell_global[cells], self.core.volume_q[cells]))
+            for index, values in parts:
+                self.q_global[index] = values
 
     def _report(self, owned: ParticleArrays) -> None:
         """The load of each rank (summary.json's "mpi"): particles now, unknowns of the
@@ -388,6 +396,8 @@ class DistributedProjection(ProjectionScheme):
         O.pockets = False
         report = state.Report()
         self.core.p_node[:] = self.p_global[self.sub.node_global]
+        if self.q_global.size and self.core.volume_q.size:
+            self.core.volume_q[:] = self.q_global[self.sub.cell_global]
         self._owned = self._distribute()
         clock = time.perf_counter()
         try:
@@ -484,12 +494,16 @@ class DistributedProjection(ProjectionScheme):
             "since_volume": np.array(self.since_volume),
             "dt_range": np.array(self.dt_range),
         }
+        if self.q_global.size:
+            saved["volume_q"] = self.q_global.copy()
         if self.affine is not None:
             saved["affine"] = self.affine.copy()
         return saved
 
     def restore(self, saved: dict[str, NDArray[Any]]) -> None:
         np.copyto(self.p_global, saved["p_node"])
+        if self.q_global.size and "volume_q" in saved:  # written by one process, or ranks
+            np.copyto(self.q_global, saved["volume_q"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
         if "since_volume" in saved:
