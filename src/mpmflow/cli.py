@@ -40,7 +40,8 @@ Run a case and write its outputs to DIR:
   timeseries.csv   one row per output.interval: time [s], front [m], height [m], ...
   summary.json     status, steps, particles, wall_seconds, solver statistics, the energy
                    check, resolved case
-  particles.pvd    ParaView time series of particle snapshots (particles_NNNNNN.vtu)
+  particles.pvd    ParaView time series of particle snapshots (particles_NNNNNN.vtu; on
+                   several ranks particles_NNNNNN.pvtu naming one piece a rank)
 
 Any case key can be overridden with --set, using the dotted names of the case-file
 reference (`mpmflow keys` lists them), e.g.

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import CaseError
-from .output.snapshots import read_index
+from .output.snapshots import read_index, read_pvtu
 from .output.timeseries import COLUMNS, Table, header_units, read_table
 
 
@@ -38,16 +38,35 @@ class Snapshot:
 
     def read(self) -> dict[str, NDArray[np.float64]]:
         """The particle data: x (n, dim) m, velocity (n, dim) m/s, pressure (n,) Pa, mass
-        (n,) kg/m in 2D, kg in 3D. CaseError when the file is missing or damaged."""
-        from meshio import vtu
+        (n,) kg/m in 2D, kg in 3D. CaseError when the file is missing or damaged. A run
+        over ranks writes a .pvtu naming one piece a rank: its pieces are read and put
+        back in the particles' order (their ids), as one process writes them."""
+        if self.path.suffix == ".pvtu":
+            return self._pieces()
+        return self._vtu(self.path)
 
+    def _pieces(self) -> dict[str, NDArray[np.float64]]:
         if not self.path.is_file():
             raise CaseError(
                 f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
                 "index particles.pvd lists it, but the file was deleted or "
                 "moved."
             )
-        if _no_points(self.path):  # every particle had left through the outlets: meshio
+        parts = [self._vtu(self.path.parent / name, ids=True) for name in read_pvtu(self.path)]
+        joined = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]} if parts else {}
+        order = np.argsort(joined.pop("id", np.zeros(0)), kind="stable")
+        return {k: a[order] for k, a in joined.items()}
+
+    def _vtu(self, path: Path, ids: bool = False) -> dict[str, NDArray[np.float64]]:
+        from meshio import vtu
+
+        if not path.is_file():
+            raise CaseError(
+                f"snapshot {path} (t = {self.time:g} s) is missing: the "
+                "index particles.pvd lists it, but the file was deleted or "
+                "moved."
+            )
+        if _no_points(path):  # every particle had left through the outlets: meshio
             # writes such a file but cannot read it back ("Inconsistent data!")
             empty = np.zeros((0, self.dim))
             return {
@@ -55,31 +74,34 @@ class Snapshot:
                 "velocity": empty.copy(),
                 "pressure": np.zeros(0),
                 "mass": np.zeros(0),
+                **({"id": np.zeros(0)} if ids else {}),
             }
         try:
             # the VTU reader itself: meshio.read prints a damaged file's error and calls
             # sys.exit(1) (mpmflow plot exited 1 on a truncated snapshot)
-            mesh = vtu.read(self.path)
+            mesh = vtu.read(path)
             data = {
                 "x": np.asarray(mesh.points[:, : self.dim]),
                 "velocity": np.asarray(mesh.point_data["velocity"][:, : self.dim]),
                 "pressure": np.asarray(mesh.point_data["pressure"]),
                 "mass": np.asarray(mesh.point_data["mass"]),
             }
+            if ids:
+                data["id"] = np.asarray(mesh.point_data["id"])
         except FileNotFoundError:
             raise CaseError(
-                f"snapshot {self.path} (t = {self.time:g} s) is missing: the "
+                f"snapshot {path} (t = {self.time:g} s) is missing: the "
                 "index particles.pvd lists it, but the file was deleted or "
                 "moved."
             ) from None
         except Exception as err:  # meshio raises many types for a damaged file
             raise CaseError(
-                f"snapshot {self.path} (t = {self.time:g} s) cannot be read "
+                f"snapshot {path} (t = {self.time:g} s) cannot be read "
                 f"({type(err).__name__}: {err}); it is damaged, e.g. cut short."
             ) from None
         if data["pressure"].shape[0] != data["x"].shape[0]:
             raise CaseError(
-                f"snapshot {self.path} (t = {self.time:g} s) is damaged: its "
+                f"snapshot {path} (t = {self.time:g} s) is damaged: its "
                 "arrays have different lengths."
             )
         return data

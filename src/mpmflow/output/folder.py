@@ -41,11 +41,12 @@ LOCK_NAME = ".mpmflow.lock"
 # the outputs of a run (outputs, checkpoints, snapshots): their presence means the folder
 # holds a run; --overwrite deletes exactly these
 OUTPUT_NAMES = ("timeseries.csv", "probes.csv", "summary.json", "particles.pvd")
-OUTPUT_PATTERNS = ("particles_*.vtu", "checkpoint_*.npz")
-# a temporary file of output/atomic.py: ".<target name>.<random>.tmp"
+OUTPUT_PATTERNS = ("particles_*.vtu", "particles_*.pvtu", "checkpoint_*.npz")
+# a temporary file of output/atomic.py: ".<target name>.<random>.tmp" (a run over ranks
+# writes particles_NNNNNN.pvtu and one piece a rank, particles_NNNNNN_rRRRR.vtu)
 _LEFTOVER = re.compile(
     r"^\.(timeseries\.csv|probes\.csv|summary\.json|particles\.pvd|"
-    r"particles_\d+\.vtu|checkpoint_\d+\.npz)\..+\.tmp$"
+    r"particles_\d+(_r\d+)?\.vtu|particles_\d+\.pvtu|checkpoint_\d+\.npz)\..+\.tmp$"
 )
 
 

@@ -19,6 +19,7 @@ from ..case import Case
 from ..output.folder import Hints
 from ..simulation import Simulation, checkpointer
 from .comm import Comm, world
+from .snapshots import RankSnapshots
 
 
 def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -> Simulation:
@@ -38,7 +39,18 @@ def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -
     else:
         sim = Simulation(case, None)
     agree_on_stops(sim, comm)
+    snapshots_in_pieces(sim, comm, out)
     return sim
+
+
+def snapshots_in_pieces(sim: Simulation, comm: Comm, out: Path) -> None:
+    """Every rank writes its own particles as a piece of each snapshot, rank 0 the .pvtu
+    that names them (``parallel.snapshots``), in place of one file of all of them."""
+    pieces = RankSnapshots(comm, out)
+    sim.builtin_writers["snapshots"] = pieces
+    for k, action in enumerate(sim.actions):
+        if action.name == "snapshots":
+            sim.actions[k] = replace(action, func=pieces)
 
 
 def agree_on_stops(sim: Simulation, comm: Comm) -> None:

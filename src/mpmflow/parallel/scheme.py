@@ -472,6 +472,17 @@ class DistributedProjection(ProjectionScheme):
             )
         return done
 
+    def owned_particles(self) -> ParticleArrays:
+        """This rank's own particles (global coordinates, with their numbers ``id``, in
+        their order in the run) between chunks: those of the last chunk's end, or before
+        the first chunk those of the split's boxes (``parallel.snapshots``)."""
+        owned = getattr(self, "_owned", None)
+        if owned is None:
+            self._split()
+            owned = self._distribute()
+        order = np.argsort(owned["id"], kind="stable")
+        return {f: a[order] for f, a in owned.items()}
+
     def check_free_surface(self) -> None:
         """As ``ProjectionScheme.check_free_surface``, over the ranks."""
         self._split()
