@@ -60,7 +60,9 @@ def main(argv: list[str] | None = None) -> int:
         if not p.is_file():
             print(f"no {p}: run `make check-cuda` on a machine with a GPU first", file=sys.stderr)
             return 2
-    dev = [r for r in read(args.paths) if "device_ms" in r]
+    lines = [r for r in read(args.paths) if "device_ms" in r]
+    dev = [r for r in lines if "particles" in r]
+    solves = [r for r in lines if r.get("solve") == "pcg"]
     other = {key(r): r for r in read([args.host])} if args.host else {}
     print(
         "| dim | particles | APIC | device | device ms (bin, p2g, g2p) | host ms "
@@ -84,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.no_history or r["dim"] != 3 or r["particles"] < 10**6:
             continue
         name = f"cuda transfers 3D {r['particles']} particles{' APIC' if r['apic'] else ''}"
-        dm = dict(start, cpu=r["device"])
+        dm = dict(start, cpu=r["device"], cores=r["host_threads"])
         append(
             name,
             [(f"device {p}", r["device_ms"][p], "ms") for p in PHASES]
@@ -106,6 +108,33 @@ def main(argv: list[str] | None = None) -> int:
             note=f"the same program's host phases ({where})",
             start=hm,
             threads=host["host_threads"],
+        )
+    print()
+    print(
+        "| dim | unknowns | iterations (host, device) | device ms (upload, pcg) | host ms "
+        "(setup, pcg; threads) | pcg ratio |"
+    )
+    print("|---|---|---|---|---|---|")
+    for r in solves:
+        d, h = r["device_ms"], r["host_ms"]
+        print(
+            f"| {r['dim']} | {r['unknowns']:,} | {r['iterations']} | {d['upload']:.1f}, "
+            f"{d['pcg']:.1f} | {h['setup']:.1f}, {h['pcg']:.1f}; {r['host_threads']} | "
+            f"{h['pcg'] / d['pcg']:.1f} |"
+        )
+        if args.no_history or r["dim"] != 3 or r["unknowns"] < 10**5:
+            continue
+        append(
+            f"cuda pcg 3D {r['unknowns']} unknowns",
+            [
+                ("device pcg", d["pcg"], "ms"),
+                ("device upload", d["upload"], "ms"),
+                ("host pcg", h["pcg"], "ms"),
+                ("host setup", h["setup"], "ms"),
+            ],
+            note=f"make check-cuda; host: the GPU machine's {r['host_threads']} threads",
+            start=dict(start, cpu=r["device"]),
+            threads="GPU",
         )
     return 0
 
