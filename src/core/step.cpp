@@ -754,8 +754,7 @@ index_t State<D>::advance(const Particles<D>& P, const Options<D>& O, index_t fi
                           Report& report, const Between& between) {
   for (index_t k = 0; k < nsteps; ++k) {
     report.step = k;
-    const bool correct = O.volume_every > 0 && (first + k) % O.volume_every == 0;
-    const int status = step_once(P, O, correct, report);
+    const int status = step_once(P, O, volume_due_fixed(first + k, O.volume_every), report);
     if (status != OK) {
       report.status = status;
       return k;
@@ -788,23 +787,11 @@ double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double
           return m;
         },
         [](double a, double b) { return std::max(a, b); });
-    double dt = O.dt_max;
-    if (vmax2 > 0.0) dt = std::min(dt, O.courant * grid_.h / std::sqrt(vmax2));
     const double rest = span - elapsed;
-    if (dt >= rest * (1.0 - 1e-9))
-      dt = rest;
-    else if (2.0 * dt > rest)
-      dt = 0.5 * rest;
+    const double dt = adaptive_dt(vmax2, O.courant, grid_.h, O.dt_max, rest);
     Ok.dt = dt;
     Ok.flip = flip_per_step(O.flip_rate, dt);
-    bool correct = false;
-    if (O.volume_rate > 0.0) {
-      since_volume_ += dt;
-      if (since_volume_ >= O.volume_interval * (1.0 - 1e-9)) {
-        correct = true;
-        since_volume_ = 0.0;
-      }
-    }
+    const bool correct = volume_due_adaptive(since_volume_, dt, O.volume_rate, O.volume_interval);
     const int status = step_once(P, Ok, correct, report);
     if (status != OK) {
       report.status = status;

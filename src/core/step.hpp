@@ -23,7 +23,9 @@
 // Report; Python turns them into messages.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -163,6 +165,37 @@ struct GridTables {
   // material leaves through (grid_to_particles retires what crosses them)
   View<const bool> outlet;
 };
+
+// The step's schedule, written once for every loop that takes steps (State::advance and
+// advance_span here, and the MPI ranks' loop, parallel/scheme.py, through the bindings).
+//
+// The adaptive step's size (time.dt = "auto", s): min(dt_max, courant h / |v|max) (vmax2:
+// the largest squared particle speed; dt_max when nothing moves), then fitted to the rest of
+// the span: all of it when it fits (to rounding), half of it when a second step would leave
+// a sliver.
+inline double adaptive_dt(double vmax2, double courant, double h, double dt_max, double rest) {
+  double dt = dt_max;
+  if (vmax2 > 0.0) dt = std::min(dt, courant * h / std::sqrt(vmax2));
+  if (dt >= rest * (1.0 - 1e-9))
+    dt = rest;
+  else if (2.0 * dt > rest)
+    dt = 0.5 * rest;
+  return dt;
+}
+// The volume correction's cadence: fixed steps, on the steps numbered (from 1, from the
+// start of the run) a multiple of every (0: never); adaptive steps, once the flow time
+// since the last correction (since, s, advanced here by dt) reaches the interval (then
+// since restarts from 0; rate 0: never).
+inline bool volume_due_fixed(index_t number, index_t every) {
+  return every > 0 && number % every == 0;
+}
+inline bool volume_due_adaptive(double& since, double dt, double rate, double interval) {
+  if (!(rate > 0.0)) return false;
+  since += dt;
+  if (since < interval * (1.0 - 1e-9)) return false;
+  since = 0.0;
+  return true;
+}
 
 // A pressure solver the step calls instead of its own multigrid (bindings/step.cpp: one
 // from Python, amg, direct or PETSc's, solver.linear_solver): set up for the step's matrix

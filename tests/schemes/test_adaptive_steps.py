@@ -92,3 +92,33 @@ def test_auto_with_a_python_solver_follows_the_multigrid():
     assert steps_d == steps_mg
     assert np.abs(x_d - x_mg).max() <= 1e-9  # m
     assert np.abs(p_d - p_mg).max() <= 1e-6 * np.abs(p_mg).max()
+
+
+def test_the_schedule_rules():
+    """The step's schedule as the core writes it once (src/core/step.hpp) for every loop."""
+    from mpmflow import state
+
+    # Courant: 1 m/s on 0.01 m at C = 0.5 gives 5 ms; nothing moving gives dt_max
+    assert state.adaptive_dt(1.0, 0.5, 0.01, 1.0, 1.0) == 0.005
+    assert state.adaptive_dt(0.0, 0.5, 0.01, 2e-3, 1.0) == 2e-3
+    # the rest of the span: taken whole when it fits, halved when a second step would
+    # leave a sliver (6 ms left, 5 ms steps: two of 3 ms)
+    assert state.adaptive_dt(1.0, 0.5, 0.01, 1.0, 0.004) == 0.004
+    assert state.adaptive_dt(1.0, 0.5, 0.01, 1.0, 0.006) == 0.003
+    assert state.adaptive_dt(1.0, 0.5, 0.01, 1.0, 0.011) == 0.005
+    # the volume correction: every 3rd step; after 2 ms of flow
+    assert [state.volume_due_fixed(k, 3) for k in range(1, 7)] == [
+        False,
+        False,
+        True,
+        False,
+        False,
+        True,
+    ]
+    assert not state.volume_due_fixed(3, 0)
+    since, due = 0.0, []
+    for _ in range(5):
+        d, since = state.volume_due_adaptive(since, 1e-3, 1.0, 2e-3)
+        due.append(d)
+    assert due == [False, True, False, True, False] and since == 1e-3
+    assert state.volume_due_adaptive(0.0, 1.0, 0.0, 2e-3) == (False, 0.0)

@@ -6,6 +6,7 @@
 #include <nanobind/stl/array.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/unique_ptr.h>
 #include <nanobind/stl/vector.h>
 
@@ -446,6 +447,19 @@ void bind_dim(nb::module_& m) {
 }  // namespace
 
 void bind_step(nb::module_& m) {
+  m.def("adaptive_dt", &adaptive_dt, nb::arg("vmax2"), nb::arg("courant"), nb::arg("h"),
+        nb::arg("dt_max"), nb::arg("rest"),
+        "The adaptive step's size (s), fitted to the rest of the span (step.hpp).");
+  m.def("volume_due_fixed", &volume_due_fixed, nb::arg("number"), nb::arg("every"),
+        "Fixed steps: the volume correction on step number (from 1) a multiple of every.");
+  m.def(
+      "volume_due_adaptive",
+      [](double since, double dt, double rate, double interval) {
+        const bool due = volume_due_adaptive(since, dt, rate, interval);
+        return std::make_tuple(due, since);
+      },
+      nb::arg("since"), nb::arg("dt"), nb::arg("rate"), nb::arg("interval"),
+      "Adaptive steps: (whether the volume correction is due, the flow time since it).");
   nb::class_<Report>(m, "Report")
       .def(nb::init<>())
       .def_rw("unknowns", &Report::unknowns)

@@ -104,6 +104,13 @@ class AdaptiveReport(StepReport):
     dt_max: float = 0.0
 
 
+def most_steps(span: float, max_speed: float, courant: float, h: float) -> int:
+    """The most adaptive steps a span (s) can need: every particle at solver.max_speed (m/s;
+    the run stops beyond it) at the Courant number on a grid of spacing h (m), and the two
+    steps fitted to the span's end."""
+    return int(np.ceil(span * max_speed / (courant * h))) + 3
+
+
 class ProjectionScheme:
     SUPPORTS: ClassVar[frozenset[str]] = capabilities.SUPPORTS["projection"]
 
@@ -307,9 +314,7 @@ class ProjectionScheme:
     ) -> AdaptiveReport:
         """time.dt = "auto": steps set by the flow over the span (``State.advance_span``)."""
         s = self.case.solver
-        # the most steps the span can need: every particle at solver.max_speed (the run
-        # stops beyond it), at the Courant number
-        most = int(np.ceil(span * s.max_speed / (O.courant * self.grid.spacing))) + 3
+        most = most_steps(span, s.max_speed, O.courant, self.grid.spacing)
         try:
             covered = self.core.advance_span(
                 *self._particles(), O, span, most, report, affine=self.affine

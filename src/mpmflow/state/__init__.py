@@ -64,8 +64,11 @@ from .step import (  # noqa: E402 (the core is loaded first, with its message)
     CoreState,
     Report,
     Status,
+    adaptive_dt,
     step_options,
     step_state,
+    volume_due_adaptive,
+    volume_due_fixed,
 )
 from .transfer import (  # noqa: E402 (the core is loaded first, with its message)
     SLIVER,
@@ -158,6 +161,9 @@ __all__ = [
     "start_contact",
     "step_options",
     "step_state",
+    "adaptive_dt",
+    "volume_due_adaptive",
+    "volume_due_fixed",
     "strips",
     "viscosity",
     "viscous_assemble",

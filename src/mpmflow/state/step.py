@@ -374,6 +374,26 @@ class CoreState(Protocol):
     def viscous_base(self) -> Floats: ...  # nn x D (m/s), writable
 
 
+def adaptive_dt(vmax2: float, courant: float, h: float, dt_max: float, rest: float) -> float:
+    """The adaptive step's size (s): min(dt_max, courant h / |v|max), fitted to the rest of
+    the span (the core's rule, src/core/step.hpp; every loop that takes steps uses it)."""
+    return float(_core.adaptive_dt(vmax2, courant, h, dt_max, rest))
+
+
+def volume_due_fixed(number: int, every: int) -> bool:
+    """Fixed steps: the volume correction on step ``number`` (from 1)? (the core's rule)"""
+    return bool(_core.volume_due_fixed(number, every))
+
+
+def volume_due_adaptive(
+    since: float, dt: float, rate: float, interval: float
+) -> tuple[bool, float]:
+    """Adaptive steps: (the volume correction due?, the flow time since it after this step)
+    (the core's rule)."""
+    due, since = _core.volume_due_adaptive(since, dt, rate, interval)
+    return bool(due), float(since)
+
+
 def step_state(
     grid: Grid,
     walls: tuple[Ints, Ints, Floats, Bools],
