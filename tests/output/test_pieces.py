@@ -1,7 +1,7 @@
 """Snapshots written in pieces (a run over ranks; issue 42, item 3): the .pvtu names its
 pieces, a restart keeps the pieces of the snapshots it keeps and deletes the later ones,
 and ``open_run`` reads a .pvtu's pieces back in the particles' order. The run over ranks
-itself: tests/parallel/test_pieces.py."""
+itself: tests/parallel/test_snapshot_pieces.py."""
 
 import numpy as np
 
