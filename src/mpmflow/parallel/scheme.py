@@ -39,7 +39,14 @@ from ..errors import SolverError
 from ..grid import Grid
 from ..particles import Particles
 from ..schemes import pressure
-from ..schemes.projection import MARGIN, AdaptiveReport, ProjectionScheme, StepReport, preset
+from ..schemes.projection import (
+    MARGIN,
+    AdaptiveReport,
+    ProjectionScheme,
+    StepReport,
+    most_steps,
+    preset,
+)
 from ..schemes.projection import ParticleArrays as CoreParticles
 from ..state import CoreOptions, CoreReport
 from .boxes import Boxes, bisect, cell_weights
@@ -81,7 +88,6 @@ class DistributedProjection(ProjectionScheme):
         )
         self.solids = obstacles.of_case(case, grid)
         self._walls = walls.of_case(case, grid).as_tuple()
-        self.python_pressure = None
         self.system = DistributedSystem(s.tolerance, s.max_iterations, s.petsc_preconditioner)
         self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
         self.volume = DistributedVolume(self.comm, s.tolerance, s.petsc_preconditioner)
@@ -406,8 +412,8 @@ class DistributedProjection(ProjectionScheme):
             else:
                 for k in range(nsteps):
                     report.step = k
-                    number = self.steps + k + 1  # the volume correction every n-th step
-                    correct = O.volume_every > 0 and number % O.volume_every == 0
+                    # the volume correction every n-th step
+                    correct = state.volume_due_fixed(self.steps + k + 1, O.volume_every)
                     self._owned = self._step(self._owned, O, report, where(k), correct)
                 done = nsteps
         finally:
@@ -429,34 +435,25 @@ class DistributedProjection(ProjectionScheme):
     def _span(
         self, O: CoreOptions, span: float, report: CoreReport, where: Callable[[int], str]
     ) -> int:
-        """Steps of adaptive size over the span (s), as ``State::advance_span`` takes them:
-        dt = min(time.max_dt, courant h / the largest particle speed over all ranks), the
-        last two steps shortened to land on the span's end, the volume correction after
-        each volume interval of flow. Returns the steps taken."""
+        """Steps of adaptive size over the span (s), by the core's rules (``adaptive_dt``,
+        ``volume_due_adaptive``: src/core/step.hpp) on the largest particle speed over all
+        ranks, as ``State::advance_span`` takes them. Returns the steps taken."""
         s = self.case.solver
         h = self.grid.spacing
-        most = int(np.ceil(span * s.max_speed / (O.courant * h))) + 3
+        most = most_steps(span, s.max_speed, O.courant, h)
         elapsed, done = 0.0, 0
         while done < most and elapsed < span:
             report.step = done
             v = self._owned["v"]
             mine = float(np.max(np.sum(v * v, axis=1))) if v.shape[0] else 0.0
             vmax2 = max(self.comm.allgather(mine))
-            dt = O.dt_max
-            if vmax2 > 0.0:
-                dt = min(dt, O.courant * h / np.sqrt(vmax2))
             rest = span - elapsed
-            if dt >= rest * (1.0 - 1e-9):
-                dt = rest
-            elif 2.0 * dt > rest:
-                dt = 0.5 * rest
+            dt = state.adaptive_dt(vmax2, O.courant, h, O.dt_max, rest)
             O.dt = dt
             O.flip = state.flip_per_step(O.flip_rate, dt)
-            correct = False
-            if O.volume_rate > 0.0:
-                self.since_volume += dt
-                if self.since_volume >= O.volume_interval * (1.0 - 1e-9):
-                    correct, self.since_volume = True, 0.0
+            correct, self.since_volume = state.volume_due_adaptive(
+                self.since_volume, dt, O.volume_rate, O.volume_interval
+            )
             self._owned = self._step(self._owned, O, report, where(done), correct)
             done += 1
             report.steps = done
