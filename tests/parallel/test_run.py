@@ -91,3 +91,21 @@ def test_a_run_written_on_four_ranks_continues_on_two(four, tmp_path):
     assert np.abs(a["x"] - b["x"]).max() < 1e-8  # m
     assert np.array_equal(a["mass"], b["mass"])
     assert np.abs(series(four, "front") - series(again, "front")).max() < 1e-8
+
+
+@pytest.mark.parametrize("extra", [["--restart"], []])
+def test_a_refusal_of_rank_0_alone_stops_every_rank(tmp_path, extra):
+    """No checkpoint to continue from, or a folder that holds another run: rank 0 alone
+    finds it, and every rank stops with its message (exit 2) instead of the others
+    waiting for ever in their next collective call."""
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "timeseries.csv").write_text("time\n")  # the folder holds a run's outputs
+    mpmflow = Path(sys.executable).parent / "mpmflow"
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    command = ["mpirun", "--oversubscribe", "-n", "2", str(mpmflow), "run"]
+    command += [str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", *extra]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr[-2000:]
+    said = "holds no checkpoint" if extra else "already holds the results of a run"
+    assert said in done.stderr and "Traceback" not in done.stderr

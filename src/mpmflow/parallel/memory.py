@@ -46,7 +46,7 @@ from ..geometry import bodies
 from ..geometry.lattice import lattice_indices
 from ..grid import Grid
 from .boxes import Boxes, Factors, bisect_separable, box_weight
-from .comm import ranks_here
+from .comm import ranks_here, world
 from .subgrid import GHOST
 
 if TYPE_CHECKING:
@@ -284,7 +284,9 @@ def check(case: Case, ranks: int) -> RanksEstimate:
     budget, source = memory.available()
     big = est.largest
     need = est.here * big.total
-    if need <= budget:
+    # every rank decides together: the ranks read the free memory at different moments,
+    # and one refusing alone would leave the others waiting in the scheme's first exchange
+    if world().allreduce(int(need > budget)) == 0:
         return est
     power = {2: "square", 3: "cube"}[len(case.domain.size)]
     raise CaseError(

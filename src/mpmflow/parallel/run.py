@@ -13,34 +13,79 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import TypeVar
 
 from .. import checkpoint
 from ..case import Case
+from ..errors import MpmflowError
 from ..output.folder import Hints
 from ..simulation import Simulation, checkpointer
 from .comm import Comm, world
 from .snapshots import RankSnapshots
+
+T = TypeVar("T")
 
 
 def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -> Simulation:
     """This rank's Simulation of a run on several ranks (rank 0's claims ``out``)."""
     comm = world()
     root = comm.rank == 0
-    if restart:
-        path = comm.bcast(checkpoint.latest(out) if root else None, root=0)
-        if root:
-            sim = Simulation.resume(case, out, path=path, hints=hints)
+    path = None
+    if restart:  # rank 0 finds the checkpoint, or the refusal every rank gives
+        path = agreed(comm, lambda: checkpoint.latest(out) if root else None, root_only=True)
+    sim: Simulation | None = None
+
+    def build() -> None:
+        nonlocal sim
+        if restart:
+            assert path is not None
+            if root:
+                sim = Simulation.resume(case, out, path=path, hints=hints)
+            else:
+                sim = checkpointer.resume_from(Simulation, case, out, path, None)
+                sim.out_dir = None  # read from the folder; rank 0 alone writes to it
+        elif root:
+            sim = Simulation(case, out, overwrite=overwrite)
+            sim.claim(hints)
         else:
-            sim = checkpointer.resume_from(Simulation, case, out, path, None)
-            sim.out_dir = None  # read from the folder; rank 0 alone writes to it
-    elif root:
-        sim = Simulation(case, out, overwrite=overwrite)
-        sim.claim(hints)
-    else:
-        sim = Simulation(case, None)
+            sim = Simulation(case, None)
+
+    try:
+        agreed(comm, build)
+    except MpmflowError:
+        if sim is not None:
+            sim.close()  # rank 0's folder lock
+        raise
+    assert sim is not None
     agree_on_stops(sim, comm)
     snapshots_in_pieces(sim, comm, out)
     return sim
+
+
+def agreed(comm: Comm, work: Callable[[], T], root_only: bool = False) -> T:
+    """``work()`` on every rank (``root_only``: its result is rank 0's, sent to all), and
+    a refusal (MpmflowError) on any rank raised on every rank: a rank that stopped alone
+    would leave the others waiting in their next collective call for ever."""
+    result, error = None, None
+    try:
+        result = work()
+    except MpmflowError as err:
+        error = err
+    said = None if error is None else (type(error), str(error))
+    if root_only:
+        said, result = comm.bcast((said, result), root=0)
+        told = [said]
+    else:
+        told = comm.allgather(said)
+    if error is not None:
+        raise error
+    first = next((t for t in told if t is not None), None)
+    if first is not None:  # another rank's refusal, as that rank gives it
+        kind, text = first
+        other = kind.__new__(kind)
+        Exception.__init__(other, text)
+        raise other
+    return result  # type: ignore[return-value]
 
 
 def snapshots_in_pieces(sim: Simulation, comm: Comm, out: Path) -> None:
