@@ -30,7 +30,10 @@ def main():
 
     start = machine()
     Simulation(
-        load_case(args.case, [*args.overrides, "time.end=0.003", "output.interval=0.001"])
+        # a few fixed steps (time.dt = "auto" would take one of up to time.max_dt)
+        load_case(
+            args.case, [*args.overrides, "time.dt=0.001", "time.end=0.003", "output.interval=0.001"]
+        )
     ).run()
     sim = Simulation(load_case(args.case, args.overrides))
     t0 = time.perf_counter()
