@@ -567,53 +567,27 @@ SolveResult Multigrid<D>::pcg(View<const double> rhs, View<double> x, double tol
   const index_t n = f.n;
   if (rhs.size() != n || x.size() != n)
     throw std::invalid_argument("multigrid: rhs and x must have one value per row");
-  View<double> r = r_store_.sized(n), p = p_store_.sized(n), q = q_store_.sized(n),
-               z = z_store_.sized(n);
-  const double bnorm = std::sqrt(dot(rhs, rhs));
-  if (bnorm == 0.0) {
-    fill(x, 0.0);
-    return {0, 0.0};
-  }
-  residual(f.cols, f.vals, x, rhs, r);
-  double rnorm = std::sqrt(dot(r, r));
-  if (rnorm > bnorm) {
-    // a warm start worse than zero (the right-hand side changed a lot) would only cost
-    // accuracy: the residual would have to fall far below round-off of A x0
-    fill(x, 0.0);
-    copy(rhs, r);
-    rnorm = bnorm;
-  }
-  if (rnorm <= tol * bnorm) return {0, rnorm / bnorm};
-  vcycle(r, z, sweeps);
-  copy(z, p);
-  double rz = dot(r, z);
-  index_t it = 0;
-  while (it < maxiter) {
-    ++it;
-    matvec(f.cols, f.vals, p, q);
-    const double alpha = rz / dot(p, q);
-    cg_update(x, r, p, q, z, alpha, 0.0, true);
-    rnorm = std::sqrt(dot(r, r));
-    if (rnorm <= tol * bnorm) {
-      // the recursive residual can drift from the true one: converged when the true one
-      // meets the tolerance too; otherwise go on from it, with a restarted direction
-      residual(f.cols, f.vals, x, rhs, r);
-      rnorm = std::sqrt(dot(r, r));
-      if (rnorm <= tol * bnorm) return {it, rnorm / bnorm};
-      vcycle(r, z, sweeps);
-      copy(z, p);
-      rz = dot(r, z);
-      continue;
+  // the host's vector operations, on all threads for long vectors (the same bits on any
+  // number of them)
+  struct HostOps {
+    Multigrid& mg;
+    const Level& f;
+    int sweeps;
+    double dot(View<const double> a, View<const double> b) { return mpmflow::dot(a, b); }
+    void residual(View<const double> x, View<const double> b, View<double> r) {
+      mpmflow::residual(f.cols, f.vals, x, b, r);
     }
-    vcycle(r, z, sweeps);
-    const double rz_new = dot(r, z);
-    const double beta = rz_new / rz;
-    rz = rz_new;
-    cg_update(x, r, p, q, z, 0.0, beta, false);
-  }
-  // the iterations ran out: report the true residual
-  residual(f.cols, f.vals, x, rhs, q);
-  return {it, std::sqrt(dot(q, q)) / bnorm};
+    void matvec(View<const double> p, View<double> q) { mpmflow::matvec(f.cols, f.vals, p, q); }
+    void vcycle(View<const double> r, View<double> z) { mg.vcycle(r, z, sweeps); }
+    void fill(View<double> v, double value) { mpmflow::fill(v, value); }
+    void copy(View<const double> from, View<double> to) { mpmflow::copy(from, to); }
+    void cg_update(View<double> x, View<double> r, View<double> p, View<const double> q,
+                   View<const double> z, double alpha, double beta, bool step) {
+      mpmflow::cg_update(x, r, p, q, z, alpha, beta, step);
+    }
+  } ops{*this, f, sweeps};
+  return pcg_iterate(ops, rhs, x, r_store_.sized(n), p_store_.sized(n), q_store_.sized(n),
+                     z_store_.sized(n), tol, maxiter);
 }
 
 template <int D>

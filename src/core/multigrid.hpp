@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "grid.hpp"
@@ -125,6 +126,65 @@ inline int first_sweep_slots(int colour, int* slots) {
     if ((colour ^ odd) < colour) slots[nslots++] = s;
   }
   return nslots;
+}
+
+// The preconditioned CG iteration, written once for the host's Multigrid<D>::pcg and the
+// device's (src/core/cuda/multigrid.cuh): ops does the vector work in its own memory,
+//   ops.dot(a, b), ops.residual(x, b, r) (r = b - A x), ops.matvec(p, q) (q = A p),
+//   ops.vcycle(r, z) (z = M^-1 r), ops.fill(v, value), ops.copy(from, to),
+//   ops.cg_update(x, r, p, q, z, alpha, beta, step) (step: x += alpha p, r -= alpha q;
+//   else p = z + beta p);
+// r, p, q, z: scratch of n values. Stops when ||rhs - A x|| <= tol ||rhs||; x holds the
+// initial guess.
+template <class Ops>
+SolveResult pcg_iterate(Ops& ops, View<const double> rhs, View<double> x, View<double> r,
+                        View<double> p, View<double> q, View<double> z, double tol,
+                        index_t maxiter) {
+  const double bnorm = std::sqrt(ops.dot(rhs, rhs));
+  if (bnorm == 0.0) {
+    ops.fill(x, 0.0);
+    return {0, 0.0};
+  }
+  ops.residual(x, rhs, r);
+  double rnorm = std::sqrt(ops.dot(r, r));
+  if (rnorm > bnorm) {
+    // a warm start worse than zero (the right-hand side changed a lot) would only cost
+    // accuracy: the residual would have to fall far below round-off of A x0
+    ops.fill(x, 0.0);
+    ops.copy(rhs, r);
+    rnorm = bnorm;
+  }
+  if (rnorm <= tol * bnorm) return {0, rnorm / bnorm};
+  ops.vcycle(r, z);
+  ops.copy(z, p);
+  double rz = ops.dot(r, z);
+  index_t it = 0;
+  while (it < maxiter) {
+    ++it;
+    ops.matvec(p, q);
+    const double alpha = rz / ops.dot(p, q);
+    ops.cg_update(x, r, p, q, z, alpha, 0.0, true);
+    rnorm = std::sqrt(ops.dot(r, r));
+    if (rnorm <= tol * bnorm) {
+      // the recursive residual can drift from the true one: converged when the true one
+      // meets the tolerance too; otherwise go on from it, with a restarted direction
+      ops.residual(x, rhs, r);
+      rnorm = std::sqrt(ops.dot(r, r));
+      if (rnorm <= tol * bnorm) return {it, rnorm / bnorm};
+      ops.vcycle(r, z);
+      ops.copy(z, p);
+      rz = ops.dot(r, z);
+      continue;
+    }
+    ops.vcycle(r, z);
+    const double rz_new = ops.dot(r, z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    ops.cg_update(x, r, p, q, z, 0.0, beta, false);
+  }
+  // the iterations ran out: report the true residual
+  ops.residual(x, rhs, q);
+  return {it, std::sqrt(ops.dot(q, q)) / bnorm};
 }
 
 template <int D>

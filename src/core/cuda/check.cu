@@ -81,6 +81,13 @@ double device_ms(F&& f, int reps = 10) {
 
 bool have_device = false;
 
+// One case's JSON line, to the terminal (at once: the big cases take minutes) and to OUT.
+void emit(const char* line, FILE* out) {
+  std::fputs(line, stdout);
+  std::fflush(stdout);
+  if (out) std::fputs(line, out);
+}
+
 // Host and device copies of one array (the device's only where there is one).
 template <class T>
 struct Pair {
@@ -250,8 +257,7 @@ void run(double h, bool apic, FILE* out) {
                   "\"g2p\": %.3f}}\n",
                   D, h, static_cast<long long>(n), apic ? "true" : "false", omp_get_max_threads(),
                   t_bin_h, t_p2g_h, t_g2p_h);
-    std::fputs(line, stdout);
-    if (out) std::fputs(line, out);
+    emit(line, out);
     return;
   }
   // --- device
@@ -322,9 +328,7 @@ void run(double h, bool apic, FILE* out) {
                 apic ? "true" : "false", prop.name, omp_get_max_threads(), t_bin_h, t_p2g_h,
                 t_g2p_h, t_bin_d, t_p2g_d, t_g2p_d, worst, g2p_same ? "true" : "false",
                 n / (dev_total * 1e-3), n / (host_total * 1e-3));
-  std::fputs(line, stdout);
-  std::fflush(stdout);
-  if (out) std::fputs(line, out);
+  emit(line, out);
 }
 
 // The pressure system of the column at rest: the Q1 Laplacian (eq. 13's matrix) on the
@@ -416,8 +420,7 @@ void run_pcg(double h, FILE* out, int reps = 5) {
                   "\"pcg\": %.3f}, \"iterations\": %lld}\n",
                   D, h, static_cast<long long>(n), static_cast<long long>(mg.levels()),
                   omp_get_max_threads(), t_setup, t_pcg_h, static_cast<long long>(rh.iterations));
-    std::fputs(line, stdout);
-    if (out) std::fputs(line, out);
+    emit(line, out);
     return;
   }
   gpu::Multigrid<D> dmg;
@@ -458,9 +461,7 @@ void run_pcg(double h, FILE* out, int reps = 5) {
                 omp_get_max_threads(), t_setup, t_pcg_h, t_upload, t_pcg_d,
                 static_cast<long long>(rh.iterations), static_cast<long long>(rd.iterations),
                 true_res, diff);
-  std::fputs(line, stdout);
-  std::fflush(stdout);
-  if (out) std::fputs(line, out);
+  emit(line, out);
 }
 
 }  // namespace

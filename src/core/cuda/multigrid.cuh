@@ -177,47 +177,25 @@ class Multigrid {
     const index_t n = f.n;
     if (rhs.size() != n || x.size() != n)
       throw std::invalid_argument("multigrid: rhs and x must have one value per row");
-    View<double> r = r_, p = p_, q = q_, z = z_;
-    const double bnorm = std::sqrt(K::dot(ws_, rhs, rhs));
-    if (bnorm == 0.0) {
-      K::fill(x, 0.0);
-      return {0, 0.0};
-    }
-    K::residual(f.cols, f.vals, x, rhs, r);
-    double rnorm = std::sqrt(K::dot(ws_, r, r));
-    if (rnorm > bnorm) {
-      K::fill(x, 0.0);
-      K::copy(rhs, r);
-      rnorm = bnorm;
-    }
-    if (rnorm <= tol * bnorm) return {0, rnorm / bnorm};
-    vcycle(r, z, sweeps);
-    K::copy(z, p);
-    double rz = K::dot(ws_, r, z);
-    index_t it = 0;
-    while (it < maxiter) {
-      ++it;
-      K::matvec(f.cols, f.vals, p, q);
-      const double alpha = rz / K::dot(ws_, p, q);
-      K::cg_update(x, r, p, q, z, alpha, 0.0, true);
-      rnorm = std::sqrt(K::dot(ws_, r, r));
-      if (rnorm <= tol * bnorm) {
-        K::residual(f.cols, f.vals, x, rhs, r);
-        rnorm = std::sqrt(K::dot(ws_, r, r));
-        if (rnorm <= tol * bnorm) return {it, rnorm / bnorm};
-        vcycle(r, z, sweeps);
-        K::copy(z, p);
-        rz = K::dot(ws_, r, z);
-        continue;
+    // the device's vector operations (LevelKernels), the same iteration as the host's
+    struct DeviceOps {
+      Multigrid& mg;
+      const Level& f;
+      int sweeps;
+      double dot(View<const double> a, View<const double> b) { return K::dot(mg.ws_, a, b); }
+      void residual(View<const double> x, View<const double> b, View<double> r) {
+        K::residual(f.cols, f.vals, x, b, r);
       }
-      vcycle(r, z, sweeps);
-      const double rz_new = K::dot(ws_, r, z);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      K::cg_update(x, r, p, q, z, 0.0, beta, false);
-    }
-    K::residual(f.cols, f.vals, x, rhs, q);
-    return {it, std::sqrt(K::dot(ws_, q, q)) / bnorm};
+      void matvec(View<const double> p, View<double> q) { K::matvec(f.cols, f.vals, p, q); }
+      void vcycle(View<const double> r, View<double> z) { mg.vcycle(r, z, sweeps); }
+      void fill(View<double> v, double value) { K::fill(v, value); }
+      void copy(View<const double> from, View<double> to) { K::copy(from, to); }
+      void cg_update(View<double> x, View<double> r, View<double> p, View<const double> q,
+                     View<const double> z, double alpha, double beta, bool step) {
+        K::cg_update(x, r, p, q, z, alpha, beta, step);
+      }
+    } ops{*this, f, sweeps};
+    return pcg_iterate(ops, rhs, x, r_, p_, q_, z_, tol, maxiter);
   }
 
   index_t levels() const { return nlev_; }
