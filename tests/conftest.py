@@ -1,5 +1,8 @@
 """Shared helpers: paths, a quick case builder, and the check for the reference data."""
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -95,3 +98,15 @@ def shared_data():
         return data_dir()
     except FileNotFoundError as err:
         pytest.fail(str(err))
+
+
+def mpmflow_on_ranks(ranks, *args, timeout=300):
+    """`mpmflow ARGS` (this environment's command line) on ``ranks`` MPI processes under
+    mpirun, one process without it; one thread each (Open MPI told it may run as root and
+    on more ranks than cores). Returns the finished process, its output captured."""
+    cli = Path(sys.executable).parent / "mpmflow"
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    env["OMP_NUM_THREADS"] = "1"
+    command = ["mpirun", "--oversubscribe", "-n", str(ranks)] if ranks > 1 else []
+    command += [str(cli), *(str(a) for a in args)]
+    return subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout)

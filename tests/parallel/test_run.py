@@ -9,15 +9,12 @@ and the column height against one process; the restart to the pressure solver's 
 
 import csv
 import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES
+from conftest import EXAMPLES, mpmflow_on_ranks
 
 from mpmflow import load_case
 from mpmflow.simulation import Simulation
@@ -41,12 +38,9 @@ SETTINGS = [
 
 
 def mpirun(ranks: int, out: Path, *extra: str) -> None:
-    mpmflow = Path(sys.executable).parent / "mpmflow"
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-    env["OMP_NUM_THREADS"] = "1"
-    command = ["mpirun", "--oversubscribe", "-n", str(ranks), str(mpmflow), "run"]
-    command += [str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", *SETTINGS, *extra]
-    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    done = mpmflow_on_ranks(
+        ranks, "run", EXAMPLES / "dam_break.toml", "--out", out, "-q", *SETTINGS, *extra
+    )
     assert done.returncode == 0, done.stderr[-3000:]
 
 
@@ -101,11 +95,9 @@ def test_a_refusal_of_rank_0_alone_stops_every_rank(tmp_path, extra):
     out = tmp_path / "run"
     out.mkdir()
     (out / "timeseries.csv").write_text("time\n")  # the folder holds a run's outputs
-    mpmflow = Path(sys.executable).parent / "mpmflow"
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-    command = ["mpirun", "--oversubscribe", "-n", "2", str(mpmflow), "run"]
-    command += [str(EXAMPLES / "dam_break.toml"), "--out", str(out), "-q", *extra]
-    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
+    done = mpmflow_on_ranks(
+        2, "run", EXAMPLES / "dam_break.toml", "--out", out, "-q", *extra, timeout=120
+    )
     assert done.returncode == 2, done.stderr[-2000:]
     said = "holds no checkpoint" if extra else "already holds the results of a run"
     assert said in done.stderr and "Traceback" not in done.stderr

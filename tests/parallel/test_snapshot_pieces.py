@@ -4,16 +4,13 @@ particles, and a restart on one process keeps the pieces it continues after. Run
 one-process invocation of ``make test-mpi`` (it starts mpirun itself); skipped where
 mpirun or the MPI environment is missing, and under mpirun."""
 
-import os
 import shutil
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES
+from conftest import EXAMPLES, mpmflow_on_ranks
 from meshio import vtu
 
 import mpmflow
@@ -37,13 +34,9 @@ SETTINGS = [
 
 
 def run(ranks: int, out: Path, *extra: str) -> None:
-    mpmflow_cli = Path(sys.executable).parent / "mpmflow"
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-    env["OMP_NUM_THREADS"] = "1"
-    command = ["mpirun", "--oversubscribe", "-n", str(ranks)] if ranks > 1 else []
-    command += [str(mpmflow_cli), "run", str(EXAMPLES / "dam_break.toml"), "--out", str(out)]
-    command += ["-q", *SETTINGS, *extra]
-    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    done = mpmflow_on_ranks(
+        ranks, "run", EXAMPLES / "dam_break.toml", "--out", out, "-q", *SETTINGS, *extra
+    )
     assert done.returncode == 0, done.stderr[-3000:]
 
 
