@@ -306,7 +306,11 @@ def test_any_case_file_runs_or_fails_cleanly(monkeypatch):
     outcomes = {}
 
     @settings(
-        max_examples=500, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow]
+        max_examples=500,
+        deadline=None,
+        database=None,
+        derandomize=True,  # the same 500 cases on every run: its counts below may not vary
+        suppress_health_check=[HealthCheck.too_slow],
     )
     @given(text=case_text)
     def one_case(text):

@@ -26,7 +26,7 @@ RUN_A = [
     "--set",
     "grid.spacing=0.008",
     "--set",
-    "time.end=0.4",
+    "time.end=1.0",  # seconds of run: the other starts while it holds the folder
     "--set",
     "output.snapshot_interval=0.1",
     "--set",
