@@ -13,10 +13,12 @@
 #include "ghost_pressure.hpp"
 #include "parallel.hpp"
 #include "periodic.hpp"
+#include "plasticity.hpp"
 #include "pockets.hpp"
 #include "pressure_system.hpp"
 #include "quadrature.hpp"
 #include "rheology.hpp"
+#include "solid.hpp"
 #include "transfer.hpp"
 #include "viscous.hpp"
 #include "volume_correction.hpp"
@@ -272,6 +274,11 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
                        start_.view(nc + 1), View<const double>(O.gravity.data(), {D}), O.dt,
                        node_mass_.view(nn), node_mom_.template view<2>({nn, D}), node_vol_.view(nn),
                        v_old, v_star, correct ? cell_vol_.view(nc) : View<double>(), P.affine);
+  if (P.stress.size() > 0 && is_solid(O.model))
+    internal_forces<D>(grid_, P.x, P.mass, P.volume, P.stress, order_.view(P.count()),
+                       start_.view(nc + 1), node_mass_.view(nn), O.dt,
+                       node_mom_.template view<2>({nn, D}), force_.template sized<2>({nn, D}),
+                       v_star);
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
   nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
@@ -317,7 +324,7 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
   auto v_star = v_star_.template view<2>({nn, D});
   auto node_row = node_row_.view(nn);
   start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row,
-                contact_.template view<2>({nn, D}));
+                contact_.template view<2>({nn, D}), T_.wall_bonded);
   start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact_.view(nn));
   const index_t n = nrows_;
   auto cols = cols_.template sized<2>({n, NS});
@@ -390,7 +397,7 @@ index_t State<D>::release_walls(View<const double> x) {
   auto v_star = v_star_.template view<2>({nn, D});
   auto node_row = node_row_.view(nn);
   return release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, p,
-                         contact_.template view<2>({nn, D})) +
+                         contact_.template view<2>({nn, D}), T_.wall_bonded) +
          release_obstacles(T_.onode, T_.onormal, v_star, node_row, p, ocontact_.view(nn));
 }
 
@@ -462,7 +469,8 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
   auto contact = contact_.template view<2>({nn, D});
   auto ocontact = ocontact_.view(nn);
   auto node_row = node_row_.view(nn);
-  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact);
+  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact,
+                T_.wall_bonded);
   start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
   // the strain rate of the particles' velocity with the held nodes at rest
   auto v_rate = v_rate_.template view<2>({nn, D});
@@ -712,6 +720,34 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
   // particles scatter was given (a rank moves only the particles it owns).
   const index_t nn = grid_.nnodes;
   PhaseClock clock(phase_seconds_);
+  if (P.stress.size() > 0 && is_solid(O.model)) {
+    // at the positions the step started from, from the particles' new velocities mapped
+    // back to the grid (solid.hpp: velocity_to_grid); this reads scatter's binning, so P
+    // must be the particles scatter binned
+    if (P.count() != binned_)
+      throw std::invalid_argument("to_particles: a solid's particles must be those scattered");
+    const GridToParticle<D> one{grid_,
+                                P.x,
+                                P.v,
+                                P.pressure,
+                                v_old_.template view<2>({nn, D}),
+                                v_new_.template view<2>({nn, D}),
+                                p_node_.view(nn),
+                                O.dt,
+                                O.flip,
+                                margin_,
+                                View<const double>(),
+                                View<const double>(),
+                                std::array<View<const double>, D>{},
+                                P.affine,
+                                Outlets{}};
+    auto v_grid = node_mom_.template view<2>({nn, D});
+    velocity_to_grid<D>(one, P.mass, order_.view(P.count()), start_.view(grid_.ncells + 1),
+                        node_mass_.view(nn), v_grid);
+    update_stresses<D>(grid_, P.x, P.mass, v_grid, p_node_.view(nn), O.dt, O.model,
+                       View<const double>(O.model_params.data(), {8}), P.stress, P.plastic_strain,
+                       P.yielding);
+  }
   std::array<View<const double>, D> faces{};  // empty: no displacement
   if (displaced)
     for (int k = 0; k < D; ++k) faces[k] = faces_[k].view(faces_[k].capacity());

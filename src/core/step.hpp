@@ -134,6 +134,10 @@ struct Particles {
   // n x D x D (1/s): each particle's affine velocity matrix C_p with APIC transfers (empty:
   // FLIP/PIC, Options::flip)
   View<double, 3> affine{};
+  // solids (plasticity.hpp; empty: a fluid): the deviatoric stress s_p (n x D x D, Pa), the
+  // equivalent plastic strain and whether the particle yielded in the last step (n, 0 or 1)
+  View<double, 3> stress{};
+  View<double> plastic_strain{}, yielding{};
   index_t count() const { return x.extent(0); }
 };
 
@@ -150,6 +154,7 @@ struct GridTables {
   View<const index_t> wall_node, wall_axis;
   View<const double> wall_sign;
   View<const bool> wall_no_slip;
+  View<const bool> wall_bonded;  // per pair, held in tension too (empty: none; walls.hpp)
   View<const double> phi, open;
   View<const index_t> static_slot;
   View<const double, 3> K_static;   // (nstatic, 2^D, 2^D)
@@ -423,6 +428,7 @@ class State {
   index_t vis_n_ = 0;  // the last viscous_system's unknowns
   index_t vis_nn() const { return viscous_on_ ? grid_.nnodes : 0; }
   Buffer<double> v_save_;  // scratch (MPMFLOW_PICARD): v* before the viscous step
+  Buffer<double> force_;   // a solid's internal forces (solid.hpp; sized on its first step)
   bool rate_from_new_ = false;
   std::array<Multigrid<D>, D> viscous_mg_;
   // integrals of this step, as views into the buffers above

@@ -257,6 +257,29 @@ struct GridToParticle {
   View<double, 3> affine;
   Outlets outlets;
 
+  // The particle's new velocity from its old one vp, the grid's change at it dv and the
+  // grid's velocity at it pic: APIC's PIC velocity, or the FLIP/PIC blend.
+  MPMFLOW_HD double blend(bool apic, double vp, double dv, double pic) const {
+    return apic ? pic : flip * (vp + dv) + (1.0 - flip) * pic;
+  }
+
+  // The velocity operator() gives particle p (m/s, into out), without moving it (a solid's
+  // stress update maps it back to the grid: solid.hpp).
+  MPMFLOW_HD void new_velocity(index_t p, double* out) const {
+    constexpr int NC = Grid<D>::NC;
+    double w[NC];
+    const index_t base = g.weights_at(&x(p, 0), w);
+    double pic[D] = {}, dv[D] = {};
+    for (int a = 0; a < NC; ++a) {
+      const index_t i = base + g.corner[a];
+      for (int k = 0; k < D; ++k) {
+        pic[k] = pic[k] + w[a] * v_new(i, k);
+        dv[k] = dv[k] + w[a] * (v_new(i, k) - v_old(i, k));
+      }
+    }
+    for (int k = 0; k < D; ++k) out[k] = blend(affine.size() > 0, v(p, k), dv[k], pic[k]);
+  }
+
   MPMFLOW_HD bool operator()(index_t p) const {
     constexpr int NC = Grid<D>::NC;
     if (outlets.any() && outlets.mass(p) == 0.0) return false;  // left through an outlet
@@ -302,7 +325,7 @@ struct GridToParticle {
         disp[k] = face_displacement<D>(g, k, faces[k], normal, nlo, tangent, tlo, thi);
     }
     for (int k = 0; k < D; ++k) {
-      v(p, k) = apic ? pic[k] : flip * (v(p, k) + dv[k]) + (1.0 - flip) * pic[k];
+      v(p, k) = blend(apic, v(p, k), dv[k], pic[k]);
       x(p, k) += dt * pic[k];
       if (correct) x(p, k) += disp[k];
     }

@@ -43,21 +43,24 @@ void apply_walls(View<const index_t> node, View<const index_t> axis, View<const 
 }
 
 void start_contact(View<const index_t> node, View<const index_t> axis, View<const double> sign,
-                   View<const double, 2> vstar, View<const index_t> node_row,
-                   View<bool, 2> contact) {
+                   View<const double, 2> vstar, View<const index_t> node_row, View<bool, 2> contact,
+                   View<const bool> bonded) {
   for (index_t j = 0; j < contact.size(); ++j) contact[j] = false;
+  const bool any_bonded = bonded.size() > 0;
   for (index_t e = 0; e < node.size(); ++e) {
     const index_t i = node(e), k = axis(e);
-    contact(i, k) = node_row(i) >= 0 || sign(e) * vstar(i, k) > 0.0;
+    contact(i, k) = node_row(i) >= 0 || sign(e) * vstar(i, k) > 0.0 || (any_bonded && bonded(e));
   }
 }
 
 index_t release_contact(View<const index_t> node, View<const index_t> axis, View<const double> sign,
                         View<const double, 2> vstar, View<const index_t> node_row,
-                        View<const double> p_node, View<bool, 2> contact) {
+                        View<const double> p_node, View<bool, 2> contact, View<const bool> bonded) {
   index_t released = 0;
+  const bool any_bonded = bonded.size() > 0;
   for (index_t e = 0; e < node.size(); ++e) {
     const index_t i = node(e), k = axis(e);
+    if (any_bonded && bonded(e)) continue;
     if (node_row(i) >= 0 && p_node(i) < 0.0 && contact(i, k) && sign(e) * vstar(i, k) < 0.0) {
       contact(i, k) = false;
       ++released;

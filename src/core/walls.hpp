@@ -33,16 +33,19 @@ void apply_walls(View<const index_t> node, View<const index_t> axis, View<const 
 
 // The wall nodes that hold the material as the pressure step starts (in place):
 // contact[i, k] is set where node i carries a pressure unknown (node_row >= 0) or v* presses
-// into its wall normal to k; every other entry is cleared.
+// into its wall normal to k, and always where the pair is bonded (bonded(e); empty: none, a
+// clamped wall: domain.walls = "bonded"); every other entry is cleared.
 void start_contact(View<const index_t> node, View<const index_t> axis, View<const double> sign,
-                   View<const double, 2> vstar, View<const index_t> node_row,
-                   View<bool, 2> contact);
+                   View<const double, 2> vstar, View<const index_t> node_row, View<bool, 2> contact,
+                   View<const bool> bonded = {});
 
 // Release the wall nodes in contact whose pressure p_node (Pa) came out negative while v*
-// leaves the wall (in place); returns how many (node, wall) pairs were released.
+// leaves the wall (in place), except the bonded pairs (bonded(e); empty: none), which hold
+// in tension too; returns how many (node, wall) pairs were released.
 index_t release_contact(View<const index_t> node, View<const index_t> axis, View<const double> sign,
                         View<const double, 2> vstar, View<const index_t> node_row,
-                        View<const double> p_node, View<bool, 2> contact);
+                        View<const double> p_node, View<bool, 2> contact,
+                        View<const bool> bonded = {});
 
 // v_i . n_e (m/s): the velocity of node i into the solid along obstacle entry e's normal.
 inline double normal_velocity(View<const double, 2> v, index_t i, View<const double, 2> onormal,

@@ -1,4 +1,6 @@
-"""The explicit scheme's time-step limit: the sound speed sqrt(K / rho) crossing one cell.
+"""The explicit scheme's time-step limit: the sound speed sqrt(K / rho) crossing one cell;
+and the projection scheme's for a solid, whose deviatoric stress is explicit: the shear wave
+sqrt(G / rho) (``longest_projection_step``).
 
 A signal travels at the sound speed c plus the flow speed |v|; an explicit step must not let
 it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explicit MPM).
@@ -8,6 +10,8 @@ from __future__ import annotations
 
 import math
 from typing import TYPE_CHECKING
+
+from . import materials
 
 if TYPE_CHECKING:  # the case's model imports this module
     from .case import Case
@@ -44,5 +48,12 @@ def time_step(case: Case) -> float:
     if case.time.dt == "auto":
         if case.solver.scheme == "explicit":
             return case.time.safety_factor * case_stable_time_step(case)
-        return case.time.max_dt
+        return longest_projection_step(case)
     return case.time.dt
+
+
+def longest_projection_step(case: Case) -> float:
+    """The longest step the projection scheme takes with time.dt = "auto" (s): time.max_dt,
+    and for a solid at most the shear wave's step (``materials.shear_wave_step``: its
+    deviatoric stress is explicit; its pressure, from the projection, sets no limit)."""
+    return min(case.time.max_dt, materials.shear_wave_step(case.material, case.grid.spacing))

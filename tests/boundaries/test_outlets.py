@@ -94,7 +94,7 @@ def test_outlets_are_refused_where_they_cannot_act():
         _slab("solver.scheme=explicit", "material.bulk_modulus=4e5")
     with pytest.raises(CaseError, match="x is periodic"):
         _slab("domain.periodic=[true, false]")
-    with pytest.raises(CaseError, match='"slip", "no_slip" or "outlet"'):
+    with pytest.raises(CaseError, match='"slip", "no_slip", "bonded" or "outlet"'):
         _slab('domain.walls={x_max="open"}')
 
 

@@ -175,7 +175,7 @@ def test_each_side_keeps_its_own_condition(scheme):
         (
             ["domain.walls={y_min='rough'}"],
             r"y_min = 'rough' is not a wall condition: give "
-            r"\"slip\", \"no_slip\" or \"outlet\"",
+            r"\"slip\", \"no_slip\", \"bonded\" or \"outlet\"",
         ),
         (["domain.walls=rough"], r"'rough' is not a wall condition"),
         (["domain.walls={}"], r"the table of sides is empty"),

@@ -499,7 +499,7 @@ def test_a_cap_beyond_double_precision_is_refused():
 
 
 def test_each_materials_code_is_the_compiled_rheologys():
-    """The materials give their code in src/core/rheology.hpp as a number (so that the case's
+    """The materials give their code in src/core/rheology.hpp (plasticity.hpp: the solids) as a number (so that the case's
     schema reads them without loading the core): each is the core's own constant."""
     from mpmflow import materials
 
@@ -508,5 +508,8 @@ def test_each_materials_code_is_the_compiled_rheologys():
         "newtonian": state.NEWTONIAN,
         "herschel_bulkley": state.HERSCHEL_BULKLEY,
         "mu_i": state.MU_I,
+        "elastic": state.ELASTIC,
+        "von_mises": state.VON_MISES,
+        "drucker_prager": state.DRUCKER_PRAGER,
     }
     assert {name: m.MODEL for name, m in materials.MATERIALS.items()} == core

@@ -33,5 +33,6 @@ NB_MODULE(_core, m) {
   mpmflow::bind::bind_volume_correction(m);
   mpmflow::bind::bind_cut_cells(m);
   mpmflow::bind::bind_viscous(m);
+  mpmflow::bind::bind_solid(m);
   mpmflow::bind::bind_explicit_scheme(m);
 }

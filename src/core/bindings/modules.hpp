@@ -20,6 +20,7 @@ void bind_corrector(nb::module_& m);
 void bind_volume_correction(nb::module_& m);
 void bind_cut_cells(nb::module_& m);
 void bind_viscous(nb::module_& m);
+void bind_solid(nb::module_& m);
 void bind_explicit_scheme(nb::module_& m);
 
 }  // namespace mpmflow::bind

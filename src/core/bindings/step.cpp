@@ -137,10 +137,15 @@ auto state_view(nb::handle h) {
 
 using Affine = std::optional<Array<double>>;
 
-// The particles; affine (n x D x D): APIC's matrices, None: FLIP/PIC transfers.
+// The particles; affine (n x D x D): APIC's matrices, None: FLIP/PIC transfers; stress
+// (n x D x D), plastic_strain and yielding (n): a solid's history (plasticity.hpp), None: a
+// fluid (all three or none).
 template <int D>
 Particles<D> particles(Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
-                       Array<double> pressure, const Affine& affine = std::nullopt) {
+                       Array<double> pressure, const Affine& affine = std::nullopt,
+                       const Affine& stress = std::nullopt,
+                       const Affine& plastic_strain = std::nullopt,
+                       const Affine& yielding = std::nullopt) {
   Particles<D> P{view<double, 2>(x, "x"), view<double, 2>(v, "v"), view<double>(mass, "mass"),
                  view<double>(volume, "volume"), view<double>(pressure)};
   const index_t n = P.x.extent(0);
@@ -152,6 +157,18 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<double> mass, Arr
     if (P.affine.extent(0) != n || P.affine.extent(1) != D || P.affine.extent(2) != D)
       throw std::invalid_argument("affine: one D x D matrix per particle");
   }
+  if (bool(stress) != bool(plastic_strain) || bool(stress) != bool(yielding))
+    throw std::invalid_argument("stress, plastic_strain, yielding: give all three or none");
+  if (stress) {
+    P.stress = view<double, 3>(*stress, "stress");
+    P.plastic_strain = view<double>(*plastic_strain, "plastic_strain");
+    P.yielding = view<double>(*yielding, "yielding");
+    if (P.stress.extent(0) != n || P.stress.extent(1) != D || P.stress.extent(2) != D ||
+        P.plastic_strain.size() != n || P.yielding.size() != n)
+      throw std::invalid_argument(
+          "stress: one D x D matrix per particle; plastic_strain, "
+          "yielding: one value per particle");
+  }
   return P;
 }
 
@@ -160,7 +177,12 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<double> mass, Arr
   nb::arg("x").noconvert(), nb::arg("v").noconvert(), nb::arg("mass").noconvert(), \
       nb::arg("volume").noconvert(), nb::arg("pressure").noconvert()
 // the affine matrices (APIC), last, optional: None runs FLIP/PIC
-#define MPMFLOW_AFFINE_ARG nb::arg("affine").noconvert().none() = nb::none()
+// and a solid's history (stress, plastic_strain, yielding; None: a fluid)
+#define MPMFLOW_AFFINE_ARG                                   \
+  nb::arg("affine").noconvert().none() = nb::none(),         \
+  nb::arg("stress").noconvert().none() = nb::none(),         \
+  nb::arg("plastic_strain").noconvert().none() = nb::none(), \
+  nb::arg("yielding").noconvert().none() = nb::none()
 
 template <int D>
 void bind_dim(nb::module_& m) {
@@ -208,7 +230,7 @@ void bind_dim(nb::module_& m) {
              nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
              nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
              bool volume_correction, bool viscous, std::vector<bool> periodic,
-             std::vector<bool> outlet) {
+             std::vector<bool> outlet, nb::object wall_bonded) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -218,6 +240,11 @@ void bind_dim(nb::module_& m) {
             T.wall_no_slip = table<bool, 1>(wall_no_slip, "wall_no_slip", keep);
             if (T.wall_no_slip.size() != T.wall_node.size())
               throw std::invalid_argument("State: wall_no_slip needs one flag per wall pair");
+            T.wall_bonded = table<bool, 1>(wall_bonded, "wall_bonded", keep);
+            if (T.wall_bonded.size() > 0) {  // empty: none
+              if (T.wall_bonded.size() != T.wall_node.size())
+                throw std::invalid_argument("State: wall_bonded needs one flag per wall pair");
+            }
             T.phi = table<double, 1>(phi, "phi", keep);
             T.open = table<double, 1>(open, "open", keep);
             T.static_slot = table<index_t, 1>(static_slot, "static_slot", keep);
@@ -260,8 +287,10 @@ void bind_dim(nb::module_& m) {
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
              Array<double> pressure, const O& opt, index_t first, index_t nsteps, Report& report,
-             const Affine& affine) {
-            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+             const Affine& affine, const Affine& stress, const Affine& plastic_strain,
+             const Affine& yielding) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine, stress, plastic_strain,
+                                  yielding);
             return run_chunk([&](const auto& between) {
               return self.state->advance(P, opt, first, nsteps, report, between);
             });
@@ -273,8 +302,10 @@ void bind_dim(nb::module_& m) {
           "advance_span",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
              Array<double> pressure, const O& opt, double span, index_t max_steps, Report& report,
-             const Affine& affine) {
-            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+             const Affine& affine, const Affine& stress, const Affine& plastic_strain,
+             const Affine& yielding) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine, stress, plastic_strain,
+                                  yielding);
             return run_chunk([&](const auto& between) {
               return self.state->advance_span(P, opt, span, max_steps, report, between);
             });
@@ -288,8 +319,10 @@ void bind_dim(nb::module_& m) {
       .def(
           "predict",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
-             Array<double> pressure, const O& opt, bool correct, const Affine& affine) {
-            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+             Array<double> pressure, const O& opt, bool correct, const Affine& affine,
+             const Affine& stress, const Affine& plastic_strain, const Affine& yielding) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine, stress, plastic_strain,
+                                  yielding);
             return self.state->predict(P, opt, correct);
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG,
@@ -297,8 +330,10 @@ void bind_dim(nb::module_& m) {
       .def(
           "scatter",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
-             Array<double> pressure, const O& opt, bool correct, const Affine& affine) {
-            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+             Array<double> pressure, const O& opt, bool correct, const Affine& affine,
+             const Affine& stress, const Affine& plastic_strain, const Affine& yielding) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine, stress, plastic_strain,
+                                  yielding);
             self.state->scatter(P, opt, correct);
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), MPMFLOW_AFFINE_ARG,
@@ -365,8 +400,10 @@ void bind_dim(nb::module_& m) {
           "finish",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
              Array<double> pressure, const O& opt, bool correct, Report& report,
-             const Affine& affine) {
-            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+             const Affine& affine, const Affine& stress, const Affine& plastic_strain,
+             const Affine& yielding) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine, stress, plastic_strain,
+                                  yielding);
             return self.state->finish(P, opt, correct, report);
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("correct"), nb::arg("report"),
@@ -393,8 +430,10 @@ void bind_dim(nb::module_& m) {
       .def(
           "to_particles",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,
-             Array<double> pressure, const O& opt, bool displaced, const Affine& affine) {
-            auto P = particles<D>(x, v, mass, volume, pressure, affine);
+             Array<double> pressure, const O& opt, bool displaced, const Affine& affine,
+             const Affine& stress, const Affine& plastic_strain, const Affine& yielding) {
+            auto P = particles<D>(x, v, mass, volume, pressure, affine, stress, plastic_strain,
+                                  yielding);
             return self.state->to_particles(P, opt, displaced);
           },
           MPMFLOW_PARTICLE_ARGS, nb::arg("options"), nb::arg("displaced"), MPMFLOW_AFFINE_ARG,

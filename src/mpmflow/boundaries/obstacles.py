@@ -261,7 +261,8 @@ def of_case(case: Case, grid: Grid) -> Tables:
         case.domain.uniform_walls() if getattr(o, "walls", "domain") == "domain" else o.walls
         for o in specs
     ]
-    no_slip = np.array([w == "no_slip" for w in walls], dtype=bool)
+    # an obstacle under bonded domain walls holds as a no-slip one (obstacles are never bonded)
+    no_slip = np.array([w in ("no_slip", "bonded") for w in walls], dtype=bool)
     tables = build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
     tables.solids = solids
     return tables

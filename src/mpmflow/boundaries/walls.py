@@ -28,7 +28,8 @@ class Walls:
     node: Ints  # (n,) int64: the node's index
     axis: Ints  # (n,) int64: the axis the wall is normal to
     sign: Floats  # (n,) float: -1 at the lower wall (at 0), +1 at the upper
-    no_slip: Bools  # (n,) bool: the wall's condition is no-slip
+    no_slip: Bools  # (n,) bool: the wall's condition is no-slip (or bonded)
+    bonded: Bools  # (n,) bool: the wall is bonded (held in tension too)
 
     def as_tuple(self) -> tuple[Ints, Ints, Floats, Bools]:
         """(node, axis, sign, no_slip), as the core's state takes them."""
@@ -46,4 +47,7 @@ def of_case(case: Case, grid: Grid) -> Walls:
     node, axis, sign = state.wall_pairs(tuple(int(c) for c in grid.cells), grid.periodic)
     side = 2 * axis + (sign > 0)
     wall = ~np.array(case.domain.outlet_sides(), dtype=np.bool_)[side]
-    return Walls(node[wall], axis[wall], sign[wall], side_conditions(case)[side[wall]])
+    bonded = np.array(case.domain.bonded_sides(), dtype=np.bool_)
+    return Walls(
+        node[wall], axis[wall], sign[wall], side_conditions(case)[side[wall]], bonded[side[wall]]
+    )

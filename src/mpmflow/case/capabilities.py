@@ -12,11 +12,15 @@ FEATURES = {
     "periodic": "periodic axes (domain.periodic)",
     "apic": 'APIC transfers (solver.transfer = "apic"; it transfers by FLIP/PIC only)',
     "outlets": 'outlets (domain.walls = "outlet")',
+    "solids": 'solids (material.model = "elastic", "von_mises" or "drucker_prager")',
+    "bonded": 'bonded walls (domain.walls = "bonded")',
 }
 
 # solver.scheme -> the FEATURES it supports
 SUPPORTS: dict[str, frozenset[str]] = {
-    "projection": frozenset({"obstacles", "materials", "periodic", "apic", "outlets"}),
+    "projection": frozenset(
+        {"obstacles", "materials", "periodic", "apic", "outlets", "solids", "bonded"}
+    ),
     "explicit": frozenset(),
 }
 

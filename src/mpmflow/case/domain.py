@@ -9,8 +9,8 @@ from typing_extensions import Self
 
 from .sections import Section
 
-WALL_CONDITIONS = ("slip", "no_slip", "outlet")
-Condition = Literal["slip", "no_slip", "outlet"]
+WALL_CONDITIONS = ("slip", "no_slip", "bonded", "outlet")
+Condition = Literal["slip", "no_slip", "bonded", "outlet"]
 AXES = "xyz"
 SIDES = ("min", "max")  # the lower wall (at 0) and the upper (at domain.size)
 
@@ -32,7 +32,7 @@ class Domain(Section):
     )
     walls: Condition | dict[str, Condition] = Field(
         "slip",
-        description='Condition of the domain boundaries, "slip", "no_slip" or '
+        description='Condition of the domain boundaries, "slip", "no_slip", "bonded" or '
         '"outlet": one for every side (walls = "no_slip"), or a table by axis and '
         "side: keys x, y (and z in 3D) set both walls across that axis, x_min, x_max, y_min, "
         "... one wall (min: at 0, max: at domain.size); a side's key overrides its axis's, "
@@ -45,7 +45,9 @@ class Domain(Section):
         "presses against it and lets go where holding it would need suction while it "
         "moves away, so water falls from a ceiling and leaves a wall freely. no_slip also "
         "stops tangential motion where the wall holds (at an edge between a no-slip and a "
-        "slip wall, the no-slip wall's hold). An outlet is an open side, not a wall: the "
+        "slip wall, the no-slip wall's hold). A bonded wall is a no-slip wall that never "
+        "lets go: it holds the material at rest in tension too (a clamped end of a beam, a "
+        "rough base that soil sticks to; one process only). An outlet is an open side, not a wall: the "
         "velocity there is free, the pressure takes the natural condition of the "
         "projection's weak form (no normal gradient: the flow leaves as if the domain went "
         "on), and the material that crosses it leaves the run (its particles removed, "
@@ -72,7 +74,7 @@ class Domain(Section):
         if isinstance(walls, str):
             if walls not in WALL_CONDITIONS:
                 raise ValueError(
-                    f'{walls!r} is not a wall condition: give "slip", "no_slip" or '
+                    f'{walls!r} is not a wall condition: give "slip", "no_slip", "bonded" or '
                     '"outlet" for every side, or a table of sides, e.g. '
                     f"walls = {example}"
                 )
@@ -98,7 +100,8 @@ class Domain(Section):
                 )
             if value not in WALL_CONDITIONS:
                 raise ValueError(
-                    f'{key} = {value!r} is not a wall condition: give "slip", "no_slip" or "outlet"'
+                    f"{key} = {value!r} is not a wall condition: give "
+                    '"slip", "no_slip", "bonded" or "outlet"'
                 )
         return walls
 
@@ -147,7 +150,17 @@ class Domain(Section):
     def no_slip_sides(self) -> list[bool]:
         """One flag per wall in the order x_min, x_max, y_min, ... (the core's side order):
         whether it is no-slip."""
-        return [c == "no_slip" for pair in self.wall_conditions() for c in pair]
+        return [c in ("no_slip", "bonded") for pair in self.wall_conditions() for c in pair]
+
+    def bonded_sides(self) -> list[bool]:
+        """One flag per wall in the order x_min, x_max, y_min, ...: whether it is bonded
+        (no-slip, held in tension too)."""
+        periodic = self.periodic or [False] * len(self.size)
+        return [
+            c == "bonded" and not periodic[k]
+            for k, pair in enumerate(self.wall_conditions())
+            for c in pair
+        ]
 
     def outlet_sides(self) -> list[bool]:
         """One flag per side in the order x_min, x_max, y_min, ...: whether it is an outlet

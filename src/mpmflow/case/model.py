@@ -8,6 +8,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 from typing_extensions import Self
 
+from .. import materials
 from ..geometry import bodies, placement
 from ..geometry.shapes import DIM_OF, Shape
 from ..geometry.specs import from_spec
@@ -116,6 +117,14 @@ class Case(Section):
             "outlets": (
                 any(self.domain.outlet_sides()),
                 'make the outlet sides of domain.walls "slip"',
+            ),
+            "solids": (
+                self.material.model in materials.SOLIDS,
+                'give a fluid material.model ("water", "newtonian", ...)',
+            ),
+            "bonded": (
+                any(self.domain.bonded_sides()),
+                'make the bonded sides of domain.walls "no_slip"',
             ),
         }
         name = self.solver.scheme
@@ -418,6 +427,17 @@ class Case(Section):
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
                     "material.bulk_modulus"
                 )
+        shear_step = materials.shear_wave_step(self.material, self.grid.spacing)
+        if self.time.dt != "auto" and self.time.dt > shear_step * (1 + 1e-9):
+            c = (self.material.shear_modulus / self.material.density) ** 0.5
+            raise ValueError(
+                f"time.dt = {self.time.dt:g} s is above the longest stable step of the solid's "
+                f"deviatoric stress, {shear_step:.4g} s = {materials.SHEAR_COURANT:g} "
+                f"grid.spacing / shear-wave speed = {materials.SHEAR_COURANT:g} x "
+                f"{self.grid.spacing:g} m / {c:.4g} m/s (sqrt(material.shear_modulus / "
+                f'density)); set time.dt to at most {shear_step:.4g} s, or time.dt = "auto", '
+                "or a softer material.shear_modulus"
+            )
         if self.time.dt != "auto" and self.output.interval < self.time.dt * (1 - 1e-9):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "

@@ -55,9 +55,14 @@ class Material(Section):
         '"newtonian" (viscosity), "herschel_bulkley" (yield-stress material; Bingham '
         "with flow_index = 1: consistency, yield_stress, flow_index, max_viscosity) or "
         '"mu_i" (dense granular flow: friction_static, friction_limit, '
-        "inertial_number_ref, grain_diameter, grain_density, max_viscosity). Each takes only "
-        "its own parameters; the viscous stress is solved implicitly (docs/method.md, "
-        '"Viscous materials").',
+        "inertial_number_ref, grain_diameter, grain_density, max_viscosity); or a solid "
+        'with a stress history on its particles: "elastic" (shear_modulus), "von_mises" '
+        "(undrained clay: shear_modulus, undrained_strength, strength_gradient, "
+        'strength_datum) or "drucker_prager" (frictional soil matched to Mohr-Coulomb in '
+        "plane strain: shear_modulus, friction_angle, cohesion, tension_cutoff). Each takes "
+        "only its own parameters; the viscous stress is solved implicitly (docs/method.md, "
+        '"Viscous materials"), a solid\'s deviatoric stress explicitly within the shear-wave '
+        'step (docs/method.md, "Solids"); every material is incompressible.',
     )
     density: float = Field(
         1000.0,
@@ -117,6 +122,38 @@ class Material(Section):
         description="Density of the grains (kg/m^3) of "
         'model = "mu_i"; the solid fraction is density / '
         "grain_density (glass beads: 2450).",
+    )
+    shear_modulus: float = Field(
+        1e6,
+        description='Shear modulus G (Pa) of the solids "elastic", "von_mises" and '
+        "\"drucker_prager\": s = 2 G (deviatoric strain); Young's modulus is 3 G (Poisson's "
+        "ratio 0.5: the solid is incompressible). It sets the shear-wave speed "
+        "sqrt(G / density) and with it the longest step, 0.5 grid.spacing / sqrt(G / "
+        "density).",
+    )
+    undrained_strength: float = Field(
+        20e3,
+        description='Undrained shear strength s_u (Pa) of model = "von_mises" at '
+        "strength_datum (Tresca's in plane strain: (sigma_1 - sigma_3) / 2 <= s_u).",
+    )
+    strength_gradient: float = Field(
+        0.0,
+        description='Growth of s_u with depth (Pa/m) of model = "von_mises": s_u + '
+        "strength_gradient x (strength_datum - height) below strength_datum.",
+    )
+    strength_datum: float = Field(
+        0.0,
+        description='Height (m, along the last axis) of model = "von_mises" where s_u is '
+        "undrained_strength; the strength grows below it by strength_gradient.",
+    )
+    friction_angle: float = Field(
+        30.0, description='Friction angle phi (degrees) of model = "drucker_prager".'
+    )
+    cohesion: float = Field(0.0, description='Cohesion c (Pa) of model = "drucker_prager".')
+    tension_cutoff: float = Field(
+        0.0,
+        description='Tension (Pa) model = "drucker_prager" bears before it parts: where the '
+        "pressure is below -tension_cutoff the soil carries no deviatoric stress.",
     )
     bulk_modulus: float = Field(
         2.2e9,

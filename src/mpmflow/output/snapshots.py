@@ -100,9 +100,19 @@ class SnapshotWriter:
         self._end = len(text.encode())  # where the next entry goes
         write_text(self.index, text + FOOTER)
 
-    def write(self, time: float, particles: Particles) -> str:
+    def write(
+        self, time: float, particles: Particles, history: dict[str, np.ndarray] | None = None
+    ) -> str:
+        """A snapshot of the particles; ``history``: a solid's (``write_vtu``)."""
         name = f"{self.stem}_{len(self.entries):06d}.vtu"
-        write_vtu(self.folder / name, particles.x, particles.v, particles.pressure, particles.mass)
+        write_vtu(
+            self.folder / name,
+            particles.x,
+            particles.v,
+            particles.pressure,
+            particles.mass,
+            history=history,
+        )
         self.add(time, name)
         return name
 
@@ -133,10 +143,15 @@ def write_vtu(
     pressure: np.ndarray,
     mass: np.ndarray,
     ids: np.ndarray | None = None,
+    history: dict[str, np.ndarray] | None = None,
 ) -> None:
-    """Particles as a VTU file (atomically): points (z = 0 in 2D), velocity, pressure,
-    mass, and with ``ids`` each particle's number in the run (a piece of a run over ranks:
-    its pieces together hold every number once)."""
+    """Particles as a VTU file (atomically): points (z = 0 in 2D), velocity (m/s),
+    pressure (Pa), mass (kg), and with ``ids`` each particle's number in the run (a piece of
+    a run over ranks: its pieces together hold every number once). With a solid's
+    ``history`` (``ProjectionScheme.history``) also its deviatoric stress (Pa) as a 3 x 3
+    tensor (9 components, row by row; in 2D the plane-strain tensor, whose out-of-plane
+    entries are 0), the equivalent plastic strain and the yielding flag (1 where the particle
+    yielded in the last step, else 0)."""
     n, dim = x.shape
     points = np.zeros((n, 3))
     points[:, :dim] = x
@@ -145,6 +160,12 @@ def write_vtu(
     data = {"velocity": velocity, "pressure": pressure.copy(), "mass": mass.copy()}
     if ids is not None:
         data["id"] = np.asarray(ids, dtype=np.int64)
+    if history:
+        stress = np.zeros((n, 3, 3))
+        stress[:, :dim, :dim] = history["stress"]
+        data["deviatoric_stress"] = stress.reshape(n, 9)
+        data["plastic_strain"] = history["plastic_strain"].copy()
+        data["yielding"] = history["yielding"].copy()
     mesh = meshio.Mesh(
         points, [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))], point_data=data
     )

@@ -440,7 +440,7 @@ class DistributedProjection(ProjectionScheme):
         ranks, as ``State::advance_span`` takes them. Returns the steps taken."""
         s = self.case.solver
         h = self.grid.spacing
-        most = most_steps(span, s.max_speed, O.courant, h)
+        most = most_steps(span, s.max_speed, O.courant, h, O.dt_max)
         elapsed, done = 0.0, 0
         while done < most and elapsed < span:
             report.step = done

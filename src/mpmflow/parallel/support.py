@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from .. import materials
 from ..boundaries import outlets
 from ..errors import CaseError
 from ..grid import Grid
@@ -24,6 +25,13 @@ def refusals(case: Case) -> list[str]:
         out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
     if case.domain.periodic and any(case.domain.periodic):
         out.append("periodic axes are not split over ranks yet: remove domain.periodic")
+    if materials.is_solid(case.material):
+        out.append(
+            f'solids (material.model = "{case.material.model}") are not split over ranks yet: '
+            "their stress history does not travel with the particles between ranks"
+        )
+    if any(case.domain.bonded_sides()):
+        out.append('bonded walls are not split over ranks yet: make them "no_slip"')
     if s.linear_solver in ("amg", "direct"):
         out.append(
             f'solver.linear_solver = "{s.linear_solver}" runs on one process: on several '

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, NoReturn, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, NoReturn, TypedDict, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,6 +23,7 @@ from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
 from ..particles import Particles
+from ..stability import longest_projection_step
 from ..state import CoreOptions, CoreReport
 from . import pressure, volume_correction
 
@@ -104,11 +105,23 @@ class AdaptiveReport(StepReport):
     dt_max: float = 0.0
 
 
-def most_steps(span: float, max_speed: float, courant: float, h: float) -> int:
+def most_steps(
+    span: float, max_speed: float, courant: float, h: float, dt_max: float = np.inf
+) -> int:
     """The most adaptive steps a span (s) can need: every particle at solver.max_speed (m/s;
-    the run stops beyond it) at the Courant number on a grid of spacing h (m), and the two
+    the run stops beyond it) at the Courant number on a grid of spacing h (m), or steps of
+    the longest dt_max (s; a solid's shear-wave step) where they are shorter, and the two
     steps fitted to the span's end."""
-    return int(np.ceil(span * max_speed / (courant * h))) + 3
+    return int(np.ceil(max(span * max_speed / (courant * h), span / dt_max))) + 3
+
+
+class Extra(TypedDict):
+    """The core's optional particle arrays (None: not carried)."""
+
+    affine: Floats | None
+    stress: Floats | None
+    plastic_strain: Floats | None
+    yielding: Floats | None
 
 
 class ProjectionScheme:
@@ -119,9 +132,11 @@ class ProjectionScheme:
         self.case = case
         self.grid = grid
         self.apic = s.transfer == "apic"
+        self.solid = materials.is_solid(case.material)
         self.open = bool(outlets.sides(case).any())  # outlets: particles leave the run
         self.outflow = outlets.Outflow()
-        self.particles = particles  # with APIC also their affine matrices (zero)
+        # with APIC also their affine matrices (zero); a solid's stress history (zero)
+        self.particles = particles
         self.solids = obstacles.of_case(case, grid)
         self.viscous = materials.is_viscous(case.material)
         cells = tuple(int(c) for c in grid.cells)
@@ -130,15 +145,17 @@ class ProjectionScheme:
             if self.viscous
             else np.zeros((0, 0, 0, 0))
         )
+        self.walls = walls.of_case(case, grid)
         self.core = state.step_state(
             grid,
-            walls.of_case(case, grid).as_tuple(),
+            self.walls.as_tuple(),
             self.solids,
             T,
             MARGIN * grid.spacing,
             preset(s.volume_correction, "volume_correction") > 0,
             self.viscous,
             outlets.sides(case) if self.open else (),
+            bonded=self.walls.bonded,
         )
         # amg, direct, petsc: solvers from Python, plugged into the compiled step
         self.python_solver = (
@@ -164,6 +181,18 @@ class ProjectionScheme:
         self._P = P
         D = self.grid.dim
         self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
+        # a solid's history (src/core/plasticity.hpp): the deviatoric stress (count x D x D,
+        # Pa; zero: bodies start unstressed), the equivalent plastic strain and whether
+        # each particle yielded in the last step (count, 0 or 1)
+        self.history: dict[str, Floats] = (
+            {
+                "stress": np.zeros((P.count, D, D)),
+                "plastic_strain": np.zeros(P.count),
+                "yielding": np.zeros(P.count),
+            }
+            if self.solid
+            else {}
+        )
         # with outlets, the particles' own mass and volume: the core zeroes a retired one's
         self._own = (P.mass.copy(), P.volume.copy()) if self.open else None
 
@@ -176,6 +205,7 @@ class ProjectionScheme:
             self._own = (self._own[0][keep], self._own[1][keep])
             if self.affine is not None:
                 self.affine = self.affine[keep]
+            self.history = {k: a[keep] for k, a in self.history.items()}
 
     @property
     def p_node(self) -> Floats:
@@ -222,7 +252,7 @@ class ProjectionScheme:
             model=int(model),
             model_params=[float(v) for v in padded],
             courant=float(self.case.time.courant),
-            dt_max=float(self.case.time.max_dt),
+            dt_max=float(longest_projection_step(self.case)),
             flip_rate=float(flip),
             volume_interval=float(s.volume_correction_interval),
         )
@@ -244,6 +274,8 @@ class ProjectionScheme:
             saved["volume_q"] = q.copy()
         if self.affine is not None:
             saved["affine"] = self.affine.copy()
+        for name, a in self.history.items():
+            saved[name] = a.copy()
         if self.open:
             saved["outflow"] = self.outflow.as_array()
         return saved
@@ -269,6 +301,21 @@ class ProjectionScheme:
                     f"need {self.affine.shape}"
                 )
             np.copyto(self.affine, affine)
+        for name, a in self.history.items():
+            kept = saved[name]  # KeyError: a checkpoint of a fluid continued as a solid
+            if kept.shape != a.shape:
+                raise ValueError(f"{name} of shape {kept.shape}, the particles need {a.shape}")
+            np.copyto(a, kept)
+
+    def _extra(self) -> Extra:
+        """The core's optional particle arrays: APIC's affine matrices, a solid's history."""
+        h = self.history
+        return Extra(
+            affine=self.affine,
+            stress=h.get("stress"),
+            plastic_strain=h.get("plastic_strain"),
+            yielding=h.get("yielding"),
+        )
 
     def _particles(self) -> ParticleArrays:
         P = self.particles
@@ -280,7 +327,7 @@ class ProjectionScheme:
         buffers are overwritten by the step). Lets a run refuse such a case before it
         starts instead of failing at step 1."""
         O = self.options(1.0)  # the step size does not change which nodes are unknowns
-        n = self.core.predict(*self._particles(), O, False, affine=self.affine)
+        n = self.core.predict(*self._particles(), O, False, **self._extra())
         if n and not self.core.pressure_matrix(O):
             raise pressure.singular(" at the start")
 
@@ -295,7 +342,7 @@ class ProjectionScheme:
             return self._adaptive(O, dt * nsteps, report, where)
         try:
             done = self.core.advance(
-                *self._particles(), O, self.steps + 1, nsteps, report, affine=self.affine
+                *self._particles(), O, self.steps + 1, nsteps, report, **self._extra()
             )
         except pressure.SETUP_ERRORS as err:
             k = int(report.step)
@@ -314,10 +361,10 @@ class ProjectionScheme:
     ) -> AdaptiveReport:
         """time.dt = "auto": steps set by the flow over the span (``State.advance_span``)."""
         s = self.case.solver
-        most = most_steps(span, s.max_speed, O.courant, self.grid.spacing)
+        most = most_steps(span, s.max_speed, O.courant, self.grid.spacing, O.dt_max)
         try:
             covered = self.core.advance_span(
-                *self._particles(), O, span, most, report, affine=self.affine
+                *self._particles(), O, span, most, report, **self._extra()
             )
         except pressure.SETUP_ERRORS as err:
             k = int(report.steps)

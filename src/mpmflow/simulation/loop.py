@@ -311,6 +311,16 @@ class Simulation:
 
     # ------------------------------------------------------------------ measures
     @property
+    def history(self) -> dict[str, NDArray[np.float64]]:
+        """A solid's particle history (material.model = "elastic", "von_mises",
+        "drucker_prager"), in the particles' order: "stress", the deviatoric stress (count x D
+        x D, Pa; in 2D the plane-strain deviator, out-of-plane entry 0), "plastic_strain", the
+        equivalent plastic strain, and "yielding", 1 where the particle yielded in the last
+        step, else 0. Empty for a fluid. The scheme's own arrays: copy to keep them."""
+        history: dict[str, NDArray[np.float64]] = getattr(self.scheme, "history", {})
+        return history
+
+    @property
     def rows(self) -> list[dict[str, float]]:
         """The timeseries rows so far, as dicts (built on each call; see ``series``)."""
         return self._timeseries.buffer.rows()

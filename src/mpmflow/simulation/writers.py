@@ -153,7 +153,9 @@ class Snapshots:
     def __call__(self, sim: Simulation) -> None:
         sim.forget_bins()  # the cells' bins are no longer needed: freed before the copies
         if self.file is not None:
-            self.file.write(sim.time, sim.particles)
+            # a solid's stress history (empty for a fluid; the split scheme has none)
+            history = getattr(sim.scheme, "history", {})
+            self.file.write(sim.time, sim.particles, history)
 
     def position(self) -> int | None:
         return len(self.file.entries) if self.file is not None else None

@@ -107,7 +107,8 @@ class CoreOptions(Protocol):
 class CoreState(Protocol):
     """The compiled projection step's state (``State2``/``State3``): its methods take the
     particles' arrays (x, v, pressure written in place; ``affine``: APIC's matrices, None:
-    FLIP/PIC) and the step's options; the arrays it exposes are views of its own storage."""
+    FLIP/PIC; ``stress``, ``plastic_strain``, ``yielding``: a solid's history, None: a
+    fluid) and the step's options; the arrays it exposes are views of its own storage."""
 
     since_volume: float  # the time since the last volume correction (s)
 
@@ -123,6 +124,9 @@ class CoreState(Protocol):
         nsteps: int,
         report: CoreReport,
         affine: Floats | None = None,
+        stress: Floats | None = None,
+        plastic_strain: Floats | None = None,
+        yielding: Floats | None = None,
     ) -> int:
         """nsteps steps; returns the steps done (fewer: report.status says why)."""
         ...
@@ -139,6 +143,9 @@ class CoreState(Protocol):
         max_steps: int,
         report: CoreReport,
         affine: Floats | None = None,
+        stress: Floats | None = None,
+        plastic_strain: Floats | None = None,
+        yielding: Floats | None = None,
     ) -> float:
         """Adaptive steps over the span (s); returns the time covered."""
         ...
@@ -153,6 +160,9 @@ class CoreState(Protocol):
         options: CoreOptions,
         correct: bool,
         affine: Floats | None = None,
+        stress: Floats | None = None,
+        plastic_strain: Floats | None = None,
+        yielding: Floats | None = None,
     ) -> int:
         """The step up to the pressure system (scatter, then classify); returns the
         pressure unknowns."""
@@ -168,6 +178,9 @@ class CoreState(Protocol):
         options: CoreOptions,
         correct: bool,
         affine: Floats | None = None,
+        stress: Floats | None = None,
+        plastic_strain: Floats | None = None,
+        yielding: Floats | None = None,
     ) -> None:
         """The particles to the grid: binning (theta), node_mass, node_vol, v_old, v_star
         (and cell_vol when correct), v_star into the obstacles, node_f."""
@@ -246,6 +259,9 @@ class CoreState(Protocol):
         correct: bool,
         report: CoreReport,
         affine: Floats | None = None,
+        stress: Floats | None = None,
+        plastic_strain: Floats | None = None,
+        yielding: Floats | None = None,
     ) -> int:
         """The step after the pressure solve (correct, the volume correction when
         correct, to_particles); returns a ``Status``."""
@@ -281,6 +297,9 @@ class CoreState(Protocol):
         options: CoreOptions,
         displaced: bool,
         affine: Floats | None = None,
+        stress: Floats | None = None,
+        plastic_strain: Floats | None = None,
+        yielding: Floats | None = None,
     ) -> int:
         """Grid to particles (with the volume correction's displacements when displaced),
         push-out of obstacles, the periodic wrap; the particles may be the first n of those
@@ -405,6 +424,7 @@ def step_state(
     outlets: Sequence[bool] | Bools = (),
     lower: Sequence[float] | Floats | None = None,
     upper: Sequence[float] | Floats | None = None,
+    bonded: Bools | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
@@ -415,7 +435,8 @@ def step_state(
     the domain's lower corner in the grid's coordinates (m; None: zeros), below which
     particles are put back inside: 0 for a grid on the whole domain, the global domain's
     corner for a grid on a part of it; ``upper`` likewise the upper corner (None: the
-    grid's extent).
+    grid's extent); ``bonded`` one flag per wall pair, the pairs held in tension too (None:
+    none).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -448,6 +469,7 @@ def step_state(
         bool(viscous),
         [bool(p) for p in grid.periodic],
         [bool(s) for s in outlets],
+        np.ascontiguousarray(np.zeros(0) if bonded is None else bonded, dtype=np.bool_),
     )
 
 

@@ -18,6 +18,11 @@ WATER: int = _core.WATER
 NEWTONIAN: int = _core.NEWTONIAN
 HERSCHEL_BULKLEY: int = _core.HERSCHEL_BULKLEY
 MU_I: int = _core.MU_I
+# the solids' codes (src/core/plasticity.hpp) and one particle's stress step
+ELASTIC: int = _core.ELASTIC
+VON_MISES: int = _core.VON_MISES
+DRUCKER_PRAGER: int = _core.DRUCKER_PRAGER
+update_stress = _core.update_stress
 
 
 def viscosity(model: int, par: ArrayLike, rate: float, p: float) -> float:

@@ -1,0 +1,94 @@
+// Solids with a stress history on the particles (docs/method.md, "Solids"): the deviatoric
+// stress s (Pa, traceless, symmetric) of an incompressible elasto-plastic material, whose
+// pressure comes from the projection, so no bulk modulus enters the step.
+//
+// Each step, from the velocity gradient L = grad v of the corrected grid velocity at the
+// particle (1/s):
+//   trial:  s' = s + dt (2 G dev(D) + W s - s W),  D = (L + L^T)/2, W = (L - L^T)/2
+//           (the Jaumann rate: the stress turns with the material's spin; dev removes the
+//           trace over the D axes, so in 2D the stress is that of plane strain with the
+//           out-of-plane deviator 0, which an incompressible plane-strain flow keeps);
+//   return: where sqrt(J2) = sqrt(s':s'/2) exceeds the strength k, s = s' k / sqrt(J2)
+//           (a radial return in the deviatoric plane: with zero dilatancy the plastic flow
+//           keeps the volume, and the pressure is the projection's).
+// Strength k (Pa), the largest sqrt(J2) the material bears:
+//   ELASTIC:        none;
+//   VON_MISES:      s_u + gradient max(0, datum - y) (y the particle's height along the last
+//                   axis, m): Tresca's undrained strength s_u in plane strain, where sqrt(J2) =
+//                   (sigma_1 - sigma_3)/2;
+//   DRUCKER_PRAGER: max(0, p sin(phi) + c cos(phi)), and 0 where p < -t (the tension
+//                   cut-off t: the material has parted): Mohr-Coulomb's in plane strain at
+//                   zero dilatancy, where the out-of-plane stress is the mean of the in-plane
+//                   ones, so sqrt(J2) = (sigma_1 - sigma_3)/2 and p = (sigma_1 + sigma_3)/2.
+// The equivalent plastic strain grows by (sqrt(J2') - k) / (sqrt(3) G) on a return
+// (sqrt(2/3 e_p:e_p) of the plastic strain increment e_p = (s' - s) / (2 G)).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "view.hpp"
+
+namespace mpmflow {
+
+// model codes after the fluids' (rheology.hpp); parameters par, as mpmflow.materials packs
+// them:
+//   ELASTIC:        [shear_modulus]
+//   VON_MISES:      [shear_modulus, undrained_strength, strength_gradient, strength_datum]
+//   DRUCKER_PRAGER: [shear_modulus, sin(friction_angle), cohesion cos(friction_angle),
+//                    tension_cutoff]
+constexpr int ELASTIC = 4;
+constexpr int VON_MISES = 5;
+constexpr int DRUCKER_PRAGER = 6;
+
+MPMFLOW_HD inline bool is_solid(int model) { return model >= ELASTIC && model <= DRUCKER_PRAGER; }
+
+// The strength k (Pa) at pressure p (Pa) and height y (m); +inf: no yield.
+MPMFLOW_HD inline double strength(int model, const double* par, double p, double y) {
+  if (model == VON_MISES) return par[1] + par[2] * std::max(0.0, par[3] - y);
+  if (model == DRUCKER_PRAGER) {
+    if (p < -par[3]) return 0.0;
+    return std::max(0.0, p * par[1] + par[2]);
+  }
+  return HUGE_VAL;
+}
+
+// One step of the stress s (D x D, row-major, in place) under velocity gradient L (D x D,
+// L[k * D + j] = dv_k/dx_j) over dt (s), at pressure p (Pa) and height y (m). Returns the
+// equivalent plastic strain increment: > 0 where the material yielded.
+template <int D>
+MPMFLOW_HD inline double update_stress(int model, const double* par, const double* L, double dt,
+                                       double p, double y, double* s) {
+  const double G = par[0];
+  double d[D * D], w[D * D], t[D * D];
+  double trace = 0.0;
+  for (int k = 0; k < D; ++k) trace += L[k * D + k];
+  for (int k = 0; k < D; ++k)
+    for (int j = 0; j < D; ++j) {
+      d[k * D + j] = 0.5 * (L[k * D + j] + L[j * D + k]) - (k == j ? trace / D : 0.0);
+      w[k * D + j] = 0.5 * (L[k * D + j] - L[j * D + k]);
+    }
+  for (int k = 0; k < D; ++k)
+    for (int j = 0; j < D; ++j) {
+      double spin = 0.0;
+      for (int m = 0; m < D; ++m) spin += w[k * D + m] * s[m * D + j] - s[k * D + m] * w[m * D + j];
+      t[k * D + j] = s[k * D + j] + dt * (2.0 * G * d[k * D + j] + spin);
+    }
+  // the trace the products leave by rounding, removed so that s stays deviatoric
+  double drift = 0.0;
+  for (int k = 0; k < D; ++k) drift += t[k * D + k];
+  for (int k = 0; k < D; ++k) t[k * D + k] -= drift / D;
+  double j2 = 0.0;
+  for (int i = 0; i < D * D; ++i) j2 += 0.5 * t[i] * t[i];
+  const double q = std::sqrt(j2);
+  const double k = strength(model, par, p, y);
+  double scale = 1.0, plastic = 0.0;
+  if (q > k) {
+    scale = q > 0.0 ? k / q : 0.0;
+    plastic = (q - k) / (std::sqrt(3.0) * G);
+  }
+  for (int i = 0; i < D * D; ++i) s[i] = t[i] * scale;
+  return plastic;
+}
+
+}  // namespace mpmflow

@@ -1,0 +1,191 @@
+#include "solid.hpp"
+
+#include <array>
+
+#include "parallel.hpp"
+#include "periodic.hpp"
+#include "plasticity.hpp"
+#include "strips.hpp"
+
+namespace mpmflow {
+
+namespace {
+
+// The forces of the particles of cell slabs r0 to r1 - 1, cell by cell, particle by
+// particle (their binned order).
+template <int D>
+void force_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 2> x,
+                 View<const double> volume, View<const double, 3> stress, View<const index_t> order,
+                 View<const index_t> start, View<double, 2> force) {
+  constexpr int NC = Grid<D>::NC;
+  const index_t slab = g.cs[D - 1];
+  double w[NC], frac[D];
+  for (index_t c = r0 * slab; c < r1 * slab; ++c) {
+    const index_t s0 = start(c), s1 = start(c + 1);
+    for (index_t s = s0; s < s1; ++s) {
+      const index_t p = order(s);
+      const index_t base = g.weights_at(&x(p, 0), w);
+      g.locate(&x(p, 0), frac);
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        double grad[D];
+        for (int j = 0; j < D; ++j) grad[j] = g.corner_gradient(a, j, frac);
+        for (int k = 0; k < D; ++k) {
+          double f = 0.0;
+          for (int j = 0; j < D; ++j) f += stress(p, k, j) * grad[j];
+          force(i, k) -= volume(p) * f;
+        }
+      }
+    }
+  }
+}
+
+// velocity_to_grid's sums over the particles of cell slabs r0 to r1 - 1.
+template <int D>
+void velocity_slabs(index_t r0, index_t r1, const GridToParticle<D>& g2p, View<const double> mass,
+                    View<const index_t> order, View<const index_t> start, View<double, 2> out) {
+  constexpr int NC = Grid<D>::NC;
+  const Grid<D>& g = g2p.g;
+  const index_t slab = g.cs[D - 1];
+  double w[NC], vp[D];
+  for (index_t c = r0 * slab; c < r1 * slab; ++c) {
+    for (index_t s = start(c); s < start(c + 1); ++s) {
+      const index_t p = order(s);
+      const index_t base = g.weights_at(&g2p.x(p, 0), w);
+      g2p.new_velocity(p, vp);
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        for (int k = 0; k < D; ++k) out(i, k) += w[a] * mass(p) * vp[k];
+      }
+    }
+  }
+}
+
+// Strips of cell slabs for a scatter of the binned particles (as particles_to_grid's).
+template <int D, class F>
+void scatter_strips(const Grid<D>& g, View<const index_t> start, index_t n, F&& body) {
+  std::array<index_t, 2 * STRIPS + 1> bounds;
+  const index_t slab = g.cs[D - 1];
+  const index_t nstrips = strips(
+      g.cells[D - 1], [&](index_t r) { return start(r * slab); },
+      g.periodic[D - 1] ? 1 : 2 * STRIPS, 2, bounds.data());
+  for_strips(bounds.data(), nstrips, n, body);
+}
+
+}  // namespace
+
+template <int D>
+void velocity_to_grid(const GridToParticle<D>& g2p, View<const double> mass,
+                      View<const index_t> order, View<const index_t> start,
+                      View<const double> node_mass, View<double, 2> out) {
+  const Grid<D>& g = g2p.g;
+  parallel_for(g.nnodes, [&](index_t i) {
+    for (int k = 0; k < D; ++k) out(i, k) = 0.0;
+  });
+  scatter_strips<D>(g, start, order.size(), [&](index_t r0, index_t r1) {
+    velocity_slabs<D>(r0, r1, g2p, mass, order, start, out);
+  });
+  if (g.any_periodic) fold_images<D>(g, out);
+  parallel_for(g.nnodes, [&](index_t i) {
+    const double m = node_mass[i];
+    for (int k = 0; k < D; ++k) out(i, k) = m > 0.0 ? out(i, k) / m : 0.0;
+  });
+}
+
+template <int D>
+void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                     View<const double> volume, View<const double, 3> stress,
+                     View<const index_t> order, View<const index_t> start,
+                     View<const double> node_mass, double dt, View<double, 2> acc,
+                     View<double, 2> dv, View<double, 2> v_star) {
+  constexpr int NC = Grid<D>::NC;
+  const index_t nn = g.nnodes;
+  parallel_for(nn, [&](index_t i) {
+    for (int k = 0; k < D; ++k) {
+      acc(i, k) = 0.0;
+      dv(i, k) = 0.0;
+    }
+  });
+  scatter_strips<D>(g, start, x.extent(0), [&](index_t r0, index_t r1) {
+    force_slabs<D>(r0, r1, g, x, volume, stress, order, start, acc);
+  });
+  if (g.any_periodic) fold_images<D>(g, acc);
+  parallel_for(nn, [&](index_t i) {
+    const double m = node_mass[i];
+    for (int k = 0; k < D; ++k) acc(i, k) = m > 0.0 ? acc(i, k) / m : 0.0;
+  });
+  // to the particles and back
+  scatter_strips<D>(g, start, x.extent(0), [&](index_t r0, index_t r1) {
+    const index_t slab = g.cs[D - 1];
+    double w[NC];
+    for (index_t c = r0 * slab; c < r1 * slab; ++c)
+      for (index_t s = start(c); s < start(c + 1); ++s) {
+        const index_t p = order(s);
+        const index_t base = g.weights_at(&x(p, 0), w);
+        double ap[D] = {};
+        for (int a = 0; a < NC; ++a)
+          for (int k = 0; k < D; ++k) ap[k] += w[a] * acc(base + g.corner[a], k);
+        for (int a = 0; a < NC; ++a)
+          for (int k = 0; k < D; ++k) dv(base + g.corner[a], k) += w[a] * mass(p) * ap[k];
+      }
+  });
+  if (g.any_periodic) fold_images<D>(g, dv);
+  parallel_for(nn, [&](index_t i) {
+    const double m = node_mass[i];
+    if (m > 0.0)
+      for (int k = 0; k < D; ++k) v_star(i, k) += dt * dv(i, k) / m;
+  });
+}
+
+template <int D>
+index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                        View<const double, 2> v_grid, View<const double> p_node, double dt,
+                        int model, View<const double> par, View<double, 3> stress,
+                        View<double> plastic_strain, View<double> yielding) {
+  constexpr int NC = Grid<D>::NC;
+  return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
+    index_t yielded = 0;
+    for (index_t p = lo; p < hi; ++p) {
+      if (mass(p) == 0.0) continue;
+      double w[NC], frac[D], L[D * D] = {}, s[D * D];
+      const index_t base = g.weights_at(&x(p, 0), w);
+      g.locate(&x(p, 0), frac);
+      double pp = 0.0;
+      for (int a = 0; a < NC; ++a) {
+        const index_t i = base + g.corner[a];
+        pp += w[a] * p_node(i);
+        for (int j = 0; j < D; ++j) {
+          const double gr = g.corner_gradient(a, j, frac);
+          for (int k = 0; k < D; ++k) L[k * D + j] += v_grid(i, k) * gr;
+        }
+      }
+      for (int k = 0; k < D; ++k)
+        for (int j = 0; j < D; ++j) s[k * D + j] = stress(p, k, j);
+      const double plastic = update_stress<D>(model, par.data(), L, dt, pp, x(p, D - 1), s);
+      for (int k = 0; k < D; ++k)
+        for (int j = 0; j < D; ++j) stress(p, k, j) = s[k * D + j];
+      plastic_strain(p) += plastic;
+      yielding(p) = plastic > 0.0 ? 1.0 : 0.0;
+      yielded += plastic > 0.0 ? 1 : 0;
+    }
+    return yielded;
+  });
+}
+
+#define MPMFLOW_SOLID(D)                                                                           \
+  template void velocity_to_grid<D>(const GridToParticle<D>&, View<const double>,                  \
+                                    View<const index_t>, View<const index_t>, View<const double>,  \
+                                    View<double, 2>);                                              \
+  template void internal_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,      \
+                                   View<const double>, View<const double, 3>, View<const index_t>, \
+                                   View<const index_t>, View<const double>, double,                \
+                                   View<double, 2>, View<double, 2>, View<double, 2>);             \
+  template index_t update_stresses<D>(const Grid<D>&, View<const double, 2>, View<const double>,   \
+                                      View<const double, 2>, View<const double>, double, int,      \
+                                      View<const double>, View<double, 3>, View<double>,           \
+                                      View<double>);
+MPMFLOW_SOLID(2)
+MPMFLOW_SOLID(3)
+#undef MPMFLOW_SOLID
+
+}  // namespace mpmflow
