@@ -90,6 +90,7 @@ VALIDATION_CASES = (
     "poiseuille",
     "bingham_plug",
     "mu_i_layer",
+    "cantilever",
 )
 
 

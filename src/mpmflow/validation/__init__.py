@@ -28,6 +28,7 @@ from . import (
     long_run,
     materials,
     sloshing,
+    solids,
     spheric,
     three_d,
     time_step_study,
@@ -61,6 +62,7 @@ CASES: dict[str, CaseRun] = {
     "poiseuille": channel_flows.run_poiseuille,
     "bingham_plug": channel_flows.run_plug,
     "mu_i_layer": channel_flows.run_layer,
+    "cantilever": solids.run_cantilever,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {
@@ -80,6 +82,7 @@ EXAMPLE_FILES = {
     "poiseuille": ("poiseuille_film.toml",),
     "bingham_plug": ("bingham_plug.toml",),
     "mu_i_layer": ("mu_i_layer.toml",),
+    "cantilever": ("cantilever.toml",),
 }  # the examples/ files each runs
 
 
