@@ -101,18 +101,23 @@ def test_drucker_prager_reads_the_pressure_and_parts_in_tension():
     assert np.all(s == 0.0) and plastic > 0.0  # below the cut-off: parted
 
 
-def _layer(h, model, end, strength=None):
-    """An elastic (or clay) layer H = 0.05 m deep, bonded to the floor of a periodic strip,
-    under gravity tilted by 20 degrees (an infinite slope), G = 1e5 Pa, rho = 2000 kg/m^3.
-    Returns the simulation and the top's mean downslope velocity every 0.2 ms."""
+def _layer(h, model, end, strength=None, dim=2):
+    """An elastic (or clay) layer H = 0.05 m deep, bonded to the floor of a periodic strip
+    (in 3D a periodic column of 8 x 4 cells), under gravity tilted by 20 degrees along x (an
+    infinite slope), G = 1e5 Pa, rho = 2000 kg/m^3. Returns the simulation and the top's
+    mean downslope velocity every 0.2 ms."""
     H, th = 0.05, math.radians(20.0)
     g = [9.81 * math.sin(th), -9.81 * math.cos(th)]
+    if dim == 3:
+        g = [g[0], 0.0, g[1]]
+    across = [4 * h] if dim == 3 else []
     sets = [
-        f"domain.size=[{8 * h}, 0.1]",
-        "domain.walls={y_min='bonded'}",
-        "domain.periodic=[true, false]",
+        f"domain.size={[8 * h, *across, 0.1]}",
+        f"domain.walls={{{'xyz'[dim - 1]}_min='bonded'}}",
+        f"domain.periodic={str([True] * (dim - 1) + [False]).lower()}",
         f"grid.spacing={h}",
-        f"bodies.0.max=[{8 * h}, {H}]",
+        f"bodies.0.min={[0.0] * dim}",
+        f"bodies.0.max={[8 * h, *across, H]}",
         "bodies.0.particles_per_cell=2",
         f"material.model='{model}'",
         "material.density=2000.0",
@@ -125,8 +130,9 @@ def _layer(h, model, end, strength=None):
     ]
     if strength is not None:
         sets.append(f"material.undrained_strength={strength}")
-    sim = Simulation(load_case(ROOT / HYDRO, sets))
-    top = sim.particles.x[:, 1] > H - h
+    example = HYDRO if dim == 2 else "examples/hydrostatic_3d.toml"
+    sim = Simulation(load_case(ROOT / example, sets))
+    top = sim.particles.x[:, dim - 1] > H - h
     u = []
     for _ in range(round(end / 2e-4)):
         sim.scheme.advance(2e-4, 1)
@@ -151,6 +157,15 @@ def test_an_elastic_layer_rings_at_the_shear_wave_period():
     exact = 4 * 0.05 / math.sqrt(1e5 / 2000.0)
     errors = [abs(_period(_layer(h, "elastic", 0.15)[1]) / exact - 1) for h in (0.005, 0.0025)]
     assert errors[1] < 0.05 and errors[1] < errors[0], errors
+
+
+def test_an_elastic_layer_rings_at_the_shear_wave_period_in_3d():
+    """The same layer in 3D (the kernels are written once for both; the 3D layer is the 2D
+    one repeated across y): measured +10.7% at H / 10 and +3.6% at H / 20, the 2D numbers;
+    asserted within 5% at H / 20."""
+    exact = 4 * 0.05 / math.sqrt(1e5 / 2000.0)
+    error = abs(_period(_layer(0.0025, "elastic", 0.15, dim=3)[1]) / exact - 1)
+    assert error < 0.05, error
 
 
 def test_a_clay_layer_stands_or_flows_by_its_strength():
