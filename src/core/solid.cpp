@@ -75,6 +75,20 @@ void scatter_strips(const Grid<D>& g, View<const index_t> start, index_t n, F&& 
 }  // namespace
 
 template <int D>
+void yielded_share(const Grid<D>& g, View<const double> mass, View<const double> yielding,
+                   View<const index_t> order, View<const index_t> start, View<double> share) {
+  parallel_for(g.ncells, [&](index_t c) {
+    double m = 0.0, y = 0.0;
+    for (index_t s = start(c); s < start(c + 1); ++s) {
+      const index_t p = order(s);
+      m += mass(p);
+      y += mass(p) * yielding(p);
+    }
+    share(c) = m > 0.0 ? y / m : 0.0;
+  });
+}
+
+template <int D>
 void velocity_to_grid(const GridToParticle<D>& g2p, View<const double> mass,
                       View<const index_t> order, View<const index_t> start,
                       View<const double> node_mass, View<double, 2> out) {
@@ -173,6 +187,8 @@ index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const do
 }
 
 #define MPMFLOW_SOLID(D)                                                                           \
+  template void yielded_share<D>(const Grid<D>&, View<const double>, View<const double>,           \
+                                 View<const index_t>, View<const index_t>, View<double>);          \
   template void velocity_to_grid<D>(const GridToParticle<D>&, View<const double>,                  \
                                     View<const index_t>, View<const index_t>, View<const double>,  \
                                     View<double, 2>);                                              \

@@ -28,6 +28,14 @@ void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const doubl
                      View<const double> node_mass, double dt, View<double, 2> acc,
                      View<double, 2> dv, View<double, 2> v_star);
 
+// Each cell's share (by mass) of its particles that yielded in the last step (0 to 1; 0 in
+// cells without particles): the implicit elastic predictor leaves a yielded cell's elastic
+// stiffness out (src/core/step.cpp, viscous_start), since a perfectly plastic material's
+// stress does not grow along its flow. Particles binned (binning.hpp).
+template <int D>
+void yielded_share(const Grid<D>& g, View<const double> mass, View<const double> yielding,
+                   View<const index_t> order, View<const index_t> start, View<double> share);
+
 // The grid velocity a solid's stress update reads (the modified update-stress-last scheme,
 // Sulsky et al. 1995 and Nairn 2003): the particles' new velocities (g2p.new_velocity, at
 // their positions at the step's start) mapped back to the nodes, out_i = sum_p N_i m_p v_p /

@@ -274,7 +274,11 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
                        start_.view(nc + 1), View<const double>(O.gravity.data(), {D}), O.dt,
                        node_mass_.view(nn), node_mom_.template view<2>({nn, D}), node_vol_.view(nn),
                        v_old, v_star, correct ? cell_vol_.view(nc) : View<double>(), P.affine);
-  if (P.stress.size() > 0 && is_solid(O.model))
+  solid_scattered_ = P.stress.size() > 0 && is_solid(O.model);
+  if (solid_scattered_)
+    yielded_share<D>(grid_, P.mass, P.yielding, order_.view(P.count()), start_.view(nc + 1),
+                     cell_yield_.sized(nc));
+  if (solid_scattered_)
     internal_forces<D>(grid_, P.x, P.mass, P.volume, P.stress, order_.view(P.count()),
                        start_.view(nc + 1), node_mass_.view(nn), O.dt,
                        node_mom_.template view<2>({nn, D}), force_.template sized<2>({nn, D}),
@@ -476,9 +480,22 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
   auto v_rate = v_rate_.template view<2>({nn, D});
   rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, T_.onode, ocontact,
                    T_.ono_slip, v_rate);
-  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_rate, p, O.model,
-                    View<const double>(O.model_params.data(), {8}), eta_.view(nc),
-                    eta_weight_.view(nc));
+  // a solid's implicit elastic predictor (plasticity.hpp): the viscous step with eta = G dt,
+  // the old stress's force already in v* (scatter)
+  std::array<double, 8> elastic{};
+  elastic[0] = is_solid(O.model) ? O.model_params[0] * O.dt : 0.0;
+  const bool solid = is_solid(O.model);
+  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_rate, p,
+                    solid ? NEWTONIAN : O.model,
+                    View<const double>(solid ? elastic.data() : O.model_params.data(), {8}),
+                    eta_.view(nc), eta_weight_.view(nc));
+  if (solid && solid_scattered_) {
+    // a yielded cell's stress no longer grows with its strain: its elastic stiffness is
+    // left out of the implicit predictor (the old stress's force holds it at the yield)
+    auto share = cell_yield_.view(nc);
+    auto weight = eta_weight_.view(nc);
+    for (index_t c = 0; c < nc; ++c) weight(c) *= 1.0 - share(c);
+  }
   {
     const double cap = viscosity_cap(O.model, View<const double>(O.model_params.data(), {8}));
     auto eta = eta_.view(nc);

@@ -429,6 +429,9 @@ class State {
   index_t vis_nn() const { return viscous_on_ ? grid_.nnodes : 0; }
   Buffer<double> v_save_;  // scratch (MPMFLOW_PICARD): v* before the viscous step
   Buffer<double> force_;   // a solid's internal forces (solid.hpp; sized on its first step)
+  // a solid's cells' share of particles that yielded in the last step (solid.hpp)
+  Buffer<double> cell_yield_;
+  bool solid_scattered_ = false;  // the last scatter's particles carry a solid's stress
   bool rate_from_new_ = false;
   std::array<Multigrid<D>, D> viscous_mg_;
   // integrals of this step, as views into the buffers above

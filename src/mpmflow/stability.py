@@ -1,6 +1,6 @@
 """The explicit scheme's time-step limit: the sound speed sqrt(K / rho) crossing one cell;
-and the projection scheme's for a solid, whose deviatoric stress is explicit: the shear wave
-sqrt(G / rho) (``longest_projection_step``).
+and the longest step the projection scheme's adaptive steps take for a solid, at which its
+shear waves sqrt(G / rho) are followed (``longest_projection_step``).
 
 A signal travels at the sound speed c plus the flow speed |v|; an explicit step must not let
 it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explicit MPM).
@@ -54,6 +54,7 @@ def time_step(case: Case) -> float:
 
 def longest_projection_step(case: Case) -> float:
     """The longest step the projection scheme takes with time.dt = "auto" (s): time.max_dt,
-    and for a solid at most the shear wave's step (``materials.shear_wave_step``: its
-    deviatoric stress is explicit; its pressure, from the projection, sets no limit)."""
+    and for a solid at most the shear wave's step (``materials.shear_wave_step``: the step
+    at which its shear waves are followed; its elastic step is implicit, so this is a
+    choice of accuracy, not of stability, and a fixed time.dt may exceed it)."""
     return min(case.time.max_dt, materials.shear_wave_step(case.material, case.grid.spacing))

@@ -427,17 +427,6 @@ class Case(Section):
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
                     "material.bulk_modulus"
                 )
-        shear_step = materials.shear_wave_step(self.material, self.grid.spacing)
-        if self.time.dt != "auto" and self.time.dt > shear_step * (1 + 1e-9):
-            c = (self.material.shear_modulus / self.material.density) ** 0.5
-            raise ValueError(
-                f"time.dt = {self.time.dt:g} s is above the longest stable step of the solid's "
-                f"deviatoric stress, {shear_step:.4g} s = {materials.SHEAR_COURANT:g} "
-                f"grid.spacing / shear-wave speed = {materials.SHEAR_COURANT:g} x "
-                f"{self.grid.spacing:g} m / {c:.4g} m/s (sqrt(material.shear_modulus / "
-                f'density)); set time.dt to at most {shear_step:.4g} s, or time.dt = "auto", '
-                "or a softer material.shear_modulus"
-            )
         if self.time.dt != "auto" and self.output.interval < self.time.dt * (1 - 1e-9):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "

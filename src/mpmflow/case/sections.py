@@ -61,8 +61,8 @@ class Material(Section):
         'strength_datum) or "drucker_prager" (frictional soil matched to Mohr-Coulomb in '
         "plane strain: shear_modulus, friction_angle, cohesion, tension_cutoff). Each takes "
         "only its own parameters; the viscous stress is solved implicitly (docs/method.md, "
-        '"Viscous materials"), a solid\'s deviatoric stress explicitly within the shear-wave '
-        'step (docs/method.md, "Solids"); every material is incompressible.',
+        '"Viscous materials"), and so is a solid\'s elastic step (docs/method.md, '
+        '"Solids"); every material is incompressible.',
     )
     density: float = Field(
         1000.0,
@@ -128,8 +128,10 @@ class Material(Section):
         description='Shear modulus G (Pa) of the solids "elastic", "von_mises" and '
         "\"drucker_prager\": s = 2 G (deviatoric strain); Young's modulus is 3 G (Poisson's "
         "ratio 0.5: the solid is incompressible). It sets the shear-wave speed "
-        "sqrt(G / density) and with it the longest step, 0.5 grid.spacing / sqrt(G / "
-        "density).",
+        'sqrt(G / density) and with it the longest step time.dt = "auto" takes, 0.5 '
+        "grid.spacing / sqrt(G / density), at which the shear waves are followed; the "
+        "elastic step is implicit, so a longer fixed time.dt is stable and damps them (for "
+        "a load that comes to rest).",
     )
     undrained_strength: float = Field(
         20e3,

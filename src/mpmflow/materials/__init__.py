@@ -92,13 +92,21 @@ def is_solid(m: Material) -> bool:
     return m.model in SOLIDS
 
 
-# the largest step of the explicit deviatoric stress, as a fraction of the time a shear wave
-# takes to cross a cell (docs/method.md, "Solids": stable at 0.5 in 2D and 3D, measured)
+def viscous_solve(m: Material) -> bool:
+    """Whether the predictor runs the implicit viscous solve: a viscous material's, and a
+    solid's implicit elastic predictor (eta = G dt; src/core/step.cpp, viscous_start)."""
+    return is_viscous(m) or is_solid(m)
+
+
+# the longest step time.dt = "auto" takes for a solid, as a fraction of the time a shear wave
+# takes to cross a cell: it follows the waves (a layer's period within 4% at H / 20);
+# the elastic step is implicit, so longer fixed steps are stable and damp them
+# (docs/method.md, "Solids")
 SHEAR_COURANT = 0.5
 
 
 def shear_wave_step(m: Material, spacing: float) -> float:
-    """The longest stable step (s) of a solid's explicit deviatoric stress on cells of side
+    """The step (s) at which a solid's shear waves are followed on cells of side
     ``spacing`` (m): SHEAR_COURANT h / sqrt(G / density); inf for a fluid."""
     if not is_solid(m):
         return float("inf")

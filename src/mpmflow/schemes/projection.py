@@ -138,7 +138,7 @@ class ProjectionScheme:
         # with APIC also their affine matrices (zero); a solid's stress history (zero)
         self.particles = particles
         self.solids = obstacles.of_case(case, grid)
-        self.viscous = materials.is_viscous(case.material)
+        self.viscous = materials.viscous_solve(case.material)
         cells = tuple(int(c) for c in grid.cells)
         T = (
             state.gauss_gradients(cells, float(grid.spacing))
