@@ -3,7 +3,7 @@
 //
 //   predict: scatter (bin_particles -> particles_to_grid -> nodal_fraction)
 //            -> classify (enclosed_cells -> cell_integrals -> classify_nodes)
-//     -> viscous_predictor (viscous materials only)
+//     -> viscous_predictor (viscous materials; a solid's elastic increment, eta = G dt)
 //     -> pressure_solve (contact walls, assembly, solve, release, ghost values)
 //     -> finish: correct (correct_velocity and the walls) -> volume_correction (every few
 //        steps: volume_system -> solve -> volume_apply) -> to_particles (grid_to_particles
