@@ -275,14 +275,14 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
                        node_mass_.view(nn), node_mom_.template view<2>({nn, D}), node_vol_.view(nn),
                        v_old, v_star, correct ? cell_vol_.view(nc) : View<double>(), P.affine);
   solid_scattered_ = P.stress.size() > 0 && is_solid(O.model);
-  if (solid_scattered_)
+  if (solid_scattered_) {  // a solid: its cells' yielded share, its old stress's force
     yielded_share<D>(grid_, P.mass, P.yielding, order_.view(P.count()), start_.view(nc + 1),
                      cell_yield_.sized(nc));
-  if (solid_scattered_)
     internal_forces<D>(grid_, P.x, P.mass, P.volume, P.stress, order_.view(P.count()),
                        start_.view(nc + 1), node_mass_.view(nn), O.dt,
                        node_mom_.template view<2>({nn, D}), force_.template sized<2>({nn, D}),
                        v_star);
+  }
   if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
   nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
@@ -732,9 +732,10 @@ void State<D>::correct(const Options<D>& O) {
 
 template <int D>
 index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool displaced) {
-  // Only the particles' own arrays and the grid's are read here (grid_to_particles and
-  // push_out use no binning array: cell_, order_, start_), so P may be the first n of the
-  // particles scatter was given (a rank moves only the particles it owns).
+  // For a fluid only the particles' own arrays and the grid's are read here
+  // (grid_to_particles and push_out use no binning array: cell_, order_, start_), so P may be
+  // the first n of the particles scatter was given (a rank moves only the particles it
+  // owns); a solid's stress update reads the binning (below).
   const index_t nn = grid_.nnodes;
   PhaseClock clock(phase_seconds_);
   if (P.stress.size() > 0 && is_solid(O.model)) {

@@ -321,9 +321,11 @@ class State {
   // Returns the faces clamped at O.volume_dmax cells.
   index_t volume_apply(const Options<D>& O, View<const double> q);
   // Grid to particles (with the last volume correction's face displacements when displaced),
-  // push-out of obstacles, the periodic wrap; returns the particles put back inside. Reads
-  // no binning array: P may hold fewer particles than scatter was given (the first n of
-  // them: those a rank owns).
+  // push-out of obstacles, the periodic wrap; returns the particles put back inside. A fluid's
+  // reads no binning array: P may hold fewer particles than scatter was given (the first n
+  // of them: those a rank owns). A solid's stress update (solid.hpp) maps the particles'
+  // new velocities back through scatter's binning, so P must then be all of them
+  // (std::invalid_argument otherwise; solids are not split over ranks yet).
   index_t to_particles(const Particles<D>& P, const Options<D>& O, bool displaced);
 
   // the arrays Python reads (views of the state's own storage)

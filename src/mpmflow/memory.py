@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 from .errors import CaseError
 from .geometry import bodies
 from .grid import Grid
+from .materials import SOLIDS
 
 if TYPE_CHECKING:
     from .case import Case
@@ -40,6 +41,10 @@ MB = 2**20
 PROGRAM = 70 * MB  # Python, NumPy, SciPy and the compiled core
 PER_PARTICLE = 84  # B: x, v (2 each), pressure, mass, volume, the cell index and order
 AFFINE = 8  # B per entry of a particle's D x D affine matrix (solver.transfer = "apic")
+# a solid's history (material.model = "elastic", ...): its D x D deviatoric stress, its
+# plastic strain and yielding flag, 8 B each per particle; and the step's D force values a
+# node (counted, not measured: arrays of that size)
+HISTORY = 8
 PER_NODE = 195  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
 PER_UNKNOWN = 590  # B: matrix (9 entries), multigrid levels, CG vectors (2D)
 # 3D: rows of 27 entries, and multigrid's Galerkin levels as wide; measured on the 3D dam
@@ -156,8 +161,11 @@ def estimate(case: Case) -> Estimate:
         if case.output.snapshots
         else 0
     )
-    # APIC's affine matrices: in memory and in each checkpoint
-    affine = AFFINE * len(case.domain.size) ** 2 if case.solver.transfer == "apic" else 0
+    # APIC's affine matrices, a solid's history: in memory and in each checkpoint
+    D = len(case.domain.size)
+    affine = AFFINE * D**2 if case.solver.transfer == "apic" else 0
+    if case.material.model in SOLIDS:
+        affine += HISTORY * (D * D + 2)
     disk = (
         rows * (170 + 12 * len(case.probes))
         + snaps * (120 * particles + 200)
@@ -170,7 +178,7 @@ def estimate(case: Case) -> Estimate:
         rows=rows,
         program=program,
         particle_bytes=(PER_PARTICLE + affine) * particles,
-        grid_bytes=PER_NODE * nodes,
+        grid_bytes=(PER_NODE + (8 * D if case.material.model in SOLIDS else 0)) * nodes,
         solver_bytes=(PER_UNKNOWN_3D if len(case.domain.size) == 3 else PER_UNKNOWN) * unknowns,
         rows_bytes=PER_ROW * values * rows,
         passing_bytes=passing,

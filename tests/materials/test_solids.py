@@ -103,7 +103,7 @@ def test_drucker_prager_reads_the_pressure_and_parts_in_tension():
 
 def _layer(h, model, end, strength=None, dim=2):
     """An elastic (or clay) layer H = 0.05 m deep, bonded to the floor of a periodic strip
-    (in 3D a periodic column of 8 x 4 cells), under gravity tilted by 20 degrees along x (an
+    8 cells wide and 0.1 m tall (in 3D a periodic column of 4 x 4 cells, 0.06 m tall), under gravity tilted by 20 degrees along x (an
     infinite slope), G = 1e5 Pa, rho = 2000 kg/m^3. Returns the simulation and the top's
     mean downslope velocity every 0.2 ms."""
     H, th = 0.05, math.radians(20.0)
@@ -111,13 +111,14 @@ def _layer(h, model, end, strength=None, dim=2):
     if dim == 3:
         g = [g[0], 0.0, g[1]]
     across = [4 * h] if dim == 3 else []
+    along, top = (4 * h, 0.06) if dim == 3 else (8 * h, 0.1)
     sets = [
-        f"domain.size={[8 * h, *across, 0.1]}",
+        f"domain.size={[along, *across, top]}",
         f"domain.walls={{{'xyz'[dim - 1]}_min='bonded'}}",
         f"domain.periodic={str([True] * (dim - 1) + [False]).lower()}",
         f"grid.spacing={h}",
         f"bodies.0.min={[0.0] * dim}",
-        f"bodies.0.max={[8 * h, *across, H]}",
+        f"bodies.0.max={[along, *across, H]}",
         "bodies.0.particles_per_cell=2",
         f"material.model='{model}'",
         "material.density=2000.0",
