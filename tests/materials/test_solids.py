@@ -28,10 +28,15 @@ SOLIDS = [
 ]
 
 
-@pytest.mark.parametrize("extra", SOLIDS, ids=["elastic", "von_mises", "drucker_prager"])
+@pytest.mark.parametrize(
+    "extra",
+    [*SOLIDS, [*SOLIDS[0], "solver.transfer='apic'"]],
+    ids=["elastic", "von_mises", "drucker_prager", "elastic_apic"],
+)
 def test_a_solid_column_at_rest_stays_at_rest(extra):
     """Between slip walls the column's deviatoric stress stays 0 and its pressure is the
-    projection's, exactly as for water (the issue's bound is 1e-6 m/s and 1e-6 rho g H)."""
+    projection's, exactly as for water (the issue's bound is 1e-6 m/s and 1e-6 rho g H);
+    with APIC transfers too (the stress update maps APIC's velocities back)."""
     case = load_case(
         ROOT / HYDRO,
         ["time.end=0.2", "output.snapshots=false", "material.shear_modulus=1e4", *extra],
@@ -75,10 +80,12 @@ def test_a_rigid_spin_turns_the_stress_and_keeps_its_invariant(D):
     assert abs(np.trace(s)) < 1e-12
 
 
-def test_von_mises_returns_to_the_undrained_strength():
+@pytest.mark.parametrize("D", [2, 3])
+def test_von_mises_returns_to_the_undrained_strength(D):
     par = np.array([1e6, 20e3, 1e3, 2.0])  # s_u = 20 kPa at y = 2 m, + 1 kPa/m below
-    s = np.zeros((2, 2))
-    L = np.array([[0.0, 100.0], [0.0, 0.0]])  # a shear far beyond the elastic range
+    s = np.zeros((D, D))
+    L = np.zeros((D, D))
+    L[0, 1] = 100.0  # a shear far beyond the elastic range
     plastic = state.update_stress(state.VON_MISES, par, L, 1e-3, 0.0, 1.0, s)
     k = 20e3 + 1e3 * 1.0  # 1 m below the datum
     assert math.sqrt(0.5 * np.sum(s * s)) == pytest.approx(k, rel=1e-14)
@@ -86,17 +93,19 @@ def test_von_mises_returns_to_the_undrained_strength():
     assert plastic == pytest.approx((trial - k) / (math.sqrt(3.0) * 1e6), rel=1e-14)
 
 
-def test_drucker_prager_reads_the_pressure_and_parts_in_tension():
+@pytest.mark.parametrize("D", [2, 3])
+def test_drucker_prager_reads_the_pressure_and_parts_in_tension(D):
     phi = math.radians(30.0)
     c = 1e3
     par = np.array([1e6, math.sin(phi), c * math.cos(phi), 500.0])
-    L = np.array([[0.0, 100.0], [0.0, 0.0]])
+    L = np.zeros((D, D))
+    L[0, 1] = 100.0
     for p in (0.0, 1e4, -400.0):
-        s = np.zeros((2, 2))
+        s = np.zeros((D, D))
         state.update_stress(state.DRUCKER_PRAGER, par, L, 1e-3, p, 0.0, s)
         k = p * math.sin(phi) + c * math.cos(phi)
         assert math.sqrt(0.5 * np.sum(s * s)) == pytest.approx(k, rel=1e-14), p
-    s = np.zeros((2, 2))
+    s = np.zeros((D, D))
     plastic = state.update_stress(state.DRUCKER_PRAGER, par, L, 1e-3, -600.0, 0.0, s)
     assert np.all(s == 0.0) and plastic > 0.0  # below the cut-off: parted
 
