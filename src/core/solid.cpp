@@ -11,65 +11,22 @@ namespace mpmflow {
 
 namespace {
 
-// The forces of the particles of cell slabs r0 to r1 - 1, cell by cell, particle by
-// particle (their binned order).
-template <int D>
-void force_slabs(index_t r0, index_t r1, const Grid<D>& g, View<const double, 2> x,
-                 View<const double> volume, View<const double, 3> stress, View<const index_t> order,
-                 View<const index_t> start, View<double, 2> force) {
-  constexpr int NC = Grid<D>::NC;
-  const index_t slab = g.cs[D - 1];
-  double w[NC], frac[D];
-  for (index_t c = r0 * slab; c < r1 * slab; ++c) {
-    const index_t s0 = start(c), s1 = start(c + 1);
-    for (index_t s = s0; s < s1; ++s) {
-      const index_t p = order(s);
-      const index_t base = g.weights_at(&x(p, 0), w);
-      g.locate(&x(p, 0), frac);
-      for (int a = 0; a < NC; ++a) {
-        const index_t i = base + g.corner[a];
-        double grad[D];
-        for (int j = 0; j < D; ++j) grad[j] = g.corner_gradient(a, j, frac);
-        for (int k = 0; k < D; ++k) {
-          double f = 0.0;
-          for (int j = 0; j < D; ++j) f += stress(p, k, j) * grad[j];
-          force(i, k) -= volume(p) * f;
-        }
-      }
-    }
-  }
-}
-
-// velocity_to_grid's sums over the particles of cell slabs r0 to r1 - 1.
-template <int D>
-void velocity_slabs(index_t r0, index_t r1, const GridToParticle<D>& g2p, View<const double> mass,
-                    View<const index_t> order, View<const index_t> start, View<double, 2> out) {
-  constexpr int NC = Grid<D>::NC;
-  const Grid<D>& g = g2p.g;
-  const index_t slab = g.cs[D - 1];
-  double w[NC], vp[D];
-  for (index_t c = r0 * slab; c < r1 * slab; ++c) {
-    for (index_t s = start(c); s < start(c + 1); ++s) {
-      const index_t p = order(s);
-      const index_t base = g.weights_at(&g2p.x(p, 0), w);
-      g2p.new_velocity(p, vp);
-      for (int a = 0; a < NC; ++a) {
-        const index_t i = base + g.corner[a];
-        for (int k = 0; k < D; ++k) out(i, k) += w[a] * mass(p) * vp[k];
-      }
-    }
-  }
-}
-
-// Strips of cell slabs for a scatter of the binned particles (as particles_to_grid's).
+// body(p) for every binned particle (order, start: binning.hpp), cell by cell in the order
+// of their bins, over strips of cell slabs as particles_to_grid scatters them (strips.hpp):
+// the even strips in parallel, then the odd ones, so a body that adds into the nodes of p's
+// cell gives the same sums on any number of threads.
 template <int D, class F>
-void scatter_strips(const Grid<D>& g, View<const index_t> start, index_t n, F&& body) {
+void scatter_particles(const Grid<D>& g, View<const index_t> order, View<const index_t> start,
+                       F&& body) {
   std::array<index_t, 2 * STRIPS + 1> bounds;
   const index_t slab = g.cs[D - 1];
   const index_t nstrips = strips(
       g.cells[D - 1], [&](index_t r) { return start(r * slab); },
       g.periodic[D - 1] ? 1 : 2 * STRIPS, 2, bounds.data());
-  for_strips(bounds.data(), nstrips, n, body);
+  for_strips(bounds.data(), nstrips, order.size(), [&](index_t r0, index_t r1) {
+    for (index_t c = r0 * slab; c < r1 * slab; ++c)
+      for (index_t s = start(c); s < start(c + 1); ++s) body(order(s));
+  });
 }
 
 }  // namespace
@@ -96,8 +53,13 @@ void velocity_to_grid(const GridToParticle<D>& g2p, View<const double> mass,
   parallel_for(g.nnodes, [&](index_t i) {
     for (int k = 0; k < D; ++k) out(i, k) = 0.0;
   });
-  scatter_strips<D>(g, start, order.size(), [&](index_t r0, index_t r1) {
-    velocity_slabs<D>(r0, r1, g2p, mass, order, start, out);
+  scatter_particles<D>(g, order, start, [&](index_t p) {
+    constexpr int NC = Grid<D>::NC;
+    double w[NC], vp[D];
+    const index_t base = g.weights_at(&g2p.x(p, 0), w);
+    g2p.new_velocity(p, vp);
+    for (int a = 0; a < NC; ++a)
+      for (int k = 0; k < D; ++k) out(base + g.corner[a], k) += w[a] * mass(p) * vp[k];
   });
   if (g.any_periodic) fold_images<D>(g, out);
   parallel_for(g.nnodes, [&](index_t i) {
@@ -120,8 +82,20 @@ void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const doubl
       dv(i, k) = 0.0;
     }
   });
-  scatter_strips<D>(g, start, x.extent(0), [&](index_t r0, index_t r1) {
-    force_slabs<D>(r0, r1, g, x, volume, stress, order, start, acc);
+  // the old stress's force: f_i = -sum_p V_p s_p grad N_i(x_p)
+  scatter_particles<D>(g, order, start, [&](index_t p) {
+    double w[NC], frac[D];
+    const index_t base = g.weights_at(&x(p, 0), w);
+    g.locate(&x(p, 0), frac);
+    for (int a = 0; a < NC; ++a) {
+      double grad[D];
+      for (int j = 0; j < D; ++j) grad[j] = g.corner_gradient(a, j, frac);
+      for (int k = 0; k < D; ++k) {
+        double f = 0.0;
+        for (int j = 0; j < D; ++j) f += stress(p, k, j) * grad[j];
+        acc(base + g.corner[a], k) -= volume(p) * f;
+      }
+    }
   });
   if (g.any_periodic) fold_images<D>(g, acc);
   parallel_for(nn, [&](index_t i) {
@@ -129,19 +103,13 @@ void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const doubl
     for (int k = 0; k < D; ++k) acc(i, k) = m > 0.0 ? acc(i, k) / m : 0.0;
   });
   // to the particles and back
-  scatter_strips<D>(g, start, x.extent(0), [&](index_t r0, index_t r1) {
-    const index_t slab = g.cs[D - 1];
-    double w[NC];
-    for (index_t c = r0 * slab; c < r1 * slab; ++c)
-      for (index_t s = start(c); s < start(c + 1); ++s) {
-        const index_t p = order(s);
-        const index_t base = g.weights_at(&x(p, 0), w);
-        double ap[D] = {};
-        for (int a = 0; a < NC; ++a)
-          for (int k = 0; k < D; ++k) ap[k] += w[a] * acc(base + g.corner[a], k);
-        for (int a = 0; a < NC; ++a)
-          for (int k = 0; k < D; ++k) dv(base + g.corner[a], k) += w[a] * mass(p) * ap[k];
-      }
+  scatter_particles<D>(g, order, start, [&](index_t p) {
+    double w[NC], ap[D] = {};
+    const index_t base = g.weights_at(&x(p, 0), w);
+    for (int a = 0; a < NC; ++a)
+      for (int k = 0; k < D; ++k) ap[k] += w[a] * acc(base + g.corner[a], k);
+    for (int a = 0; a < NC; ++a)
+      for (int k = 0; k < D; ++k) dv(base + g.corner[a], k) += w[a] * mass(p) * ap[k];
   });
   if (g.any_periodic) fold_images<D>(g, dv);
   parallel_for(nn, [&](index_t i) {

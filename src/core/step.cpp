@@ -482,9 +482,9 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
                    T_.ono_slip, v_rate);
   // a solid's implicit elastic predictor (plasticity.hpp): the viscous step with eta = G dt,
   // the old stress's force already in v* (scatter)
-  std::array<double, 8> elastic{};
-  elastic[0] = is_solid(O.model) ? O.model_params[0] * O.dt : 0.0;
   const bool solid = is_solid(O.model);
+  std::array<double, 8> elastic{};
+  elastic[0] = solid ? O.model_params[0] * O.dt : 0.0;
   cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_rate, p,
                     solid ? NEWTONIAN : O.model,
                     View<const double>(solid ? elastic.data() : O.model_params.data(), {8}),

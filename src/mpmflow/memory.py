@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 from .errors import CaseError
 from .geometry import bodies
 from .grid import Grid
-from .materials import SOLIDS
+from .materials import is_solid
 
 if TYPE_CHECKING:
     from .case import Case
@@ -164,7 +164,7 @@ def estimate(case: Case) -> Estimate:
     # APIC's affine matrices, a solid's history: in memory and in each checkpoint
     D = len(case.domain.size)
     affine = AFFINE * D**2 if case.solver.transfer == "apic" else 0
-    if case.material.model in SOLIDS:
+    if is_solid(case.material):
         affine += HISTORY * (D * D + 2)
     disk = (
         rows * (170 + 12 * len(case.probes))
@@ -178,7 +178,7 @@ def estimate(case: Case) -> Estimate:
         rows=rows,
         program=program,
         particle_bytes=(PER_PARTICLE + affine) * particles,
-        grid_bytes=(PER_NODE + (8 * D if case.material.model in SOLIDS else 0)) * nodes,
+        grid_bytes=(PER_NODE + (8 * D if is_solid(case.material) else 0)) * nodes,
         solver_bytes=(PER_UNKNOWN_3D if len(case.domain.size) == 3 else PER_UNKNOWN) * unknowns,
         rows_bytes=PER_ROW * values * rows,
         passing_bytes=passing,

@@ -119,7 +119,7 @@ class Case(Section):
                 'make the outlet sides of domain.walls "slip"',
             ),
             "solids": (
-                self.material.model in materials.SOLIDS,
+                materials.is_solid(self.material),
                 'give a fluid material.model ("water", "newtonian", ...)',
             ),
             "bonded": (
