@@ -81,12 +81,12 @@ def volume_measures(
     }
 
 
-def kinetic_energy(particles: Particles) -> float:
-    return float(0.5 * np.sum(particles.mass * np.sum(particles.v**2, axis=1)))
-
-
-def potential_energy(particles: Particles, gravity: Sequence[float]) -> float:
-    return float(-np.sum(particles.mass * (particles.x @ np.asarray(gravity))))
+def totals(particles: Particles, gravity: Sequence[float]) -> state.Totals:
+    """Kinetic and potential energy (J; J/m in 2D), the fastest particle and its speed
+    (m/s), the largest pressure (Pa) and the particles that are not finite, in one pass of
+    the core over the particles (``state.particle_totals``)."""
+    P = particles
+    return state.particle_totals(P.x, P.v, P.mass, P.pressure, gravity)
 
 
 def pressure_noise(grid: Grid, particles: Particles) -> float:

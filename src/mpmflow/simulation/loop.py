@@ -23,7 +23,7 @@ import time as _time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,13 +32,7 @@ from threadpoolctl import threadpool_limits
 from .. import checkpoint
 from ..case import Case, revalidate
 from ..cells import CellBins, bin_particles
-from ..diagnostics.measures import (
-    front_and_height,
-    kinetic_energy,
-    potential_energy,
-    pressure_noise,
-    volume_measures,
-)
+from ..diagnostics.measures import front_and_height, pressure_noise, totals, volume_measures
 from ..errors import SimulationError
 from ..fallbacks import Fallbacks
 from ..interrupts import StopNow
@@ -51,6 +45,9 @@ from .callbacks import Action, Stop
 from .counters import ChunkReport, Counters, add_report
 from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterval
 from .summary import summary as _summary
+
+if TYPE_CHECKING:
+    from ..state import Totals
 
 
 class Simulation:
@@ -105,6 +102,7 @@ class Simulation:
         self._opened = False
         self._stop: Stop | None = None
         self._binned: CellBins | None = None
+        self._totals: Totals | None = None
         self._schedules_and_actions()
 
     def _schedules_and_actions(self) -> None:
@@ -348,17 +346,17 @@ class Simulation:
         P, g = self.particles, self.grid
         bins = bins if bins is not None else self._bins()
         front, height = front_and_height(g, bins.theta)
-        speed = np.sqrt(np.sum(P.v**2, axis=1))
-        empty = P.count == 0  # every particle left through the outlets: no largest value
+        # every particle left through the outlets: no largest value (nan)
+        t = self.totals()
         return {
             "time": self.time,
             "front": front,
             "height": height,
             "step": self.steps,
-            "kinetic_energy": kinetic_energy(P),
-            "potential_energy": potential_energy(P, self.case.physics.gravity),
-            "max_speed": np.nan if empty else float(speed.max()),
-            "max_pressure": np.nan if empty else float(P.pressure.max()),
+            "kinetic_energy": t.kinetic,
+            "potential_energy": t.potential,
+            "max_speed": t.max_speed,
+            "max_pressure": t.max_pressure,
             "pressure_noise": pressure_noise(g, P),
             **volume_measures(bins.theta, g.cell_volume, self.volume0, self._open()),
             "max_particles_per_cell": int(np.diff(bins.start).max()),
@@ -381,8 +379,17 @@ class Simulation:
             self._binned = self._bins()
         return self._binned
 
+    def totals(self) -> Totals:
+        """The particles' energies, fastest particle, largest pressure and non-finite
+        particles at this output time (``diagnostics.measures.totals``), shared by the
+        writers and the blow-up guard."""
+        if self._totals is None:
+            self._totals = totals(self.particles, self.case.physics.gravity)
+        return self._totals
+
     def forget_bins(self) -> None:
         self._binned = None
+        self._totals = None
 
     # ------------------------------------------------------------------ time loop
     def run(self, wall_budget: float | None = None) -> dict[str, Any]:
@@ -496,6 +503,7 @@ class Simulation:
 
     def _advance(self, dt: float, n: int) -> None:
         """n steps of size dt, and the counters of what they did."""
+        self.forget_bins()  # what was measured before (outside an output time too) is old
         first, t0 = self.steps + 1, self.time
 
         def where(k: int) -> str:

@@ -72,6 +72,7 @@ from .step import (  # noqa: E402 (the core is loaded first, with its message)
 )
 from .transfer import (  # noqa: E402 (the core is loaded first, with its message)
     SLIVER,
+    Totals,
     assemble_volume,
     cell_index,
     cell_volume,
@@ -84,6 +85,7 @@ from .transfer import (  # noqa: E402 (the core is loaded first, with its messag
     face_mass,
     flip_per_step,
     grid_to_particles,
+    particle_totals,
     particles_to_grid,
     pressure_noise,
     push_out,
@@ -129,6 +131,7 @@ __all__ = [
     "Report",
     "SLIVER",
     "SURFACE_QUADRATURE",
+    "Totals",
     "Status",
     "VON_MISES",
     "WATER",
@@ -158,6 +161,7 @@ __all__ = [
     "multigrid",
     "number_unknowns",
     "particle_cell_tensors",
+    "particle_totals",
     "particles_to_grid",
     "pressure_noise",
     "push_out",

@@ -1,8 +1,10 @@
 """Particle-grid kernels called from Python: transfers, the corrector, the volume
-correction, binning and cut cells (src/core/transfer, corrector, volume_correction,
-binning, cut_cells, strips.hpp)."""
+correction, binning and cut cells, and the particles' totals at an output time
+(src/core/transfer, corrector, volume_correction, binning, cut_cells, totals, strips.hpp)."""
 
+import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -105,6 +107,39 @@ def grid_to_particles(
             list(faces),
             affine,
         )
+    )
+
+
+class Totals(NamedTuple):
+    """The particles' totals at an output time (src/core/totals.hpp), in one pass."""
+
+    kinetic: float  # J (J/m in 2D)
+    potential: float  # J (J/m in 2D), -sum m g . x
+    max_speed: float  # m/s, of the finite particles (nan: none)
+    max_pressure: float  # Pa (nan: no particle)
+    fastest: int  # the particle of max_speed (-1: none)
+    nonfinite: int  # particles with a non-finite position or velocity
+    first_nonfinite: int  # the first of those (-1: none)
+
+
+def particle_totals(
+    x: Floats, v: Floats, mass: Floats, pressure: Floats, gravity: Sequence[float]
+) -> Totals:
+    """Kinetic and potential energy, the fastest particle, the largest pressure and the
+    non-finite particles of (x, v: n x D; mass, pressure: n) under ``gravity`` (D entries,
+    m/s^2), in one pass over the particles (fixed chunks: the same bits on any number of
+    threads). Non-finite particles are counted and left out of the rest."""
+    g = np.ascontiguousarray(gravity, dtype=float)
+    k, u, s2, pmax, fastest, bad, first = _core.particle_totals(x, v, mass, pressure, g)
+    none = fastest < 0
+    return Totals(
+        float(k),
+        float(u),
+        math.nan if none else math.sqrt(s2),
+        math.nan if x.shape[0] == 0 else float(pmax),
+        int(fastest),
+        int(bad),
+        int(first),
     )
 
 
