@@ -342,12 +342,16 @@ class Simulation:
         return probes.buffer.column(name)
 
     def measure(self, bins: CellBins | None = None) -> dict[str, float]:
-        """The diagnostics of one timeseries row at the current state."""
+        """The diagnostics of one timeseries row at the current state. With ``bins`` (the
+        writers pass ``binned()``) the output time's shared bins and totals; without, both
+        measured afresh."""
         P, g = self.particles, self.grid
-        bins = bins if bins is not None else self._bins()
-        front, height = front_and_height(g, bins.theta)
         # every particle left through the outlets: no largest value (nan)
-        t = self.totals()
+        if bins is None:
+            bins, t = self._bins(), totals(P, self.case.physics.gravity)
+        else:
+            t = self.totals()
+        front, height = front_and_height(g, bins.theta)
         return {
             "time": self.time,
             "front": front,
