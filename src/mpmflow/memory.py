@@ -161,15 +161,18 @@ def estimate(case: Case) -> Estimate:
         if case.output.snapshots
         else 0
     )
-    # APIC's affine matrices, a solid's history: in memory and in each checkpoint
+    # APIC's affine matrices, a solid's history: in memory and in each checkpoint; a
+    # solid's force, D values a node
     D = len(case.domain.size)
-    affine = AFFINE * D**2 if case.solver.transfer == "apic" else 0
-    if is_solid(case.material):
-        affine += HISTORY * (D * D + 2)
+    solid = is_solid(case.material)
+    carried = (AFFINE * D**2 if case.solver.transfer == "apic" else 0) + (
+        HISTORY * (D * D + 2) if solid else 0
+    )
+    force = HISTORY * D if solid else 0
     disk = (
         rows * (170 + 12 * len(case.probes))
         + snaps * (120 * particles + 200)
-        + 2 * ((56 + affine) * particles + 16 * nodes)
+        + 2 * ((56 + carried) * particles + 16 * nodes)
     )
     return Estimate(
         particles=count if count < 10**15 else particles,
@@ -177,9 +180,9 @@ def estimate(case: Case) -> Estimate:
         unknowns=unknowns,
         rows=rows,
         program=program,
-        particle_bytes=(PER_PARTICLE + affine) * particles,
-        grid_bytes=(PER_NODE + (8 * D if is_solid(case.material) else 0)) * nodes,
-        solver_bytes=(PER_UNKNOWN_3D if len(case.domain.size) == 3 else PER_UNKNOWN) * unknowns,
+        particle_bytes=(PER_PARTICLE + carried) * particles,
+        grid_bytes=(PER_NODE + force) * nodes,
+        solver_bytes=(PER_UNKNOWN_3D if D == 3 else PER_UNKNOWN) * unknowns,
         rows_bytes=PER_ROW * values * rows,
         passing_bytes=passing,
         passing_what=what,

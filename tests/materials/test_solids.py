@@ -112,8 +112,8 @@ def test_drucker_prager_reads_the_pressure_and_parts_in_tension(D):
 
 def _layer(h, model, end, strength=None, dim=2):
     """An elastic (or clay) layer H = 0.05 m deep, bonded to the floor of a periodic strip
-    8 cells wide and 0.1 m tall (in 3D a periodic column of 4 x 4 cells, 0.06 m tall), under gravity tilted by 20 degrees along x (an
-    infinite slope), G = 1e5 Pa, rho = 2000 kg/m^3. Returns the simulation and the top's
+    8 cells wide and 0.1 m tall (in 3D a periodic column of 4 x 4 cells, 0.06 m tall),
+    under gravity tilted by 20 degrees along x (an infinite slope), G = 1e5 Pa, rho = 2000 kg/m^3. Returns the simulation and the top's
     mean downslope velocity every 0.2 ms."""
     H, th = 0.05, math.radians(20.0)
     g = [9.81 * math.sin(th), -9.81 * math.cos(th)]

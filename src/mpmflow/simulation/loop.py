@@ -392,6 +392,7 @@ class Simulation:
         return self._totals
 
     def forget_bins(self) -> None:
+        """Drop the output time's shared bins and totals (measured again when asked)."""
         self._binned = None
         self._totals = None
 
