@@ -54,8 +54,13 @@ template <int D>
 double wall_integral(const Grid<D>& g, const std::array<index_t, D>& ix, index_t i,
                      View<const index_t> cell_slot, View<const index_t> static_slot,
                      View<const double, 4> Wf, View<const double, 2> vstar,
-                     View<const bool, 2> contact) {
+                     View<const bool, 2> contact, View<const double, 2> held) {
   constexpr int NC = 1 << D;
+  const bool moving = held.size() > 0;
+  // the normal velocity through the wall relative to the wall's own
+  const auto through = [&](index_t j, int k) {
+    return moving ? vstar(j, k) - held(j, k) : vstar(j, k);
+  };
   const double hd = D == 2 ? g.h : g.h * g.h;  // h^(D-1)
   double total = 0.0;
   for (int k = 0; k < D; ++k)
@@ -74,7 +79,7 @@ double wall_integral(const Grid<D>& g, const std::array<index_t, D>& ix, index_t
           double face = 0.0;
           for (int corner = 0; corner < NC; ++corner) {
             const index_t jn = nc.first + g.corner[corner];
-            if (contact(jn, k)) face += Wf(ss, 2 * k + side, nc.a, corner) * sign * vstar(jn, k);
+            if (contact(jn, k)) face += Wf(ss, 2 * k + side, nc.a, corner) * sign * through(jn, k);
           }
           total += face;
           continue;
@@ -88,7 +93,7 @@ double wall_integral(const Grid<D>& g, const std::array<index_t, D>& ix, index_t
             if ((corner >> m) & 1) jn += g.ns[m];
             if (m != k) denom *= ((corner >> m) & 1) == ((nc.a >> m) & 1) ? 3.0 : 6.0;
           }
-          const double vn = contact(jn, k) ? sign * vstar(jn, k) : 0.0;
+          const double vn = contact(jn, k) ? sign * through(jn, k) : 0.0;
           face += vn / denom;
         }
         total += hd * face;
@@ -123,7 +128,7 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
               View<const index_t> row_nodes, View<const double, 2> vstar,
               View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
               View<const index_t> static_slot, View<const double, 4> F, View<const double, 4> Wf,
-              View<const bool> ocontact, View<double> rhs) {
+              View<const bool> ocontact, View<const double, 2> held, View<double> rhs) {
   constexpr int NC = 1 << D;
   std::array<index_t, D> ix;
   std::array<index_t, NC> slots, base;
@@ -149,7 +154,7 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
       const double excess = node_vol(i) - vol;
       if (expansion > 0.0 && excess > 0.0) b += expansion * excess;
       if (wall_flux) {
-        b += wall_integral<D>(g, ix, i, cell_slot, static_slot, Wf, vstar, contact);
+        b += wall_integral<D>(g, ix, i, cell_slot, static_slot, Wf, vstar, contact, held);
         if (F.extent(0) > 1)
           b += obstacle_integral<D>(g, ix, cell_slot, static_slot, F, vstar, ocontact);
       }
@@ -164,10 +169,11 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
                   View<const index_t> row_nodes, View<const double, 2> vstar,
                   View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
                   View<const index_t> static_slot, View<const double, 4> F,
-                  View<const double, 4> Wf, View<const bool> ocontact, View<double> rhs) {
+                  View<const double, 4> Wf, View<const bool> ocontact, View<const double, 2> held,
+                  View<double> rhs) {
   for_each_chunk(row_nodes.size(), [&](index_t, index_t lo, index_t hi) {
     rhs_rows<D>(g, lo, hi, cell_slot, C, V, node_vol, row_nodes, vstar, contact, wall_flux,
-                expansion, rho_over_dt, static_slot, F, Wf, ocontact, rhs);
+                expansion, rho_over_dt, static_slot, F, Wf, ocontact, held, rhs);
   });
 }
 
@@ -175,22 +181,23 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
   template void assemble_matrix<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
                                    View<const index_t>, View<const double>, bool, double,          \
                                    View<index_t, 2>, View<double, 2>, View<bool>);                 \
-  template double wall_integral<D>(                                                                \
-      const Grid<D>&, const std::array<index_t, D>&, index_t, View<const index_t>,                 \
-      View<const index_t>, View<const double, 4>, View<const double, 2>, View<const bool, 2>);     \
+  template double wall_integral<D>(const Grid<D>&, const std::array<index_t, D>&, index_t,         \
+                                   View<const index_t>, View<const index_t>,                       \
+                                   View<const double, 4>, View<const double, 2>,                   \
+                                   View<const bool, 2>, View<const double, 2>);                    \
   template double obstacle_integral<D>(                                                            \
       const Grid<D>&, const std::array<index_t, D>&, View<const index_t>, View<const index_t>,     \
       View<const double, 4>, View<const double, 2>, View<const bool>);                             \
-  template void rhs_rows<D>(const Grid<D>&, index_t, index_t, View<const index_t>,                 \
-                            View<const double, 4>, View<const double, 2>, View<const double>,      \
-                            View<const index_t>, View<const double, 2>, View<const bool, 2>, bool, \
-                            double, double, View<const index_t>, View<const double, 4>,            \
-                            View<const double, 4>, View<const bool>, View<double>);                \
+  template void rhs_rows<D>(                                                                       \
+      const Grid<D>&, index_t, index_t, View<const index_t>, View<const double, 4>,                \
+      View<const double, 2>, View<const double>, View<const index_t>, View<const double, 2>,       \
+      View<const bool, 2>, bool, double, double, View<const index_t>, View<const double, 4>,       \
+      View<const double, 4>, View<const bool>, View<const double, 2>, View<double>);               \
   template void assemble_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,        \
                                 View<const double, 2>, View<const double>, View<const index_t>,    \
                                 View<const double, 2>, View<const bool, 2>, bool, double, double,  \
                                 View<const index_t>, View<const double, 4>, View<const double, 4>, \
-                                View<const bool>, View<double>);
+                                View<const bool>, View<const double, 2>, View<double>);
 MPMFLOW_INSTANTIATE(2)
 MPMFLOW_INSTANTIATE(3)
 #undef MPMFLOW_INSTANTIATE

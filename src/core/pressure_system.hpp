@@ -30,16 +30,17 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
                      double theta_min, View<index_t, 2> cols, View<double, 2> vals,
                      View<bool> anchored);
 
-// Sum over the wetted wall faces through node i (coordinates ix) of int N_i (v*.n) ds
+// Sum over the wetted wall faces through node i (coordinates ix) of int N_i (v* - u_w).n ds
 // (m^3/s in 3D, m^2/s in 2D), counting only the nodes in contact (contact[j, k]: node j
-// holds the material at its wall normal to axis k). In a cell an obstacle cuts
+// holds the material at its wall normal to axis k), u_w the wall's velocity there
+// (held(j, k); held empty: walls at rest). In a cell an obstacle cuts
 // (static_slot >= 1) only the fluid part of the face counts: Wf[s, 2 k + side, a, b] is its
 // mass matrix.
 template <int D>
 double wall_integral(const Grid<D>& g, const std::array<index_t, D>& ix, index_t i,
                      View<const index_t> cell_slot, View<const index_t> static_slot,
                      View<const double, 4> Wf, View<const double, 2> vstar,
-                     View<const bool, 2> contact);
+                     View<const bool, 2> contact, View<const double, 2> held);
 
 // Sum over the node's cut cells in the system of int N_i (v*.n) ds over the obstacle's face
 // (F[s, a, b, k]: the face's integrals of N_a N_b n_k), counting the obstacle nodes in
@@ -57,12 +58,13 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
               View<const index_t> row_nodes, View<const double, 2> vstar,
               View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
               View<const index_t> static_slot, View<const double, 4> F, View<const double, 4> Wf,
-              View<const bool> ocontact, View<double> rhs);
+              View<const bool> ocontact, View<const double, 2> held, View<double> rhs);
 
 // Right-hand side of eq. (13) (Pa m^(D-2)) for every unknown (row_nodes[r]: the node of
 // row r):
 //   rhs_i = -(rho/dt) sum_e C_e[a_i, b, k] v*_{b,k}                (divergence, eq. 15)
-//           + (rho/dt) int_{wetted walls in contact} N_i v*.n ds   (if wall_flux)
+//           + (rho/dt) int_{wetted walls in contact} N_i (v* - u_w).n ds (if wall_flux;
+//                                    u_w = held, the walls' velocity: an inlet's inflow)
 //           + (rho/dt) int_{obstacle faces in contact} N_i v*.n ds (if wall_flux, F has
 //                                                                   more than one slot)
 //           + (rho/dt) expansion max(vol_i - V_i, 0)
@@ -75,6 +77,7 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
                   View<const index_t> row_nodes, View<const double, 2> vstar,
                   View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
                   View<const index_t> static_slot, View<const double, 4> F,
-                  View<const double, 4> Wf, View<const bool> ocontact, View<double> rhs);
+                  View<const double, 4> Wf, View<const bool> ocontact, View<const double, 2> held,
+                  View<double> rhs);
 
 }  // namespace mpmflow

@@ -64,6 +64,7 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
       obstacles_(tables.phi.size() > 0),
       nstatic_(tables.K_static.extent(0)) {
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  travel_.assign(static_cast<std::size_t>(T_.inlets.count()), 0.0);
   start_.reserve(nc + 1);
   theta_.reserve(nc);
   node_mass_.reserve(nn);
@@ -378,12 +379,13 @@ void State<D>::pressure_rhs(const Options<D>& O) {
   if (!O.wall_flux) {  // the paper: the divergence of the wall-constrained v*
     v_c = v_c_.template view<2>({nn, D});
     std::copy(v_star_.view(nn * D).data(), v_star_.view(nn * D).data() + nn * D, v_c.data());
-    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_c, contact);
+    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_c, contact,
+                T_.wall_velocity);
     apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_c, ocontact);
   }
   assemble_rhs<D>(grid_, I_.rhs_slot, I_.rhs_C, I_.rhs_V, node_vol_.view(nn), rows_.view(nrows_),
                   v_c, contact, O.wall_flux, O.expansion / O.dt, O.rho / O.dt, T_.static_slot,
-                  T_.F_static, T_.Wf_static, ocontact, rhs_.view(nrows_));
+                  T_.F_static, T_.Wf_static, ocontact, T_.wall_velocity, rhs_.view(nrows_));
   if (npockets_ > 0) {
     auto mean = pocket_mean_.view(2 * npockets_);
     apply_pockets(component_.view(nrows_), pockets_.view(npockets_), mean.head(npockets_),
@@ -718,7 +720,8 @@ void State<D>::correct(const Options<D>& O) {
   auto ocontact = ocontact_.view(nn);
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p_node_.view(nn),
                       v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
-  apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_new, contact);
+  apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_new, contact,
+              T_.wall_velocity);
   // with the face term (wall_flux) only the obstacle nodes in the solid: the corrected
   // velocity of a node in the water already meets the face's condition (weakly, at the
   // face); zeroing its normal velocity held the water up to a cell short of the face, where
@@ -773,7 +776,7 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
       grid_, P.x, P.v, P.pressure, v_old_.template view<2>({nn, D}),
       v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
       View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
-      faces, P.affine, Outlets{T_.outlet, P.mass, P.volume});
+      faces, P.affine, Outlets{T_.outlet, P.mass, P.volume, T_.inlets.count() > 0});
   if (obstacles_) {
     moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
     // a particle pushed out of an obstacle near a periodic end may cross it
@@ -795,6 +798,9 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
   if (status == OK) status = pressure_solve(O, report);
   clock.lap(PHASE_PRESSURE);
   if (status == OK) status = finish(P, O, correct, report);
+  if (status == OK && T_.inlets.count() > 0)
+    emit_layers<D>(T_.inlets, O.dt, inlet_travel(), pool_, P.x, P.v, P.mass, P.volume, P.pressure,
+                   P.affine);
   if (status == OK) {
     report.steps += 1;
     report.dt_min = report.steps == 1 ? O.dt : std::min(report.dt_min, O.dt);

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "grid.hpp"
+#include "inlets.hpp"
 #include "multigrid.hpp"
 #include "view.hpp"
 
@@ -169,6 +170,11 @@ struct GridTables {
   // outlets: one flag per side (x_min, x_max, y_min, ...; empty: none), the sides the
   // material leaves through (grid_to_particles retires what crosses them)
   View<const bool> outlet;
+  // the velocity each wall node is held to where its wall holds the material (nnodes x D,
+  // m/s; empty: every wall at rest): an inlet's inflow at its nodes (inlets.hpp)
+  View<const double, 2> wall_velocity;
+  // the inlets' layers of particles (none: inlets.count() == 0)
+  Inlets<D> inlets;
 };
 
 // The step's schedule, written once for every loop that takes steps (State::advance and
@@ -249,6 +255,12 @@ class State {
   // the flow time since the last volume correction (adaptive steps; kept in checkpoints)
   double since_volume() const { return since_volume_; }
   void set_since_volume(double t) { since_volume_ = t; }
+  // The inlets' pool for the next chunk: the dormant particles [first, end) of the particle
+  // arrays it is given (inlets.hpp); inlet_next(): the first not emitted yet.
+  void set_inlet_pool(index_t first, index_t end) { pool_ = InletPool{first, end}; }
+  index_t inlet_next() const { return pool_.next; }
+  // each inlet's distance travelled since its last layer (m; kept in checkpoints)
+  View<double> inlet_travel() { return View<double>(travel_.data(), {T_.inlets.count()}); }
 
   // The pressure step's solver: solver (not owned; it must outlive its use), or the
   // step's own multigrid (nullptr, the default).
@@ -387,6 +399,8 @@ class State {
   int step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
   std::array<double, NPHASES> phase_seconds_{};
   double since_volume_ = 0.0;
+  std::vector<double> travel_;  // per inlet (inlet_travel)
+  InletPool pool_;
   Grid<D> grid_;
   double cell_volume_;
   std::array<double, D> lower_, upper_;

@@ -198,7 +198,10 @@ MPMFLOW_HD inline bool put_inside(View<double, 2> x, View<double, 2> v, index_t 
 struct Outlets {
   View<const bool> side;
   View<double> mass, volume;
+  // the particle arrays hold inlets' dormant particles (mass 0, inlets.hpp), skipped too
+  bool dormant = false;
   MPMFLOW_HD bool any() const { return side.size() > 0; }
+  MPMFLOW_HD bool skips(index_t p) const { return (any() || dormant) && mass(p) == 0.0; }
 };
 
 // True when particle p lies beyond an outlet side of the box [lower, upper].
@@ -282,7 +285,7 @@ struct GridToParticle {
 
   MPMFLOW_HD bool operator()(index_t p) const {
     constexpr int NC = Grid<D>::NC;
-    if (outlets.any() && outlets.mass(p) == 0.0) return false;  // left through an outlet
+    if (outlets.skips(p)) return false;  // left through an outlet, or an inlet's dormant one
     const bool correct = faces[0].size() > 0;
     const bool apic = affine.size() > 0;
     double w[NC];

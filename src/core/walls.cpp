@@ -30,14 +30,16 @@ index_t wall_pairs(const Grid<D>& g, View<index_t> node, View<index_t> axis, Vie
 }
 
 void apply_walls(View<const index_t> node, View<const index_t> axis, View<const double> sign,
-                 View<const bool> no_slip, View<double, 2> v, View<const bool, 2> contact) {
+                 View<const bool> no_slip, View<double, 2> v, View<const bool, 2> contact,
+                 View<const double, 2> held) {
+  const bool moving = held.size() > 0;
   for (index_t e = 0; e < node.size(); ++e) {
     const index_t i = node(e), k = axis(e);
     if (contact(i, k) || sign(e) * v(i, k) > 0.0) {
-      v(i, k) = 0.0;
+      v(i, k) = moving ? held(i, k) : 0.0;
       if (no_slip(e) && contact(i, k))
         for (index_t m = 0; m < v.extent(1); ++m)
-          if (m != k) v(i, m) = 0.0;
+          if (m != k) v(i, m) = moving ? held(i, m) : 0.0;
     }
   }
 }

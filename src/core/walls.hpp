@@ -24,12 +24,14 @@ template <int D>
 index_t wall_pairs(const Grid<D>& g, View<index_t> node, View<index_t> axis, View<double> sign);
 
 // Velocity conditions at wall nodes (in place in v, nnodes x D). Where the wall holds the
-// material (contact[i, k]) the normal velocity is zero; elsewhere on the wall only a
-// velocity into the wall is removed. A no-slip pair (no_slip(e)) also zeroes the tangential
-// velocity where its node is in contact (at an edge node of a no-slip and a slip wall the
-// no-slip wall's hold wins: the node is at rest where that wall holds it).
+// material (contact[i, k]) the normal velocity is the wall's: held(i, k) (m/s; held empty:
+// every wall at rest; an inlet's nodes hold its inflow, inlets.hpp); elsewhere on the wall
+// only a velocity into the wall is removed. A no-slip pair (no_slip(e)) also sets the
+// tangential velocity to the wall's where its node is in contact (at an edge node of a
+// no-slip and a slip wall the no-slip wall's hold wins).
 void apply_walls(View<const index_t> node, View<const index_t> axis, View<const double> sign,
-                 View<const bool> no_slip, View<double, 2> v, View<const bool, 2> contact);
+                 View<const bool> no_slip, View<double, 2> v, View<const bool, 2> contact,
+                 View<const double, 2> held = {});
 
 // The wall nodes that hold the material as the pressure step starts (in place):
 // contact[i, k] is set where node i carries a pressure unknown (node_row >= 0) or v* presses

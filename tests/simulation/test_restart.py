@@ -33,6 +33,13 @@ SCHEMES = {
     # water leaves through an outlet from about 0.05 s: the particles removed, the outflow
     # and the affine matrices of those kept are in the checkpoint
     "outlet": ["domain.size=[0.16, 0.44]", 'domain.walls={x_max="outlet"}', "solver.transfer=apic"],
+    # water enters through an inlet at about 0.4 of a spacing a step: the inlet's travel and
+    # inflow, and the particles it emitted in each chunk, are in the checkpoint
+    "inlet": [
+        "domain.size=[0.16, 0.44]",
+        'domain.walls={x_max="outlet"}',
+        'inlets=[{side="x_min", speed=0.5, level=0.05}]',
+    ],
 }
 
 
@@ -65,6 +72,7 @@ def _assert_same_run(a, b, out_a, out_b):
     if affine is not None:
         assert affine.any() and np.array_equal(affine, b.scheme.affine)
     assert a.scheme.outflow == b.scheme.outflow
+    assert a.scheme.inflow == b.scheme.inflow
     assert a.steps == b.steps and a.time == b.time
     for name in ("timeseries.csv", "particles.pvd"):
         assert (out_a / name).read_text() == (out_b / name).read_text(), name

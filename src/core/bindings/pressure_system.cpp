@@ -39,7 +39,8 @@ void bind_pressure_system(nb::module_& m) {
               view<const double, 2>(vstar, "vstar"), view<const bool, 2>(contact, "contact"),
               wall_flux, expansion, rho_over_dt, view<const index_t>(static_slot, "static_slot"),
               view<const double, 4>(F, "F"), view<const double, 4>(Wf, "Wf"),
-              view<const bool>(ocontact, "ocontact"), view<double>(rhs, "rhs"));
+              view<const bool>(ocontact, "ocontact"), View<const double, 2>(),
+              view<double>(rhs, "rhs"));
         });
       },
       "The right-hand side of eq. (13) for every unknown.");

@@ -230,7 +230,10 @@ void bind_dim(nb::module_& m) {
              nb::object K, nb::object C, nb::object V, nb::object F, nb::object Wf,
              nb::object onode, nb::object onormal, nb::object ono_slip, nb::object viscous_T,
              bool volume_correction, bool viscous, std::vector<bool> periodic,
-             std::vector<bool> outlet, nb::object wall_bonded) {
+             std::vector<bool> outlet, nb::object wall_bonded, nb::object wall_velocity,
+             nb::object inlet_axis, nb::object inlet_direction, nb::object inlet_speed,
+             nb::object inlet_first, nb::object inlet_layer, nb::object inlet_spacing,
+             nb::object inlet_mass, nb::object inlet_volume) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -261,6 +264,40 @@ void bind_dim(nb::module_& m) {
               throw std::invalid_argument("State: outlet needs one flag per side");
             for (std::size_t s = 0; s < outlet.size(); ++s) self->outlet[s] = outlet[s];
             if (!outlet.empty()) T.outlet = View<const bool>(self->outlet.data(), {2 * D});
+            const index_t nn = make_grid<D>(h, cells, periodic).nnodes;
+            T.wall_velocity = table<double, 2>(wall_velocity, "wall_velocity", keep);
+            if (T.wall_velocity.size() > 0 &&
+                (T.wall_velocity.extent(0) != nn || T.wall_velocity.extent(1) != D))
+              throw std::invalid_argument("State: wall_velocity needs nnodes x D values (or none)");
+            Inlets<D>& in = T.inlets;
+            in.axis = table<index_t, 1>(inlet_axis, "inlet_axis", keep);
+            in.direction = table<double, 1>(inlet_direction, "inlet_direction", keep);
+            in.speed = table<double, 1>(inlet_speed, "inlet_speed", keep);
+            in.first = table<index_t, 1>(inlet_first, "inlet_first", keep);
+            in.layer = table<double, 2>(inlet_layer, "inlet_layer", keep);
+            in.spacing = table<double, 1>(inlet_spacing, "inlet_spacing", keep);
+            in.mass = table<double, 1>(inlet_mass, "inlet_mass", keep);
+            in.volume = table<double, 1>(inlet_volume, "inlet_volume", keep);
+            const index_t ninlets = in.speed.size();
+            if (in.axis.size() != ninlets || in.direction.size() != ninlets ||
+                in.spacing.size() != ninlets || in.mass.size() != ninlets ||
+                in.volume.size() != ninlets || (ninlets > 0 && in.first.size() != ninlets + 1))
+              throw std::invalid_argument(
+                  "State: the inlets need an axis, direction, speed, spacing, mass and volume "
+                  "each and inlets + 1 layer offsets");
+            if (ninlets > 0) {
+              if (in.layer.extent(1) != D || in.first(ninlets) != in.layer.extent(0))
+                throw std::invalid_argument(
+                    "State: inlet_layer needs rows x D positions, "
+                    "inlet_first's last entry its rows");
+              for (index_t q = 0; q < ninlets; ++q)
+                if (in.axis(q) < 0 || in.axis(q) >= D || !(in.speed(q) > 0.0) ||
+                    !(in.spacing(q) > 0.0) || !(in.mass(q) > 0.0) || !(in.volume(q) > 0.0) ||
+                    in.first(q) > in.first(q + 1))
+                  throw std::invalid_argument(
+                      "State: inlet " + std::to_string(q) +
+                      " has an axis, speed, particle or layer range out of range");
+            }
             self->state =
                 std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume, lower,
                                            upper, margin, T, volume_correction, viscous);
@@ -316,6 +353,22 @@ void bind_dim(nb::module_& m) {
       .def_prop_rw(
           "since_volume", [](S& self) { return self.state->since_volume(); },
           [](S& self, double t) { self.state->set_since_volume(t); })
+      .def(
+          "set_inlet_pool",
+          [](S& self, index_t first, index_t end) {
+            if (first < 0 || end < first)
+              throw std::invalid_argument("set_inlet_pool: need 0 <= first <= end");
+            self.state->set_inlet_pool(first, end);
+          },
+          nb::arg("first"), nb::arg("end"),
+          "The dormant particles [first, end) the inlets may emit in the next chunk (the "
+          "particle arrays given to it must hold them).")
+      .def_prop_ro(
+          "inlet_next", [](S& self) { return self.state->inlet_next(); },
+          "The first particle of the pool not emitted yet.")
+      .def_prop_ro("inlet_travel", &state_view<D, &State<D>::inlet_travel>,
+                   "Where each inlet's next layer is (m: its centre lies travel - spacing inside "
+                   "the side), a view (writable: a checkpoint restores it).")
       .def(
           "predict",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,

@@ -6,6 +6,7 @@ lets it go where holding it would need suction. An outlet side is no wall (outle
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -41,13 +42,17 @@ def side_conditions(case: Case) -> Bools:
     return np.array(case.domain.no_slip_sides(), dtype=np.bool_)
 
 
-def of_case(case: Case, grid: Grid) -> Walls:
+def of_case(case: Case, grid: Grid, openings: Mapping[int, Ints] | None = None) -> Walls:
     """The walls of the case's domain on its grid (an outlet side has none: its nodes are
-    never held; ``boundaries.outlets``)."""
+    never held; ``boundaries.outlets``). ``openings``: the inlets' (``inlets.Tables``), side
+    -> its nodes in the opening: those pairs are bonded no-slip, held to the inflow."""
     node, axis, sign = state.wall_pairs(tuple(int(c) for c in grid.cells), grid.periodic)
     side = 2 * axis + (sign > 0)
     wall = ~np.array(case.domain.outlet_sides(), dtype=np.bool_)[side]
-    bonded = np.array(case.domain.bonded_sides(), dtype=np.bool_)
-    return Walls(
-        node[wall], axis[wall], sign[wall], side_conditions(case)[side[wall]], bonded[side[wall]]
-    )
+    no_slip = side_conditions(case)[side]
+    bonded = np.array(case.domain.bonded_sides(), dtype=np.bool_)[side]
+    for s, nodes in (openings or {}).items():
+        opening = (side == s) & np.isin(node, nodes)
+        no_slip = no_slip | opening
+        bonded = bonded | opening
+    return Walls(node[wall], axis[wall], sign[wall], no_slip[wall], bonded[wall])

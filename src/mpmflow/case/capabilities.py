@@ -14,12 +14,13 @@ FEATURES = {
     "outlets": 'outlets (domain.walls = "outlet")',
     "solids": 'solids (material.model = "elastic", "von_mises" or "drucker_prager")',
     "bonded": 'bonded walls (domain.walls = "bonded")',
+    "inlets": "inlets ([[inlets]])",
 }
 
 # solver.scheme -> the FEATURES it supports
 SUPPORTS: dict[str, frozenset[str]] = {
     "projection": frozenset(
-        {"obstacles", "materials", "periodic", "apic", "outlets", "solids", "bonded"}
+        {"obstacles", "materials", "periodic", "apic", "outlets", "solids", "bonded", "inlets"}
     ),
     "explicit": frozenset(),
 }

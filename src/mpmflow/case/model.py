@@ -16,6 +16,8 @@ from ..grid import Grid
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
 from . import capabilities, probe_data
 from .domain import Domain
+from .inlets import Inlet
+from .inlets import problem as inlet_problem
 from .sections import (
     MAX_PRESSURE,
     MAX_STEPS,
@@ -73,6 +75,13 @@ class Case(Section):
         "sampled at every output time into probes.csv (a column per probe, named by "
         "probes.N.name; time in s).",
     )
+    inlets: list[Inlet] = Field(
+        [],
+        description="Velocity inlets ([[inlets]] tables): water entering through part of a "
+        "side at a given speed (inlets.N.side, speed, level), so that a channel with an "
+        "outlet downstream runs steady; what entered is counted in summary.json's inflow. "
+        "The projection scheme only, one process.",
+    )
     execution: Execution = Execution()
 
     _base_dir: Path | None = PrivateAttr(None)  # the case file's folder
@@ -126,6 +135,7 @@ class Case(Section):
                 any(self.domain.bonded_sides()),
                 'make the bonded sides of domain.walls "no_slip"',
             ),
+            "inlets": (bool(self.inlets), "remove the [[inlets]]"),
         }
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():
@@ -274,7 +284,7 @@ class Case(Section):
             self._base_dir = Path(info.context["base_dir"])
         size = self.domain.size
         self._same_dimension()
-        message = self._unsupported()
+        message = self._unsupported() or inlet_problem(self)
         if message:
             raise ValueError(message)
         if self.domain.uniform_walls() is None:

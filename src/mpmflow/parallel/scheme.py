@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from .. import materials, state
 from ..arrays import Floats, Ints
-from ..boundaries import obstacles, outlets, walls
+from ..boundaries import inlets, obstacles, outlets, walls
 from ..errors import SolverError
 from ..grid import Grid
 from ..particles import Particles
@@ -82,6 +82,7 @@ class DistributedProjection(ProjectionScheme):
         self.apic = s.transfer == "apic"
         self.open = False
         self.outflow = outlets.Outflow()  # none: outlets are refused on several ranks
+        self.inflow = inlets.Inflow()  # none: inlets are refused on several ranks
         self.viscous = materials.is_viscous(case.material)
         self.viscous_solve = DistributedViscous(
             self.comm, s.tolerance, s.max_iterations, s.petsc_preconditioner

@@ -32,6 +32,8 @@ def refusals(case: Case) -> list[str]:
         )
     if any(case.domain.bonded_sides()):
         out.append('bonded walls are not split over ranks yet: make them "no_slip"')
+    if case.inlets:
+        out.append("inlets are not split over ranks yet: remove the [[inlets]]")
     if s.linear_solver in ("amg", "direct"):
         out.append(
             f'solver.linear_solver = "{s.linear_solver}" runs on one process: on several '

@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from ..particles import Particles
     from .projection import StepReport
 
+from ..boundaries.inlets import Inflow
 from ..boundaries.outlets import Outflow
 
 
@@ -25,6 +26,7 @@ class Scheme(Protocol):
     last_unknowns: int  # the size of the last step's system (0: none)
     particles: Particles  # the particles it moves (set anew before the first step: setup)
     outflow: Outflow  # what has left through the domain's outlets
+    inflow: Inflow  # what has entered through its inlets
 
     def __init__(self, case: Case, grid: Grid, particles: Particles) -> None: ...
 

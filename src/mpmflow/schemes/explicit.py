@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import state
-from ..boundaries import outlets, walls
+from ..boundaries import inlets, outlets, walls
 from ..case import capabilities
 from ..errors import SimulationError
 from ..grid import Grid
@@ -50,6 +50,7 @@ class ExplicitScheme:
         self.grid = grid
         self.particles = particles
         self.outflow = outlets.Outflow()  # no outlets: nothing leaves
+        self.inflow = inlets.Inflow()  # no inlets: nothing enters
         m, sv = case.material, case.solver
         q_lin, q_quad = (float(q) for q in sv.explicit_bulk_viscosity)
         self.settings = state.ExplicitSettings(

@@ -17,7 +17,7 @@ from typing_extensions import Self
 
 from .. import materials, state
 from ..arrays import Floats
-from ..boundaries import obstacles, outlets, walls
+from ..boundaries import inlets, obstacles, outlets, walls
 from ..case import capabilities
 from ..errors import CaseError, SolverError
 from ..grid import Grid
@@ -135,6 +135,8 @@ class ProjectionScheme:
         self.solid = materials.is_solid(case.material)
         self.open = bool(outlets.sides(case).any())  # outlets: particles leave the run
         self.outflow = outlets.Outflow()
+        self.inlets = inlets.of_case(case, grid)  # inlets: particles enter the run
+        self.inflow = inlets.Inflow()
         # with APIC also their affine matrices (zero); a solid's stress history (zero)
         self.particles = particles
         self.solids = obstacles.of_case(case, grid)
@@ -145,7 +147,7 @@ class ProjectionScheme:
             if self.viscous
             else np.zeros((0, 0, 0, 0))
         )
-        self.walls = walls.of_case(case, grid)
+        self.walls = walls.of_case(case, grid, self.inlets.openings)
         self.core = state.step_state(
             grid,
             self.walls.as_tuple(),
@@ -156,6 +158,8 @@ class ProjectionScheme:
             self.viscous,
             outlets.sides(case) if self.open else (),
             bonded=self.walls.bonded,
+            held=self.inlets.held if self.inlets.present else None,
+            inlets=self.inlets.core() if self.inlets.present else None,
         )
         # amg, direct, petsc: solvers from Python, plugged into the compiled step
         self.python_solver = (
@@ -163,6 +167,8 @@ class ProjectionScheme:
         )
         if self.python_solver is not None:
             self.python_solver.use(self.core)
+        if self.inlets.present:  # the next layers continue the bodies' lattice (k + 1/2) s
+            self.core.inlet_travel[:] = self.inlets.spacing / 2
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (advance_span)
@@ -195,6 +201,34 @@ class ProjectionScheme:
         )
         # with outlets, the particles' own mass and volume: the core zeroes a retired one's
         self._own = (P.mass.copy(), P.volume.copy()) if self.open else None
+
+    def _supply(self, duration: float) -> None:
+        """Before a chunk of ``duration`` (s): the inlets' pool of dormant particles at the
+        end of the particle arrays (src/core/inlets.hpp)."""
+        if not self.inlets.present:
+            return
+        size = self.inlets.pool_size(self.core.inlet_travel, duration)
+        extra = [] if self.affine is None else [self.affine]
+        first, end = self.inflow.supply(self._P, size, extra)
+        if self.affine is not None:
+            self.affine = extra[0]
+        self.core.set_inlet_pool(first, end)
+
+    def _settle(self) -> None:
+        """After a chunk: the pool's emitted particles kept and counted, the rest removed."""
+        if not self.inlets.present:
+            return
+        first = self.inflow.pool[0]
+        emitted = int(self.core.inlet_next) - first
+        keep = self.inflow.settle(self._P, first + emitted, self.inlets.particle)
+        if keep is not None and self.affine is not None:
+            self.affine = self.affine[keep]
+        if self._own is not None:  # the emitted particles' own mass and volume
+            m, V = self.inlets.particle
+            self._own = (
+                np.concatenate([self._own[0], np.full(emitted, m)]),
+                np.concatenate([self._own[1], np.full(emitted, V)]),
+            )
 
     def _drain(self) -> None:
         """Remove the particles that left through an outlet in the last chunk."""
@@ -278,6 +312,9 @@ class ProjectionScheme:
             saved[name] = a.copy()
         if self.open:
             saved["outflow"] = self.outflow.as_array()
+        if self.inlets.present:
+            saved["inflow"] = self.inflow.as_array()
+            saved["inlet_travel"] = self.core.inlet_travel.copy()
         return saved
 
     def restore(self, saved: dict[str, NDArray[Any]]) -> None:
@@ -293,6 +330,9 @@ class ProjectionScheme:
             np.copyto(q, saved["volume_q"])
         if self.open:
             self.outflow = outlets.Outflow.of_array(saved["outflow"])
+        if self.inlets.present:
+            self.inflow = inlets.Inflow.of_array(saved["inflow"])
+            np.copyto(self.core.inlet_travel, saved["inlet_travel"])
         if self.affine is not None:
             affine = saved["affine"]  # KeyError, or ValueError if its shape differs
             if affine.shape != self.affine.shape:
@@ -338,6 +378,7 @@ class ProjectionScheme:
         the steps (residual: the worst)."""
         O = self.options(dt)
         report = state.Report()
+        self._supply(dt * nsteps)
         if self.auto:
             return self._adaptive(O, dt * nsteps, report, where)
         try:
@@ -349,6 +390,7 @@ class ProjectionScheme:
             self.steps += k
             raise pressure.setup_failed(where(k), err, int(report.last_unknowns)) from err
         finally:
+            self._settle()
             self._drain()
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
@@ -371,6 +413,7 @@ class ProjectionScheme:
             self.steps += k
             raise pressure.setup_failed(where(k), err, int(report.last_unknowns)) from err
         finally:
+            self._settle()
             self._drain()
         done = int(report.steps)
         self.steps += done

@@ -144,11 +144,13 @@ def resume_from(
     sim = cls(case, out_dir, progress)
     P = sim.particles
     count = P.count
-    # with outlets (domain.walls = "outlet") the particles that left are not in it
+    # with outlets (domain.walls = "outlet") the particles that left are not in it; with
+    # inlets ([[inlets]]) those that entered are
     fewer = bool(outlets.sides(case).any()) and arrays["x"].shape[0] <= count
+    other = fewer or bool(case.inlets)
     for name in Particles.FIELDS:
         saved = arrays[name]
-        if saved.shape[1:] != getattr(P, name).shape[1:] or not (saved.shape[0] == count or fewer):
+        if saved.shape[1:] != getattr(P, name).shape[1:] or not (saved.shape[0] == count or other):
             raise CaseError(
                 f"--restart: checkpoint {path} holds {saved.shape[0]} "
                 f"particles, the case {count}; it belongs to another case."

@@ -55,6 +55,7 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
     bins = sim._bins()
     mass = float(P.mass.sum())
     out = sim.scheme.outflow
+    into = sim.scheme.inflow
     return {
         "status": status,
         "message": message,
@@ -62,13 +63,15 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         "time": sim.time,
         "steps": sim.steps,
         "particles": P.count,
-        "particles_lost": sim.count0 - P.count - out.count,
+        "particles_lost": sim.count0 + into.count - P.count - out.count,
         "particles_moved_inside": c.moved_inside,
         "mass_initial": sim.mass0,
         "mass_final": mass,
-        "mass_relative_change": (mass + out.mass - sim.mass0) / sim.mass0,
-        # through the outlets (domain.walls = "outlet"): particles, kg, m^3
+        "mass_relative_change": (mass + out.mass - into.mass - sim.mass0) / sim.mass0,
+        # through the outlets (domain.walls = "outlet") and the inlets ([[inlets]]):
+        # particles, kg, m^3
         "outflow": {"particles": out.count, "mass": out.mass, "volume": out.volume},
+        "inflow": {"particles": into.count, "mass": into.mass, "volume": into.volume},
         "max_particles_per_cell": int(np.diff(bins.start).max()),
         # the largest rise of KE + PE above its start, against the threshold (energy.py)
         "energy": energy.record(sim),

@@ -111,6 +111,10 @@ class CoreState(Protocol):
     fluid) and the step's options; the arrays it exposes are views of its own storage."""
 
     since_volume: float  # the time since the last volume correction (s)
+    inlet_travel: Floats  # where each inlet's next layer is (m; src/core/inlets.hpp)
+    inlet_next: int  # the first particle of the inlets' pool not emitted yet
+
+    def set_inlet_pool(self, first: int, end: int) -> None: ...
 
     def advance(
         self,
@@ -425,6 +429,8 @@ def step_state(
     lower: Sequence[float] | Floats | None = None,
     upper: Sequence[float] | Floats | None = None,
     bonded: Bools | None = None,
+    held: Floats | None = None,
+    inlets: Sequence[Floats | Ints] | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
@@ -436,7 +442,10 @@ def step_state(
     particles are put back inside: 0 for a grid on the whole domain, the global domain's
     corner for a grid on a part of it; ``upper`` likewise the upper corner (None: the
     grid's extent); ``bonded`` one flag per wall pair, the pairs held in tension too (None:
-    none).
+    none); ``held`` (nnodes x D, m/s; None: every wall at rest) the velocity each wall node
+    is held to where its wall holds the material (an inlet's inflow); ``inlets`` the inlets'
+    tables (axis, direction, speed, first, layer, spacing, mass, volume:
+    ``boundaries.inlets.Tables.core``; None: none).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -470,7 +479,27 @@ def step_state(
         [bool(p) for p in grid.periodic],
         [bool(s) for s in outlets],
         np.ascontiguousarray(np.zeros(0) if bonded is None else bonded, dtype=np.bool_),
+        arrays.floats(np.zeros((0, D)) if held is None else held),
+        *_inlet_tables(D, inlets),
     )
+
+
+def _inlet_tables(D: int, inlets: Sequence[Floats | Ints] | None) -> list[Floats | Ints]:
+    """The inlets' arrays in the core's types (empty ones for none)."""
+    if inlets is None:
+        empty = np.zeros(0)
+        inlets = (empty, empty, empty, np.zeros(1), np.zeros((0, D)), empty, empty, empty)
+    axis, direction, speed, first, layer, spacing, mass, volume = inlets
+    return [
+        arrays.ints(axis),
+        arrays.floats(direction),
+        arrays.floats(speed),
+        arrays.ints(first),
+        arrays.floats(layer),
+        arrays.floats(spacing),
+        arrays.floats(mass),
+        arrays.floats(volume),
+    ]
 
 
 def step_options(dim: int, **settings: float | bool | list[float]) -> CoreOptions:

@@ -1,0 +1,123 @@
+"""The case's [[inlets]] tables: velocity inlets on the domain's sides (SI units: m, m/s),
+and the rules between an inlet and the rest of the case."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Literal
+
+from pydantic import Field
+
+from .. import materials
+from .domain import AXES
+from .sections import Section
+
+if TYPE_CHECKING:
+    from .model import Case
+
+Side = Literal["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"]
+
+
+class Inlet(Section):
+    side: Side = Field(
+        description="The side of the domain the water enters through: x_min, x_max (and "
+        "y_min, y_max in 3D); not the floor or the ceiling (the last axis is up).",
+        examples=["x_min"],
+    )
+    speed: float = Field(
+        description="Speed (m/s) of the inflow, uniform over the opening and normal to the "
+        "side, into the domain. The side's nodes in the opening hold the water to it "
+        "(a wall moving into the domain that never lets go), and the inlet adds a layer of "
+        "particles each time the inflow has travelled one particle spacing: the volume "
+        "that enters is speed x the opening's area x time.",
+        gt=0,
+        examples=[0.5],
+    )
+    level: float = Field(
+        description="Top of the opening (m, along the last axis, from the floor): the water "
+        "enters between the floor and this level, across the whole side. Rounded to the "
+        "particles' lattice (a whole number of particle rows). Above it the side is the "
+        "wall domain.walls gives it.",
+        gt=0,
+        examples=[0.1],
+    )
+    particles_per_cell: int = Field(
+        2,
+        ge=1,
+        le=16,
+        description="Material points per cell along each axis of the water the inlet brings "
+        "(as bodies.N.particles_per_cell).",
+    )
+
+    @property
+    def axis(self) -> int:
+        return AXES.index(self.side[0])
+
+    @property
+    def lower(self) -> bool:
+        """Whether the side is at the axis's lower end (0), the flow towards +axis."""
+        return self.side.endswith("_min")
+
+
+def problem(case: Case) -> str | None:
+    """What is wrong with the case's inlets (None: nothing)."""
+    if not case.inlets:
+        return None
+    D = len(case.domain.size)
+    if materials.viscous_solve(case.material):
+        return (
+            f'material.model = "{case.material.model}": inlets bring inviscid water or a '
+            "material without the implicit viscous solve so far (its held nodes would need the "
+            'inflow as their value); give material.model = "water", or remove the [[inlets]]'
+        )
+    periodic = case.domain.periodic or [False] * D
+    conditions = case.domain.wall_conditions()
+    seen: set[str] = set()
+    for k, inlet in enumerate(case.inlets):
+        name = f"inlets.{k}"
+        axis = inlet.axis
+        if axis >= D:
+            return f'{name}.side = "{inlet.side}" is not a side of a {D}D domain'
+        if axis == D - 1:
+            return (
+                f'{name}.side = "{inlet.side}" is the floor or the ceiling; an inlet is a '
+                f"side the water enters through sideways: give x_min or x_max"
+                + (" (or y_min, y_max)" if D == 3 else "")
+            )
+        if periodic[axis]:
+            return (
+                f'{name}.side = "{inlet.side}": {AXES[axis]} is periodic (domain.periodic) and '
+                "has no sides; make it a wall axis or move the inlet"
+            )
+        if conditions[axis][0 if inlet.lower else 1] == "outlet":
+            return (
+                f'{name}.side = "{inlet.side}" is an outlet in domain.walls; a side is one or '
+                "the other: give the outlet another side"
+            )
+        if inlet.particles_per_cell != case.inlets[0].particles_per_cell:
+            return (
+                f"{name}.particles_per_cell = {inlet.particles_per_cell} differs from "
+                f"inlets.0's {case.inlets[0].particles_per_cell}; the inlets share one lattice: "
+                "give them the same particles_per_cell"
+            )
+        if inlet.side in seen:
+            return f'two inlets on side "{inlet.side}"; give one inlet per side'
+        seen.add(inlet.side)
+        top = case.domain.size[D - 1]
+        spacing = case.grid.spacing / inlet.particles_per_cell
+        if inlet.level > top * (1 + 1e-12):
+            return (
+                f"{name}.level = {inlet.level:g} m is above the domain's top ({top:g} m); "
+                f"lower it or enlarge domain.size"
+            )
+        if inlet.level < spacing * (1 - 1e-9):
+            return (
+                f"{name}.level = {inlet.level:g} m is below one particle spacing "
+                f"({spacing:g} m: grid.spacing / {name}.particles_per_cell); raise it"
+            )
+        if inlet.speed > case.solver.max_speed:
+            return (
+                f"{name}.speed = {inlet.speed:g} m/s is above solver.max_speed = "
+                f"{case.solver.max_speed:g} m/s, the speed the run stops at; lower it or "
+                "raise solver.max_speed"
+            )
+    return None
