@@ -481,7 +481,7 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
   // the strain rate of the particles' velocity with the held nodes at rest
   auto v_rate = v_rate_.template view<2>({nn, D});
   rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, T_.onode, ocontact,
-                   T_.ono_slip, v_rate);
+                   T_.ono_slip, v_rate, T_.wall_velocity);
   // a solid's implicit elastic predictor (plasticity.hpp): the viscous step with eta = G dt,
   // the old stress's force already in v* (scatter)
   const bool solid = is_solid(O.model);
@@ -520,9 +520,9 @@ index_t State<D>::viscous_system(const Options<D>& O) {
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
-  const index_t n =
-      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact,
-                         T_.onode, ocontact, T_.ono_slip, base, vu, vrow, voff, &grid_);
+  const index_t n = number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis,
+                                       T_.wall_no_slip, contact, T_.onode, ocontact, T_.ono_slip,
+                                       base, vu, vrow, voff, &grid_, T_.wall_velocity);
   if (n == 0) return 0;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});

@@ -80,6 +80,24 @@ def test_a_uniform_stream_through_an_inlet_and_an_outlet_stays_uniform(gravity):
         assert m + out.mass - into.mass == pytest.approx(M0, rel=1e-12), t
 
 
+def test_a_viscous_stream_holds_the_inflow_in_its_viscous_solve():
+    """A Newtonian stream (1 Pa s, a thousand times water's) without gravity: uniform, it
+    has no shear, so the implicit viscous solve must leave it as it is; it can only if the
+    inlet's nodes are held there to the inflow, not at rest as a wall's (at rest they sheared
+    the water beside them)."""
+    _summary, (V0, M0), rows = _run(
+        _stream(
+            "physics.gravity=[0.0, 0.0]",
+            "time.dt=0.005",
+            'material.model="newtonian"',
+            "material.viscosity=1.0",
+        )
+    )
+    for t, _into, _out, v, _m, _x, vel in rows:
+        assert np.abs(vel[:, 0] - U).max() < 1e-9 and np.abs(vel[:, 1]).max() < 1e-9, t
+        assert v == pytest.approx(L * H, rel=1e-12), t
+
+
 def test_at_any_step_the_stream_stays_within_a_fraction_of_a_percent():
     """At a step that is not a whole number of spacings (4 ms: 0.8 of one) the first layer
     lies anywhere within a spacing of the side and the cells along it hold their share of
@@ -165,10 +183,10 @@ def test_a_3d_stream_enters_and_keeps_its_speed():
         (
             [
                 'inlets=[{side="x_min", speed=1.0, level=0.1}]',
-                'material.model="newtonian"',
-                "material.viscosity=1e-3",
+                'material.model="elastic"',
+                "material.shear_modulus=1e6",
             ],
-            "inlets bring inviscid water",
+            "inlets bring a fluid",
         ),
         (
             ['inlets=[{side="x_min", speed=1.0, level=0.1}]', 'solver.scheme="explicit"'],

@@ -63,11 +63,10 @@ def problem(case: Case) -> str | None:
     if not case.inlets:
         return None
     D = len(case.domain.size)
-    if materials.viscous_solve(case.material):
+    if materials.is_solid(case.material):
         return (
-            f'material.model = "{case.material.model}": inlets bring inviscid water or a '
-            "material without the implicit viscous solve so far (its held nodes would need the "
-            'inflow as their value); give material.model = "water", or remove the [[inlets]]'
+            f'material.model = "{case.material.model}" is a solid; inlets bring a fluid (water '
+            "or a viscous material): give a fluid material.model, or remove the [[inlets]]"
         )
     periodic = case.domain.periodic or [False] * D
     conditions = case.domain.wall_conditions()
