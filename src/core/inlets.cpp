@@ -11,17 +11,16 @@ index_t emit_layers(const Inlets<D>& in, double dt, View<double> travel, InletPo
                     View<double> pressure, View<double, 3> affine) {
   index_t emitted = 0;
   for (index_t q = 0; q < in.count(); ++q) {
-    travel(q) += in.speed(q) * dt;
     const index_t k = in.axis(q);
-    const double dir = in.direction(q);
-    while (travel(q) >= in.spacing(q)) {
-      travel(q) -= in.spacing(q);
-      const index_t rows = in.first(q + 1) - in.first(q);
-      if (pool.next + rows > pool.end)
-        throw std::logic_error("emit_layers: the inlets' pool of dormant particles ran out (" +
-                               std::to_string(pool.end - pool.next) + " left, a layer of " +
-                               std::to_string(rows) + "): the chunk was longer than its pool");
-      for (index_t r = in.first(q); r < in.first(q + 1); ++r) {
+    const double dir = in.direction(q), s = in.spacing(q);
+    for (index_t r = in.first(q); r < in.first(q + 1); ++r) {
+      travel(r) += in.speed(r) * dt;
+      while (travel(r) >= s) {
+        travel(r) -= s;
+        if (pool.next >= pool.end)
+          throw std::logic_error("emit_layers: the inlets' pool of dormant particles ran out (" +
+                                 std::to_string(pool.end) +
+                                 " particles): the chunk was longer than its pool");
         const index_t p = pool.next++;
         for (int m = 0; m < D; ++m) {
           x(p, m) = in.layer(r, m);
@@ -29,8 +28,8 @@ index_t emit_layers(const Inlets<D>& in, double dt, View<double> travel, InletPo
           if (affine.size() > 0)
             for (int j = 0; j < D; ++j) affine(p, m, j) = 0.0;
         }
-        x(p, k) += dir * travel(q);
-        v(p, k) = dir * in.speed(q);
+        x(p, k) += dir * travel(r);
+        v(p, k) = dir * in.speed(r);
         mass(p) = in.mass(q);
         volume(p) = in.volume(q);
         pressure(p) = 0.0;

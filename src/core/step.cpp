@@ -64,7 +64,7 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
       obstacles_(tables.phi.size() > 0),
       nstatic_(tables.K_static.extent(0)) {
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
-  travel_.assign(static_cast<std::size_t>(T_.inlets.count()), 0.0);
+  travel_.assign(static_cast<std::size_t>(T_.inlets.rows()), 0.0);
   start_.reserve(nc + 1);
   theta_.reserve(nc);
   node_mass_.reserve(nn);

@@ -259,8 +259,8 @@ class State {
   // arrays it is given (inlets.hpp); inlet_next(): the first not emitted yet.
   void set_inlet_pool(index_t first, index_t end) { pool_ = InletPool{first, end}; }
   index_t inlet_next() const { return pool_.next; }
-  // each inlet's distance travelled since its last layer (m; kept in checkpoints)
-  View<double> inlet_travel() { return View<double>(travel_.data(), {T_.inlets.count()}); }
+  // where each inlet row's next particle is (m, inlets.hpp; kept in checkpoints)
+  View<double> inlet_travel() { return View<double>(travel_.data(), {T_.inlets.rows()}); }
 
   // The pressure step's solver: solver (not owned; it must outlive its use), or the
   // step's own multigrid (nullptr, the default).
@@ -399,7 +399,7 @@ class State {
   int step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report);
   std::array<double, NPHASES> phase_seconds_{};
   double since_volume_ = 0.0;
-  std::vector<double> travel_;  // per inlet (inlet_travel)
+  std::vector<double> travel_;  // per inlet row (inlet_travel)
   InletPool pool_;
   Grid<D> grid_;
   double cell_volume_;

@@ -28,9 +28,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from .errors import CaseError
 from .geometry import bodies
-from .geometry.lattice import lattice_count
+from .geometry.lattice import lattice_axes, lattice_count
 from .grid import Grid
 from .materials import is_solid
 
@@ -145,13 +147,13 @@ def inflow_count(case: Case) -> int:
     D = len(size)
     for inlet in case.inlets:
         s = case.grid.spacing / inlet.particles_per_cell
-        rows = 1
-        for k in range(D):
-            if k == inlet.axis:
-                continue
-            top = math.floor(inlet.level / s + 1e-9) * s if k == D - 1 else size[k]
-            rows *= lattice_count([0.0], [top], s)
-        total += rows * (math.floor(inlet.speed * case.time.end / s) + 1)
+        across = 1  # the lattice's rows across the side's horizontal axes
+        for k in range(D - 1):
+            if k != inlet.axis:
+                across *= lattice_count([0.0], [size[k]], s)
+        heights = lattice_axes([0.0], [math.floor(inlet.level / s + 1e-9) * s], s)[0]
+        per_row = np.floor(inlet.speed_at(heights) * case.time.end / s) + 1
+        total += across * int(per_row.sum())
     return total
 
 

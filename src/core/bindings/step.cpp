@@ -278,25 +278,27 @@ void bind_dim(nb::module_& m) {
             in.spacing = table<double, 1>(inlet_spacing, "inlet_spacing", keep);
             in.mass = table<double, 1>(inlet_mass, "inlet_mass", keep);
             in.volume = table<double, 1>(inlet_volume, "inlet_volume", keep);
-            const index_t ninlets = in.speed.size();
-            if (in.axis.size() != ninlets || in.direction.size() != ninlets ||
-                in.spacing.size() != ninlets || in.mass.size() != ninlets ||
-                in.volume.size() != ninlets || (ninlets > 0 && in.first.size() != ninlets + 1))
+            const index_t ninlets = in.direction.size();
+            if (in.axis.size() != ninlets || in.spacing.size() != ninlets ||
+                in.mass.size() != ninlets || in.volume.size() != ninlets ||
+                (ninlets > 0 && in.first.size() != ninlets + 1) ||
+                in.speed.size() != in.layer.extent(0))
               throw std::invalid_argument(
-                  "State: the inlets need an axis, direction, speed, spacing, mass and volume "
-                  "each and inlets + 1 layer offsets");
+                  "State: the inlets need an axis, direction, spacing, mass and volume each, "
+                  "inlets + 1 layer offsets and a speed per layer row");
             if (ninlets > 0) {
               if (in.layer.extent(1) != D || in.first(ninlets) != in.layer.extent(0))
                 throw std::invalid_argument(
                     "State: inlet_layer needs rows x D positions, "
                     "inlet_first's last entry its rows");
               for (index_t q = 0; q < ninlets; ++q)
-                if (in.axis(q) < 0 || in.axis(q) >= D || !(in.speed(q) > 0.0) ||
-                    !(in.spacing(q) > 0.0) || !(in.mass(q) > 0.0) || !(in.volume(q) > 0.0) ||
-                    in.first(q) > in.first(q + 1))
-                  throw std::invalid_argument(
-                      "State: inlet " + std::to_string(q) +
-                      " has an axis, speed, particle or layer range out of range");
+                if (in.axis(q) < 0 || in.axis(q) >= D || !(in.spacing(q) > 0.0) ||
+                    !(in.mass(q) > 0.0) || !(in.volume(q) > 0.0) || in.first(q) > in.first(q + 1))
+                  throw std::invalid_argument("State: inlet " + std::to_string(q) +
+                                              " has an axis, particle or layer range out of range");
+              for (index_t r = 0; r < in.speed.size(); ++r)
+                if (!(in.speed(r) >= 0.0))
+                  throw std::invalid_argument("State: an inlet row's speed must be >= 0");
             }
             self->state =
                 std::make_unique<State<D>>(make_grid<D>(h, cells, periodic), cell_volume, lower,
@@ -367,8 +369,8 @@ void bind_dim(nb::module_& m) {
           "inlet_next", [](S& self) { return self.state->inlet_next(); },
           "The first particle of the pool not emitted yet.")
       .def_prop_ro("inlet_travel", &state_view<D, &State<D>::inlet_travel>,
-                   "Where each inlet's next layer is (m: its centre lies travel - spacing inside "
-                   "the side), a view (writable: a checkpoint restores it).")
+                   "Where each inlet row's next particle is (m: its centre lies travel - spacing "
+                   "inside the side), a view (writable: a checkpoint restores it).")
       .def(
           "predict",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,

@@ -3,11 +3,14 @@ and the rules between an inlet and the rest of the case."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Annotated, Literal
 
-from pydantic import Field
+import numpy as np
+from pydantic import Field, model_validator
+from typing_extensions import Self
 
 from .. import materials
+from ..arrays import Floats
 from .domain import AXES
 from .sections import Section
 
@@ -23,14 +26,25 @@ class Inlet(Section):
         "y_min, y_max in 3D); not the floor or the ceiling (the last axis is up).",
         examples=["x_min"],
     )
-    speed: float = Field(
+    speed: float | None = Field(
+        None,
         description="Speed (m/s) of the inflow, uniform over the opening and normal to the "
-        "side, into the domain. The side's nodes in the opening hold the water to it "
-        "(a wall moving into the domain that never lets go), and the inlet adds a layer of "
-        "particles each time the inflow has travelled one particle spacing: the volume "
-        "that enters is speed x the opening's area x time.",
+        "side, into the domain (or give profile). The side's nodes in the opening hold the "
+        "water to it (a wall moving into the domain that never lets go), and each row of the "
+        "particles' lattice across the opening adds a particle each time the inflow there "
+        "has travelled one particle spacing: the volume that enters is the speed x the "
+        "opening's area x time.",
         gt=0,
         examples=[0.5],
+    )
+    profile: list[Annotated[list[float], Field(min_length=2, max_length=2)]] | None = Field(
+        None,
+        description="A profiled inflow instead of speed: [[z, u], ...] pairs of height above "
+        "the floor (m, increasing) and speed (m/s, >= 0), the speed at any height "
+        "interpolated linearly between them and held at the end values beyond them; e.g. a "
+        "power law tabulated, [[0.0, 0.0], [0.01, 0.35], [0.05, 0.48], [0.1, 0.5]].",
+        min_length=1,
+        examples=[[[0.0, 0.0], [0.05, 0.4], [0.1, 0.5]]],
     )
     level: float = Field(
         description="Top of the opening (m, along the last axis, from the floor): the water "
@@ -47,6 +61,42 @@ class Inlet(Section):
         description="Material points per cell along each axis of the water the inlet brings "
         "(as bodies.N.particles_per_cell).",
     )
+
+    @model_validator(mode="after")
+    def _speed_or_profile(self) -> Self:
+        if (self.speed is None) == (self.profile is None):
+            raise ValueError(
+                "give an inlet either speed (m/s, uniform) or profile ([[z, u], ...]), "
+                "not both nor neither"
+            )
+        if self.profile is not None:
+            z = [p[0] for p in self.profile]
+            u = [p[1] for p in self.profile]
+            if z[0] < 0 or any(b <= a for a, b in zip(z, z[1:])):
+                raise ValueError(
+                    f"profile heights {z} must start at or above the floor (0) and increase"
+                )
+            if min(u) < 0 or max(u) <= 0:
+                raise ValueError(
+                    f"profile speeds {u} must be >= 0 (into the domain), one of them > 0; "
+                    "water leaves through an outlet"
+                )
+        return self
+
+    def speed_at(self, z: Floats) -> Floats:
+        """The inflow's speed (m/s) at heights z (m) above the floor."""
+        if self.profile is None:
+            return np.full(np.shape(z), float(self.speed or 0.0))
+        table = np.asarray(self.profile, dtype=float)
+        speed: Floats = np.interp(z, table[:, 0], table[:, 1])
+        return speed
+
+    @property
+    def fastest(self) -> float:
+        """The largest speed of the inflow (m/s)."""
+        if self.profile is None:
+            return float(self.speed or 0.0)
+        return max(p[1] for p in self.profile)
 
     @property
     def axis(self) -> int:
@@ -113,9 +163,9 @@ def problem(case: Case) -> str | None:
                 f"{name}.level = {inlet.level:g} m is below one particle spacing "
                 f"({spacing:g} m: grid.spacing / {name}.particles_per_cell); raise it"
             )
-        if inlet.speed > case.solver.max_speed:
+        if inlet.fastest > case.solver.max_speed:
             return (
-                f"{name}.speed = {inlet.speed:g} m/s is above solver.max_speed = "
+                f"{name}'s speed {inlet.fastest:g} m/s is above solver.max_speed = "
                 f"{case.solver.max_speed:g} m/s, the speed the run stops at; lower it or "
                 "raise solver.max_speed"
             )

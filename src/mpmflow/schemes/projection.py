@@ -168,7 +168,7 @@ class ProjectionScheme:
         if self.python_solver is not None:
             self.python_solver.use(self.core)
         if self.inlets.present:  # the next layers continue the bodies' lattice (k + 1/2) s
-            self.core.inlet_travel[:] = self.inlets.spacing / 2
+            self.core.inlet_travel[:] = self.inlets.row_spacing() / 2
         self.steps = 0  # steps taken: the volume correction runs on every n-th (n from dt)
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (advance_span)
