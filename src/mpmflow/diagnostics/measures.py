@@ -39,10 +39,11 @@ def last_crossing(f: Floats, centres: Floats, wall: float) -> float:
     return float(last_crossings(f[:, None], centres, wall)[0])
 
 
-def volume_fraction_field(grid: Grid, theta: Floats) -> Floats:
+def volume_fraction_field(grid: Grid, theta: Floats, clip: bool = True) -> Floats:
     """Cell volume fractions as an array indexed [cx, cy] ([cx, cy, cz] in 3D), clipped to
-    [0, 1]."""
-    f: Floats = np.clip(theta, 0.0, 1.0).reshape(grid.cells[::-1]).T
+    [0, 1] (``clip``; else only to >= 0: the particles' volume over the cell's, which
+    exceeds 1 where the lattice is strained)."""
+    f: Floats = np.clip(theta, 0.0, 1.0 if clip else None).reshape(grid.cells[::-1]).T
     return f
 
 

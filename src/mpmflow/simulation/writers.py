@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..arrays import Floats
 from ..diagnostics import probes
 from ..output.snapshots import SnapshotWriter
 from ..output.timeseries import (
@@ -96,6 +97,8 @@ class Probes(_Rows):
 
     def __init__(self, case: Case) -> None:
         super().__init__(probes.columns(case))
+        # the pressure probes' windows: the probes, the grid and the obstacles stand still
+        self._boxes: dict[str, tuple[Floats, Floats]] = {}
 
     def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
         return CsvAppender(
@@ -113,6 +116,7 @@ class Probes(_Rows):
                 sim.time,
                 solids.distance if solids is not None and solids.solids else None,
                 sim.fallbacks,
+                self._boxes,
             )
         )
 
