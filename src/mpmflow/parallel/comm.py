@@ -38,6 +38,8 @@ class Comm(Protocol):
     def alltoall(self, values: list[Any]) -> list[Any]: ...
     def Isend(self, buf: Any, dest: int, tag: int = ...) -> Any: ...
     def Irecv(self, buf: Any, source: int = ..., tag: int = ...) -> Any: ...
+    def isend(self, obj: Any, dest: int, tag: int = ...) -> Any: ...
+    def recv(self, buf: Any = ..., source: int = ..., tag: int = ...) -> Any: ...
     def Barrier(self) -> None: ...
 
 
@@ -63,6 +65,12 @@ class Single:
         raise RuntimeError("one process sends nothing")
 
     def Irecv(self, buf: Any, source: int = 0, tag: int = 0) -> Any:
+        raise RuntimeError("one process receives nothing")
+
+    def isend(self, obj: Any, dest: int, tag: int = 0) -> Any:
+        raise RuntimeError("one process sends nothing")
+
+    def recv(self, buf: Any = None, source: int = 0, tag: int = 0) -> Any:
         raise RuntimeError("one process receives nothing")
 
     def Barrier(self) -> None:

@@ -7,8 +7,12 @@
 - ``halo``: copies of a rank's particles in its neighbours' ghost layers, so that every
   node of a box sees all its particles.
 
-Particles travel as a dict of arrays (one row per particle); the exchanges use mpi4py's
-object collectives (pickled NumPy arrays), node values its buffer sends.
+Particles travel as a dict of arrays (one row per particle), to the neighbours only
+(``subgrid.neighbours``: the ranks whose boxes meet this one's with its ghost layer), one
+message to each of them and one from each, pickled by mpi4py (``swap``); node values
+travel by its buffer sends. (Both used an all-to-all of every rank before, a message to
+each rank of the run whatever its place: the cost the 64-rank model of
+docs/notes/benchmarks-diary.md, "MPI", grows with N.)
 """
 
 from __future__ import annotations
@@ -108,18 +112,43 @@ def owners(boxes: Boxes, sub: Subgrid, x: NDArray[np.float64]) -> NDArray[np.int
     return owner
 
 
-def migrate(comm: Comm, owner: NDArray[np.int64], arrays: ParticleArrays) -> ParticleArrays:
+MIGRATE, HALO = 21, 22  # the tags of the two particle exchanges
+
+
+def swap(comm: Comm, neighbours: list[int], out: dict[int, Any], tag: int) -> dict[int, Any]:
+    """Send ``out[r]`` (None when absent) to each neighbour r and receive one object from
+    each; returns them by sending rank. The neighbour relation is symmetric, so every
+    send has its receive. Collective over the neighbours."""
+    from mpi4py import MPI
+
+    requests = [comm.isend(out.get(r), dest=r, tag=tag) for r in neighbours]
+    got = {r: comm.recv(source=r, tag=tag) for r in neighbours}
+    MPI.Request.waitall(requests)
+    return got
+
+
+def migrate(
+    comm: Comm, owner: NDArray[np.int64], arrays: ParticleArrays, neighbours: list[int]
+) -> ParticleArrays:
     """The particles this rank owns after they moved (``owner``: each one's rank now):
-    those that stayed, then those that arrived, by sending rank. Collective."""
+    those that stayed, then those that arrived, by sending rank. A particle goes to a
+    neighbour only (``subgrid.neighbours``); one whose new owner is not a neighbour moved
+    farther than the ghost layer in a step, which no step allows: RuntimeError. Collective
+    over the neighbours."""
     if comm.size == 1:
         return arrays
     me = comm.rank
     leaving = owner != me
-    out = [
-        _take(arrays, owner == r) if r != me and leaving.any() else None for r in range(comm.size)
-    ]
-    got = comm.alltoall(out)
-    arrived = [g for r, g in enumerate(got) if r != me and g is not None]
+    if leaving.any():
+        beyond = np.setdiff1d(np.unique(owner[leaving]), neighbours)
+        if beyond.size:
+            raise RuntimeError(
+                f"rank {me}: particles moved in one step to rank(s) {beyond.tolist()}, beyond "
+                f"its neighbours {neighbours}: farther than the ghost layer"
+            )
+    out = {r: _take(arrays, owner == r) for r in neighbours} if leaving.any() else {}
+    got = swap(comm, neighbours, out, MIGRATE)
+    arrived = [got[r] for r in neighbours if got[r] is not None]
     if not leaving.any() and not arrived:
         return arrays
     kept = _take(arrays, ~leaving) if leaving.any() else arrays
@@ -130,8 +159,9 @@ class Halo:
     """Copies of the neighbours' particles in a rank's ghost layer: which of this rank's
     cells lie in each other rank's ghost layer is listed once per split."""
 
-    def __init__(self, comm: Comm, boxes: Boxes, sub: Subgrid) -> None:
+    def __init__(self, comm: Comm, boxes: Boxes, sub: Subgrid, neighbours: list[int]) -> None:
         self.comm, self.sub, self.boxes = comm, sub, boxes
+        self.neighbours = neighbours
         cells = (
             np.stack(
                 np.unravel_index(np.arange(sub.grid.ncells), sub.grid.cells, order="F"), axis=1
@@ -140,12 +170,11 @@ class Halo:
         )
         mine = sub.owned_cells
         self.wanted: dict[int, NDArray[np.bool_]] = {}
-        for r in range(comm.size):
-            if r != comm.rank:
-                lo, hi = extended(boxes, r)
-                wanted = mine & np.all((cells >= lo) & (cells < hi), axis=1)
-                if wanted.any():
-                    self.wanted[r] = wanted
+        for r in neighbours:  # only a neighbour's ghost layer meets this rank's box
+            lo, hi = extended(boxes, r)
+            wanted = mine & np.all((cells >= lo) & (cells < hi), axis=1)
+            if wanted.any():
+                self.wanted[r] = wanted
 
     def __call__(self, arrays: ParticleArrays) -> ParticleArrays:
         """The halo of this rank's (owned) particles' neighbours, by sending rank.
@@ -156,8 +185,6 @@ class Halo:
         sub = self.sub
         ijk = cells_of(arrays["x"], sub.grid.spacing, self.boxes.cells) - sub.origin
         local = np.ravel_multi_index(tuple(ijk.T), sub.grid.cells, order="F")
-        out: list[ParticleArrays | None] = [None] * comm.size
-        for r, wanted in self.wanted.items():
-            out[r] = _take(arrays, wanted[local])
-        got = comm.alltoall(out)
-        return _join([g for g in got if g is not None], arrays)
+        out = {r: _take(arrays, wanted[local]) for r, wanted in self.wanted.items()}
+        got = swap(comm, self.neighbours, out, HALO)
+        return _join([got[r] for r in self.neighbours if got[r] is not None], arrays)

@@ -54,7 +54,7 @@ from .comm import Comm, world
 from .exchange import Halo, NodeExchange, ParticleArrays, migrate, owners
 from .petsc import DistributedSystem
 from .pockets import sealed_pockets
-from .subgrid import restrict_obstacles, restrict_walls, subgrid
+from .subgrid import neighbours, restrict_obstacles, restrict_walls, subgrid
 from .viscous import DistributedViscous
 from .volume import DistributedVolume
 
@@ -158,7 +158,8 @@ class DistributedProjection(ProjectionScheme):
             self.node_bytes += self.nodes.sent
         self.nodes: NodeExchange = NodeExchange(self.comm, sub)
         self.cells = NodeExchange(self.comm, sub, cells=True)
-        self.halo = Halo(self.comm, self.boxes, sub)
+        self.neighbours = neighbours(self.boxes, self.comm.rank)
+        self.halo = Halo(self.comm, self.boxes, sub, self.neighbours)
         self.foreign = ~sub.owned_nodes
         offset = sub.offset
         cells = tuple(int(c) for c in sub.grid.cells)
@@ -391,7 +392,7 @@ class DistributedProjection(ProjectionScheme):
         owner = owners(self.boxes, self.sub, moved["x"])
         self.traffic["migrated particles"] += int((owner != self.comm.rank).sum())
         self.traffic["steps"] += 1
-        return migrate(self.comm, owner, moved)
+        return migrate(self.comm, owner, moved, self.neighbours)
 
     def advance(
         self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""

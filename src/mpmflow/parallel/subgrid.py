@@ -100,6 +100,24 @@ def extended(boxes: Boxes, rank: int) -> tuple[Ints, Ints]:
     return lo, hi
 
 
+def neighbours(boxes: Boxes, rank: int) -> list[int]:
+    """The ranks whose box meets rank's box with its ghost layer, or whose box with its
+    ghost layer meets rank's: the only ranks it exchanges particles with (a particle moves
+    less than a cell in a step, so it stays within the ghost layer of the box it left)."""
+    lo, hi = extended(boxes, rank)
+    out = []
+    for r in range(boxes.ranks):
+        if r == rank:
+            continue
+        rlo, rhi = extended(boxes, r)
+        meets = np.all((boxes.lo[r] < hi) & (boxes.hi[r] > lo)) or np.all(
+            (boxes.lo[rank] < rhi) & (boxes.hi[rank] > rlo)
+        )
+        if meets:
+            out.append(r)
+    return out
+
+
 def subgrid(whole: Grid, boxes: Boxes, rank: int) -> Subgrid:
     if whole.periodic and any(whole.periodic):
         raise ValueError("periodic axes are not split over ranks yet")
