@@ -25,7 +25,7 @@ import numpy as np
 from ..arrays import Bools, Floats, Ints
 from ..geometry.lattice import lattice_axes
 from ..grid import Grid
-from ..particles import Particles
+from ..particles import Particles, Tally, keep
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -160,13 +160,10 @@ QUADRATURE = 64  # midpoints across a node's support (the profile is piecewise l
 
 
 @dataclass
-class Inflow:
+class Inflow(Tally):
     """What has entered through the inlets: particles, mass (kg) and volume (m^3), and the
-    pool of the chunk in progress (``pool``: its first particle and size)."""
+    pool of the chunk in progress (``pool``: its first particle and end)."""
 
-    count: int = 0
-    mass: float = 0.0
-    volume: float = 0.0
     pool: tuple[int, int] = field(default=(0, 0))
 
     def supply(self, P: Particles, size: int, extra: list[Floats]) -> tuple[int, int]:
@@ -192,21 +189,10 @@ class Inflow:
         first, end = self.pool
         self.pool = (0, 0)
         emitted = emitted_end - first
-        self.count += emitted
-        self.mass += emitted * particle[0]
-        self.volume += emitted * particle[1]
+        self.add(emitted, emitted * particle[0], emitted * particle[1])
         if emitted_end == end:
             return None
-        keep = np.ones(P.count, dtype=np.bool_)
-        keep[emitted_end:end] = False
-        for name in Particles.FIELDS:
-            setattr(P, name, getattr(P, name)[keep])
-        return keep
-
-    def as_array(self) -> Floats:
-        """The totals as a checkpoint keeps them."""
-        return np.array([self.count, self.mass, self.volume], dtype=np.float64)
-
-    @classmethod
-    def of_array(cls, a: Floats) -> Inflow:
-        return cls(int(a[0]), float(a[1]), float(a[2]))
+        kept = np.ones(P.count, dtype=np.bool_)
+        kept[emitted_end:end] = False
+        keep(P, kept)
+        return kept

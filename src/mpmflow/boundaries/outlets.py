@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..arrays import Bools, Floats
-from ..particles import Particles
+from ..particles import Particles, Tally, keep
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -25,12 +25,8 @@ def sides(case: Case) -> Bools:
 
 
 @dataclass
-class Outflow:
+class Outflow(Tally):
     """What has left through the outlets: particles, mass (kg) and volume (m^3)."""
-
-    count: int = 0
-    mass: float = 0.0
-    volume: float = 0.0
 
     def drain(self, P: Particles, mass: Floats, volume: Floats) -> Bools | None:
         """Remove from ``P`` the particles the core retired (mass 0), in place (its arrays
@@ -40,18 +36,7 @@ class Outflow:
         gone: Bools = P.mass == 0.0
         if not gone.any():
             return None
-        self.count += int(gone.sum())
-        self.mass += float(mass[gone].sum())
-        self.volume += float(volume[gone].sum())
-        keep = ~gone
-        for name in Particles.FIELDS:
-            setattr(P, name, getattr(P, name)[keep])
-        return keep
-
-    def as_array(self) -> Floats:
-        """The totals as a checkpoint keeps them."""
-        return np.array([self.count, self.mass, self.volume], dtype=np.float64)
-
-    @classmethod
-    def of_array(cls, a: Floats) -> Outflow:
-        return cls(int(a[0]), float(a[1]), float(a[2]))
+        self.add(int(gone.sum()), float(mass[gone].sum()), float(volume[gone].sum()))
+        kept: Bools = ~gone
+        keep(P, kept)
+        return kept
