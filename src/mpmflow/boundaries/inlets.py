@@ -2,17 +2,18 @@
 given speed, uniform or profiled over the height. The core does the work each step
 (src/core/inlets.hpp): the inlet's wall nodes are held to the inflow (``Tables.held``, bonded
 no-slip wall pairs, ``walls.of_case``), and each row of the particles' lattice across the
-opening emits a particle each time the inflow there has travelled one particle spacing. This module builds those tables, and between chunks appends the pool of dormant
-particles a chunk may emit (``Inflow.supply``) and trims what it did not (``Inflow.settle``),
+opening emits a particle each time the inflow there has travelled one particle spacing.
+This module builds those tables, and between chunks appends the pool of dormant particles
+a chunk may emit (``Inflow.supply``) and trims what it did not (``Inflow.settle``),
 counting what entered.
 
 The opening is the side's nodes from the floor up to the inlet's level, rounded to the
 particles' lattice (a whole number of rows of spacing s): every node whose dual segment
-[z - h/2, z + h/2] along the last axis reaches below that level is held to the inflow's full
-speed, as the water round it moves. (Holding the node at the surface to the share of its
-segment below the level, which makes the grid's flux the particles' exactly, dragged the top
-rows of the stream: a stream entering at 1 m/s without gravity slowed to 0.98-0.99 m/s
-within 0.3 m of the inlet.)"""
+[z - h/2, z + h/2] along the last axis reaches below that level is held to the inflow
+there (``_node_speed``), the node at the surface at the full speed, as the water round it
+moves. (Holding it to the share of its segment below the level, which makes the grid's
+flux the particles' exactly, dragged the top rows of the stream: a stream entering at
+1 m/s without gravity slowed to 0.98-0.99 m/s within 0.3 m of the inlet.)"""
 
 from __future__ import annotations
 
@@ -97,9 +98,9 @@ def of_case(case: Case, grid: Grid) -> Tables:
         s = grid.spacing / inlet.particles_per_cell
         rows = math.floor(inlet.level / s + 1e-9)  # whole rows of the lattice below the level
         level = rows * s
-        # the side's nodes and the share of their dual segment along the last axis below it
+        # the side's nodes, and those whose dual segment along the last axis reaches into
+        # the opening
         on_side = np.isclose(nodes[:, k], 0.0 if inlet.lower else size[k], atol=1e-9 * grid.spacing)
-        # the nodes whose dual segment along the last axis reaches into the opening
         inside = np.flatnonzero(on_side & (nodes[:, up] - grid.spacing / 2 < level - 1e-9 * s))
         sign = 1.0 if inlet.lower else -1.0
         apic = case.solver.transfer == "apic"
