@@ -146,12 +146,12 @@ def inflow_count(case: Case) -> int:
     size = case.domain.size
     D = len(size)
     for inlet in case.inlets:
-        s = case.grid.spacing / inlet.particles_per_cell
+        s = inlet.spacing(case.grid.spacing)
         across = 1  # the lattice's rows across the side's horizontal axes
         for k in range(D - 1):
             if k != inlet.axis:
                 across *= lattice_count([0.0], [size[k]], s)
-        heights = lattice_axes([0.0], [math.floor(inlet.level / s + 1e-9) * s], s)[0]
+        heights = lattice_axes([0.0], [inlet.top(case.grid.spacing)], s)[0]
         per_row = np.floor(inlet.speed_at(heights) * case.time.end / s) + 1
         total += across * int(per_row.sum())
     return total

@@ -17,7 +17,6 @@ flux the particles' exactly, dragged the top rows of the stream: a stream enteri
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -92,18 +91,17 @@ def of_case(case: Case, grid: Grid) -> Tables:
     held = np.zeros((grid.nnodes, D)) if case.inlets else np.zeros((0, D))
     openings: dict[int, Ints] = {}
     size = grid.size
+    apic = case.solver.transfer == "apic"
     axis, direction, speeds, first, layers, spacing, mass, volume = [], [], [], [0], [], [], [], []
     for inlet in case.inlets:
         k = inlet.axis
-        s = grid.spacing / inlet.particles_per_cell
-        rows = math.floor(inlet.level / s + 1e-9)  # whole rows of the lattice below the level
-        level = rows * s
+        s = inlet.spacing(grid.spacing)
+        level = inlet.top(grid.spacing)
         # the side's nodes, and those whose dual segment along the last axis reaches into
         # the opening
         on_side = np.isclose(nodes[:, k], 0.0 if inlet.lower else size[k], atol=1e-9 * grid.spacing)
         inside = np.flatnonzero(on_side & (nodes[:, up] - grid.spacing / 2 < level - 1e-9 * s))
         sign = 1.0 if inlet.lower else -1.0
-        apic = case.solver.transfer == "apic"
         held[inside, k] = sign * _node_speed(inlet, nodes[inside, up], level, grid.spacing, apic)
         openings[2 * k + (0 if inlet.lower else 1)] = inside
         # one layer: the lattice across the side, rows below the level; on the side along k
@@ -160,6 +158,11 @@ def _node_speed(inlet: Inlet, z: Floats, level: float, h: float, apic: bool) -> 
 QUADRATURE = 64  # midpoints across a node's support (the profile is piecewise linear)
 
 
+def _zero_rows(a: Floats, size: int) -> Floats:
+    """``a`` with ``size`` rows of zeros after its own."""
+    return np.concatenate([a, np.zeros((size, *a.shape[1:]))])
+
+
 @dataclass
 class Inflow(Tally):
     """What has entered through the inlets: particles, mass (kg) and volume (m^3), and the
@@ -172,13 +175,10 @@ class Inflow(Tally):
         to each array of ``extra`` (returned in that list, the same order); returns the
         pool's range (first, end) for the core."""
         n = P.count
-        D = P.x.shape[1]
-        P.x = np.concatenate([P.x, np.zeros((size, D))])
-        P.v = np.concatenate([P.v, np.zeros((size, D))])
-        for name in ("pressure", "mass", "volume"):
-            setattr(P, name, np.concatenate([getattr(P, name), np.zeros(size)]))
+        for name in Particles.FIELDS:
+            setattr(P, name, _zero_rows(getattr(P, name), size))
         for j, a in enumerate(extra):
-            extra[j] = np.concatenate([a, np.zeros((size, *a.shape[1:]))])
+            extra[j] = _zero_rows(a, size)
         self.pool = (n, n + size)
         return self.pool
 

@@ -3,6 +3,7 @@ and the rules between an inlet and the rest of the case."""
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Annotated, Literal
 
 import numpy as np
@@ -98,6 +99,16 @@ class Inlet(Section):
             return float(self.speed or 0.0)
         return max(p[1] for p in self.profile)
 
+    def spacing(self, grid_spacing: float) -> float:
+        """The spacing (m) of the particles the inlet brings on a grid of ``grid_spacing``."""
+        return grid_spacing / self.particles_per_cell
+
+    def top(self, grid_spacing: float) -> float:
+        """The opening's top (m): the level rounded down to whole rows of the particles'
+        lattice."""
+        s = self.spacing(grid_spacing)
+        return math.floor(self.level / s + 1e-9) * s
+
     @property
     def axis(self) -> int:
         return AXES.index(self.side[0])
@@ -152,7 +163,7 @@ def problem(case: Case) -> str | None:
             return f'two inlets on side "{inlet.side}"; give one inlet per side'
         seen.add(inlet.side)
         top = case.domain.size[D - 1]
-        spacing = case.grid.spacing / inlet.particles_per_cell
+        spacing = inlet.spacing(case.grid.spacing)
         if inlet.level > top * (1 + 1e-12):
             return (
                 f"{name}.level = {inlet.level:g} m is above the domain's top ({top:g} m); "

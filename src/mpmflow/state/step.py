@@ -111,7 +111,7 @@ class CoreState(Protocol):
     fluid) and the step's options; the arrays it exposes are views of its own storage."""
 
     since_volume: float  # the time since the last volume correction (s)
-    inlet_travel: Floats  # where each inlet's next layer is (m; src/core/inlets.hpp)
+    inlet_travel: Floats  # where each inlet row's next particle is (m; src/core/inlets.hpp)
     inlet_next: int  # the first particle of the inlets' pool not emitted yet
 
     def set_inlet_pool(self, first: int, end: int) -> None: ...
