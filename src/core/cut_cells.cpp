@@ -182,9 +182,37 @@ double interpolate_phi(const Grid<D>& g, View<const double> phi_node, View<const
   return val;
 }
 
+namespace {
+// held (nnodes x D) interpolated multilinearly at particle p into u
+template <int D>
+void held_at(const Grid<D>& g, View<const double, 2> held, View<const double, 2> x, index_t p,
+             double* u) {
+  index_t i0[D];
+  double w[D];
+  for (int k = 0; k < D; ++k) {
+    const double s = x(p, k) * g.inv_h;
+    index_t i = static_cast<index_t>(std::floor(s));
+    i = std::min<index_t>(std::max<index_t>(i, 0), g.cells[k] - 1);
+    i0[k] = i;
+    w[k] = std::min(std::max(s - static_cast<double>(i), 0.0), 1.0);
+  }
+  for (int k = 0; k < D; ++k) u[k] = 0.0;
+  for (int a = 0; a < (1 << D); ++a) {
+    double weight = 1.0;
+    index_t node = 0;
+    for (int k = 0; k < D; ++k) {
+      const int bit = (a >> k) & 1;
+      weight *= bit ? w[k] : 1.0 - w[k];
+      node += (i0[k] + bit) * g.ns[k];
+    }
+    for (int k = 0; k < D; ++k) u[k] += weight * held(node, k);
+  }
+}
+}  // namespace
+
 template <int D>
 index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
-                 View<const double> phi_node, double margin) {
+                 View<const double> phi_node, double margin, View<const double, 2> held) {
   View<const double, 2> xc = x;
   return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
     index_t moved = 0;
@@ -210,10 +238,12 @@ index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
         phi = interpolate_phi<D>(g, phi_node, xc, p, grad);
         if (phi >= margin) break;
       }
+      double u[D] = {};
+      if (held.size() > 0) held_at<D>(g, held, xc, p, u);
       double g2 = 0.0, vn = 0.0;
       for (int k = 0; k < D; ++k) {
         g2 += grad[k] * grad[k];
-        vn += v(p, k) * grad[k];
+        vn += (v(p, k) - u[k]) * grad[k];
       }
       if (g2 > 0.0 && vn < 0.0)
         for (int k = 0; k < D; ++k) v(p, k) -= vn * grad[k] / g2;
@@ -294,7 +324,7 @@ void extend_velocity(const Grid<D>& g, View<const index_t> onode, View<const dou
   template double interpolate_phi<D>(const Grid<D>&, View<const double>, View<const double, 2>, \
                                      index_t, double*);                                         \
   template index_t push_out<D>(const Grid<D>&, View<double, 2>, View<double, 2>,                \
-                               View<const double>, double);                                     \
+                               View<const double>, double, View<const double, 2>);              \
   template void sliver_fractions<D>(const Grid<D>&, View<const double>, View<double>);          \
   template void extend_velocity<D>(const Grid<D>&, View<const index_t>, View<const double>,     \
                                    View<double, 2>, View<double, 2>);

@@ -53,10 +53,12 @@ double interpolate_phi(const Grid<D>& g, View<const double> phi_node, View<const
 // Particles inside an obstacle (interpolated phi < margin, m) moved out along grad phi to
 // phi = margin (up to 4 Newton steps, each at most 2 cells long; none where |grad phi| <
 // 0.01, a flat cell that gives no direction), their velocity into the solid removed (x, v:
-// n x D, in place). Returns how many were moved.
+// n x D, in place); with held (nnodes x D, m/s: a moving obstacle's velocity at the nodes,
+// bodies.hpp; empty: at rest) their velocity into it relative to held interpolated where
+// they end. Returns how many were moved.
 template <int D>
 index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
-                 View<const double> phi_node, double margin);
+                 View<const double> phi_node, double margin, View<const double, 2> held = {});
 
 // The volume fraction theta of a cut cell whose fluid part is a sliver (0 < open < SLIVER):
 // the largest of its face neighbours' with open >= SLIVER (in place; unchanged without one).

@@ -106,8 +106,9 @@ template <int D>
 double obstacle_integral(const Grid<D>& g, const std::array<index_t, D>& ix,
                          View<const index_t> cell_slot, View<const index_t> static_slot,
                          View<const double, 4> F, View<const double, 2> vstar,
-                         View<const bool> ocontact) {
+                         View<const bool> ocontact, View<const double, 2> oheld) {
   constexpr int NC = 1 << D;
+  const bool moving = oheld.size() > 0;
   double total = 0.0;
   for (int b = 0; b < NC; ++b) {
     const NodeCell nc = node_cell<D>(g, ix, b);
@@ -116,7 +117,8 @@ double obstacle_integral(const Grid<D>& g, const std::array<index_t, D>& ix,
     for (int corner = 0; corner < NC; ++corner) {
       const index_t jn = nc.first + g.corner[corner];
       if (ocontact(jn))
-        for (int k = 0; k < D; ++k) total += F(s, nc.a, corner, k) * vstar(jn, k);
+        for (int k = 0; k < D; ++k)
+          total += F(s, nc.a, corner, k) * (vstar(jn, k) - (moving ? oheld(jn, k) : 0.0));
     }
   }
   return total;
@@ -128,7 +130,8 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
               View<const index_t> row_nodes, View<const double, 2> vstar,
               View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
               View<const index_t> static_slot, View<const double, 4> F, View<const double, 4> Wf,
-              View<const bool> ocontact, View<const double, 2> held, View<double> rhs) {
+              View<const bool> ocontact, View<const double, 2> held, View<double> rhs,
+              View<const double, 2> oheld) {
   constexpr int NC = 1 << D;
   std::array<index_t, D> ix;
   std::array<index_t, NC> slots, base;
@@ -156,7 +159,7 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
       if (wall_flux) {
         b += wall_integral<D>(g, ix, i, cell_slot, static_slot, Wf, vstar, contact, held);
         if (F.extent(0) > 1)
-          b += obstacle_integral<D>(g, ix, cell_slot, static_slot, F, vstar, ocontact);
+          b += obstacle_integral<D>(g, ix, cell_slot, static_slot, F, vstar, ocontact, oheld);
       }
       rhs(r) = rho_over_dt * b;
     }
@@ -170,10 +173,10 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
                   View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
                   View<const index_t> static_slot, View<const double, 4> F,
                   View<const double, 4> Wf, View<const bool> ocontact, View<const double, 2> held,
-                  View<double> rhs) {
+                  View<double> rhs, View<const double, 2> oheld) {
   for_each_chunk(row_nodes.size(), [&](index_t, index_t lo, index_t hi) {
     rhs_rows<D>(g, lo, hi, cell_slot, C, V, node_vol, row_nodes, vstar, contact, wall_flux,
-                expansion, rho_over_dt, static_slot, F, Wf, ocontact, held, rhs);
+                expansion, rho_over_dt, static_slot, F, Wf, ocontact, held, rhs, oheld);
   });
 }
 
@@ -187,17 +190,18 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
                                    View<const bool, 2>, View<const double, 2>);                    \
   template double obstacle_integral<D>(                                                            \
       const Grid<D>&, const std::array<index_t, D>&, View<const index_t>, View<const index_t>,     \
-      View<const double, 4>, View<const double, 2>, View<const bool>);                             \
-  template void rhs_rows<D>(                                                                       \
-      const Grid<D>&, index_t, index_t, View<const index_t>, View<const double, 4>,                \
-      View<const double, 2>, View<const double>, View<const index_t>, View<const double, 2>,       \
-      View<const bool, 2>, bool, double, double, View<const index_t>, View<const double, 4>,       \
-      View<const double, 4>, View<const bool>, View<const double, 2>, View<double>);               \
-  template void assemble_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,        \
-                                View<const double, 2>, View<const double>, View<const index_t>,    \
-                                View<const double, 2>, View<const bool, 2>, bool, double, double,  \
-                                View<const index_t>, View<const double, 4>, View<const double, 4>, \
-                                View<const bool>, View<const double, 2>, View<double>);
+      View<const double, 4>, View<const double, 2>, View<const bool>, View<const double, 2>);      \
+  template void rhs_rows<D>(const Grid<D>&, index_t, index_t, View<const index_t>,                 \
+                            View<const double, 4>, View<const double, 2>, View<const double>,      \
+                            View<const index_t>, View<const double, 2>, View<const bool, 2>, bool, \
+                            double, double, View<const index_t>, View<const double, 4>,            \
+                            View<const double, 4>, View<const bool>, View<const double, 2>,        \
+                            View<double>, View<const double, 2>);                                  \
+  template void assemble_rhs<D>(                                                                   \
+      const Grid<D>&, View<const index_t>, View<const double, 4>, View<const double, 2>,           \
+      View<const double>, View<const index_t>, View<const double, 2>, View<const bool, 2>, bool,   \
+      double, double, View<const index_t>, View<const double, 4>, View<const double, 4>,           \
+      View<const bool>, View<const double, 2>, View<double>, View<const double, 2>);
 MPMFLOW_INSTANTIATE(2)
 MPMFLOW_INSTANTIATE(3)
 #undef MPMFLOW_INSTANTIATE

@@ -42,14 +42,14 @@ double wall_integral(const Grid<D>& g, const std::array<index_t, D>& ix, index_t
                      View<const double, 4> Wf, View<const double, 2> vstar,
                      View<const bool, 2> contact, View<const double, 2> held);
 
-// Sum over the node's cut cells in the system of int N_i (v*.n) ds over the obstacle's face
-// (F[s, a, b, k]: the face's integrals of N_a N_b n_k), counting the obstacle nodes in
-// contact (ocontact).
+// Sum over the node's cut cells in the system of int N_i ((v* - u).n) ds over the obstacle's
+// face (F[s, a, b, k]: the face's integrals of N_a N_b n_k; u: the obstacle's velocity at the
+// nodes, oheld, nnodes x D, empty: at rest), counting the obstacle nodes in contact (ocontact).
 template <int D>
 double obstacle_integral(const Grid<D>& g, const std::array<index_t, D>& ix,
                          View<const index_t> cell_slot, View<const index_t> static_slot,
                          View<const double, 4> F, View<const double, 2> vstar,
-                         View<const bool> ocontact);
+                         View<const bool> ocontact, View<const double, 2> oheld = {});
 
 // Rows r0 to r1 - 1 of assemble_rhs (one parallel chunk's range).
 template <int D>
@@ -58,15 +58,16 @@ void rhs_rows(const Grid<D>& g, index_t r0, index_t r1, View<const index_t> cell
               View<const index_t> row_nodes, View<const double, 2> vstar,
               View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
               View<const index_t> static_slot, View<const double, 4> F, View<const double, 4> Wf,
-              View<const bool> ocontact, View<const double, 2> held, View<double> rhs);
+              View<const bool> ocontact, View<const double, 2> held, View<double> rhs,
+              View<const double, 2> oheld = {});
 
 // Right-hand side of eq. (13) (Pa m^(D-2)) for every unknown (row_nodes[r]: the node of
 // row r):
 //   rhs_i = -(rho/dt) sum_e C_e[a_i, b, k] v*_{b,k}                (divergence, eq. 15)
 //           + (rho/dt) int_{wetted walls in contact} N_i (v* - u_w).n ds (if wall_flux;
 //                                    u_w = held, the walls' velocity: an inlet's inflow)
-//           + (rho/dt) int_{obstacle faces in contact} N_i v*.n ds (if wall_flux, F has
-//                                                                   more than one slot)
+//           + (rho/dt) int_{obstacle faces in contact} N_i (v* - u_o).n ds (if wall_flux,
+//                   F has more than one slot; u_o = oheld, a moving obstacle's velocity)
 //           + (rho/dt) expansion max(vol_i - V_i, 0)
 // vol_i (node_vol, m^D): the material volume the particles give node i; V_i = sum_e
 // V_e[a_i] the node's volume in the system; expansion (1/s) = beta/dt (0 = off). Rows in
@@ -78,6 +79,6 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
                   View<const bool, 2> contact, bool wall_flux, double expansion, double rho_over_dt,
                   View<const index_t> static_slot, View<const double, 4> F,
                   View<const double, 4> Wf, View<const bool> ocontact, View<const double, 2> held,
-                  View<double> rhs);
+                  View<double> rhs, View<const double, 2> oheld = {});
 
 }  // namespace mpmflow

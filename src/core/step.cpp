@@ -61,8 +61,18 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
       T_(tables),
       volume_on_(volume_correction),
       viscous_on_(viscous),
-      obstacles_(tables.phi.size() > 0),
-      nstatic_(tables.K_static.extent(0)) {
+      obstacles_(tables.phi.size() > 0) {
+  ob_.phi = T_.phi;
+  ob_.open = T_.open;
+  ob_.static_slot = T_.static_slot;
+  ob_.K = T_.K_static;
+  ob_.C = T_.C_static;
+  ob_.V = T_.V_static;
+  ob_.F = T_.F_static;
+  ob_.Wf = T_.Wf_static;
+  ob_.onode = T_.onode;
+  ob_.onormal = T_.onormal;
+  ob_.ono_slip = T_.ono_slip;
   const index_t nn = grid_.nnodes, nc = grid_.ncells;
   travel_.assign(static_cast<std::size_t>(T_.inlets.rows()), 0.0);
   start_.reserve(nc + 1);
@@ -122,6 +132,31 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
 }
 
 template <int D>
+void State<D>::set_bodies(std::vector<Body<D>> bodies, View<const bool> fixed_no_slip,
+                          index_t nsub) {
+  ObstacleTables<D> fixed = ob_;
+  fixed.velocity = View<const double, 2>();
+  bodies_.setup(grid_, fixed, fixed_no_slip, std::move(bodies), nsub);
+  body_force_.sized(bodies_.count() * D);
+  body_torque_.sized(bodies_.count() * 3);
+  for (index_t i = 0; i < bodies_.count() * D; ++i) body_force_.view(bodies_.count() * D)(i) = 0.0;
+  for (index_t i = 0; i < bodies_.count() * 3; ++i) body_torque_.view(bodies_.count() * 3)(i) = 0.0;
+  obstacles_ = true;
+  set_time(time_);
+}
+
+template <int D>
+void State<D>::set_time(double t) {
+  time_ = t;
+  if (!bodies_.present()) return;
+  bodies_.place(t);
+  bodies_.hold(t);
+  ob_ = bodies_.tables();
+  auto ocontact = ocontact_.view(grid_.nnodes);
+  for (index_t i = 0; i < grid_.nnodes; ++i) ocontact(i) = false;
+}
+
+template <int D>
 void State<D>::bin_particles(const Particles<D>& P) {
   const index_t n = P.count();
   const index_t nc = grid_.ncells;
@@ -130,8 +165,8 @@ void State<D>::bin_particles(const Particles<D>& P) {
   auto start = start_.view(nc + 1);
   auto theta = theta_.view(nc);
   cell_index<D>(grid_, P.x, cell);
-  sort_with_fraction(cell, nc, P.volume, cell_volume_, T_.open, start, order, theta);
-  if (obstacles_) sliver_fractions<D>(grid_, T_.open, theta);
+  sort_with_fraction(cell, nc, P.volume, cell_volume_, ob_.open, start, order, theta);
+  if (obstacles_) sliver_fractions<D>(grid_, ob_.open, theta);
   binned_ = n;
 }
 
@@ -143,8 +178,8 @@ void State<D>::cell_integrals(const Particles<D>& P, const Options<D>& O) {
   auto theta = theta_.view(nc);
   auto enclosed = enclosed_.view(nc);
   auto slot = slot_.view(nc);
-  auto stat = T_.static_slot;
-  const index_t ns = nstatic_;
+  auto stat = ob_.static_slot;
+  const index_t ns = ob_.K.extent(0);
   index_t npartial = 0, nsurface = 0;
   for (index_t c = 0; c < nc; ++c) {
     const bool counted = theta(c) >= O.sparse;
@@ -160,9 +195,9 @@ void State<D>::cell_integrals(const Particles<D>& P, const Options<D>& O) {
   auto K = K_.template sized<3>({nk, NC, NC});
   auto C = C_.template sized<4>({nk, NC, NC, D});
   auto V = V_.template sized<2>({nk, NC});
-  std::copy(T_.K_static.data(), T_.K_static.data() + T_.K_static.size(), K.data());
-  std::copy(T_.C_static.data(), T_.C_static.data() + T_.C_static.size(), C.data());
-  std::copy(T_.V_static.data(), T_.V_static.data() + T_.V_static.size(), V.data());
+  std::copy(ob_.K.data(), ob_.K.data() + ob_.K.size(), K.data());
+  std::copy(ob_.C.data(), ob_.C.data() + ob_.C.size(), C.data());
+  std::copy(ob_.V.data(), ob_.V.data() + ob_.V.size(), V.data());
   auto start = start_.view(nc + 1);
   auto order = order_.view(P.count());
   if (npartial) {
@@ -203,11 +238,11 @@ void State<D>::cell_integrals(const Particles<D>& P, const Options<D>& O) {
   auto Cs = Cs_.template sized<4>({nsk, NC, NC, D});
   auto Vs = Vs_.template sized<2>({nsk, NC});
   auto Vcells = Vcells_.template sized<2>({nsk, NC});
-  std::copy(T_.C_static.data(), T_.C_static.data() + T_.C_static.size(), Cs.data());
-  std::copy(T_.V_static.data(), T_.V_static.data() + T_.V_static.size(), Vs.data());
-  std::copy(T_.V_static.data(), T_.V_static.data() + T_.V_static.size(), Vcells.data());
+  std::copy(ob_.C.data(), ob_.C.data() + ob_.C.size(), Cs.data());
+  std::copy(ob_.V.data(), ob_.V.data() + ob_.V.size(), Vs.data());
+  std::copy(ob_.V.data(), ob_.V.data() + ob_.V.size(), Vcells.data());
   for (index_t s = ns; s < nsk; ++s)
-    for (int a = 0; a < NC; ++a) Vcells(s, a) = T_.V_static(0, a);
+    for (int a = 0; a < NC; ++a) Vcells(s, a) = ob_.V(0, a);
   if (nsurface) {
     particle_cell_tensors<D>(grid_, P.x, P.volume, order, start, listed,
                              View<double, 3>(nullptr, {0, NC, NC}),
@@ -232,7 +267,7 @@ template <int D>
 void State<D>::classify_nodes(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
   auto node_row = node_row_.view(nn);
-  nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, T_.static_slot, node_f_.view(nn), O.subcell,
+  nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, ob_.static_slot, node_f_.view(nn), O.subcell,
                                       node_row);
   fill_rows();
 }
@@ -284,9 +319,9 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
                        node_mom_.template view<2>({nn, D}), force_.template sized<2>({nn, D}),
                        v_star);
   }
-  if (obstacles_) extend_velocity<D>(grid_, T_.onode, node_mass_.view(nn), v_old, v_star);
+  if (obstacles_) extend_velocity<D>(grid_, ob_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
-  nodal_fraction<D>(grid_, theta_.view(nc), T_.open, node_f_.view(nn));
+  nodal_fraction<D>(grid_, theta_.view(nc), ob_.open, node_f_.view(nn));
   clock.lap(PHASE_FREE_SURFACE);
 }
 
@@ -330,7 +365,7 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
   auto node_row = node_row_.view(nn);
   start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row,
                 contact_.template view<2>({nn, D}), T_.wall_bonded);
-  start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact_.view(nn));
+  start_obstacles(ob_.onode, ob_.onormal, v_star, node_row, ocontact_.view(nn), ob_.velocity);
   const index_t n = nrows_;
   auto cols = cols_.template sized<2>({n, NS});
   auto vals = vals_.template sized<2>({n, NS});
@@ -381,11 +416,12 @@ void State<D>::pressure_rhs(const Options<D>& O) {
     std::copy(v_star_.view(nn * D).data(), v_star_.view(nn * D).data() + nn * D, v_c.data());
     apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_c, contact,
                 T_.wall_velocity);
-    apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_c, ocontact);
+    apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v_c, ocontact, View<const double>(),
+                    ob_.velocity);
   }
   assemble_rhs<D>(grid_, I_.rhs_slot, I_.rhs_C, I_.rhs_V, node_vol_.view(nn), rows_.view(nrows_),
-                  v_c, contact, O.wall_flux, O.expansion / O.dt, O.rho / O.dt, T_.static_slot,
-                  T_.F_static, T_.Wf_static, ocontact, T_.wall_velocity, rhs_.view(nrows_));
+                  v_c, contact, O.wall_flux, O.expansion / O.dt, O.rho / O.dt, ob_.static_slot,
+                  ob_.F, ob_.Wf, ocontact, T_.wall_velocity, rhs_.view(nrows_), ob_.velocity);
   if (npockets_ > 0) {
     auto mean = pocket_mean_.view(2 * npockets_);
     apply_pockets(component_.view(nrows_), pockets_.view(npockets_), mean.head(npockets_),
@@ -404,7 +440,8 @@ index_t State<D>::release_walls(View<const double> x) {
   auto node_row = node_row_.view(nn);
   return release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, p,
                          contact_.template view<2>({nn, D}), T_.wall_bonded) +
-         release_obstacles(T_.onode, T_.onormal, v_star, node_row, p, ocontact_.view(nn));
+         release_obstacles(ob_.onode, ob_.onormal, v_star, node_row, p, ocontact_.view(nn),
+                           ob_.velocity);
 }
 
 template <int D>
@@ -477,17 +514,17 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
   auto node_row = node_row_.view(nn);
   start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact,
                 T_.wall_bonded);
-  start_obstacles(T_.onode, T_.onormal, v_star, node_row, ocontact);
+  start_obstacles(ob_.onode, ob_.onormal, v_star, node_row, ocontact, ob_.velocity);
   // the strain rate of the particles' velocity with the held nodes at rest
   auto v_rate = v_rate_.template view<2>({nn, D});
-  rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, T_.onode, ocontact,
-                   T_.ono_slip, v_rate, T_.wall_velocity);
+  rate_velocity<D>(v_old, T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, ob_.onode, ocontact,
+                   ob_.ono_slip, v_rate, T_.wall_velocity, ob_.velocity);
   // a solid's implicit elastic predictor (plasticity.hpp): the viscous step with eta = G dt,
   // the old stress's force already in v* (scatter)
   const bool solid = is_solid(O.model);
   std::array<double, 8> elastic{};
   elastic[0] = solid ? O.model_params[0] * O.dt : 0.0;
-  cell_viscosity<D>(grid_, theta_.view(nc), T_.open, enclosed_.view(nc), O.full, v_rate, p,
+  cell_viscosity<D>(grid_, theta_.view(nc), ob_.open, enclosed_.view(nc), O.full, v_rate, p,
                     solid ? NEWTONIAN : O.model,
                     View<const double>(solid ? elastic.data() : O.model_params.data(), {8}),
                     eta_.view(nc), eta_weight_.view(nc));
@@ -520,9 +557,9 @@ index_t State<D>::viscous_system(const Options<D>& O) {
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
-  const index_t n = number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis,
-                                       T_.wall_no_slip, contact, T_.onode, ocontact, T_.ono_slip,
-                                       base, vu, vrow, voff, &grid_, T_.wall_velocity);
+  const index_t n = number_unknowns<D>(
+      node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, ob_.onode,
+      ocontact, ob_.ono_slip, base, vu, vrow, voff, &grid_, T_.wall_velocity, ob_.velocity);
   if (n == 0) return 0;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});
@@ -597,7 +634,7 @@ index_t State<D>::volume_system(const Options<D>& O) {
   auto all_cols = vol_cols_.template view<2>({nc, NS});
   auto all_vals = vol_vals_.template view<2>({nc, NS});
   const VolumeSystem assembled = mpmflow::assemble<D>(
-      grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}), T_.static_slot,
+      grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}), ob_.static_slot,
       cell_row, all_cols, all_vals, vol_rhs_.view(nc), vol_rows_.view(nc));
   const index_t n = vol_n_ = assembled.n;
   vol_anchored_ = assembled.anchored;
@@ -656,8 +693,8 @@ index_t State<D>::volume_apply(const Options<D>& O, View<const double> q) {
   for (index_t c = 0; c < nc; ++c) Q(c) = 0.0;
   for (index_t r = 0; r < n; ++r) Q(rows(r)) = q(r);
   const double dmax = O.volume_dmax * grid_.h;
-  face_displacements<D>(grid_, cell_row_.view(nc), T_.static_slot, q, O.volume_rate * grid_.h, dmax,
-                        faces);
+  face_displacements<D>(grid_, cell_row_.view(nc), ob_.static_slot, q, O.volume_rate * grid_.h,
+                        dmax, faces);
   index_t clamped = 0;
   for (int k = 0; k < D; ++k)
     for (index_t i = 0; i < faces[k].size(); ++i)
@@ -728,8 +765,8 @@ void State<D>::correct(const Options<D>& O) {
   // the cut cell's fluid part then stayed empty and its solid-side node fell out of the
   // pressure system (p = 0 at the face; SPHERIC Test 2 at 0.02 m, docs/notes/benchmarks-diary.md).
   // The paper's formulation constrains v* at every obstacle node, and so its result.
-  apply_obstacles(T_.onode, T_.onormal, T_.ono_slip, v_new, ocontact,
-                  O.wall_flux ? T_.phi : View<const double>());
+  apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v_new, ocontact,
+                  O.wall_flux ? ob_.phi : View<const double>(), ob_.velocity);
   clock.lap(PHASE_CORRECTOR);
 }
 
@@ -777,8 +814,18 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
       v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
       View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
       faces, P.affine, Outlets{T_.outlet, P.mass, P.volume, T_.inlets.count() > 0});
+  if (bodies_.present()) {  // the bodies' force of this step, then the bodies at its end
+    bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
+                   body_torque_.template view<2>({bodies_.count(), 3}));
+    bodies_.place(time_ + O.dt);
+    bodies_.hold(time_ + O.dt);
+    ob_ = bodies_.tables();
+    // the last step's obstacle contacts belong to its obstacle nodes
+    auto ocontact = ocontact_.view(nn);
+    for (index_t i = 0; i < nn; ++i) ocontact(i) = false;
+  }
   if (obstacles_) {
-    moved += push_out<D>(grid_, P.x, P.v, T_.phi, margin_);
+    moved += push_out<D>(grid_, P.x, P.v, ob_.phi, margin_, ob_.velocity);
     // a particle pushed out of an obstacle near a periodic end may cross it
     if (grid_.any_periodic)
       parallel_for(P.count(), [&](index_t p) { wrap_periodic<D>(grid_, P.x, p); });
@@ -789,6 +836,7 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
 
 template <int D>
 int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
+  if (bodies_.present()) bodies_.hold(time_ + 0.5 * O.dt);  // the bodies' mean velocity
   const index_t n = predict(P, O, correct);
   report.unknowns = std::max(report.unknowns, n);
   report.last_unknowns = n;
@@ -802,6 +850,7 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
     emit_layers<D>(T_.inlets, O.dt, inlet_travel(), pool_, P.x, P.v, P.mass, P.volume, P.pressure,
                    P.affine);
   if (status == OK) {
+    time_ += O.dt;
     report.steps += 1;
     report.dt_min = report.steps == 1 ? O.dt : std::min(report.dt_min, O.dt);
     report.dt_max = std::max(report.dt_max, O.dt);
@@ -835,7 +884,7 @@ double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double
   for (index_t k = 0; k < max_steps && elapsed < span; ++k) {
     report.step = k;
     const index_t n = P.count();
-    const double vmax2 = reduce_chunks<double>(
+    double vmax2 = reduce_chunks<double>(
         n,
         [&](index_t lo, index_t hi) {
           double m = 0.0;
@@ -847,6 +896,9 @@ double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double
           return m;
         },
         [](double a, double b) { return std::max(a, b); });
+    // a moving body's points count as the particles do: it crosses at most courant cells
+    const double body = bodies_.present() ? bodies_.max_speed(time_) : 0.0;
+    vmax2 = std::max(vmax2, body * body);
     const double rest = span - elapsed;
     const double dt = adaptive_dt(vmax2, O.courant, grid_.h, O.dt_max, rest);
     Ok.dt = dt;

@@ -29,6 +29,7 @@
 #include <functional>
 #include <vector>
 
+#include "bodies.hpp"
 #include "grid.hpp"
 #include "inlets.hpp"
 #include "multigrid.hpp"
@@ -262,6 +263,19 @@ class State {
   // where each inlet row's next particle is (m, inlets.hpp; kept in checkpoints)
   View<double> inlet_travel() { return View<double>(travel_.data(), {T_.inlets.rows()}); }
 
+  // Obstacles that move along a prescribed path (bodies.hpp): they join the fixed ones of
+  // the tables; fixed_no_slip, per node, whether its nearest fixed obstacle is no-slip
+  // (empty: none is); nsub, the cut cells' sub-cells per axis. Places them at time().
+  void set_bodies(std::vector<Body<D>> bodies, View<const bool> fixed_no_slip, index_t nsub);
+  // The flow time (s), which every step advances by its dt; setting it places the bodies.
+  void set_time(double t);
+  double time() const { return time_; }
+  // the pressure's force (N, 2D: N/m) and torque (N m; 2D: N m/m, about z) on each body in
+  // the last step (bodies x D, bodies x 3), about its frame's origin
+  View<double, 2> body_force() { return body_force_.template view<2>({bodies_.count(), D}); }
+  View<double, 2> body_torque() { return body_torque_.template view<2>({bodies_.count(), 3}); }
+  index_t body_count() const { return bodies_.count(); }
+
   // The pressure step's solver: solver (not owned; it must outlive its use), or the
   // step's own multigrid (nullptr, the default).
   void use_solver(PressureSolver* solver) { solver_ = solver; }
@@ -408,7 +422,12 @@ class State {
   GridTables<D> T_;
   bool volume_on_, viscous_on_;
   bool obstacles_;
-  index_t nstatic_;
+  // the obstacle tables the step reads: the fixed ones of T_, or with moving bodies their
+  // tables at the bodies' present pose (bodies.hpp)
+  ObstacleTables<D> ob_;
+  BodyTables<D> bodies_;
+  double time_ = 0.0;                        // s: the flow time (moves the bodies)
+  Buffer<double> body_force_, body_torque_;  // the last step's pressure force on each body
   index_t nrows_ = 0;
   index_t binned_ = -1;  // the particles of the last scatter (-1: none yet)
   index_t nsurface_ = 0, npartial_ = 0;

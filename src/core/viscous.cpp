@@ -142,8 +142,8 @@ void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
                    View<const index_t> wall_axis, View<const bool> wall_no_slip,
                    View<const bool, 2> contact, View<const index_t> onode,
                    View<const bool> ocontact, View<const bool> ono_slip, View<double, 2> out,
-                   View<const double, 2> held) {
-  const bool moving = held.size() > 0;
+                   View<const double, 2> held, View<const double, 2> oheld) {
+  const bool moving = held.size() > 0, omoving = oheld.size() > 0;
   for (index_t i = 0; i < v.size(); ++i) out[i] = v[i];
   for (index_t e = 0; e < wall_node.size(); ++e) {
     const index_t i = wall_node(e), k = wall_axis(e);
@@ -153,7 +153,7 @@ void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
   for (index_t e = 0; e < onode.size(); ++e) {
     const index_t i = onode(e);
     if (ono_slip(e) && ocontact(i))
-      for (int m = 0; m < D; ++m) out(i, m) = 0.0;
+      for (int m = 0; m < D; ++m) out(i, m) = omoving ? oheld(i, m) : 0.0;
   }
 }
 
@@ -163,9 +163,10 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
                         View<const bool, 2> contact, View<const index_t> onode,
                         View<const bool> ocontact, View<const bool> ono_slip,
                         View<const double, 2> vstar, View<double, 2> u, View<index_t, 2> row,
-                        View<index_t> off, const Grid<D>* grid, View<const double, 2> held) {
+                        View<index_t> off, const Grid<D>* grid, View<const double, 2> held,
+                        View<const double, 2> oheld) {
   const index_t nn = u.extent(0);
-  const bool moving = held.size() > 0;
+  const bool moving = held.size() > 0, omoving = oheld.size() > 0;
   for (index_t i = 0; i < u.size(); ++i) u[i] = vstar[i];
   for (index_t i = 0; i < nn; ++i)
     for (int k = 0; k < D; ++k) row(i, k) = node_mass(i) > 0.0 ? FREE : HELD;
@@ -195,7 +196,7 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
     if (ocontact(i))
       for (int k = 0; k < D; ++k) {
         row(i, k) = HELD;
-        u(i, k) = 0.0;
+        u(i, k) = omoving ? oheld(i, k) : 0.0;
       }
   }
   const bool periodic = grid != nullptr && grid->any_periodic;
@@ -342,12 +343,12 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
   template void rate_velocity<D>(View<const double, 2>, View<const index_t>, View<const index_t>, \
                                  View<const bool>, View<const bool, 2>, View<const index_t>,      \
                                  View<const bool>, View<const bool>, View<double, 2>,             \
-                                 View<const double, 2>);                                          \
-  template index_t number_unknowns<D>(View<const double>, View<const index_t>,                    \
-                                      View<const index_t>, View<const bool>, View<const bool, 2>, \
-                                      View<const index_t>, View<const bool>, View<const bool>,    \
-                                      View<const double, 2>, View<double, 2>, View<index_t, 2>,   \
-                                      View<index_t>, const Grid<D>*, View<const double, 2>);      \
+                                 View<const double, 2>, View<const double, 2>);                   \
+  template index_t number_unknowns<D>(                                                            \
+      View<const double>, View<const index_t>, View<const index_t>, View<const bool>,             \
+      View<const bool, 2>, View<const index_t>, View<const bool>, View<const bool>,               \
+      View<const double, 2>, View<double, 2>, View<index_t, 2>, View<index_t>, const Grid<D>*,    \
+      View<const double, 2>, View<const double, 2>);                                              \
   template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,            \
                             View<const double>, double, View<const double, 2>,                    \
                             View<const index_t, 2>, View<const index_t>, View<index_t, 3>,        \

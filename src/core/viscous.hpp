@@ -46,7 +46,8 @@ void cell_viscosity(const Grid<D>& g, View<const double> theta, View<const doubl
 // velocity v (nn x D, the particles' velocity on the grid) with the nodes the solve holds
 // set to their held value: a no-slip wall pair's node (wall_no_slip(e)) where contact(i,
 // axis) to its wall's velocity (held, nn x D; empty: 0; an inlet's inflow), a no-slip
-// obstacle node where ocontact(i) to 0 (the holds of number_unknowns). On the grid of the particles
+// obstacle node where ocontact(i) to its velocity (oheld, nn x D; empty: 0; a moving body's,
+// bodies.hpp) (the holds of number_unknowns). On the grid of the particles
 // a wall node reads the mean velocity of the particles above it (a third of the first node's in a
 // sheared layer), so the cell on the wall read about half its shear rate and a yield-stress
 // material held there at twice its yield stress (docs/method.md, "Viscous materials").
@@ -55,17 +56,17 @@ void rate_velocity(View<const double, 2> v, View<const index_t> wall_node,
                    View<const index_t> wall_axis, View<const bool> wall_no_slip,
                    View<const bool, 2> contact, View<const index_t> onode,
                    View<const bool> ocontact, View<const bool> ono_slip, View<double, 2> out,
-                   View<const double, 2> held = {});
+                   View<const double, 2> held = {}, View<const double, 2> oheld = {});
 
 // The unknowns and held values of the system: u (nn x D) = vstar with the no-slip contacts
 // set to their wall's velocity (held, nn x D; empty: 0, walls at rest; an inlet's inflow); row(i,
 // k) the unknown's number (component by component, each in node order), -1 where held or massless;
 // off (D + 1) the first row of each component. Walls: entries (wall_node, wall_axis, wall_no_slip),
 // whose normal component is held (at vstar); a no-slip pair holds every component of its node at 0
-// where contact(i, axis) (nn x D). Obstacles: entries onode, held (all components) where no-slip
-// (ono_slip) and ocontact(i) (nn). contact and ocontact are the pressure step's starting contact
-// (start_contact, start_obstacles), so that the viscous solve holds exactly the nodes the corrector
-// will. Returns the number of unknowns.
+// where contact(i, axis) (nn x D). Obstacles: entries onode, held (all components, at oheld: a
+// moving body's velocity, nn x D; empty: 0) where no-slip (ono_slip) and ocontact(i) (nn). contact
+// and ocontact are the pressure step's starting contact (start_contact, start_obstacles), so that
+// the viscous solve holds exactly the nodes the corrector will. Returns the number of unknowns.
 template <int D>
 index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_node,
                         View<const index_t> wall_axis, View<const bool> wall_no_slip,
@@ -73,7 +74,7 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
                         View<const bool> ocontact, View<const bool> ono_slip,
                         View<const double, 2> vstar, View<double, 2> u, View<index_t, 2> row,
                         View<index_t> off, const Grid<D>* grid = nullptr,
-                        View<const double, 2> held = {});
+                        View<const double, 2> held = {}, View<const double, 2> oheld = {});
 
 // The system for the unknowns of number_unknowns (n of them): cols(m, r, s), vals(m, r, s)
 // (D x n x 3^D, kg/s) the couplings of row r to component m (columns numbered within

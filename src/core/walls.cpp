@@ -73,15 +73,15 @@ index_t release_contact(View<const index_t> node, View<const index_t> axis, View
 
 void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
                      View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact,
-                     View<const double> phi) {
+                     View<const double> phi, View<const double, 2> held) {
   const index_t D = v.extent(1);
-  const bool in_solid_only = phi.size() > 0;
+  const bool in_solid_only = phi.size() > 0, moving = held.size() > 0;
   for (index_t e = 0; e < onode.size(); ++e) {
     const index_t i = onode(e);
     if (in_solid_only && phi(i) > 0.0) continue;
-    const double vn = normal_velocity(v, i, onormal, e);
+    const double vn = normal_velocity(v, held, i, onormal, e);
     if (ocontact(i) && no_slip(e)) {
-      for (index_t k = 0; k < D; ++k) v(i, k) = 0.0;
+      for (index_t k = 0; k < D; ++k) v(i, k) = moving ? held(i, k) : 0.0;
     } else if (ocontact(i) || vn > 0.0) {
       for (index_t k = 0; k < D; ++k) v(i, k) -= vn * onormal(e, k);
     }
@@ -89,22 +89,23 @@ void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
 }
 
 void start_obstacles(View<const index_t> onode, View<const double, 2> onormal,
-                     View<const double, 2> vstar, View<const index_t> node_row,
-                     View<bool> ocontact) {
+                     View<const double, 2> vstar, View<const index_t> node_row, View<bool> ocontact,
+                     View<const double, 2> held) {
   for (index_t e = 0; e < onode.size(); ++e) {
     const index_t i = onode(e);
-    const double vn = normal_velocity(vstar, i, onormal, e);
+    const double vn = normal_velocity(vstar, held, i, onormal, e);
     ocontact(i) = node_row(i) >= 0 || vn > 0.0;
   }
 }
 
 index_t release_obstacles(View<const index_t> onode, View<const double, 2> onormal,
                           View<const double, 2> vstar, View<const index_t> node_row,
-                          View<const double> p_node, View<bool> ocontact) {
+                          View<const double> p_node, View<bool> ocontact,
+                          View<const double, 2> held) {
   index_t released = 0;
   for (index_t e = 0; e < onode.size(); ++e) {
     const index_t i = onode(e);
-    const double vn = normal_velocity(vstar, i, onormal, e);
+    const double vn = normal_velocity(vstar, held, i, onormal, e);
     if (node_row(i) >= 0 && p_node(i) < 0.0 && ocontact(i) && vn < 0.0) {
       ocontact(i) = false;
       ++released;

@@ -56,6 +56,15 @@ inline double normal_velocity(View<const double, 2> v, index_t i, View<const dou
   for (index_t k = 0; k < v.extent(1); ++k) vn += v(i, k) * onormal(e, k);
   return vn;
 }
+// (v_i - held_i) . n_e (m/s): the same relative to the obstacle's velocity there (held: nnodes
+// x D; empty: every obstacle at rest).
+inline double normal_velocity(View<const double, 2> v, View<const double, 2> held, index_t i,
+                              View<const double, 2> onormal, index_t e) {
+  double vn = normal_velocity(v, i, onormal, e);
+  if (held.size() > 0)
+    for (index_t k = 0; k < v.extent(1); ++k) vn -= held(i, k) * onormal(e, k);
+  return vn;
+}
 
 // Velocity conditions at the obstacle nodes (in place), as apply_walls: the normal velocity
 // is removed where the obstacle holds the material, elsewhere only a velocity into the
@@ -65,18 +74,20 @@ inline double normal_velocity(View<const double, 2> v, index_t i, View<const dou
 // the face) keeps its velocity, since the face lies beyond it.
 void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
                      View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact,
-                     View<const double> phi = View<const double>());
+                     View<const double> phi = View<const double>(),
+                     View<const double, 2> held = {});
 
 // The obstacle nodes that hold the material as the pressure step starts (in place): a
-// pressure unknown, or v* pressing into the solid.
+// pressure unknown, or v* pressing into the solid (relative to its velocity held).
 void start_obstacles(View<const index_t> onode, View<const double, 2> onormal,
-                     View<const double, 2> vstar, View<const index_t> node_row,
-                     View<bool> ocontact);
+                     View<const double, 2> vstar, View<const index_t> node_row, View<bool> ocontact,
+                     View<const double, 2> held = {});
 
 // Release the obstacle nodes in contact whose pressure came out negative while v* leaves
 // the solid (in place); returns how many.
 index_t release_obstacles(View<const index_t> onode, View<const double, 2> onormal,
                           View<const double, 2> vstar, View<const index_t> node_row,
-                          View<const double> p_node, View<bool> ocontact);
+                          View<const double> p_node, View<bool> ocontact,
+                          View<const double, 2> held = {});
 
 }  // namespace mpmflow

@@ -356,6 +356,73 @@ void bind_dim(nb::module_& m) {
           "since_volume", [](S& self) { return self.state->since_volume(); },
           [](S& self, double t) { self.state->set_since_volume(t); })
       .def(
+          "set_bodies",
+          [](S& self, nb::list bodies, nb::object fixed_no_slip, index_t nsub) {
+            auto& keep = self.keep;
+            std::vector<Body<D>> list;
+            for (nb::handle item : bodies) {
+              nb::dict d = nb::cast<nb::dict>(item);
+              Body<D> b;
+              b.phi = table<double, 1>(d["phi"], "body phi", keep);
+              const auto counts = nb::cast<std::vector<index_t>>(d["counts"]);
+              const auto origin = nb::cast<std::vector<double>>(d["origin"]);
+              const auto lo = nb::cast<std::vector<double>>(d["lo"]);
+              const auto hi = nb::cast<std::vector<double>>(d["hi"]);
+              const auto axis = nb::cast<std::vector<double>>(d["axis"]);
+              if (counts.size() != D || origin.size() != D || lo.size() != D || hi.size() != D ||
+                  axis.size() != 3)
+                throw std::invalid_argument(
+                    "set_bodies: counts, origin, lo, hi need D entries, axis 3");
+              index_t total = 1;
+              for (int k = 0; k < D; ++k) {
+                b.counts[k] = counts[k];
+                b.origin[k] = origin[k];
+                b.lo[k] = lo[k];
+                b.hi[k] = hi[k];
+                total *= counts[k];
+              }
+              for (int k = 0; k < 3; ++k) b.axis[k] = axis[k];
+              if (b.phi.size() != total)
+                throw std::invalid_argument("set_bodies: phi needs prod(counts) values");
+              b.spacing = nb::cast<double>(d["spacing"]);
+              b.time = table<double, 1>(d["time"], "body time", keep);
+              b.centre = table<double, 2>(d["centre"], "body centre", keep);
+              b.velocity = table<double, 2>(d["velocity"], "body velocity", keep);
+              b.angle = table<double, 1>(d["angle"], "body angle", keep);
+              b.rate = table<double, 1>(d["rate"], "body rate", keep);
+              const index_t n = b.time.size();
+              if (n < 1 || b.centre.extent(0) != n || b.centre.extent(1) != D ||
+                  b.velocity.extent(0) != n || b.velocity.extent(1) != D || b.angle.size() != n ||
+                  b.rate.size() != n)
+                throw std::invalid_argument(
+                    "set_bodies: a path needs n times, n x D centres and velocities, n angles "
+                    "and rates");
+              for (index_t j = 1; j < n; ++j)
+                if (!(b.time(j) > b.time(j - 1)))
+                  throw std::invalid_argument("set_bodies: a path's times must increase");
+              b.no_slip = nb::cast<bool>(d["no_slip"]);
+              list.push_back(b);
+            }
+            const auto flags = table<bool, 1>(fixed_no_slip, "fixed_no_slip", keep);
+            if (flags.size() > 0 && flags.size() != self.state->grid().nnodes)
+              throw std::invalid_argument("set_bodies: fixed_no_slip needs one flag per node");
+            self.state->set_bodies(std::move(list), flags, nsub);
+          },
+          nb::arg("bodies"), nb::arg("fixed_no_slip"), nb::arg("nsub"),
+          "Obstacles moving along prescribed paths (src/core/bodies.hpp): each a dict of its "
+          "body-frame distance lattice (phi, flat, axis 0 fastest; counts, origin, spacing), "
+          "its shape's body-frame bounds (lo, hi), rotation axis (3 entries), path (time, "
+          "centre, velocity, angle, rate) and no_slip flag. Places them at the state's time.")
+      .def_prop_rw(
+          "time", [](S& self) { return self.state->time(); },
+          [](S& self, double t) { self.state->set_time(t); },
+          "The flow time (s); setting it places the moving bodies.")
+      .def_prop_ro("body_force", &state_view<D, &State<D>::body_force>,
+                   "The pressure's force on each body in the last step (bodies x D; N, 2D N/m).")
+      .def_prop_ro("body_torque", &state_view<D, &State<D>::body_torque>,
+                   "The pressure's torque on each body about its frame's origin in the last "
+                   "step (bodies x 3; N m, 2D N m/m).")
+      .def(
           "set_inlet_pool",
           [](S& self, index_t first, index_t end) {
             if (first < 0 || end < first)

@@ -60,6 +60,9 @@ class Tables:
     normal: Floats  # (m, D) their unit normals, into the solid
     no_slip: Bools  # (m,) whether the node's obstacle is no-slip
     solids: list[Shape] = field(default_factory=list)  # the obstacles' shapes
+    # (nnodes,) whether each node's nearest obstacle is no-slip (None: no obstacle); moving
+    # obstacles (boundaries/moving.py) read it where their cells meet a fixed one's
+    node_no_slip: Bools | None = None
 
     def distance(self, points: Floats) -> Floats:
         """The signed distance (m) of points to the nearest obstacle, negative inside."""
@@ -248,11 +251,17 @@ def grid_distance(tables: Tables, grid: Grid, x: Floats) -> Floats:
 
 
 def of_case(case: Case, grid: Grid) -> Tables:
-    """The tables of the case's ``[[obstacles]]`` (none: empty tables)."""
-    specs = getattr(case, "obstacles", None) or []
-    if not specs:
+    """The tables of the case's fixed ``[[obstacles]]`` (none: empty tables); those with a
+    ``motion`` are the moving obstacles' (boundaries/moving.py)."""
+    fixed = [
+        (k, o)
+        for k, o in enumerate(getattr(case, "obstacles", None) or [])
+        if getattr(o, "motion", None) is None
+    ]
+    if not fixed:
         return build(grid)
-    solids = [case.obstacle_shape(k) for k in range(len(specs))]
+    specs = [o for _, o in fixed]
+    solids = [case.obstacle_shape(k) for k, _ in fixed]
     x = grid.node_coordinates()
     dist = np.array([node_distance(grid, s, x) for s in solids])  # (nobstacles, nnodes)
     phi = dist.min(axis=0)
@@ -265,6 +274,7 @@ def of_case(case: Case, grid: Grid) -> Tables:
     no_slip = np.array([w in ("no_slip", "bonded") for w in walls], dtype=bool)
     tables = build(grid, phi, lambda nodes: no_slip[nearest[nodes]])
     tables.solids = solids
+    tables.node_no_slip = no_slip[nearest]
     return tables
 
 

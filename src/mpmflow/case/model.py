@@ -243,6 +243,16 @@ class Case(Section):
                 ]
         for k, body in enumerate(self.bodies):
             vectors.append((f"bodies.{k}.velocity", body.velocity))
+        for k, spec in enumerate(self.obstacles):
+            motion = getattr(spec, "motion", None)
+            if motion is None:
+                continue
+            if motion.pivot is not None:
+                vectors.append((f"obstacles.{k}.motion.pivot", motion.pivot))
+            for name in ("velocity", "amplitude"):
+                value = getattr(motion, name)
+                if value is not None and len(value) != D:
+                    vectors.append((f"obstacles.{k}.motion.{name}", value))
         vectors += [(f"probes.{k}.position", p.position) for k, p in enumerate(self.probes)]
         for name, value in vectors:
             if len(value) != D:

@@ -8,6 +8,7 @@ from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 from typing_extensions import Self
 
 from ..geometry import shapes
+from .motion import Motion
 from .sections import Section
 
 # --------------------------------------------------------------------------- shapes
@@ -247,6 +248,11 @@ class _ObstacleFields(Section):
         description='Wall condition on the obstacle\'s surface: "slip", '
         '"no_slip", or "domain" = the same as domain.walls (which must then be one '
         "condition for every wall).",
+    )
+    motion: Motion | None = Field(
+        None,
+        description="How the obstacle moves ([obstacles.motion]: a velocity, an oscillation "
+        "or a table of its path; src/core/bodies.hpp); none: it stays where it is.",
     )
 
 

@@ -17,7 +17,7 @@ from typing_extensions import Self
 
 from .. import materials, state
 from ..arrays import Floats
-from ..boundaries import inlets, obstacles, outlets, walls
+from ..boundaries import inlets, moving, obstacles, outlets, walls
 from ..case import capabilities
 from ..errors import CaseError, SolverError
 from ..grid import Grid
@@ -161,6 +161,16 @@ class ProjectionScheme:
             held=self.inlets.held if self.inlets.present else None,
             inlets=self.inlets.core() if self.inlets.present else None,
         )
+        # obstacles moving along prescribed paths (src/core/bodies.hpp), placed at t = 0
+        self.movers = moving.of_case(case)
+        self.time = 0.0  # s: the flow time the core's bodies are placed at
+        _check_movers(case, grid, self.movers)
+        if self.movers:
+            self.core.set_bodies(
+                [m.core(grid) for m in self.movers],
+                moving.fixed_flags(self.solids.node_no_slip),
+                obstacles.SUBCELLS,
+            )
         # amg, direct, petsc: solvers from Python, plugged into the compiled step
         self.python_solver = (
             None if s.linear_solver == "multigrid" else pressure.PythonSolver(grid, s)
@@ -302,6 +312,7 @@ class ProjectionScheme:
             "steps": np.array(self.steps),
             "since_volume": np.array(self.core.since_volume),
             "dt_range": np.array(self.dt_range),
+            "time": np.array(self.time),
         }
         q = self.core.volume_q
         if q.size:
@@ -325,6 +336,9 @@ class ProjectionScheme:
         if "since_volume" in saved:  # checkpoints written before adaptive steps lack them
             self.core.since_volume = float(saved["since_volume"])
             self.dt_range = [float(t) for t in saved["dt_range"]]
+        if "time" in saved:  # checkpoints written before moving obstacles lack it
+            self.time = float(saved["time"])
+            self.core.time = self.time
         q = self.core.volume_q
         if q.size:
             np.copyto(q, saved["volume_q"])
@@ -379,6 +393,8 @@ class ProjectionScheme:
         O = self.options(dt)
         report = state.Report()
         self._supply(dt * nsteps)
+        if self.movers:  # the bodies where this chunk starts (the core's own sum may drift)
+            self.core.time = self.time
         if self.auto:
             return self._adaptive(O, dt * nsteps, report, where)
         try:
@@ -393,6 +409,7 @@ class ProjectionScheme:
             self._settle()
             self._drain()
         self.steps += done
+        self.time += done * dt
         self.last_unknowns = int(report.last_unknowns)
         if done < nsteps:
             self._fail(report, where(done))
@@ -417,6 +434,7 @@ class ProjectionScheme:
             self._drain()
         done = int(report.steps)
         self.steps += done
+        self.time += covered
         self.last_unknowns = int(report.last_unknowns)
         if done:
             self.dt_range = [
@@ -475,3 +493,26 @@ class ProjectionScheme:
                 + "."
             )
         raise SolverError(f"The step failed{where} with status {status.name}.")
+
+
+def _check_movers(case: Case, grid: Grid, movers: list[moving.Mover]) -> None:
+    """Refuse moving obstacles the step cannot follow: across a periodic axis, or faster
+    than a cell a step at a fixed time.dt (time.dt = "auto" counts their speed)."""
+    if not movers:
+        return
+    if any(case.domain.periodic or []):
+        raise CaseError(
+            f"obstacles.{movers[0].index}.motion: moving obstacles in a periodic domain are not "
+            "supported yet; remove domain.periodic or the motion"
+        )
+    if case.time.dt == "auto":
+        return
+    dt = float(case.time.dt)
+    for m in movers:
+        speed = m.max_speed()
+        if speed * dt > grid.spacing:
+            raise CaseError(
+                f"obstacles.{m.index}.motion moves the obstacle at up to {speed:.4g} m/s, more "
+                f"than a cell ({grid.spacing:g} m) in a step of time.dt = {dt:g} s; give "
+                f'time.dt <= {grid.spacing / speed:.3g} s, or time.dt = "auto"'
+            )

@@ -1,7 +1,7 @@
 """The energy check: a closed tank may lose energy but must not gain it (issue 39).
 
-Nothing in a run without inlets puts energy into the water: walls and obstacles stand
-still, gravity is constant, outlets only let energy leave, and viscosity only dissipates. So the
+Nothing in a run without inlets or moving obstacles puts energy into the water: walls and
+fixed obstacles stand still, gravity is constant, outlets only let energy leave, and viscosity only dissipates. So the
 mechanical energy E = KE + PE of the particles (``kinetic_energy`` + ``potential_energy``,
 the time series' columns) can only fall; a rise is the step's doing. At the end of a run
 (``record``, in summary.json's ``energy``) the largest rise over the output times,
@@ -23,7 +23,7 @@ less, and the dam break never above its start; the defects the issue measured ri
 the settings that likely caused it: ``advice``) and in summary.json.
 
 ``sources`` names what may legitimately raise KE + PE in a case; the check is off when
-there is any: an inlet is one; a moving boundary, when it comes, belongs there.
+there is any: an inlet is one, a moving obstacle (obstacles.N.motion) another.
 """
 
 from __future__ import annotations
@@ -63,7 +63,11 @@ def sources(case: Case, grid: Grid) -> list[str]:
             )
     if case.inlets:
         why.append("the inlets ([[inlets]]) bring water, and its energy, into the domain")
-    # a moving boundary (not in mpmflow yet) puts energy in: name it here
+    moved = [o.name or f"obstacles.{k}" for k, o in enumerate(case.obstacles) if o.motion]
+    if moved:
+        why.append(
+            f"the moving obstacles ({', '.join(moved)}: obstacles.N.motion) do work on the water"
+        )
     return why
 
 

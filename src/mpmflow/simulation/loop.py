@@ -122,6 +122,9 @@ class Simulation:
             self.builtin_writers["probes"] = self._probes
         if self.case.output.centre_of_mass:
             self.builtin_writers["centre_of_mass"] = writers.CentreOfMass(self.case)
+        movers = getattr(self.scheme, "movers", None)
+        if movers:
+            self.builtin_writers["bodies"] = writers.Bodies(movers, self.grid.dim)
         self.builtin_writers["snapshots"] = writers.Snapshots()
         w = self.builtin_writers
 

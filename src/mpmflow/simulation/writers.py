@@ -4,6 +4,8 @@
   (``sim.series``), at the output times (``output.interval``) and at ``time.end``;
 - ``Probes``: the case's probes into probes.csv and memory (``sim.probe_series``), at the
   same times;
+- ``Bodies``: the moving obstacles' pose, velocity, force and torque into bodies.csv, at
+  the same times;
 - ``Snapshots``: the particles into particles_NNNNNN.vtu and particles.pvd, at the first
   output time at or after each multiple of ``output.snapshot_interval`` and at the end;
 - the checkpointer (``checkpointer.Checkpointer``), at the first output time at or after
@@ -24,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..arrays import Floats
+from ..boundaries import moving
 from ..diagnostics import probes
 from ..output.snapshots import SnapshotWriter
 from ..output.timeseries import (
@@ -143,6 +146,52 @@ class CentreOfMass(_Rows):
         self.append({"time": sim.time, **{f"{a}_c": float(v) for a, v in zip("xyz", c)}})
 
 
+class Bodies(_Rows):
+    """The moving obstacles (``obstacles.N.motion``) into bodies.csv at the output times: each
+    one's pivot position (m), angle (degrees), velocity (m/s) and turning rate (degrees/s),
+    and the pressure's force (N; 2D: N per metre of depth) and torque about the pivot (N m;
+    2D: N m/m) in the last step (columns ``{name}_{quantity}``)."""
+
+    file_name = "bodies.csv"
+
+    def __init__(self, movers: list[moving.Mover], dim: int) -> None:
+        self.movers = movers
+        self.dim = dim
+        columns, self.units = ["time"], ["time [s]"]
+        axes = "xyz"[:dim]
+        torques = ["torque"] if dim == 2 else ["torque_x", "torque_y", "torque_z"]
+        for m in movers:
+            for q, unit in (
+                *((a, "m") for a in axes),
+                ("angle", "deg"),
+                *((f"v{a}", "m/s") for a in axes),
+                ("rate", "deg/s"),
+                *((f"F{a}", "N" if dim == 3 else "N/m") for a in axes),
+                *((t, "N m" if dim == 3 else "N m/m") for t in torques),
+            ):
+                columns.append(f"{m.name}_{q}")
+                self.units.append(f"{m.name}_{q} [{unit}]")
+        super().__init__(columns)
+
+    def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
+        return CsvAppender(folder / self.file_name, self.buffer.columns, resume, self.units)
+
+    def __call__(self, sim: Simulation) -> None:
+        core = sim.scheme.core  # type: ignore[attr-defined]  # (only the projection scheme moves obstacles)
+        force, torque = core.body_force, core.body_torque
+        row = {"time": sim.time}
+        axes = "xyz"[: self.dim]
+        for b, m in enumerate(self.movers):
+            c, v, angle, rate = m.path.at(sim.time)
+            values = [*c, np.degrees(angle), *v, np.degrees(rate), *force[b]]
+            values += [torque[b, 2]] if self.dim == 2 else list(torque[b])
+            names = [*axes, "angle", *(f"v{a}" for a in axes), "rate"]
+            names += [f"F{a}" for a in axes]
+            names += ["torque"] if self.dim == 2 else ["torque_x", "torque_y", "torque_z"]
+            row.update({f"{m.name}_{q}": float(x) for q, x in zip(names, values)})
+        self.append(row)
+
+
 class Snapshots:
     """Snapshots when the case asks for them (``output.snapshots``) and there is a folder;
     otherwise the schedule still runs (its phase is in the checkpoints)."""
@@ -169,4 +218,4 @@ class Snapshots:
             self.file.sync()
 
 
-Builtin = TimeSeries | Probes | CentreOfMass | Snapshots  # the built-in writers
+Builtin = TimeSeries | Probes | CentreOfMass | Bodies | Snapshots  # the built-in writers

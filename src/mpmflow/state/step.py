@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -113,8 +113,13 @@ class CoreState(Protocol):
     since_volume: float  # the time since the last volume correction (s)
     inlet_travel: Floats  # where each inlet row's next particle is (m; src/core/inlets.hpp)
     inlet_next: int  # the first particle of the inlets' pool not emitted yet
+    time: float  # the flow time (s); setting it places the moving obstacles
+    body_force: Floats  # (bodies, D) the pressure's force on each moving obstacle (N; 2D N/m)
+    body_torque: Floats  # (bodies, 3) its torque about the pivot (N m; 2D N m/m)
 
     def set_inlet_pool(self, first: int, end: int) -> None: ...
+
+    def set_bodies(self, bodies: list[dict[str, Any]], fixed_no_slip: Bools, nsub: int) -> None: ...
 
     def advance(
         self,

@@ -1,0 +1,551 @@
+#include "bodies.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "cut_cells.hpp"
+
+namespace mpmflow {
+
+namespace {
+
+// the rotation by angle about a unit axis (Rodrigues; 2D: about z)
+template <int D>
+std::array<std::array<double, D>, D> rotation(double angle, const std::array<double, 3>& a) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  std::array<std::array<double, D>, D> R{};
+  if constexpr (D == 2) {
+    (void)a;
+    R[0] = {c, -s};
+    R[1] = {s, c};
+  } else {
+    const double t = 1.0 - c;
+    R[0] = {c + a[0] * a[0] * t, a[0] * a[1] * t - a[2] * s, a[0] * a[2] * t + a[1] * s};
+    R[1] = {a[1] * a[0] * t + a[2] * s, c + a[1] * a[1] * t, a[1] * a[2] * t - a[0] * s};
+    R[2] = {a[2] * a[0] * t - a[1] * s, a[2] * a[1] * t + a[0] * s, c + a[2] * a[2] * t};
+  }
+  return R;
+}
+
+// cubic Hermite on [t0, t0 + w] at s in [0, 1]: value and rate from the ends' values (p) and
+// rates (m)
+struct Hermite {
+  double h00, h10, h01, h11, d00, d10, d01, d11, w;
+  Hermite(double s, double width) : w(width) {
+    const double s2 = s * s, s3 = s2 * s;
+    h00 = 2 * s3 - 3 * s2 + 1;
+    h10 = s3 - 2 * s2 + s;
+    h01 = -2 * s3 + 3 * s2;
+    h11 = s3 - s2;
+    d00 = 6 * s2 - 6 * s;
+    d10 = 3 * s2 - 4 * s + 1;
+    d01 = -6 * s2 + 6 * s;
+    d11 = 3 * s2 - 2 * s;
+  }
+  double value(double p0, double m0, double p1, double m1) const {
+    return h00 * p0 + h10 * w * m0 + h01 * p1 + h11 * w * m1;
+  }
+  double rate(double p0, double m0, double p1, double m1) const {
+    return (d00 * p0 + d10 * w * m0 + d01 * p1 + d11 * w * m1) / w;
+  }
+};
+
+}  // namespace
+
+template <int D>
+void Pose<D>::velocity_at(const double* x, double* out) const {
+  double r[3] = {0.0, 0.0, 0.0};
+  for (int k = 0; k < D; ++k) r[k] = x[k] - centre[k];
+  const double w[3] = {omega[1] * r[2] - omega[2] * r[1], omega[2] * r[0] - omega[0] * r[2],
+                       omega[0] * r[1] - omega[1] * r[0]};
+  for (int k = 0; k < D; ++k) out[k] = velocity[k] + w[k];
+}
+
+template <int D>
+Pose<D> Body<D>::pose(double t) const {
+  const index_t n = time.size();
+  Pose<D> q;
+  double a = 0.0, da = 0.0;
+  if (t <= time(0) || n == 1) {
+    const index_t e = t <= time(0) ? 0 : n - 1;
+    for (int k = 0; k < D; ++k) {
+      q.centre[k] = centre(e, k);
+      q.velocity[k] = velocity(e, k);
+    }
+    a = angle(e);
+    da = rate(e);
+  } else if (t >= time(n - 1)) {
+    for (int k = 0; k < D; ++k) {
+      q.centre[k] = centre(n - 1, k);
+      q.velocity[k] = velocity(n - 1, k);
+    }
+    a = angle(n - 1);
+    da = rate(n - 1);
+  } else {
+    const double* t0 = time.data();
+    const index_t j = std::upper_bound(t0, t0 + n, t) - t0 - 1;  // time(j) <= t < time(j + 1)
+    const Hermite H((t - time(j)) / (time(j + 1) - time(j)), time(j + 1) - time(j));
+    for (int k = 0; k < D; ++k) {
+      q.centre[k] = H.value(centre(j, k), velocity(j, k), centre(j + 1, k), velocity(j + 1, k));
+      q.velocity[k] = H.rate(centre(j, k), velocity(j, k), centre(j + 1, k), velocity(j + 1, k));
+    }
+    a = H.value(angle(j), rate(j), angle(j + 1), rate(j + 1));
+    da = H.rate(angle(j), rate(j), angle(j + 1), rate(j + 1));
+  }
+  q.R = rotation<D>(a, axis);
+  for (int k = 0; k < 3; ++k) q.omega[k] = da * axis[k];
+  return q;
+}
+
+template <int D>
+double Body<D>::distance(const Pose<D>& q, const double* x) const {
+  // y = R^T (x - c), then multilinear on the lattice
+  std::array<double, D> u;
+  std::array<index_t, D> i0;
+  for (int k = 0; k < D; ++k) {
+    double y = 0.0;
+    for (int m = 0; m < D; ++m) y += q.R[m][k] * (x[m] - q.centre[m]);
+    const double s = (y - origin[k]) / spacing;
+    if (!(s >= 0.0) || s > static_cast<double>(counts[k] - 1)) return BodyTables<D>::FAR;
+    i0[k] = std::min(static_cast<index_t>(s), counts[k] - 2);
+    u[k] = s - static_cast<double>(i0[k]);
+  }
+  double value = 0.0;
+  for (int a = 0; a < (1 << D); ++a) {
+    index_t flat = 0, stride = 1;
+    double w = 1.0;
+    for (int k = 0; k < D; ++k) {
+      const int bit = (a >> k) & 1;
+      w *= bit ? u[k] : 1.0 - u[k];
+      flat += (i0[k] + bit) * stride;
+      stride *= counts[k];
+    }
+    value += w * phi(flat);
+  }
+  return value;
+}
+
+template <int D>
+void BodyTables<D>::setup(const Grid<D>& g, const ObstacleTables<D>& fixed,
+                          View<const bool> fixed_no_slip, std::vector<Body<D>> bodies,
+                          index_t nsub) {
+  g_ = g;
+  fixed_ = fixed;
+  fixed_no_slip_ = fixed_no_slip;
+  bodies_ = std::move(bodies);
+  poses_.assign(bodies_.size(), Pose<D>{});
+  held_.assign(bodies_.size(), Pose<D>{});
+  nsub_ = nsub;
+  nfixed_ = fixed.K.extent(0);
+  nslots_ = nfixed_;
+  placed_ = false;
+  const index_t nn = g.nnodes, nc = g.ncells;
+  for (const Body<D>& b : bodies_)
+    for (int k = 0; k < D; ++k)
+      if (b.counts[k] < 2 || !(b.spacing > 0.0) || b.phi.size() == 0)
+        throw std::invalid_argument("BodyTables: a body's lattice needs 2 points per axis");
+  auto phi = phi_.sized(nn);
+  auto owner = owner_.sized(nn);
+  auto vel = velocity_.sized(nn * D);
+  for (index_t i = 0; i < nn; ++i) {
+    phi(i) = fixed.phi.size() > 0 ? fixed.phi(i) : FAR;
+    owner(i) = -1;
+  }
+  for (index_t i = 0; i < nn * D; ++i) vel(i) = 0.0;
+  auto open = open_.sized(nc);
+  auto slot = slot_.sized(nc);
+  for (index_t c = 0; c < nc; ++c) {
+    open(c) = fixed.open(c);
+    slot(c) = fixed.static_slot(c);
+  }
+  // the fixed slots first; the bodies' after them
+  auto copy = [](Buffer<double>& to, const double* from, index_t n) {
+    to.reserve(n);
+    std::copy(from, from + n, to.view(n).data());
+  };
+  copy(K_, fixed.K.data(), fixed.K.size());
+  copy(C_, fixed.C.data(), fixed.C.size());
+  copy(V_, fixed.V.data(), fixed.V.size());
+  copy(F_, fixed.F.data(), fixed.F.size());
+  copy(Wf_, fixed.Wf.data(), fixed.Wf.size());
+  slot_owner_.reserve(nfixed_);
+  for (index_t s = 0; s < nfixed_; ++s) slot_owner_.view(nfixed_)(s) = -1;
+  nonode_ = fixed.onode.size();
+  onode_.reserve(nonode_);
+  onormal_.reserve(nonode_ * D);
+  ono_slip_.reserve(nonode_);
+  for (index_t e = 0; e < nonode_; ++e) {
+    onode_.view(nonode_)(e) = fixed.onode(e);
+    ono_slip_.view(nonode_)(e) = fixed.ono_slip(e);
+    for (int k = 0; k < D; ++k) onormal_.view(nonode_ * D)(e * D + k) = fixed.onormal(e, k);
+  }
+  nvec_.reserve(nn * D);
+}
+
+template <int D>
+void BodyTables<D>::restore() {
+  if (!placed_) return;
+  auto phi = phi_.view(g_.nnodes);
+  auto owner = owner_.view(g_.nnodes);
+  auto vel = velocity_.template view<2>({g_.nnodes, D});
+  auto open = open_.view(g_.ncells);
+  auto slot = slot_.view(g_.ncells);
+  std::array<index_t, D> ix = box_lo_;
+  while (true) {
+    index_t i = 0, c = 0;
+    bool cell = true;
+    for (int k = 0; k < D; ++k) {
+      i += ix[k] * g_.ns[k];
+      if (ix[k] >= box_hi_[k])
+        cell = false;
+      else
+        c += ix[k] * g_.cs[k];
+    }
+    phi(i) = fixed_.phi.size() > 0 ? fixed_.phi(i) : FAR;
+    owner(i) = -1;
+    for (int k = 0; k < D; ++k) vel(i, k) = 0.0;
+    if (cell) {
+      open(c) = fixed_.open(c);
+      slot(c) = fixed_.static_slot(c);
+    }
+    int k = 0;
+    for (; k < D; ++k) {
+      if (++ix[k] <= box_hi_[k]) break;
+      ix[k] = box_lo_[k];
+    }
+    if (k == D) break;
+  }
+}
+
+template <int D>
+void BodyTables<D>::place(double t) {
+  restore();
+  const index_t nn = g_.nnodes, nc = g_.ncells;
+  // the box: every body's lattice in the grid, a node more each way
+  std::array<double, D> lo, hi;
+  lo.fill(1e300);
+  hi.fill(-1e300);
+  std::vector<std::array<bool, 2 * D>> shifts(bodies_.size());
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    const Body<D>& body = bodies_[b];
+    poses_[b] = body.pose(t);
+    const Pose<D>& q = poses_[b];
+    std::array<double, D> slo, shi;  // the shape's box in the grid
+    slo.fill(1e300);
+    shi.fill(-1e300);
+    for (int a = 0; a < NC; ++a) {
+      for (int k = 0; k < D; ++k) {
+        double xl = q.centre[k], xs = q.centre[k];
+        for (int m = 0; m < D; ++m) {
+          const bool up = (a >> m) & 1;
+          xl += q.R[k][m] * (body.origin[m] + (up ? (body.counts[m] - 1) * body.spacing : 0.0));
+          xs += q.R[k][m] * (up ? body.hi[m] : body.lo[m]);
+        }
+        lo[k] = std::min(lo[k], xl);
+        hi[k] = std::max(hi[k], xl);
+        slo[k] = std::min(slo[k], xs);
+        shi[k] = std::max(shi[k], xs);
+      }
+    }
+    const double tol = 1e-9 * g_.h;
+    for (int k = 0; k < D; ++k) {
+      shifts[b][2 * k] = !g_.periodic[k] && slo[k] <= tol;
+      shifts[b][2 * k + 1] = !g_.periodic[k] && shi[k] >= g_.cells[k] * g_.h - tol;
+    }
+  }
+  for (int k = 0; k < D; ++k) {
+    box_lo_[k] = std::max<index_t>(0, static_cast<index_t>(std::floor(lo[k] * g_.inv_h)) - 1);
+    box_hi_[k] =
+        std::min<index_t>(g_.cells[k], static_cast<index_t>(std::ceil(hi[k] * g_.inv_h)) + 1);
+    if (box_lo_[k] > box_hi_[k]) box_lo_[k] = box_hi_[k];  // wholly outside: an empty-ish box
+  }
+  placed_ = true;
+  auto phi = phi_.view(nn);
+  auto owner = owner_.view(nn);
+  // the box's nodes: each body's distance where it is the nearest
+  auto for_box = [&](index_t last_shrink, auto&& f) {
+    std::array<index_t, D> ix = box_lo_;
+    for (int k = 0; k < D; ++k)
+      if (box_hi_[k] - last_shrink < box_lo_[k]) return;
+    while (true) {
+      f(ix);
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++ix[k] <= box_hi_[k] - last_shrink) break;
+        ix[k] = box_lo_[k];
+      }
+      if (k == D) break;
+    }
+  };
+  for_box(0, [&](const std::array<index_t, D>& ix) {
+    index_t i = 0;
+    for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      double x[D];
+      for (int k = 0; k < D; ++k) {
+        x[k] = static_cast<double>(ix[k]) * g_.h;
+        if (ix[k] == 0 && shifts[b][2 * k]) x[k] += g_.h;
+        if (ix[k] == g_.cells[k] && shifts[b][2 * k + 1]) x[k] -= g_.h;
+      }
+      const double d = bodies_[b].distance(poses_[b], x);
+      if (d < phi(i)) {
+        phi(i) = d;
+        owner(i) = static_cast<index_t>(b);
+      }
+    }
+  });
+  // the box's cells: solid, whole or candidates for the cut-cell integrals
+  auto corner_range = [&](index_t c, double& mn, double& mx) {
+    index_t cx[D];
+    g_.cell_coords(c, cx);
+    index_t first = 0;
+    for (int k = 0; k < D; ++k) first += cx[k] * g_.ns[k];
+    mn = 1e300;
+    mx = -1e300;
+    for (int a = 0; a < NC; ++a) {
+      const double v = phi(first + g_.corner[a]);
+      mn = std::min(mn, v);
+      mx = std::max(mx, v);
+    }
+  };
+  auto touching = [&](index_t c) {
+    double mn, mx;
+    corner_range(c, mn, mx);
+    return mn <= 0.0 && mx > 0.0;
+  };
+  index_t ncells_box = 1;
+  for (int k = 0; k < D; ++k) ncells_box *= std::max<index_t>(0, box_hi_[k] - box_lo_[k]);
+  auto cand = cand_.sized(ncells_box);
+  auto open = open_.view(nc);
+  auto slot = slot_.view(nc);
+  index_t m = 0;
+  for_box(1, [&](const std::array<index_t, D>& cx) {
+    index_t c = 0;
+    for (int k = 0; k < D; ++k) c += cx[k] * g_.cs[k];
+    double mn, mx;
+    corner_range(c, mn, mx);
+    if (mx <= 0.0) {
+      slot(c) = -1;
+      open(c) = 0.0;
+      return;
+    }
+    slot(c) = 0;
+    open(c) = 1.0;
+    bool near = mn <= 0.0;
+    for (int k = 0; k < D && !near; ++k) {
+      if (cx[k] > 0 && touching(c - g_.cs[k])) near = true;
+      if (cx[k] + 1 < g_.cells[k] && touching(c + g_.cs[k])) near = true;
+    }
+    if (near) cand(m++) = c;
+  });
+  // their integrals, after the fixed slots
+  const index_t total = nfixed_ + m;
+  auto K = K_.template sized<3>({total, NC, NC});
+  auto C = C_.template sized<4>({total, NC, NC, D});
+  auto V = V_.template sized<2>({total, NC});
+  auto F = F_.template sized<4>({total, NC, NC, D});
+  auto Wf = Wf_.template sized<4>({total, 2 * D, NC, NC});
+  auto parts = parts_.sized(m);
+  const index_t kk = NC * NC, cc = NC * NC * D, ww = 2 * D * NC * NC;
+  cut_cell_tensors<D>(g_, View<const double>(phi.data(), {nn}),
+                      View<const index_t>(cand.data(), {m}), nsub_,
+                      View<double, 3>(K.data() + nfixed_ * kk, {m, NC, NC}),
+                      View<double, 4>(C.data() + nfixed_ * cc, {m, NC, NC, D}),
+                      View<double, 2>(V.data() + nfixed_ * NC, {m, NC}),
+                      View<double, 4>(F.data() + nfixed_ * cc, {m, NC, NC, D}),
+                      View<double, 4>(Wf.data() + nfixed_ * ww, {m, 2 * D, NC, NC}), parts);
+  auto sowner = slot_owner_.sized(total);
+  auto scell = slot_cell_.sized(total);
+  index_t s = nfixed_;
+  for (index_t j = 0; j < m; ++j) {
+    const index_t c = cand(j), from = nfixed_ + j;
+    double fluid = 0.0;
+    for (int a = 0; a < NC; ++a) fluid += V(from, a);
+    if (fluid <= 0.0) {  // no fluid sub-cell: solid on the staircase
+      slot(c) = -1;
+      open(c) = 0.0;
+      continue;
+    }
+    if (parts(j) == 0) continue;  // not cut: a whole cell
+    if (s != from) {
+      std::copy(K.data() + from * kk, K.data() + (from + 1) * kk, K.data() + s * kk);
+      std::copy(C.data() + from * cc, C.data() + (from + 1) * cc, C.data() + s * cc);
+      std::copy(V.data() + from * NC, V.data() + (from + 1) * NC, V.data() + s * NC);
+      std::copy(F.data() + from * cc, F.data() + (from + 1) * cc, F.data() + s * cc);
+      std::copy(Wf.data() + from * ww, Wf.data() + (from + 1) * ww, Wf.data() + s * ww);
+    }
+    slot(c) = s;
+    open(c) = fluid / int_power(g_.h, D);
+    // the body nearest the cell's corners owns its face
+    index_t cx[D], first = 0;
+    g_.cell_coords(c, cx);
+    for (int k = 0; k < D; ++k) first += cx[k] * g_.ns[k];
+    index_t best = first;
+    for (int a = 1; a < NC; ++a)
+      if (phi(first + g_.corner[a]) < phi(best)) best = first + g_.corner[a];
+    sowner(s) = owner(best);
+    scell(s) = c;
+    ++s;
+  }
+  nslots_ = s;
+  // the obstacle nodes: the fixed ones outside the box, then the box's
+  auto inside_box = [&](index_t i) {
+    index_t ix[D];
+    g_.node_coords(i, ix);
+    for (int k = 0; k < D; ++k)
+      if (ix[k] < box_lo_[k] || ix[k] > box_hi_[k]) return false;
+    return true;
+  };
+  index_t box_nodes = 1;
+  for (int k = 0; k < D; ++k) box_nodes *= box_hi_[k] - box_lo_[k] + 1;
+  const index_t most = fixed_.onode.size() + box_nodes;
+  auto onode = onode_.sized(most);
+  auto onormal = onormal_.template sized<2>({most, D});
+  auto slip = ono_slip_.sized(most);
+  index_t e = 0;
+  for (index_t f = 0; f < fixed_.onode.size(); ++f) {
+    const index_t i = fixed_.onode(f);
+    if (inside_box(i)) continue;
+    onode(e) = i;
+    slip(e) = fixed_.ono_slip(f);
+    for (int k = 0; k < D; ++k) onormal(e, k) = fixed_.onormal(f, k);
+    ++e;
+  }
+  const double threshold = 1e-9 * int_power(g_.h, D - 1);
+  for_box(0, [&](const std::array<index_t, D>& ix) {
+    index_t i = 0;
+    for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
+    double n[D] = {};
+    for (int a = 0; a < NC; ++a) {  // the cell whose corner a the node is
+      index_t c = 0;
+      bool in = true;
+      for (int k = 0; k < D; ++k) {
+        const index_t cx = ix[k] - ((a >> k) & 1);
+        if (cx < 0 || cx >= g_.cells[k]) in = false;
+        c += cx * g_.cs[k];
+      }
+      if (!in || slot(c) < 1) continue;
+      const index_t sc = slot(c);
+      for (int b = 0; b < NC; ++b)
+        for (int k = 0; k < D; ++k) n[k] += F(sc, a, b, k);
+    }
+    double size = 0.0;
+    for (int k = 0; k < D; ++k) size += n[k] * n[k];
+    size = std::sqrt(size);
+    if (size <= threshold) return;
+    onode(e) = i;
+    for (int k = 0; k < D; ++k) onormal(e, k) = n[k] / size;
+    slip(e) = owner(i) >= 0 ? bodies_[owner(i)].no_slip
+                            : (fixed_no_slip_.size() > 0 && fixed_no_slip_(i));
+    ++e;
+  });
+  nonode_ = e;
+}
+
+template <int D>
+void BodyTables<D>::hold(double t) {
+  // every box node nearest a body (the obstacle nodes read it; push_out interpolates it)
+  if (!placed_) return;
+  auto vel = velocity_.template view<2>({g_.nnodes, D});
+  auto owner = owner_.view(g_.nnodes);
+  for (std::size_t b = 0; b < bodies_.size(); ++b) held_[b] = bodies_[b].pose(t);
+  std::array<index_t, D> ix = box_lo_;
+  while (true) {
+    index_t i = 0;
+    for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
+    if (owner(i) >= 0) {
+      double x[D], v[D];
+      for (int k = 0; k < D; ++k) x[k] = static_cast<double>(ix[k]) * g_.h;
+      held_[owner(i)].velocity_at(x, v);
+      for (int k = 0; k < D; ++k) vel(i, k) = v[k];
+    }
+    int k = 0;
+    for (; k < D; ++k) {
+      if (++ix[k] <= box_hi_[k]) break;
+      ix[k] = box_lo_[k];
+    }
+    if (k == D) break;
+  }
+}
+
+template <int D>
+double BodyTables<D>::max_speed(double t) const {
+  double top = 0.0;
+  for (const Body<D>& b : bodies_) {
+    const Pose<D> q = b.pose(t);
+    double reach = 0.0, w = 0.0, v = 0.0;  // the lattice's farthest corner from the centre
+    for (int k = 0; k < D; ++k) {
+      const double far =
+          std::max(std::abs(b.origin[k]), std::abs(b.origin[k] + (b.counts[k] - 1) * b.spacing));
+      reach += far * far;
+      v += q.velocity[k] * q.velocity[k];
+    }
+    for (int k = 0; k < 3; ++k) w += q.omega[k] * q.omega[k];
+    top = std::max(top, std::sqrt(v) + std::sqrt(w * reach));
+  }
+  return top;
+}
+
+template <int D>
+void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force,
+                           View<double, 2> torque) {
+  for (index_t i = 0; i < force.size(); ++i) force[i] = 0.0;
+  for (index_t i = 0; i < torque.size(); ++i) torque[i] = 0.0;
+  if (!placed_) return;
+  auto F = F_.template view<4>({nslots_, NC, NC, D});
+  auto sowner = slot_owner_.view(nslots_);
+  auto scell = slot_cell_.view(nslots_);
+  for (index_t s = nfixed_; s < nslots_; ++s) {
+    if (sowner(s) < 0) continue;
+    const index_t c = scell(s);
+    const index_t b = sowner(s);
+    const Pose<D>& q = poses_[b];
+    index_t cx[D], first = 0;
+    g_.cell_coords(c, cx);
+    for (int k = 0; k < D; ++k) first += cx[k] * g_.ns[k];
+    for (int a = 0; a < NC; ++a) {
+      double r[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k < D; ++k)
+        r[k] = static_cast<double>(cx[k] + ((a >> k) & 1)) * g_.h - q.centre[k];
+      for (int bb = 0; bb < NC; ++bb) {
+        const double p = p_node(first + g_.corner[bb]);
+        double f[3] = {0.0, 0.0, 0.0};
+        for (int k = 0; k < D; ++k) f[k] = F(s, a, bb, k) * p;
+        for (int k = 0; k < D; ++k) force(b, k) += f[k];
+        torque(b, 0) += r[1] * f[2] - r[2] * f[1];
+        torque(b, 1) += r[2] * f[0] - r[0] * f[2];
+        torque(b, 2) += r[0] * f[1] - r[1] * f[0];
+      }
+    }
+  }
+}
+
+template <int D>
+ObstacleTables<D> BodyTables<D>::tables() {
+  auto& self = *this;
+  const index_t nn = g_.nnodes, nc = g_.ncells, n = nslots_;
+  ObstacleTables<D> T;
+  T.phi = self.phi_.view(nn);
+  T.open = self.open_.view(nc);
+  T.static_slot = self.slot_.view(nc);
+  T.K = self.K_.template view<3>({n, NC, NC});
+  T.C = self.C_.template view<4>({n, NC, NC, D});
+  T.V = self.V_.template view<2>({n, NC});
+  T.F = self.F_.template view<4>({n, NC, NC, D});
+  T.Wf = self.Wf_.template view<4>({n, 2 * D, NC, NC});
+  T.onode = self.onode_.view(nonode_);
+  T.onormal = self.onormal_.template view<2>({nonode_, D});
+  T.ono_slip = self.ono_slip_.view(nonode_);
+  T.velocity = self.velocity_.template view<2>({nn, D});
+  return T;
+}
+
+template struct Pose<2>;
+template struct Pose<3>;
+template struct Body<2>;
+template struct Body<3>;
+template class BodyTables<2>;
+template class BodyTables<3>;
+
+}  // namespace mpmflow
