@@ -62,10 +62,65 @@ void Pose<D>::velocity_at(const double* x, double* out) const {
   for (int k = 0; k < D; ++k) out[k] = velocity[k] + w[k];
 }
 
+namespace {
+// the rotation of a unit quaternion (w, x, y, z); 2D: its upper-left block (about z)
+template <int D>
+std::array<std::array<double, D>, D> rotation_of(const std::array<double, 4>& q) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  const double R3[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                           {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                           {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+  std::array<std::array<double, D>, D> R{};
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) R[i][j] = R3[i][j];
+  return R;
+}
+
+// a x b
+std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+// A x = b for a small dense A (n x n, row-major, destroyed; partial pivoting), x into b;
+// false when A is singular
+bool solve_dense(index_t n, double* A, double* b) {
+  for (index_t k = 0; k < n; ++k) {
+    index_t best = k;
+    for (index_t i = k + 1; i < n; ++i)
+      if (std::abs(A[i * n + k]) > std::abs(A[best * n + k])) best = i;
+    if (!(std::abs(A[best * n + k]) > 0.0)) return false;
+    if (best != k) {
+      for (index_t j = 0; j < n; ++j) std::swap(A[k * n + j], A[best * n + j]);
+      std::swap(b[k], b[best]);
+    }
+    for (index_t i = k + 1; i < n; ++i) {
+      const double f = A[i * n + k] / A[k * n + k];
+      for (index_t j = k; j < n; ++j) A[i * n + j] -= f * A[k * n + j];
+      b[i] -= f * b[k];
+    }
+  }
+  for (index_t k = n - 1; k >= 0; --k) {
+    double v = b[k];
+    for (index_t j = k + 1; j < n; ++j) v -= A[k * n + j] * b[j];
+    b[k] = v / A[k * n + k];
+  }
+  return true;
+}
+}  // namespace
+
 template <int D>
 Pose<D> Body<D>::pose(double t) const {
-  const index_t n = time.size();
   Pose<D> q;
+  if (free) {
+    q.centre = centre_now;
+    q.velocity = velocity_now;
+    q.R = rotation_of<D>(quat);
+    q.omega = omega_now;
+    if constexpr (D == 2) q.omega[0] = q.omega[1] = 0.0;
+    q.angle = 2.0 * std::atan2(quat[3], quat[0]);
+    return q;
+  }
+  const index_t n = time.size();
   double a = 0.0, da = 0.0;
   if (t <= time(0) || n == 1) {
     const index_t e = t <= time(0) ? 0 : n - 1;
@@ -94,6 +149,7 @@ Pose<D> Body<D>::pose(double t) const {
     da = H.rate(angle(j), rate(j), angle(j + 1), rate(j + 1));
   }
   q.R = rotation<D>(a, axis);
+  q.angle = a;
   for (int k = 0; k < 3; ++k) q.omega[k] = da * axis[k];
   return q;
 }
@@ -181,6 +237,26 @@ void BodyTables<D>::setup(const Grid<D>& g, const ObstacleTables<D>& fixed,
     for (int k = 0; k < D; ++k) onormal_.view(nonode_ * D)(e * D + k) = fixed.onormal(e, k);
   }
   nvec_.reserve(nn * D);
+  // the free bodies' unheld degrees of freedom
+  dofs_.clear();
+  dof_of_.assign(bodies_.size(), std::array<index_t, 6>{-1, -1, -1, -1, -1, -1});
+  constexpr int NR = D == 2 ? 1 : 3;
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    Body<D>& body = bodies_[b];
+    if (!body.free) continue;
+    if (!(body.mass > 0.0))
+      throw std::invalid_argument("BodyTables: a free body needs a positive mass");
+    for (index_t kind = 0; kind < D + NR; ++kind)
+      if (!body.locked[kind]) {
+        dof_of_[b][kind] = static_cast<index_t>(dofs_.size());
+        dofs_.push_back({static_cast<index_t>(b), kind});
+      }
+    body.velocity_star = body.velocity_now;
+    body.omega_star = body.omega_now;
+  }
+  const index_t nq = free_dofs();
+  small_.reserve(nq * nq);
+  rhs_small_.reserve(nq);
 }
 
 template <int D>
@@ -539,6 +615,196 @@ ObstacleTables<D> BodyTables<D>::tables() {
   T.ono_slip = self.ono_slip_.view(nonode_);
   T.velocity = self.velocity_.template view<2>({nn, D});
   return T;
+}
+
+template <int D>
+void BodyTables<D>::predict(double dt, const std::array<double, D>& g) {
+  for (Body<D>& b : bodies_) {
+    if (!b.free) continue;
+    for (int k = 0; k < D; ++k)
+      b.velocity_star[k] = b.velocity_now[k] + (b.locked[k] ? 0.0 : dt * g[k]);
+    b.omega_star = b.omega_now;
+    if constexpr (D == 3) {  // omega' = -I^-1 (omega x I omega), explicitly
+      const auto R = rotation_of<3>(b.quat);
+      double Iw[3][3] = {};  // R I R^T
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          for (int k = 0; k < 3; ++k)
+            for (int m = 0; m < 3; ++m) Iw[i][j] += R[i][k] * b.inertia[k][m] * R[j][m];
+      std::array<double, 3> Iomega{};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) Iomega[i] += Iw[i][j] * b.omega_now[j];
+      const auto torque = cross(b.omega_now, Iomega);
+      double A[9], rhs[3] = {-torque[0], -torque[1], -torque[2]};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) A[i * 3 + j] = Iw[i][j];
+      if (solve_dense(3, A, rhs))
+        for (int k = 0; k < 3; ++k)
+          if (!b.locked[D + k]) b.omega_star[k] += dt * rhs[k];
+    }
+  }
+  reset_velocity();
+}
+
+template <int D>
+void BodyTables<D>::reset_velocity() {
+  for (Body<D>& b : bodies_)
+    if (b.free) {
+      b.velocity_now = b.velocity_star;
+      b.omega_now = b.omega_star;
+    }
+}
+
+template <int D>
+void BodyTables<D>::coupling(View<const index_t> cell_slot, View<const index_t> node_row,
+                             View<const bool> ocontact, View<double, 2> J, View<double, 2> K) {
+  for (index_t i = 0; i < J.size(); ++i) J[i] = 0.0;
+  for (index_t i = 0; i < K.size(); ++i) K[i] = 0.0;
+  auto F = F_.template view<4>({nslots_, NC, NC, D});
+  auto sowner = slot_owner_.view(nslots_);
+  auto scell = slot_cell_.view(nslots_);
+  auto owner = owner_.view(g_.nnodes);
+  constexpr int NR = D == 2 ? 1 : 3;
+  // G_d(x) . f for the body's degree of freedom kind at arm r (translation k: f_k; rotation
+  // about axis m: (r x f)_m)
+  auto along = [](index_t kind, const std::array<double, 3>& r, const std::array<double, 3>& f) {
+    if (kind < D) return f[kind];
+    const auto rf = cross(r, f);
+    return D == 2 ? rf[2] : rf[kind - D];
+  };
+  for (index_t s = nfixed_; s < nslots_; ++s) {
+    const index_t b = sowner(s);
+    if (b < 0 || !bodies_[b].free) continue;
+    const index_t c = scell(s);
+    if (cell_slot(c) < 0) continue;
+    const Pose<D>& q = poses_[b];
+    index_t cx[D], first = 0;
+    g_.cell_coords(c, cx);
+    for (int k = 0; k < D; ++k) first += cx[k] * g_.ns[k];
+    std::array<std::array<double, 3>, NC> arm{};
+    for (int a = 0; a < NC; ++a)
+      for (int k = 0; k < D; ++k)
+        arm[a][k] = static_cast<double>(cx[k] + ((a >> k) & 1)) * g_.h - q.centre[k];
+    for (int a = 0; a < NC; ++a) {
+      const index_t ia = first + g_.corner[a], ra = node_row(ia);
+      for (int bb = 0; bb < NC; ++bb) {
+        const index_t jb = first + g_.corner[bb], rb = node_row(jb);
+        std::array<double, 3> f{};
+        for (int k = 0; k < D; ++k) f[k] = F(s, a, bb, k);
+        for (index_t kind = 0; kind < D + NR; ++kind) {
+          const index_t d = dof_of_[b][kind];
+          if (d < 0) continue;
+          if (ra >= 0 && ocontact(jb) && owner(jb) == b) J(d, ra) += along(kind, arm[bb], f);
+          if (rb >= 0) K(d, rb) += along(kind, arm[a], f);
+        }
+      }
+    }
+  }
+}
+
+template <int D>
+void BodyTables<D>::mass_matrix(View<double, 2> M) const {
+  const index_t n = free_dofs();
+  for (index_t i = 0; i < M.size(); ++i) M[i] = 0.0;
+  for (index_t i = 0; i < n; ++i)
+    for (index_t j = 0; j < n; ++j) {
+      const auto [bi, ki] = dofs_[i];
+      const auto [bj, kj] = dofs_[j];
+      if (bi != bj) continue;
+      const Body<D>& b = bodies_[bi];
+      if (ki < D || kj < D) {
+        if (ki == kj) M(i, j) = b.mass;
+        continue;
+      }
+      if constexpr (D == 2) {
+        M(i, j) = b.inertia[2][2];
+      } else {  // R I R^T
+        const auto R = rotation_of<3>(b.quat);
+        double v = 0.0;
+        for (int k = 0; k < 3; ++k)
+          for (int m = 0; m < 3; ++m) v += R[ki - D][k] * b.inertia[k][m] * R[kj - D][m];
+        M(i, j) = v;
+      }
+    }
+}
+
+template <int D>
+void BodyTables<D>::apply_impulse(View<const double> impulse) {
+  const index_t n = free_dofs();
+  if (n == 0) return;
+  auto M = small_.template view<2>({n, n});
+  mass_matrix(M);
+  auto dq = rhs_small_.view(n);
+  for (index_t i = 0; i < n; ++i) dq(i) = impulse(i);
+  if (!solve_dense(n, M.data(), dq.data()))
+    throw std::logic_error("BodyTables: a free body's mass matrix is singular");
+  reset_velocity();
+  for (index_t i = 0; i < n; ++i) {
+    const auto [b, kind] = dofs_[i];
+    Body<D>& body = bodies_[b];
+    if (kind < D)
+      body.velocity_now[kind] += dq(i);
+    else
+      body.omega_now[D == 2 ? 2 : kind - D] += dq(i);
+  }
+}
+
+template <int D>
+void BodyTables<D>::integrate(double dt) {
+  for (Body<D>& b : bodies_) {
+    if (!b.free) continue;
+    for (int k = 0; k < D; ++k) b.centre_now[k] += dt * b.velocity_now[k];
+    // q += dt/2 (0, omega) q, normalized
+    const auto& w = b.omega_now;
+    const std::array<double, 3> v = {b.quat[1], b.quat[2], b.quat[3]};
+    const auto wv = cross(w, v);
+    std::array<double, 4> dq = {-(w[0] * v[0] + w[1] * v[1] + w[2] * v[2]),
+                                b.quat[0] * w[0] + wv[0], b.quat[0] * w[1] + wv[1],
+                                b.quat[0] * w[2] + wv[2]};
+    double norm = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      b.quat[k] += 0.5 * dt * dq[k];
+      norm += b.quat[k] * b.quat[k];
+    }
+    norm = std::sqrt(norm);
+    for (int k = 0; k < 4; ++k) b.quat[k] /= norm;
+    b.velocity_star = b.velocity_now;
+    b.omega_star = b.omega_now;
+  }
+}
+
+template <int D>
+void BodyTables<D>::state(double t, View<double, 2> out) const {
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    const Body<D>& body = bodies_[b];
+    const Pose<D> q = body.pose(t);
+    for (int k = 0; k < 13; ++k) out(b, k) = 0.0;
+    for (int k = 0; k < D; ++k) {
+      out(b, k) = q.centre[k];
+      out(b, 3 + k) = q.velocity[k];
+    }
+    for (int k = 0; k < 3; ++k) out(b, 6 + k) = q.omega[k];
+    if (body.free) {
+      for (int k = 0; k < 4; ++k) out(b, 9 + k) = body.quat[k];
+    } else {
+      out(b, 9) = std::cos(0.5 * q.angle);
+      for (int k = 0; k < 3; ++k) out(b, 10 + k) = body.axis[k] * std::sin(0.5 * q.angle);
+    }
+  }
+}
+
+template <int D>
+void BodyTables<D>::set_state(View<const double, 2> in) {
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    Body<D>& body = bodies_[b];
+    if (!body.free) continue;
+    for (int k = 0; k < D; ++k) {
+      body.centre_now[k] = in(b, k);
+      body.velocity_now[k] = body.velocity_star[k] = in(b, 3 + k);
+    }
+    for (int k = 0; k < 3; ++k) body.omega_now[k] = body.omega_star[k] = in(b, 6 + k);
+    for (int k = 0; k < 4; ++k) body.quat[k] = in(b, 9 + k);
+  }
 }
 
 template struct Pose<2>;

@@ -63,6 +63,7 @@ struct Pose {
   std::array<double, D> centre{}, velocity{};  // m, m/s
   std::array<std::array<double, D>, D> R{};    // body frame to grid frame
   std::array<double, 3> omega{};               // rad/s (2D: about z only)
+  double angle = 0.0;                          // rad about the path's axis (free: unused)
   // the body's velocity (m/s) at grid point x
   void velocity_at(const double* x, double* out) const;
 };
@@ -80,6 +81,19 @@ struct Body {
   View<const double, 2> velocity;  // (n, D) m/s
   View<const double> angle, rate;  // (n) rad, rad/s
   bool no_slip = false;
+  // A free body instead of a path: moved by gravity and the pressure on it (bodies.cpp).
+  // Its mass (kg; 2D kg/m), inertia about its pivot (its centroid) in its own frame (kg m^2;
+  // 2D the zz entry, kg m), the degrees of freedom held at their start (translations along
+  // the axes, then rotations about them; 2D: about z only), and its state: the pivot's
+  // position and velocity, its orientation (a unit quaternion w, x, y, z; 2D about z) and
+  // angular velocity (rad/s); *_star: the step's velocities before the pressure acts.
+  bool free = false;
+  double mass = 0.0;
+  std::array<std::array<double, 3>, 3> inertia{};
+  std::array<bool, 6> locked{};
+  std::array<double, D> centre_now{}, velocity_now{}, velocity_star{};
+  std::array<double, 4> quat{1.0, 0.0, 0.0, 0.0};
+  std::array<double, 3> omega_now{}, omega_star{};
   // the pose at time t (held at the table's ends beyond them)
   Pose<D> pose(double t) const;
   // phi_b (m) at grid point x for the body at pose q; far (a large value) off the lattice
@@ -109,7 +123,38 @@ class BodyTables {
   void forces(View<const double> p_node, View<double, 2> force, View<double, 2> torque);
   ObstacleTables<D> tables();
 
+  // Free bodies (bodies.cpp). Their unheld degrees of freedom, numbered body by body
+  // (translations, then rotations).
+  index_t free_dofs() const { return static_cast<index_t>(dofs_.size()); }
+  // the step's velocities before the pressure: gravity g (m/s^2) over dt added to the
+  // translations, the rotations' own change (omega x I omega) to the angular velocities
+  void predict(double dt, const std::array<double, D>& g);
+  // back to the predicted velocities (before each right-hand side of the pressure step)
+  void reset_velocity();
+  // The coupling of the pressure step's unknowns (node_row; cell_slot: the cells in the
+  // system) to the free degrees of freedom q: J (dofs x rows, m^(D-1) per unit of q) the
+  // face flux int N_i u(q).n ds over the obstacle nodes in contact (ocontact) that the body
+  // holds, and K (dofs x rows, m^(D-1) per Pa) the generalized force of the pressure at the
+  // rows on the body (force, torque about the pivot).
+  void coupling(View<const index_t> cell_slot, View<const index_t> node_row,
+                View<const bool> ocontact, View<double, 2> J, View<double, 2> K);
+  // the mass matrix of the free degrees of freedom (dofs x dofs; the inertia in the grid's
+  // frame)
+  void mass_matrix(View<double, 2> M) const;
+  // the velocities after the pressure: q = q* + M^-1 impulse (impulse: dofs, N s; 2D N s/m)
+  void apply_impulse(View<const double> impulse);
+  // the free bodies' poses moved over dt at their velocities
+  void integrate(double dt);
+  // each body's pose and velocity at time t (bodies x 13: pivot (3), velocity (3), angular
+  // velocity (3), orientation quaternion (4); 2D: z entries 0, rotation about z)
+  void state(double t, View<double, 2> out) const;
+  // a free body's state back from state()'s rows (a checkpoint); path bodies unchanged
+  void set_state(View<const double, 2> in);
+
  private:
+  std::vector<std::array<index_t, 2>> dofs_;    // (body, kind: 0..D-1 translation, D.. rotation)
+  std::vector<std::array<index_t, 6>> dof_of_;  // per body and kind: its dof (-1: held)
+  Buffer<double> small_, rhs_small_;            // the dense solves of the free dofs
   void restore();
   Grid<D> g_;
   ObstacleTables<D> fixed_;

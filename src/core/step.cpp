@@ -453,6 +453,70 @@ void State<D>::extend_pressure(const Options<D>& O) {
 }
 
 template <int D>
+template <class Solve>
+bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
+  // The free bodies' velocities q are unknowns of the pressure step with it: the right-hand
+  // side just solved (p0 = A^-1 r) took them at q*, and q = q* + dt M^-1 K p, so that
+  //   (A + rho J M^-1 K) p = r,
+  // J, K the coupling of bodies.hpp. The update is of rank nq (the free degrees of freedom):
+  // by the Woodbury identity p = p0 - Y S^-1 K p0 with Y = A^-1 J (nq more solves of the
+  // same matrix) and S = M / rho + K Y (nq x nq).
+  const index_t n = nrows_, nq = bodies_.free_dofs(), nn = grid_.nnodes;
+  auto J = body_J_.template sized<2>({nq, n});
+  auto K = body_K_.template sized<2>({nq, n});
+  auto Y = body_Y_.template sized<2>({nq, n});
+  auto S = body_S_.template sized<2>({nq, nq});
+  auto z = body_z_.sized(nq);
+  bodies_.coupling(I_.slot, node_row_.view(nn), ocontact_.view(nn), J, K);
+  for (index_t d = 0; d < nq; ++d) {
+    View<double> y(&Y(d, 0), {n});
+    for (index_t r = 0; r < n; ++r) y(r) = 0.0;
+    if (!solve(View<const double>(&J(d, 0), {n}), y)) return false;
+  }
+  bodies_.mass_matrix(S);
+  auto x = x_.view(n);
+  for (index_t i = 0; i < nq; ++i) {
+    for (index_t j = 0; j < nq; ++j) {
+      double v = 0.0;
+      for (index_t r = 0; r < n; ++r) v += K(i, r) * Y(j, r);
+      S(i, j) = S(i, j) / O.rho + v;
+    }
+    double kp = 0.0;
+    for (index_t r = 0; r < n; ++r) kp += K(i, r) * x(r);
+    z(i) = kp;
+  }
+  // z = S^-1 K p0 (Gauss with partial pivoting on the small system)
+  for (index_t k = 0; k < nq; ++k) {
+    index_t best = k;
+    for (index_t i = k + 1; i < nq; ++i)
+      if (std::abs(S(i, k)) > std::abs(S(best, k))) best = i;
+    for (index_t j = 0; j < nq; ++j) std::swap(S(k, j), S(best, j));
+    std::swap(z(k), z(best));
+    for (index_t i = k + 1; i < nq; ++i) {
+      const double f = S(i, k) / S(k, k);
+      for (index_t j = k; j < nq; ++j) S(i, j) -= f * S(k, j);
+      z(i) -= f * z(k);
+    }
+  }
+  for (index_t k = nq - 1; k >= 0; --k) {
+    double v = z(k);
+    for (index_t j = k + 1; j < nq; ++j) v -= S(k, j) * z(j);
+    z(k) = v / S(k, k);
+  }
+  for (index_t d = 0; d < nq; ++d)
+    for (index_t r = 0; r < n; ++r) x(r) -= Y(d, r) * z(d);
+  // the pressure's impulse on the bodies, dt K p, and their velocities after it
+  for (index_t d = 0; d < nq; ++d) {
+    double kp = 0.0;
+    for (index_t r = 0; r < n; ++r) kp += K(d, r) * x(r);
+    z(d) = O.dt * kp;
+  }
+  bodies_.apply_impulse(z);
+  bodies_.hold(time_ + 0.5 * O.dt);
+  return true;
+}
+
+template <int D>
 int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   warm_start();
   const bool anchored = pressure_matrix(O);
@@ -475,10 +539,10 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   auto x = x_.view(n);
   auto rhs = rhs_.view(n);
   index_t step_iterations = 0;
-  while (true) {
-    pressure_rhs(O);
-    const SolveResult res = solver_ ? solver_->solve(rhs, x)
-                                    : pressure_mg_.pcg(rhs, x, O.tol, O.max_iterations, O.sweeps);
+  // one solve of the pressure matrix, counted; false: it did not converge (reported)
+  auto solve = [&](View<const double> b, View<double> y) {
+    const SolveResult res =
+        solver_ ? solver_->solve(b, y) : pressure_mg_.pcg(b, y, O.tol, O.max_iterations, O.sweeps);
     report.solves += 1;
     report.iterations += res.iterations;
     step_iterations += res.iterations;
@@ -486,10 +550,21 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
     if (!(res.residual <= O.tol)) {
       report.fail_iterations = res.iterations;
       report.fail_residual = res.residual;
-      report.fail_node = rows(worst_row(cols, vals, x, rhs, scratch_.view(n)));
+      report.fail_node = rows(worst_row(cols, vals, y, b, scratch_.view(n)));
       report.fail_size = n;
-      return PRESSURE_NOT_CONVERGED;
+      return false;
     }
+    return true;
+  };
+  const bool free = bodies_.free_dofs() > 0;
+  while (true) {
+    if (free) {  // the right-hand side at the free bodies' velocities before the pressure
+      bodies_.reset_velocity();
+      bodies_.hold(time_ + 0.5 * O.dt);
+    }
+    pressure_rhs(O);
+    if (!solve(rhs, x)) return PRESSURE_NOT_CONVERGED;
+    if (free && !couple_bodies(O, solve)) return PRESSURE_NOT_CONVERGED;
     const index_t released = release_walls(x);
     if (released == 0) break;
     report.released += released;
@@ -817,6 +892,7 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
   if (bodies_.present()) {  // the bodies' force of this step, then the bodies at its end
     bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
                    body_torque_.template view<2>({bodies_.count(), 3}));
+    bodies_.integrate(O.dt);  // the free bodies' new poses
     bodies_.place(time_ + O.dt);
     bodies_.hold(time_ + O.dt);
     ob_ = bodies_.tables();
@@ -836,7 +912,10 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
 
 template <int D>
 int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct, Report& report) {
-  if (bodies_.present()) bodies_.hold(time_ + 0.5 * O.dt);  // the bodies' mean velocity
+  if (bodies_.present()) {  // the bodies' mean velocity (a free body's before the pressure)
+    bodies_.predict(O.dt, O.gravity);
+    bodies_.hold(time_ + 0.5 * O.dt);
+  }
   const index_t n = predict(P, O, correct);
   report.unknowns = std::max(report.unknowns, n);
   report.last_unknowns = n;

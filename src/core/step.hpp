@@ -275,6 +275,17 @@ class State {
   View<double, 2> body_force() { return body_force_.template view<2>({bodies_.count(), D}); }
   View<double, 2> body_torque() { return body_torque_.template view<2>({bodies_.count(), 3}); }
   index_t body_count() const { return bodies_.count(); }
+  // each body's pose and velocity (bodies x 13, BodyTables::state); set_body_state: a free
+  // body's back from such rows (a checkpoint)
+  View<double, 2> body_state() {
+    auto out = body_state_.template sized<2>({bodies_.count(), 13});
+    bodies_.state(time_, out);
+    return out;
+  }
+  void set_body_state(View<const double, 2> in) {
+    bodies_.set_state(in);
+    set_time(time_);
+  }
 
   // The pressure step's solver: solver (not owned; it must outlive its use), or the
   // step's own multigrid (nullptr, the default).
@@ -428,6 +439,10 @@ class State {
   BodyTables<D> bodies_;
   double time_ = 0.0;                        // s: the flow time (moves the bodies)
   Buffer<double> body_force_, body_torque_;  // the last step's pressure force on each body
+  Buffer<double> body_state_;                // body_state's rows
+  Buffer<double> body_J_, body_K_, body_Y_, body_S_, body_z_;  // couple_bodies' arrays
+  template <class Solve>
+  bool couple_bodies(const Options<D>& O, Solve& solve);
   index_t nrows_ = 0;
   index_t binned_ = -1;  // the particles of the last scatter (-1: none yet)
   index_t nsurface_ = 0, npartial_ = 0;

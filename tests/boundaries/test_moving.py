@@ -226,3 +226,151 @@ def test_a_table_path_and_bad_motions_are_told(tmp_path):
     assert any("moving obstacles" in p for p in refusals(case))
     with pytest.raises(CaseError, match="needs its period"):
         _case(tmp_path, motion="{type = 'oscillation', amplitude = [0.01, 0.0]}", end=0.1, **common)
+
+
+FLOAT = """
+title = "free body"
+[domain]
+size = {size}
+walls = "slip"
+[grid]
+spacing = {h}
+[[bodies]]
+type = "box"
+min = {water_min}
+max = {water_max}
+particles_per_cell = 2
+around_obstacles = true
+initial_pressure = "hydrostatic"
+[[obstacles]]
+name = "box"
+type = "box"
+min = {body_min}
+max = {body_max}
+motion = {{type = "free", density = {density}, locked = {locked}}}
+[material]
+density = 1000.0
+[physics]
+gravity = {gravity}
+[time]
+dt = {dt}
+end = {end}
+[output]
+interval = {interval}
+snapshots = false
+"""
+
+
+def _float(tmp_path, **keys):
+    path = tmp_path / "float.toml"
+    path.write_text(FLOAT.format(**keys))
+    return load_case(path)
+
+
+def _body_rows(sim, every):
+    rows = []
+    sim.add_writer(
+        lambda s: rows.append((s.time, s.scheme.core.body_state.copy())), TimeInterval(every)
+    )
+    return rows
+
+
+def test_a_free_body_in_the_air_falls_freely(tmp_path):
+    """A box of density 500 far above the water: nothing but gravity acts on it, and its
+    pivot follows the step's integration exactly: v_n = -g n dt, y_n = y_0 - g dt^2 n (n +
+    1) / 2 (the velocity first, then the position: symplectic Euler), x and the angle kept."""
+    dt = 0.005
+    case = _float(
+        tmp_path,
+        size="[1.0, 2.0]",
+        h=0.02,
+        water_min="[0.0, 0.0]",
+        water_max="[1.0, 0.1]",
+        body_min="[0.4, 1.5]",
+        body_max="[0.6, 1.7]",
+        density=500.0,
+        locked="[]",
+        gravity="[0.0, -9.81]",
+        dt=dt,
+        end=0.2,
+        interval=0.05,
+    )
+    sim = Simulation(case)
+    rows = _body_rows(sim, 0.05)
+    sim.run()
+    for t, state in rows:
+        n = round(t / dt)
+        assert state[0, 1] == pytest.approx(1.6 - G * dt**2 * n * (n + 1) / 2, abs=1e-12), t
+        assert state[0, 4] == pytest.approx(-G * dt * n, abs=1e-12), t
+        assert state[0, 0] == pytest.approx(0.5, abs=1e-12) and state[0, 12] == 0.0, t
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_box_floating_at_its_draft_stays_there_and_the_water_at_rest(tmp_path, dim):
+    """A box of density 500 and 0.1 m high floating at its draft, 0.05 m (weight = the water
+    it displaces), its faces on grid lines: the implicit coupling of the body's velocity to
+    the pressure (src/core/step.cpp, couple_bodies) holds it and the water at rest (to 1e-9
+    m/s), and the pressure's force on it is its weight."""
+    two = dim == 2
+    case = _float(
+        tmp_path,
+        size="[1.0, 0.6]" if two else "[0.48, 0.4, 0.48]",
+        h=0.01 if two else 0.04,
+        water_min="[0.0, 0.0]" if two else "[0.0, 0.0, 0.0]",
+        water_max="[1.0, 0.3]" if two else "[0.48, 0.4, 0.28]",
+        body_min="[0.4, 0.25]" if two else "[0.16, 0.12, 0.24]",
+        body_max="[0.6, 0.35]" if two else "[0.32, 0.28, 0.32]",
+        density=500.0,
+        locked="[]",
+        gravity="[0.0, -9.81]" if two else "[0.0, 0.0, -9.81]",
+        dt="'auto'",
+        end=0.5 if two else 0.2,
+        interval=0.1,
+    )
+    sim = Simulation(case)
+    rows = _body_rows(sim, 0.1)
+    start = sim.scheme.core.body_state.copy()
+    sim.run()
+    weight = 500.0 * (0.2 * 0.1 if two else 0.16 * 0.16 * 0.08) * G
+    for t, state in rows:
+        assert np.abs(state[0, :3] - start[0, :3]).max() < 1e-9, t
+        assert np.abs(state[0, 3:9]).max() < 1e-9, t
+    assert np.abs(sim.particles.v).max() < 1e-9
+    assert sim.scheme.core.body_force[0, dim - 1] == pytest.approx(weight, rel=1e-9)
+
+
+def test_a_box_released_off_its_draft_heaves_about_it(tmp_path):
+    """The box released 0.02 m high (draft 0.02 m of its equilibrium 0.05 m), held to heave
+    only: it oscillates about the level its weight gives, H_eq = the water's level (its
+    volume and the box's displacement over the tank) less the draft, within 1% of its
+    height (the mean from 2 to 10 s; the closed tank keeps the energy the release gave, in
+    the heave and the sloshing it beats with: 1 s means wander by 3 mm), its oscillation
+    dies down, and the water's volume is kept."""
+    case = _float(
+        tmp_path,
+        size="[1.0, 0.6]",
+        h=0.01,
+        water_min="[0.0, 0.0]",
+        water_max="[1.0, 0.3]",
+        body_min="[0.4, 0.28]",
+        body_max="[0.6, 0.38]",
+        density=500.0,
+        locked='["x", "rotation"]',
+        gravity="[0.0, -9.81]",
+        dt="'auto'",
+        end=10.0,
+        interval=0.02,
+    )
+    sim = Simulation(case)
+    rows = _body_rows(sim, 0.02)
+    water = sim.particles.volume.sum()
+    sim.run()
+    level = (water + 0.2 * 0.05) / 1.0
+    centre = level - 0.05 + 0.05  # the box's centre: its bottom at level - draft, 0.05 up
+    y = np.array([s[0, 1] for t, s in rows])
+    t = np.array([t for t, s in rows])
+    late = y[t >= 2.0]
+    assert abs(late.mean() - centre) < 0.01 * 0.1, (late.mean(), centre)
+    first, last = np.ptp(y[t < 1.0]), np.ptp(y[t >= 9.0])
+    assert last < 0.6 * first, (first, last)
+    assert sim.particles.volume.sum() == pytest.approx(water, rel=1e-12)

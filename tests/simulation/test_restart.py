@@ -46,6 +46,11 @@ SCHEMES = {
         'obstacles=[{type="box", min=[0.114, 0.0], max=[0.134, 0.3], '
         'motion={type="velocity", velocity=[0.0, 1.0]}}]'
     ],
+    # a free box falling towards the flow: its pose and velocity are in the checkpoint
+    "free": [
+        'obstacles=[{type="box", min=[0.2, 0.25], max=[0.26, 0.31], '
+        'motion={type="free", density=500.0}}]'
+    ],
 }
 
 

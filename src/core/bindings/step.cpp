@@ -385,13 +385,41 @@ void bind_dim(nb::module_& m) {
               if (b.phi.size() != total)
                 throw std::invalid_argument("set_bodies: phi needs prod(counts) values");
               b.spacing = nb::cast<double>(d["spacing"]);
+              b.free = d.contains("free") && nb::cast<bool>(d["free"]);
+              if (b.free) {  // moved by the flow: its mass, inertia, held dofs and state
+                b.mass = nb::cast<double>(d["mass"]);
+                const auto inertia = nb::cast<std::vector<std::vector<double>>>(d["inertia"]);
+                const auto locked = nb::cast<std::vector<bool>>(d["locked"]);
+                const auto c = nb::cast<std::vector<double>>(d["centre_now"]);
+                const auto v = nb::cast<std::vector<double>>(d["velocity_now"]);
+                const auto w = nb::cast<std::vector<double>>(d["omega_now"]);
+                const auto q = nb::cast<std::vector<double>>(d["quat"]);
+                if (inertia.size() != 3 || locked.size() != 6 || c.size() != D || v.size() != D ||
+                    w.size() != 3 || q.size() != 4 || !(b.mass > 0.0))
+                  throw std::invalid_argument(
+                      "set_bodies: a free body needs mass > 0, a 3 x 3 inertia, 6 locked "
+                      "flags, D centre and velocity entries, 3 angular velocity entries and "
+                      "a quaternion");
+                for (int i = 0; i < 3; ++i) {
+                  if (inertia[i].size() != 3)
+                    throw std::invalid_argument("set_bodies: inertia must be 3 x 3");
+                  for (int j = 0; j < 3; ++j) b.inertia[i][j] = inertia[i][j];
+                  b.omega_now[i] = w[i];
+                }
+                for (int k = 0; k < 6; ++k) b.locked[k] = locked[k];
+                for (int k = 0; k < D; ++k) {
+                  b.centre_now[k] = c[k];
+                  b.velocity_now[k] = v[k];
+                }
+                for (int k = 0; k < 4; ++k) b.quat[k] = q[k];
+              }
               b.time = table<double, 1>(d["time"], "body time", keep);
               b.centre = table<double, 2>(d["centre"], "body centre", keep);
               b.velocity = table<double, 2>(d["velocity"], "body velocity", keep);
               b.angle = table<double, 1>(d["angle"], "body angle", keep);
               b.rate = table<double, 1>(d["rate"], "body rate", keep);
               const index_t n = b.time.size();
-              if (n < 1 || b.centre.extent(0) != n || b.centre.extent(1) != D ||
+              if ((n < 1 && !b.free) || b.centre.extent(0) != n || b.centre.extent(1) != D ||
                   b.velocity.extent(0) != n || b.velocity.extent(1) != D || b.angle.size() != n ||
                   b.rate.size() != n)
                 throw std::invalid_argument(
@@ -417,6 +445,17 @@ void bind_dim(nb::module_& m) {
           "time", [](S& self) { return self.state->time(); },
           [](S& self, double t) { self.state->set_time(t); },
           "The flow time (s); setting it places the moving bodies.")
+      .def_prop_rw(
+          "body_state", &state_view<D, &State<D>::body_state>,
+          [](S& self, Array<double> rows) {
+            auto in = view<double, 2>(rows, "body_state");
+            if (in.extent(0) != self.state->body_count() || in.extent(1) != 13)
+              throw std::invalid_argument("body_state: one row of 13 values per body");
+            self.state->set_body_state(in);
+          },
+          "Each body's pivot (3, m), velocity (3, m/s), angular velocity (3, rad/s) and "
+          "orientation quaternion (4) at the state's time (a view, filled when read; 2D: z "
+          "entries 0, rotation about z). Setting it puts the free bodies back (a checkpoint).")
       .def_prop_ro("body_force", &state_view<D, &State<D>::body_force>,
                    "The pressure's force on each body in the last step (bodies x D; N, 2D N/m).")
       .def_prop_ro("body_torque", &state_view<D, &State<D>::body_torque>,

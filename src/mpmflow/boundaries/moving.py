@@ -85,9 +85,23 @@ class Trajectory:
 
 
 @dataclass
+class Freedom:
+    """A free body's mass (kg; 2D kg/m), inertia about its centroid (3 x 3, kg m^2; 2D the
+    zz entry, kg m), held degrees of freedom (6 flags: translations, then rotations; 2D:
+    x, y, rotation about z) and starting velocity (m/s) and turning rate (rad/s)."""
+
+    mass: float
+    inertia: Floats
+    locked: list[bool]
+    velocity: Floats
+    rate: float
+
+
+@dataclass
 class Mover:
     """One moving obstacle: obstacles.index of the case, its name, shape (at t = 0), pivot
-    (m, at t = 0), rotation axis (unit, 3 entries), no-slip flag and path."""
+    (m, at t = 0; a free body's centroid), rotation axis (unit, 3 entries), no-slip flag,
+    path (a free body's: where it starts) and, for a free body, its mass properties."""
 
     index: int
     name: str
@@ -96,6 +110,7 @@ class Mover:
     axis: Floats
     no_slip: bool
     path: Trajectory
+    free: Freedom | None = None
 
     def reach(self) -> float:
         """The farthest point of the shape's bounding box from the pivot (m)."""
@@ -136,6 +151,23 @@ class Mover:
             "angle": np.ascontiguousarray(p.angle, dtype=float),
             "rate": np.ascontiguousarray(p.rate, dtype=float),
             "no_slip": bool(self.no_slip),
+            **(self._freedom() if self.free is not None else {}),
+        }
+
+    def _freedom(self) -> dict[str, Any]:
+        f = self.free
+        assert f is not None
+        D = self.pivot.size
+        velocity = [float(v) for v in f.velocity]
+        return {
+            "free": True,
+            "mass": float(f.mass),
+            "inertia": [[float(v) for v in row] for row in f.inertia],
+            "locked": [bool(b) for b in f.locked],
+            "centre_now": [float(c) for c in self.pivot],
+            "velocity_now": velocity[:D],
+            "omega_now": [0.0, 0.0, float(f.rate)] if D == 2 else [0.0, 0.0, 0.0],
+            "quat": [1.0, 0.0, 0.0, 0.0],
         }
 
 
@@ -234,6 +266,60 @@ def _table(motion: Motion, pivot: Floats, end: float, base_dir: Path, where: str
     return Trajectory(t, pivot + d, velocity, angle, rate)
 
 
+def mass_properties(
+    shape: Shape, h: float, density: float | None, mass: float | None
+) -> tuple[float, Floats, Floats]:
+    """(mass, centroid, inertia about it) of a solid shape: the midpoint rule on a lattice of
+    spacing h / 4 over its bounding box (exact for a box on the lattice). 2D: per metre of
+    depth, the inertia's zz entry (the others 0). density (kg/m^3), or the mass (kg) that
+    sets it."""
+    lo, hi = (np.asarray(b, dtype=float) for b in shape.bounds())
+    D = lo.size
+    step = h / 4
+    counts = np.maximum(np.ceil((hi - lo) / step).astype(int), 1)
+    spacing = (hi - lo) / counts
+    axes = [lo[k] + spacing[k] * (np.arange(counts[k]) + 0.5) for k in range(D)]
+    x = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+    x = x[shape.signed_distance(x) < 0.0]
+    dv = float(np.prod(spacing))
+    volume = x.shape[0] * dv
+    rho = float(density) if density is not None else float(mass or 0.0) / volume
+    centroid = x.mean(axis=0)
+    r = x - centroid
+    inertia = np.zeros((3, 3))
+    if D == 2:
+        inertia[2, 2] = rho * dv * float(np.sum(r * r))
+    else:
+        inertia = rho * dv * (np.sum(r * r) * np.eye(3) - r.T @ r)
+    return rho * volume, centroid, inertia
+
+
+def _freedom(case: Case, k: int, shape: Shape, where: str) -> tuple[Freedom, Floats]:
+    """A free body's mass properties and its centroid (its pivot)."""
+    from ..case.motion import DOF_NAMES
+
+    motion = case.obstacles[k].motion
+    assert motion is not None
+    D = len(case.domain.size)
+    names = DOF_NAMES[D]
+    wrong = [n for n in motion.locked if n not in names]
+    if wrong:
+        raise CaseError(
+            f"{where}.locked = {motion.locked}: {', '.join(wrong)} is not a degree of freedom "
+            f"of a {D}D body; give some of {', '.join(repr(n) for n in names)}"
+        )
+    if motion.pivot is not None:
+        raise CaseError(f"{where}.pivot: a free body turns about its centroid; remove the pivot")
+    mass, centroid, inertia = mass_properties(
+        shape, float(case.grid.spacing), motion.density, motion.mass
+    )
+    flags = [n in motion.locked for n in names]
+    # the core's order: translations, then rotations (2D: x, y, rotation; the rest unused)
+    locked = (flags + [True] * 3) if D == 2 else flags
+    velocity = np.asarray(motion.velocity or [0.0] * D, dtype=float)
+    return Freedom(mass, inertia, locked, velocity, math.radians(motion.rate)), centroid
+
+
 def of_case(case: Case) -> list[Mover]:
     """The case's moving obstacles (those with a ``motion``), in the order of [[obstacles]]."""
     D = len(case.domain.size)
@@ -243,6 +329,22 @@ def of_case(case: Case) -> list[Mover]:
         if motion is None:
             continue
         shape = case.obstacle_shape(k)
+        where = f"obstacles.{k}.motion"
+        if motion.type == "free":
+            free, pivot = _freedom(case, k, shape, where)
+            axis = np.array([0.0, 0.0, 1.0])
+            walls = case.domain.uniform_walls() if spec.walls == "domain" else spec.walls
+            start = Trajectory(
+                np.zeros(1),
+                pivot[None, :],
+                free.velocity[None, :],
+                np.zeros(1),
+                np.array([free.rate]),
+            )
+            name = spec.name or f"obstacle{k}"
+            no_slip = walls in ("no_slip", "bonded")
+            movers.append(Mover(k, name, shape, pivot, axis, no_slip, start, free))
+            continue
         lo, hi = shape.bounds()
         pivot = (
             np.asarray(motion.pivot, dtype=float)
@@ -252,7 +354,6 @@ def of_case(case: Case) -> list[Mover]:
         axis = np.array([0.0, 0.0, 1.0]) if D == 2 else np.asarray(motion.axis, dtype=float)
         axis = axis / np.linalg.norm(axis)
         walls = case.domain.uniform_walls() if spec.walls == "domain" else spec.walls
-        where = f"obstacles.{k}.motion"
         path = path_of(motion, pivot, float(case.time.end), case.base_dir, where)
         name = spec.name or f"obstacle{k}"
         movers.append(Mover(k, name, shape, pivot, axis, walls in ("no_slip", "bonded"), path))

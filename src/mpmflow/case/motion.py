@@ -9,16 +9,19 @@ from typing_extensions import Self
 
 from .sections import Section
 
-MOTION_TYPES = ("velocity", "oscillation", "table")
+MOTION_TYPES = ("velocity", "oscillation", "table", "free")
+DOF_NAMES = {2: ("x", "y", "rotation"), 3: ("x", "y", "z", "rx", "ry", "rz")}
 
 
 class Motion(Section):
-    type: Literal["velocity", "oscillation", "table"] = Field(
+    type: Literal["velocity", "oscillation", "table", "free"] = Field(
         description='How the obstacle moves: "velocity" (a constant velocity and turning '
         'rate from `start` to `stop`), "oscillation" (x(t) = amplitude sin(2 pi t / '
         "period), angle(t) = angle_amplitude sin(2 pi t / period), each times a ramp that "
-        'rises from 0 to 1 over `ramp` seconds: a piston or flap wave maker) or "table" '
-        "(displacement and angle read from a CSV file, `file`)."
+        'rises from 0 to 1 over `ramp` seconds: a piston or flap wave maker), "table" '
+        '(displacement and angle read from a CSV file, `file`) or "free" (a rigid body '
+        "moved by gravity and the water's pressure, of `density` or `mass`, starting at "
+        "`velocity`; `locked` holds some of its degrees of freedom)."
     )
     velocity: list[float] | None = Field(
         None,
@@ -81,6 +84,26 @@ class Motion(Section):
         max_length=3,
     )
 
+    density: float | None = Field(
+        None,
+        gt=0,
+        description='Density (kg/m^3) of a free body (type = "free"): its mass and inertia '
+        "from its shape (2D: per metre of depth).",
+    )
+    mass: float | None = Field(
+        None,
+        gt=0,
+        description='Mass (kg; 2D kg per metre of depth) of a free body (type = "free"), '
+        "instead of its density: its inertia from its shape at the density this gives.",
+    )
+    locked: list[Literal["x", "y", "z", "rotation", "rx", "ry", "rz"]] = Field(
+        [],
+        description='Degrees of freedom a free body keeps at their start (type = "free"): '
+        '"x", "y" (and "z") its pivot\'s motion along the axes, "rotation" (2D) or "rx", '
+        '"ry", "rz" (3D) its turning about them; e.g. ["x", "rotation"] lets a 2D body '
+        "heave only.",
+    )
+
     @model_validator(mode="after")
     def _complete(self) -> Self:
         if self.type == "oscillation" and self.period is None:
@@ -89,6 +112,16 @@ class Motion(Section):
             raise ValueError('type = "table" needs the CSV file of its path: give file = "..."')
         if self.stop is not None and not self.stop > self.start:
             raise ValueError(f"stop = {self.stop} s must come after start = {self.start} s")
+        if self.type == "free" and (self.density is None) == (self.mass is None):
+            raise ValueError(
+                'type = "free" needs the body\'s density (kg/m^3) or its mass (kg), one of '
+                "them: give density = ... or mass = ..."
+            )
+        if self.type != "free" and (self.density or self.mass or self.locked):
+            raise ValueError(
+                f'density, mass and locked are for type = "free"; type = "{self.type}" '
+                "follows its path whatever its mass: remove them"
+            )
         if not any(self.axis):
             raise ValueError("axis must not be [0, 0, 0]; give the direction, e.g. [0, 1, 0]")
         return self

@@ -314,6 +314,8 @@ class ProjectionScheme:
             "dt_range": np.array(self.dt_range),
             "time": np.array(self.time),
         }
+        if self.movers:  # the free bodies' poses and velocities
+            saved["body_state"] = self.core.body_state.copy()
         q = self.core.volume_q
         if q.size:
             saved["volume_q"] = q.copy()
@@ -339,6 +341,8 @@ class ProjectionScheme:
         if "time" in saved:  # checkpoints written before moving obstacles lack it
             self.time = float(saved["time"])
             self.core.time = self.time
+        if self.movers:
+            self.core.body_state = np.ascontiguousarray(saved["body_state"], dtype=float)
         q = self.core.volume_q
         if q.size:
             np.copyto(q, saved["volume_q"])
@@ -505,10 +509,19 @@ def _check_movers(case: Case, grid: Grid, movers: list[moving.Mover]) -> None:
             f"obstacles.{movers[0].index}.motion: moving obstacles in a periodic domain are not "
             "supported yet; remove domain.periodic or the motion"
         )
+    free = [m for m in movers if m.free is not None]
+    if free and not preset(case.solver.wall_flux, "wall_flux"):
+        raise CaseError(
+            f"obstacles.{free[0].index}.motion: a free body is coupled to the pressure through "
+            "the obstacle's face term, which solver.wall_flux = false leaves out; set "
+            "solver.wall_flux = true"
+        )
     if case.time.dt == "auto":
         return
     dt = float(case.time.dt)
     for m in movers:
+        if m.free is not None:  # its speed is the flow's: time.dt = "auto" follows it
+            continue
         speed = m.max_speed()
         if speed * dt > grid.spacing:
             raise CaseError(

@@ -148,9 +148,10 @@ class CentreOfMass(_Rows):
 
 class Bodies(_Rows):
     """The moving obstacles (``obstacles.N.motion``) into bodies.csv at the output times: each
-    one's pivot position (m), angle (degrees), velocity (m/s) and turning rate (degrees/s),
-    and the pressure's force (N; 2D: N per metre of depth) and torque about the pivot (N m;
-    2D: N m/m) in the last step (columns ``{name}_{quantity}``)."""
+    one's pivot position (m), orientation (2D: its angle, degrees; 3D: its unit quaternion),
+    velocity (m/s), turning rate (degrees/s; 3D about each axis), and the pressure's force
+    (N; 2D N per metre of depth) and torque about the pivot (N m; 2D N m/m) in the last step
+    (columns ``{name}_{quantity}``; the core's state, src/core/bodies.hpp)."""
 
     file_name = "bodies.csv"
 
@@ -158,36 +159,45 @@ class Bodies(_Rows):
         self.movers = movers
         self.dim = dim
         columns, self.units = ["time"], ["time [s]"]
-        axes = "xyz"[:dim]
-        torques = ["torque"] if dim == 2 else ["torque_x", "torque_y", "torque_z"]
         for m in movers:
-            for q, unit in (
-                *((a, "m") for a in axes),
-                ("angle", "deg"),
-                *((f"v{a}", "m/s") for a in axes),
-                ("rate", "deg/s"),
-                *((f"F{a}", "N" if dim == 3 else "N/m") for a in axes),
-                *((t, "N m" if dim == 3 else "N m/m") for t in torques),
-            ):
+            for q, unit in self._quantities():
                 columns.append(f"{m.name}_{q}")
                 self.units.append(f"{m.name}_{q} [{unit}]")
         super().__init__(columns)
+
+    def _quantities(self) -> list[tuple[str, str]]:
+        axes = "xyz"[: self.dim]
+        per = "" if self.dim == 3 else "/m"
+        turn = [("angle", "deg")] if self.dim == 2 else [(f"q{c}", "-") for c in "wxyz"]
+        rates = [("rate", "deg/s")] if self.dim == 2 else [(f"w{a}", "deg/s") for a in axes]
+        torques = [("torque", "N m/m")] if self.dim == 2 else [(f"torque_{a}", "N m") for a in axes]
+        return [
+            *((a, "m") for a in axes),
+            *turn,
+            *((f"v{a}", "m/s") for a in axes),
+            *rates,
+            *((f"F{a}", "N" + per) for a in axes),
+            *torques,
+        ]
 
     def _open_file(self, folder: Path, sim: Simulation, resume: Position | None) -> CsvAppender:
         return CsvAppender(folder / self.file_name, self.buffer.columns, resume, self.units)
 
     def __call__(self, sim: Simulation) -> None:
-        core = sim.scheme.core  # type: ignore[attr-defined]  # (only the projection scheme moves obstacles)
-        force, torque = core.body_force, core.body_torque
+        core = sim.scheme.core  # type: ignore[attr-defined]  # only the projection moves them
+        force, torque, state = core.body_force, core.body_torque, core.body_state.copy()
+        D = self.dim
         row = {"time": sim.time}
-        axes = "xyz"[: self.dim]
+        names = [q for q, _ in self._quantities()]
         for b, m in enumerate(self.movers):
-            c, v, angle, rate = m.path.at(sim.time)
-            values = [*c, np.degrees(angle), *v, np.degrees(rate), *force[b]]
-            values += [torque[b, 2]] if self.dim == 2 else list(torque[b])
-            names = [*axes, "angle", *(f"v{a}" for a in axes), "rate"]
-            names += [f"F{a}" for a in axes]
-            names += ["torque"] if self.dim == 2 else ["torque_x", "torque_y", "torque_z"]
+            c, v, w, quat = state[b, :D], state[b, 3 : 3 + D], state[b, 6:9], state[b, 9:13]
+            if D == 2:
+                turn = [np.degrees(2.0 * np.arctan2(quat[3], quat[0]))]
+                rates = [np.degrees(w[2])]
+                torques = [torque[b, 2]]
+            else:
+                turn, rates, torques = list(quat), list(np.degrees(w)), list(torque[b])
+            values = [*c, *turn, *v, *rates, *force[b], *torques]
             row.update({f"{m.name}_{q}": float(x) for q, x in zip(names, values)})
         self.append(row)
 

@@ -116,6 +116,8 @@ class CoreState(Protocol):
     time: float  # the flow time (s); setting it places the moving obstacles
     body_force: Floats  # (bodies, D) the pressure's force on each moving obstacle (N; 2D N/m)
     body_torque: Floats  # (bodies, 3) its torque about the pivot (N m; 2D N m/m)
+    # (bodies, 13) pivot, velocity, angular velocity, orientation quaternion (settable)
+    body_state: Floats
 
     def set_inlet_pool(self, first: int, end: int) -> None: ...
 
