@@ -921,6 +921,9 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
   report.last_unknowns = n;
   PhaseClock clock(phase_seconds_);
   int status = viscous_predictor(O, report);
+  if (T_.damping.size() > 0)  // the damping zones (sponges.hpp)
+    damp_velocity<D>(T_.damping, node_mass_.view(grid_.nnodes), O.gravity, O.dt,
+                     v_star_.template view<2>({grid_.nnodes, D}));
   clock.lap(PHASE_VISCOUS);
   if (status == OK) status = pressure_solve(O, report);
   clock.lap(PHASE_PRESSURE);

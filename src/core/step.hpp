@@ -33,6 +33,7 @@
 #include "grid.hpp"
 #include "inlets.hpp"
 #include "multigrid.hpp"
+#include "sponges.hpp"
 #include "view.hpp"
 
 namespace mpmflow {
@@ -176,6 +177,8 @@ struct GridTables {
   View<const double, 2> wall_velocity;
   // the inlets' layers of particles (none: inlets.count() == 0)
   Inlets<D> inlets;
+  // damping zones: each node's rate (1/s; empty: none; sponges.hpp)
+  View<const double> damping;
 };
 
 // The step's schedule, written once for every loop that takes steps (State::advance and

@@ -233,7 +233,7 @@ void bind_dim(nb::module_& m) {
              std::vector<bool> outlet, nb::object wall_bonded, nb::object wall_velocity,
              nb::object inlet_axis, nb::object inlet_direction, nb::object inlet_speed,
              nb::object inlet_first, nb::object inlet_layer, nb::object inlet_spacing,
-             nb::object inlet_mass, nb::object inlet_volume) {
+             nb::object inlet_mass, nb::object inlet_volume, nb::object damping) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -265,6 +265,9 @@ void bind_dim(nb::module_& m) {
             for (std::size_t s = 0; s < outlet.size(); ++s) self->outlet[s] = outlet[s];
             if (!outlet.empty()) T.outlet = View<const bool>(self->outlet.data(), {2 * D});
             const index_t nn = make_grid<D>(h, cells, periodic).nnodes;
+            T.damping = table<double, 1>(damping, "damping", keep);
+            if (T.damping.size() > 0 && T.damping.size() != nn)
+              throw std::invalid_argument("State: damping needs one rate per node (or none)");
             T.wall_velocity = table<double, 2>(wall_velocity, "wall_velocity", keep);
             if (T.wall_velocity.size() > 0 &&
                 (T.wall_velocity.extent(0) != nn || T.wall_velocity.extent(1) != D))

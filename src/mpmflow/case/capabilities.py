@@ -15,12 +15,23 @@ FEATURES = {
     "solids": 'solids (material.model = "elastic", "von_mises" or "drucker_prager")',
     "bonded": 'bonded walls (domain.walls = "bonded")',
     "inlets": "inlets ([[inlets]])",
+    "sponges": "damping zones ([[sponges]])",
 }
 
 # solver.scheme -> the FEATURES it supports
 SUPPORTS: dict[str, frozenset[str]] = {
     "projection": frozenset(
-        {"obstacles", "materials", "periodic", "apic", "outlets", "solids", "bonded", "inlets"}
+        {
+            "obstacles",
+            "materials",
+            "periodic",
+            "apic",
+            "outlets",
+            "solids",
+            "bonded",
+            "inlets",
+            "sponges",
+        }
     ),
     "explicit": frozenset(),
 }

@@ -34,6 +34,8 @@ from .sections import (
 from .shapes import Body, Obstacle
 from .shapes import Box as BoxBody
 from .solver import Solver
+from .sponges import Sponge
+from .sponges import problem as sponge_problem
 
 # A periodic axis is halved by the multigrid while its period stays a multiple of 4
 # (src/core/multigrid.cpp); the points left on the coarsest level enter a dense solve at
@@ -81,6 +83,13 @@ class Case(Section):
         "side at a given speed (inlets.N.side, speed, level), so that a channel with an "
         "outlet downstream runs steady; what entered is counted in summary.json's inflow. "
         "The projection scheme only, one process.",
+    )
+    sponges: list[Sponge] = Field(
+        [],
+        description="Damping zones along the domain's sides ([[sponges]] tables: "
+        "sponges.N.side, length, strength): a numerical beach where the water's velocity is "
+        "relaxed towards rest, so that waves and what a body radiates leave instead of "
+        "reflecting from the walls. The projection scheme only, one process.",
     )
     execution: Execution = Execution()
 
@@ -136,6 +145,7 @@ class Case(Section):
                 'make the bonded sides of domain.walls "no_slip"',
             ),
             "inlets": (bool(self.inlets), "remove the [[inlets]]"),
+            "sponges": (bool(self.sponges), "remove the [[sponges]]"),
         }
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():
@@ -294,7 +304,7 @@ class Case(Section):
             self._base_dir = Path(info.context["base_dir"])
         size = self.domain.size
         self._same_dimension()
-        message = self._unsupported() or inlet_problem(self)
+        message = self._unsupported() or inlet_problem(self) or sponge_problem(self)
         if message:
             raise ValueError(message)
         if self.domain.uniform_walls() is None:

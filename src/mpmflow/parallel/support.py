@@ -34,6 +34,8 @@ def refusals(case: Case) -> list[str]:
         out.append('bonded walls are not split over ranks yet: make them "no_slip"')
     if case.inlets:
         out.append("inlets are not split over ranks yet: remove the [[inlets]]")
+    if case.sponges:
+        out.append("damping zones are not split over ranks yet: remove the [[sponges]]")
     if any(getattr(o, "motion", None) is not None for o in case.obstacles):
         out.append("moving obstacles are not split over ranks yet: remove obstacles.N.motion")
     if s.linear_solver in ("amg", "direct"):

@@ -438,6 +438,7 @@ def step_state(
     bonded: Bools | None = None,
     held: Floats | None = None,
     inlets: Sequence[Floats | Ints] | None = None,
+    damping: Floats | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
@@ -452,7 +453,8 @@ def step_state(
     none); ``held`` (nnodes x D, m/s; None: every wall at rest) the velocity each wall node
     is held to where its wall holds the material (an inlet's inflow); ``inlets`` the inlets'
     tables (axis, direction, speed, first, layer, spacing, mass, volume:
-    ``boundaries.inlets.Tables.core``; None: none).
+    ``boundaries.inlets.Tables.core``; None: none); ``damping`` each node's damping rate
+    (1/s, ``boundaries.sponges.rates``; None: no damping zone).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -488,6 +490,7 @@ def step_state(
         np.ascontiguousarray(np.zeros(0) if bonded is None else bonded, dtype=np.bool_),
         arrays.floats(np.zeros((0, D)) if held is None else held),
         *_inlet_tables(D, inlets),
+        arrays.floats(np.zeros(0) if damping is None else damping),
     )
 
 
