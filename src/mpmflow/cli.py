@@ -91,6 +91,7 @@ VALIDATION_CASES = (
     "bingham_plug",
     "mu_i_layer",
     "cantilever",
+    "heave_cylinder",
 )
 
 

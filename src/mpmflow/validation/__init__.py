@@ -19,6 +19,7 @@ from typing import Protocol
 
 from ..errors import CaseError, SimulationError
 from . import (
+    bodies,
     channel_flows,
     dam_break,
     dam_break_ar1,
@@ -63,6 +64,7 @@ CASES: dict[str, CaseRun] = {
     "bingham_plug": channel_flows.run_plug,
     "mu_i_layer": channel_flows.run_layer,
     "cantilever": solids.run_cantilever,
+    "heave_cylinder": bodies.run,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {
@@ -83,6 +85,7 @@ EXAMPLE_FILES = {
     "bingham_plug": ("bingham_plug.toml",),
     "mu_i_layer": ("mu_i_layer.toml",),
     "cantilever": ("cantilever.toml",),
+    "heave_cylinder": ("heave_cylinder.toml",),
 }  # the examples/ files each runs
 
 
