@@ -254,6 +254,10 @@ void BodyTables<D>::setup(const Grid<D>& g, const ObstacleTables<D>& fixed,
     body.velocity_star = body.velocity_now;
     body.omega_star = body.omega_now;
   }
+  index_t most = 0;  // contacts: each surface point against each wall and the obstacles
+  for (const Body<D>& body : bodies_)
+    if (body.free) most = std::max(most, body.surface.extent(0) * (2 * D + 1));
+  contacts_.reserve(7 * std::max<index_t>(most, 1));
   const index_t nq = free_dofs();
   small_.reserve(nq * nq);
   rhs_small_.reserve(nq);
@@ -771,6 +775,134 @@ void BodyTables<D>::integrate(double dt) {
     b.velocity_star = b.velocity_now;
     b.omega_star = b.omega_now;
   }
+  contact();
+}
+
+template <int D>
+index_t BodyTables<D>::contact() {
+  index_t count = 0;
+  const double touch = 1e-3 * g_.h;  // a point this close counts as touching (resting)
+  for (Body<D>& b : bodies_) {
+    if (!b.free || b.surface.size() == 0) continue;
+    const auto R = rotation_of<D>(b.quat);
+    const index_t m = b.surface.extent(0);
+    // the contacts: each surface point beyond (or on) a wall or inside (or on) a fixed
+    // obstacle, with the normal out of it, into contacts_ as (point, normal); the deepest
+    double deepest = 0.0;
+    std::array<double, 3> push{};
+    index_t nc = 0;
+    auto contacts = contacts_.template view<2>({contacts_.capacity() / 7, 7});
+    auto add = [&](const std::array<double, D>& x, const double* n, double depth) {
+      if (nc >= contacts.extent(0)) return;
+      for (int k = 0; k < 3; ++k) {
+        contacts(nc, k) = k < D ? x[k] : 0.0;
+        contacts(nc, 3 + k) = k < D ? n[k] : 0.0;
+      }
+      contacts(nc, 6) = 0.0;  // the impulse it has taken so far
+      ++nc;
+      if (depth > deepest) {
+        deepest = depth;
+        push = {};
+        for (int k = 0; k < D; ++k) push[k] = n[k];
+      }
+    };
+    for (index_t e = 0; e < m; ++e) {
+      std::array<double, D> x;
+      for (int k = 0; k < D; ++k) {
+        x[k] = b.centre_now[k];
+        for (int j = 0; j < D; ++j) x[k] += R[k][j] * b.surface(e, j);
+      }
+      for (int k = 0; k < D; ++k) {
+        if (g_.periodic[k]) continue;
+        double n[D] = {};
+        const double below = -x[k], above = x[k] - g_.cells[k] * g_.h;
+        if (below > -touch) {
+          n[k] = 1.0;
+          add(x, n, below);
+        }
+        if (above > -touch) {
+          n[k] = -1.0;
+          add(x, n, above);
+        }
+      }
+      if (fixed_.phi.size() > 0) {  // a fixed obstacle: phi interpolated, its gradient
+        bool inside = true;
+        for (int k = 0; k < D; ++k) inside = inside && x[k] >= 0.0 && x[k] <= g_.cells[k] * g_.h;
+        if (!inside) continue;
+        double grad[D];
+        const double px =
+            interpolate_phi<D>(g_, fixed_.phi, View<const double, 2>(x.data(), {1, D}), 0, grad);
+        double gn = 0.0;
+        for (int k = 0; k < D; ++k) gn += grad[k] * grad[k];
+        gn = std::sqrt(gn);
+        if (px < touch && gn > 0.01) {
+          double n[D];
+          for (int k = 0; k < D; ++k) n[k] = grad[k] / gn;
+          add(x, n, -px);
+        }
+      }
+    }
+    if (nc == 0) continue;
+    count += nc;
+    // back out along the deepest contact's normal (the held translations stay)
+    for (int k = 0; k < D; ++k)
+      if (!b.locked[k]) b.centre_now[k] += deepest * push[k];
+    // the world inertia's inverse over the free rotations (2D: about z)
+    double Iinv[3][3] = {};
+    if constexpr (D == 2) {
+      if (!b.locked[2]) Iinv[2][2] = 1.0 / b.inertia[2][2];
+    } else {
+      for (int c = 0; c < 3; ++c) {
+        double A[9] = {}, t[3] = {0.0, 0.0, 0.0};
+        t[c] = 1.0;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            for (int k = 0; k < 3; ++k)
+              for (int q = 0; q < 3; ++q) A[i * 3 + j] += R[i][k] * b.inertia[k][q] * R[j][q];
+        if (solve_dense(3, A, t))
+          for (int i = 0; i < 3; ++i) Iinv[i][c] = b.locked[3 + i] || b.locked[3 + c] ? 0.0 : t[i];
+      }
+    }
+    // projected Gauss-Seidel on the contacts' impulses (each >= 0, pushing only): contact
+    // by contact, the impulse that zeroes its normal velocity added to what it has taken,
+    // clamped at 0 (a contact may give back what an earlier one made it take), in sweeps until
+    // they agree: an inelastic, frictionless landing (two corners of a box resting flat)
+    for (int sweep = 0; sweep < 50; ++sweep) {
+      double change = 0.0;
+      for (index_t c = 0; c < nc; ++c) {
+        std::array<double, 3> r{}, n{};
+        for (int k = 0; k < 3; ++k) {
+          r[k] = contacts(c, k) - (k < D ? b.centre_now[k] : 0.0);
+          n[k] = contacts(c, 3 + k);
+        }
+        const auto w = cross(b.omega_now, r);
+        double vn = 0.0;
+        for (int k = 0; k < D; ++k) vn += (b.velocity_now[k] + w[k]) * n[k];
+        double inv = 0.0;
+        for (int k = 0; k < D; ++k)
+          if (!b.locked[k]) inv += n[k] * n[k] / b.mass;
+        const auto rn = cross(r, n);
+        std::array<double, 3> turn{};
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) turn[i] += Iinv[i][j] * rn[j];
+        for (int k = 0; k < 3; ++k) inv += rn[k] * turn[k];
+        if (!(inv > 0.0)) continue;  // every degree of freedom along it is held
+        const double taken = contacts(c, 6);
+        const double now = std::max(0.0, taken - vn / inv);
+        const double j = now - taken;
+        if (j == 0.0) continue;
+        contacts(c, 6) = now;
+        change = std::max(change, std::abs(j) * inv);  // the velocity it changed (m/s)
+        for (int k = 0; k < D; ++k)
+          if (!b.locked[k]) b.velocity_now[k] += j * n[k] / b.mass;
+        for (int k = 0; k < 3; ++k) b.omega_now[k] += j * turn[k];
+      }
+      if (change < 1e-9) break;
+    }
+    b.velocity_star = b.velocity_now;
+    b.omega_star = b.omega_now;
+  }
+  return count;
 }
 
 template <int D>

@@ -94,6 +94,9 @@ struct Body {
   std::array<double, D> centre_now{}, velocity_now{}, velocity_star{};
   std::array<double, 4> quat{1.0, 0.0, 0.0, 0.0};
   std::array<double, 3> omega_now{}, omega_star{};
+  // points on a free body's surface in its own frame (m x D, m; empty: no contact), which
+  // the contact with the domain's walls and the fixed obstacles checks (BodyTables::contact)
+  View<const double, 2> surface;
   // the pose at time t (held at the table's ends beyond them)
   Pose<D> pose(double t) const;
   // phi_b (m) at grid point x for the body at pose q; far (a large value) off the lattice
@@ -143,8 +146,17 @@ class BodyTables {
   void mass_matrix(View<double, 2> M) const;
   // the velocities after the pressure: q = q* + M^-1 impulse (impulse: dofs, N s; 2D N s/m)
   void apply_impulse(View<const double> impulse);
-  // the free bodies' poses moved over dt at their velocities
+  // the free bodies' poses moved over dt at their velocities, then their contacts
   void integrate(double dt);
+  // Contact of the free bodies with the domain's walls (those not periodic) and the fixed
+  // obstacles: rigid, frictionless and inelastic. Every surface point on or beyond a wall, or
+  // on or inside an obstacle (the fixed phi <= 0, its normal grad phi), is a contact; the body
+  // is moved back out along the deepest one's normal by its depth, and the contacts'
+  // velocities into the walls are removed by impulses there (through its mass and inertia;
+  // a held degree of freedom takes none), each impulse >= 0 (projected Gauss-Seidel: contact
+  // by contact, in sweeps until they agree).
+  // Contact between bodies is not checked. Returns the contacts.
+  index_t contact();
   // each body's pose and velocity at time t (bodies x 13: pivot (3), velocity (3), angular
   // velocity (3), orientation quaternion (4); 2D: z entries 0, rotation about z)
   void state(double t, View<double, 2> out) const;
@@ -155,6 +167,7 @@ class BodyTables {
   std::vector<std::array<index_t, 2>> dofs_;    // (body, kind: 0..D-1 translation, D.. rotation)
   std::vector<std::array<index_t, 6>> dof_of_;  // per body and kind: its dof (-1: held)
   Buffer<double> small_, rhs_small_;            // the dense solves of the free dofs
+  Buffer<double> contacts_;                     // contact(): (point, normal, impulse) per contact
   void restore();
   Grid<D> g_;
   ObstacleTables<D> fixed_;

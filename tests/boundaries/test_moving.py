@@ -374,3 +374,71 @@ def test_a_box_released_off_its_draft_heaves_about_it(tmp_path):
     first, last = np.ptp(y[t < 1.0]), np.ptp(y[t >= 9.0])
     assert last < 0.6 * first, (first, last)
     assert sim.particles.volume.sum() == pytest.approx(water, rel=1e-12)
+
+
+DROP = """
+title = "box dropped"
+[domain]
+size = [2.0, 0.6]
+walls = "slip"
+[grid]
+spacing = 0.02
+[[bodies]]
+type = "box"
+min = [1.95, 0.0]
+max = [2.0, 0.05]
+particles_per_cell = 2
+[[obstacles]]
+name = "box"
+type = "box"
+min = {body_min}
+max = {body_max}
+motion = {{type = "free", density = 500.0, rate = {rate}}}
+[[obstacles]]
+name = "step"
+type = "box"
+min = [0.5, 0.0]
+max = [0.8, 0.2]
+[material]
+density = 1000.0
+[physics]
+gravity = [0.0, -9.81]
+[time]
+dt = 0.005
+end = {end}
+[output]
+interval = 0.1
+snapshots = false
+"""
+
+
+@pytest.mark.parametrize(
+    ("body_min", "body_max", "rate", "rest"),
+    [
+        ("[0.2, 0.3]", "[0.4, 0.4]", 0.0, 0.05),  # flat onto the floor
+        ("[0.55, 0.35]", "[0.75, 0.45]", 0.0, 0.25),  # onto the fixed step (top 0.2 m)
+        ("[0.2, 0.3]", "[0.4, 0.4]", 60.0, 0.05),  # turning: a corner first, then flat
+    ],
+)
+def test_a_free_body_lands_and_rests_on_the_floor_or_an_obstacle(
+    tmp_path, body_min, body_max, rate, rest
+):
+    """Contact (src/core/bodies.hpp, BodyTables::contact): rigid, frictionless, inelastic, by
+    projected Gauss-Seidel over the body's surface points touching a wall or a fixed
+    obstacle. A box of density 500 dropped from 0.3 m lands and comes to rest, flat, on the
+    floor or on a fixed step, its centre half its height (0.05 m) above what it rests on; no
+    sideways motion (frictionless: no sideways impulse); turning as it falls, it lands on a
+    corner and settles flat."""
+    path = tmp_path / "drop.toml"
+    path.write_text(
+        DROP.format(body_min=body_min, body_max=body_max, rate=rate, end=2.0 if rate else 0.8)
+    )
+    sim = Simulation(load_case(path))
+    sim.run()
+    state = sim.scheme.core.body_state[0]
+    centre_x = 0.5 * (float(body_min[1:-1].split(",")[0]) + float(body_max[1:-1].split(",")[0]))
+    assert state[0] == pytest.approx(centre_x, abs=1e-9)  # no sideways motion
+    assert state[1] == pytest.approx(rest, abs=1e-4)
+    assert np.abs(state[3:9]).max() < 1e-6  # at rest
+    angle = np.degrees(2 * np.arctan2(state[12], state[9]))
+    assert abs(angle) < 0.1

@@ -415,6 +415,11 @@ void bind_dim(nb::module_& m) {
                   b.velocity_now[k] = v[k];
                 }
                 for (int k = 0; k < 4; ++k) b.quat[k] = q[k];
+                if (d.contains("surface")) {
+                  b.surface = table<double, 2>(d["surface"], "body surface", keep);
+                  if (b.surface.size() > 0 && b.surface.extent(1) != D)
+                    throw std::invalid_argument("set_bodies: surface points need D coordinates");
+                }
               }
               b.time = table<double, 1>(d["time"], "body time", keep);
               b.centre = table<double, 2>(d["centre"], "body centre", keep);

@@ -136,6 +136,7 @@ class Mover:
         # (axis 0 fastest: Fortran order of the (counts) array)
         y = np.stack([g.ravel(order="F") for g in np.meshgrid(*axes, indexing="ij")], axis=1)
         phi = np.ascontiguousarray(self.shape.signed_distance(y + self.pivot), dtype=float)
+        surface = _surface(phi, counts, spacing, y) if self.free is not None else None
         p = self.path
         return {
             "phi": phi,
@@ -152,6 +153,7 @@ class Mover:
             "rate": np.ascontiguousarray(p.rate, dtype=float),
             "no_slip": bool(self.no_slip),
             **(self._freedom() if self.free is not None else {}),
+            **({"surface": surface} if surface is not None else {}),
         }
 
     def _freedom(self) -> dict[str, Any]:
@@ -169,6 +171,20 @@ class Mover:
             "omega_now": [0.0, 0.0, float(f.rate)] if D == 2 else [0.0, 0.0, 0.0],
             "quat": [1.0, 0.0, 0.0, 0.0],
         }
+
+
+def _surface(phi: Floats, counts: Any, spacing: float, y: Floats) -> Floats:
+    """Points on a body's surface in its frame (m x D): the lattice points within a
+    spacing inside it, moved onto the surface along the distance's gradient (the contact of
+    a free body checks them, src/core/bodies.hpp)."""
+    D = y.shape[1]
+    grid = phi.reshape(tuple(int(c) for c in counts[::-1]))  # axis 0 fastest: [.., i1, i0]
+    grads = np.gradient(grid, spacing)  # along the reversed axes
+    grad = np.stack([grads[D - 1 - k].ravel() for k in range(D)], axis=1)
+    size = np.linalg.norm(grad, axis=1)
+    band = (phi <= 0.0) & (phi > -spacing) & (size > 0.5)
+    moved = y[band] - (phi[band] / size[band] ** 2)[:, None] * grad[band]
+    return np.ascontiguousarray(moved, dtype=float)
 
 
 def _ramp(t: Floats, width: float) -> tuple[Floats, Floats, Floats]:
