@@ -271,8 +271,7 @@ void BodyTables<D>::restore() {
   auto vel = velocity_.template view<2>({g_.nnodes, D});
   auto open = open_.view(g_.ncells);
   auto slot = slot_.view(g_.ncells);
-  std::array<index_t, D> ix = box_lo_;
-  while (true) {
+  for_box(0, [&](const std::array<index_t, D>& ix) {
     index_t i = 0, c = 0;
     bool cell = true;
     for (int k = 0; k < D; ++k) {
@@ -289,13 +288,7 @@ void BodyTables<D>::restore() {
       open(c) = fixed_.open(c);
       slot(c) = fixed_.static_slot(c);
     }
-    int k = 0;
-    for (; k < D; ++k) {
-      if (++ix[k] <= box_hi_[k]) break;
-      ix[k] = box_lo_[k];
-    }
-    if (k == D) break;
-  }
+  });
 }
 
 template <int D>
@@ -344,20 +337,6 @@ void BodyTables<D>::place(double t) {
   auto phi = phi_.view(nn);
   auto owner = owner_.view(nn);
   // the box's nodes: each body's distance where it is the nearest
-  auto for_box = [&](index_t last_shrink, auto&& f) {
-    std::array<index_t, D> ix = box_lo_;
-    for (int k = 0; k < D; ++k)
-      if (box_hi_[k] - last_shrink < box_lo_[k]) return;
-    while (true) {
-      f(ix);
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++ix[k] <= box_hi_[k] - last_shrink) break;
-        ix[k] = box_lo_[k];
-      }
-      if (k == D) break;
-    }
-  };
   for_box(0, [&](const std::array<index_t, D>& ix) {
     index_t i = 0;
     for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
@@ -530,23 +509,15 @@ void BodyTables<D>::hold(double t) {
   auto vel = velocity_.template view<2>({g_.nnodes, D});
   auto owner = owner_.view(g_.nnodes);
   for (std::size_t b = 0; b < bodies_.size(); ++b) held_[b] = bodies_[b].pose(t);
-  std::array<index_t, D> ix = box_lo_;
-  while (true) {
+  for_box(0, [&](const std::array<index_t, D>& ix) {
     index_t i = 0;
     for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
-    if (owner(i) >= 0) {
-      double x[D], v[D];
-      for (int k = 0; k < D; ++k) x[k] = static_cast<double>(ix[k]) * g_.h;
-      held_[owner(i)].velocity_at(x, v);
-      for (int k = 0; k < D; ++k) vel(i, k) = v[k];
-    }
-    int k = 0;
-    for (; k < D; ++k) {
-      if (++ix[k] <= box_hi_[k]) break;
-      ix[k] = box_lo_[k];
-    }
-    if (k == D) break;
-  }
+    if (owner(i) < 0) return;
+    double x[D], v[D];
+    for (int k = 0; k < D; ++k) x[k] = static_cast<double>(ix[k]) * g_.h;
+    held_[owner(i)].velocity_at(x, v);
+    for (int k = 0; k < D; ++k) vel(i, k) = v[k];
+  });
 }
 
 template <int D>

@@ -169,6 +169,23 @@ class BodyTables {
   Buffer<double> small_, rhs_small_;            // the dense solves of the free dofs
   Buffer<double> contacts_;                     // contact(): (point, normal, impulse) per contact
   void restore();
+  // f(ix) for each node ix of the last place's box, its upper ends shrunk by shrink (1: the
+  // first node of each of the box's cells), axis 0 fastest
+  template <class F>
+  void for_box(index_t shrink, F&& f) const {
+    for (int k = 0; k < D; ++k)
+      if (box_hi_[k] - shrink < box_lo_[k]) return;
+    std::array<index_t, D> ix = box_lo_;
+    while (true) {
+      f(ix);
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++ix[k] <= box_hi_[k] - shrink) break;
+        ix[k] = box_lo_[k];
+      }
+      if (k == D) return;
+    }
+  }
   Grid<D> g_;
   ObstacleTables<D> fixed_;
   View<const bool> fixed_no_slip_;

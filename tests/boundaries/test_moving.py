@@ -49,6 +49,21 @@ snapshots = false
 """
 
 
+# water 0.1 m deep and 0.4 m long beside a wall 0.1 m thick at x = 0 (a piston when it moves)
+PISTON_TANK = dict(
+    size="[0.5, 0.3]",
+    h=0.01,
+    water_min="[0.1, 0.0]",
+    water_max="[0.5, 0.1]",
+    water_velocity="[0.0, 0.0]",
+    body_min="[0.0, 0.0]",
+    body_max="[0.1, 0.3]",
+    gravity="[0.0, -9.81]",
+    dt=0.005,
+    interval=0.1,
+)
+
+
 def _case(tmp_path, ppc=2, **keys):
     text = TANK.format(ppc=ppc, **keys)
     path = tmp_path / "case.toml"
@@ -140,18 +155,9 @@ def test_a_piston_pushed_into_a_closed_tank_raises_the_level_by_its_displacement
     H, L, d, S = 0.1, 0.4, 0.05, 0.005
     case = _case(
         tmp_path,
-        size="[0.5, 0.3]",
-        h=0.01,
-        water_min="[0.1, 0.0]",
-        water_max="[0.5, 0.1]",
-        water_velocity="[0.0, 0.0]",
-        body_min="[0.0, 0.0]",
-        body_max="[0.1, 0.3]",
         motion="{type = 'velocity', velocity = [0.05, 0.0], stop = 1.1, ramp = 0.2}",
-        gravity="[0.0, -9.81]",
-        dt=0.005,
         end=3.0,
-        interval=0.1,
+        **PISTON_TANK,
     )
     sim, rows = _run(case, 0.1)
     mover = sim.scheme.movers[0]
@@ -199,18 +205,7 @@ def test_the_sampled_paths_follow_their_motions():
 def test_a_table_path_and_bad_motions_are_told(tmp_path):
     """A table's path is read with its rates; a table that stops before time.end, an obstacle
     faster than a cell a step, a periodic domain and several ranks are refused by name."""
-    common = dict(
-        size="[0.5, 0.3]",
-        h=0.01,
-        water_min="[0.1, 0.0]",
-        water_max="[0.5, 0.1]",
-        water_velocity="[0.0, 0.0]",
-        body_min="[0.0, 0.0]",
-        body_max="[0.1, 0.3]",
-        gravity="[0.0, -9.81]",
-        dt=0.005,
-        interval=0.1,
-    )
+    common = PISTON_TANK
     (tmp_path / "path.csv").write_text("t,x,y\n0,0,0\n0.5,0.01,0\n1.0,0.02,0\n")
     case = _case(tmp_path, motion="{type = 'table', file = 'path.csv'}", end=1.0, **common)
     path = moving.of_case(case)[0].path
