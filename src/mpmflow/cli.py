@@ -92,6 +92,7 @@ VALIDATION_CASES = (
     "mu_i_layer",
     "cantilever",
     "heave_cylinder",
+    "wave_maker",
 )
 
 

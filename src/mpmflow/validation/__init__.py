@@ -65,6 +65,7 @@ CASES: dict[str, CaseRun] = {
     "mu_i_layer": channel_flows.run_layer,
     "cantilever": solids.run_cantilever,
     "heave_cylinder": bodies.run,
+    "wave_maker": bodies.run_wave_maker,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {
@@ -86,6 +87,7 @@ EXAMPLE_FILES = {
     "mu_i_layer": ("mu_i_layer.toml",),
     "cantilever": ("cantilever.toml",),
     "heave_cylinder": ("heave_cylinder.toml",),
+    "wave_maker": ("wave_maker.toml",),
 }  # the examples/ files each runs
 
 
