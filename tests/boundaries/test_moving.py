@@ -437,3 +437,33 @@ def test_a_free_body_lands_and_rests_on_the_floor_or_an_obstacle(
     assert np.abs(state[3:9]).max() < 1e-6  # at rest
     angle = np.degrees(2 * np.arctan2(state[12], state[9]))
     assert abs(angle) < 0.1
+
+
+def test_the_plots_draw_a_moving_obstacle_where_it_is(tmp_path):
+    """`mpmflow plot` reads bodies.csv: at each snapshot the piston is drawn at its pose, its
+    face 0.05 m further in at 1 s than at 0 (a point between the two faces is in the solid
+    at 1 s, in the water at 0); the figures are written."""
+    import json
+
+    from mpmflow.cli import main
+    from mpmflow.plotting.figures import _poses, obstacle_section
+
+    path = tmp_path / "case.toml"
+    path.write_text(
+        TANK.format(
+            ppc=2, motion="{type = 'velocity', velocity = [0.05, 0.0]}", end=1.0, **PISTON_TANK
+        ).replace("snapshots = false", "snapshot_interval = 0.5")
+    )
+    run = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(run), "-q"]) == 0
+    summary = json.loads((run / "summary.json").read_text())
+    notes: list[str] = []
+    poses = _poses(run, notes)
+    assert poses is not None and not notes
+    X, Y, phi0 = obstacle_section(summary, [0.5, 0.3], notes, 0.0, poses)
+    _, _, phi1 = obstacle_section(summary, [0.5, 0.3], notes, 1.0, poses)
+    between = (np.abs(X - 0.125) < 0.002) & (np.abs(Y - 0.05) < 0.002)
+    assert between.any()
+    assert (phi0[between] > 0).all() and (phi1[between] < 0).all()
+    assert main(["plot", str(run)]) == 0
+    assert (run / "plots" / "snapshots.png").stat().st_size > 1000

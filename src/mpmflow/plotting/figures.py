@@ -251,12 +251,18 @@ def side_view(
 
 
 def obstacle_section(
-    summary: Summary, plane: Sequence[float], notes: list[str]
+    summary: Summary,
+    plane: Sequence[float],
+    notes: list[str],
+    t: float | None = None,
+    poses: dict[str, Floats] | None = None,
 ) -> tuple[Floats, Floats, Floats] | None:
     """The obstacles on the figures' plane (the x-y plane in 2D, the mid-width x-z slice in
     3D) as (X, Y, signed distance) on a fine raster, or None without obstacles. Rebuilt from
     the case in summary.json; an obstacle that cannot be rebuilt (a mesh file moved away) is
-    left out with a note."""
+    left out with a note. A moving obstacle (obstacles.N.motion) is drawn where bodies.csv
+    (``poses``: its columns) puts it at time ``t`` (its pose interpolated between the rows),
+    where it started without them."""
     from ..case import validate_case
 
     spec = summary.get("case", {})
@@ -277,8 +283,59 @@ def obstacle_section(
     else:
         mid = 0.5 * summary.get("grid", {}).get("domain_used", case.domain.size)[1]
         pts = np.column_stack([X.ravel(), np.full(X.size, mid), Y.ravel()])
-    phi = np.min([s.signed_distance(pts) for s in solids], axis=0).reshape(X.shape)
+    phis = []
+    for k, solid in enumerate(solids):
+        moving = case.obstacles[k].motion is not None and poses is not None and t is not None
+        name = case.obstacles[k].name or f"obstacle{k}"
+        at = _at_start(pts, poses, name, float(t)) if moving else pts  # type: ignore[arg-type]
+        phis.append(solid.signed_distance(at))
+    phi = np.min(phis, axis=0).reshape(X.shape)
     return X, Y, phi
+
+
+def _poses(run_dir: Path, notes: list[str]) -> dict[str, Floats] | None:
+    """bodies.csv's columns (the moving obstacles' poses), or None without the file."""
+    from ..output.timeseries import read_table
+
+    path = run_dir / "bodies.csv"
+    if not path.is_file():
+        return None
+    try:
+        table, read_notes = read_table(path)
+    except CaseError as err:
+        notes.append(f"the moving obstacles are drawn where they started: {err}")
+        return None
+    notes.extend(read_notes)
+    return {k: np.asarray(v, dtype=float) for k, v in table.items()}
+
+
+def _at_start(pts: Floats, poses: dict[str, Floats], name: str, t: float) -> Floats:
+    """The points ``pts`` (n, D) carried back from a moving obstacle's pose at time t to where
+    it started (bodies.csv's first row, at t = 0), where its shape is defined: x0 = R(t)^T (x
+    - c(t)) + c(0). Unchanged without its columns."""
+    D = pts.shape[1]
+    axes = "xyz"[:D]
+    time = poses.get("time")
+    if time is None or time.size == 0 or time[0] != 0.0 or f"{name}_x" not in poses:
+        return pts
+    c = np.array([np.interp(t, time, poses[f"{name}_{a}"]) for a in axes])
+    c0 = np.array([poses[f"{name}_{a}"][0] for a in axes])
+    if D == 2:
+        angle = np.radians(np.interp(t, time, poses[f"{name}_angle"]))
+        R = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    else:
+        w, x, y, z = (np.interp(t, time, poses[f"{name}_q{q}"]) for q in "wxyz")
+        norm = np.sqrt(w * w + x * x + y * y + z * z)
+        w, x, y, z = w / norm, x / norm, y / norm, z / norm
+        R = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+    moved: Floats = (pts - c) @ R + c0
+    return moved
 
 
 def _draw(
@@ -324,7 +381,12 @@ def _name_axes(ax: Axes, names: Sequence[str], caption: str = "", y: bool = True
 
 
 def plot_snapshots(
-    snaps: Sequence[Snapshot], summary: Summary, folder: Path, plt: ModuleType, notes: list[str]
+    snaps: Sequence[Snapshot],
+    summary: Summary,
+    folder: Path,
+    plt: ModuleType,
+    notes: list[str],
+    run_dir: Path | None = None,
 ) -> list[Path]:
     """One PNG per snapshot, an overview of up to six, and the GIF; returns the paths.
     Snapshots that cannot be read (missing, damaged) are left out with a note."""
@@ -353,15 +415,22 @@ def plot_snapshots(
         xy, pv, plane, names, caption = side_view(x, p, size, spacing)
         data[k] = (t, xy, pv)
     size = plane
+    poses = _poses(run_dir, notes) if run_dir is not None else None
+    moving = poses is not None and any(
+        o.get("motion") for o in summary.get("case", {}).get("obstacles", [])
+    )
     solid = obstacle_section(summary, plane, notes)
     # the colour scale: the 99.5th percentile over all snapshots, so that a few impact peaks
     # do not leave the rest of the run dark
     vmax = float(np.percentile(np.concatenate([p for _, _, p in data]), 99.5)) or 1.0
     (folder / "snapshots").mkdir(exist_ok=True)
     written = []
-    for (t, xy, p), (_, f) in zip(data, readable):
+    sections = [
+        obstacle_section(summary, plane, notes, t, poses) if moving else solid for t, _, _ in data
+    ]
+    for (t, xy, p), (_, f), section in zip(data, readable, sections):
         fig, ax = plt.subplots(figsize=(5, 5 * size[1] / size[0] + 0.6))
-        art = _draw(ax, xy, p, t, size, vmax, plt, solid)
+        art = _draw(ax, xy, p, t, size, vmax, plt, section)
         fig.colorbar(art, ax=ax, label="pressure [Pa]")
         _name_axes(ax, names, caption)
         out = folder / "snapshots" / (Path(f).stem + ".png")
@@ -372,7 +441,7 @@ def plot_snapshots(
         1, len(pick), figsize=(2.2 * len(pick) + 1.2, 2.8), squeeze=False, layout="constrained"
     )
     for j, (ax, k) in enumerate(zip(axes[0], pick)):
-        art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt, solid)
+        art = _draw(ax, data[k][1], data[k][2], data[k][0], size, vmax, plt, sections[k])
         _name_axes(ax, names, y=j == 0)
     fig.colorbar(art, ax=axes[0].tolist(), label="pressure [Pa]")
     if caption:
@@ -491,4 +560,4 @@ def plot_run(
         if any(units.get(n) in QUANTITY for n in run.probes if n != "time"):
             plot_probes(run.probes, run.summary, units, out / "probes.png", plt, notes)
             written.append(out / "probes.png")
-    return [*written, *plot_snapshots(run.snapshots, run.summary, out, plt, notes)]
+    return [*written, *plot_snapshots(run.snapshots, run.summary, out, plt, notes, Path(run_dir))]
