@@ -76,6 +76,17 @@ std::array<std::array<double, D>, D> rotation_of(const std::array<double, 4>& q)
   return R;
 }
 
+// a free 3D body's inertia in the grid's frame, R I R^T (R: its orientation)
+std::array<std::array<double, 3>, 3> world_inertia(const std::array<std::array<double, 3>, 3>& R,
+                                                   const std::array<std::array<double, 3>, 3>& I) {
+  std::array<std::array<double, 3>, 3> Iw{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        for (int m = 0; m < 3; ++m) Iw[i][j] += R[i][k] * I[k][m] * R[j][m];
+  return Iw;
+}
+
 // a x b
 std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
@@ -600,12 +611,7 @@ void BodyTables<D>::predict(double dt, const std::array<double, D>& g) {
       b.velocity_star[k] = b.velocity_now[k] + (b.locked[k] ? 0.0 : dt * g[k]);
     b.omega_star = b.omega_now;
     if constexpr (D == 3) {  // omega' = -I^-1 (omega x I omega), explicitly
-      const auto R = rotation_of<3>(b.quat);
-      double Iw[3][3] = {};  // R I R^T
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          for (int k = 0; k < 3; ++k)
-            for (int m = 0; m < 3; ++m) Iw[i][j] += R[i][k] * b.inertia[k][m] * R[j][m];
+      const auto Iw = world_inertia(rotation_of<3>(b.quat), b.inertia);
       std::array<double, 3> Iomega{};
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) Iomega[i] += Iw[i][j] * b.omega_now[j];
@@ -693,12 +699,8 @@ void BodyTables<D>::mass_matrix(View<double, 2> M) const {
       }
       if constexpr (D == 2) {
         M(i, j) = b.inertia[2][2];
-      } else {  // R I R^T
-        const auto R = rotation_of<3>(b.quat);
-        double v = 0.0;
-        for (int k = 0; k < 3; ++k)
-          for (int m = 0; m < 3; ++m) v += R[ki - D][k] * b.inertia[k][m] * R[kj - D][m];
-        M(i, j) = v;
+      } else {
+        M(i, j) = world_inertia(rotation_of<3>(b.quat), b.inertia)[ki - D][kj - D];
       }
     }
 }
@@ -823,13 +825,12 @@ index_t BodyTables<D>::contact() {
     if constexpr (D == 2) {
       if (!b.locked[2]) Iinv[2][2] = 1.0 / b.inertia[2][2];
     } else {
+      const auto Iw = world_inertia(R, b.inertia);
       for (int c = 0; c < 3; ++c) {
-        double A[9] = {}, t[3] = {0.0, 0.0, 0.0};
+        double A[9], t[3] = {0.0, 0.0, 0.0};
         t[c] = 1.0;
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            for (int k = 0; k < 3; ++k)
-              for (int q = 0; q < 3; ++q) A[i * 3 + j] += R[i][k] * b.inertia[k][q] * R[j][q];
+          for (int j = 0; j < 3; ++j) A[i * 3 + j] = Iw[i][j];
         if (solve_dense(3, A, t))
           for (int i = 0; i < 3; ++i) Iinv[i][c] = b.locked[3 + i] || b.locked[3 + c] ? 0.0 : t[i];
       }
