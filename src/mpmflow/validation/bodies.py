@@ -31,7 +31,16 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..simulation import Simulation
-from .common import CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+from .common import (
+    CaseResult,
+    Row,
+    fmt,
+    markdown_table,
+    parabola_extremum,
+    pyplot,
+    run_example,
+    save,
+)
 from .types import Context
 
 SPACINGS, SPACINGS_QUICK = (0.02, 0.01, 0.005), (0.02,)
@@ -56,10 +65,7 @@ def extrema(t: np.ndarray, s: np.ndarray) -> list[tuple[float, float]]:
     found = []
     for k in range(1, s.size - 1):
         if (s[k] - s[k - 1]) * (s[k + 1] - s[k]) < 0 and abs(s[k]) > 0.02:
-            y0, y1, y2 = s[k - 1], s[k], s[k + 1]
-            d = y0 - 2 * y1 + y2
-            off = 0.5 * (y0 - y2) / d if d != 0 else 0.0
-            found.append((t[k] + off * (t[k + 1] - t[k]), y1 - 0.25 * (y0 - y2) * off))
+            found.append(parabola_extremum(t, s, k))
     return found
 
 

@@ -108,6 +108,15 @@ def run_example(
     return sim
 
 
+def parabola_extremum(t: np.ndarray, s: np.ndarray, k: int) -> tuple[float, float]:
+    """The extremum (time, value) of the parabola through the samples k - 1, k, k + 1 of the
+    signal s(t) (evenly spaced times; the sample k itself where the three lie on a line)."""
+    y0, y1, y2 = s[k - 1], s[k], s[k + 1]
+    d = y0 - 2 * y1 + y2
+    off = 0.5 * (y0 - y2) / d if d != 0 else 0.0
+    return float(t[k] + off * (t[k + 1] - t[k])), float(y1 - 0.25 * (y0 - y2) * off)
+
+
 def observed_order(h: ArrayLike, e: ArrayLike) -> float:
     """Least-squares slope of log(error) against log(spacing): the observed order."""
     h, e = np.asarray(h, float), np.asarray(e, float)

@@ -26,6 +26,7 @@ from .common import (
     fmt,
     markdown_table,
     observed_order,
+    parabola_extremum,
     pyplot,
     run_example,
     save,
@@ -76,10 +77,8 @@ def period_and_decay(t: FloatArray, s: FloatArray) -> tuple[float, float, FloatA
             continue
         k = a + int(np.argmax(np.abs(s[a:b])))
         if 0 < k < t.size - 1 and a < k < b - 1:
-            y0, y1, y2 = s[k - 1], s[k], s[k + 1]
-            d = y0 - 2 * y1 + y2
-            off = 0.5 * (y0 - y2) / d if d != 0 else 0.0
-            found.append((t[k] + off * (t[k + 1] - t[k]), abs(y1 - 0.25 * (y0 - y2) * off)))
+            at, value = parabola_extremum(t, s, k)
+            found.append((at, abs(value)))
         elif k == 0:
             found.append((t[0], abs(s[0])))
     ext = np.array(found).reshape(-1, 2)
