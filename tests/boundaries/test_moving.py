@@ -30,6 +30,7 @@ max = {water_max}
 particles_per_cell = {ppc}
 velocity = {water_velocity}
 around_obstacles = true
+initial_pressure = "{pressure}"
 [[obstacles]]
 name = "body"
 type = "box"
@@ -64,8 +65,8 @@ PISTON_TANK = dict(
 )
 
 
-def _case(tmp_path, ppc=2, **keys):
-    text = TANK.format(ppc=ppc, **keys)
+def _case(tmp_path, ppc=2, pressure="zero", **keys):
+    text = TANK.format(ppc=ppc, pressure=pressure, **keys)
     path = tmp_path / "case.toml"
     path.write_text(text)
     return load_case(path)
@@ -223,43 +224,17 @@ def test_a_table_path_and_bad_motions_are_told(tmp_path):
         _case(tmp_path, motion="{type = 'oscillation', amplitude = [0.01, 0.0]}", end=0.1, **common)
 
 
-FLOAT = """
-title = "free body"
-[domain]
-size = {size}
-walls = "slip"
-[grid]
-spacing = {h}
-[[bodies]]
-type = "box"
-min = {water_min}
-max = {water_max}
-particles_per_cell = 2
-around_obstacles = true
-initial_pressure = "hydrostatic"
-[[obstacles]]
-name = "box"
-type = "box"
-min = {body_min}
-max = {body_max}
-motion = {{type = "free", density = {density}, locked = {locked}}}
-[material]
-density = 1000.0
-[physics]
-gravity = {gravity}
-[time]
-dt = {dt}
-end = {end}
-[output]
-interval = {interval}
-snapshots = false
-"""
-
-
-def _float(tmp_path, **keys):
-    path = tmp_path / "float.toml"
-    path.write_text(FLOAT.format(**keys))
-    return load_case(path)
+def _float(tmp_path, density, locked, **keys):
+    """The tank with a free box of that density (``locked``: its held degrees of freedom),
+    the water at rest with its hydrostatic pressure."""
+    dim = keys["gravity"].count(",") + 1
+    return _case(
+        tmp_path,
+        pressure="hydrostatic",
+        water_velocity="[" + ", ".join(["0.0"] * dim) + "]",
+        motion=f"{{type = 'free', density = {density}, locked = {locked}}}",
+        **keys,
+    )
 
 
 def _body_rows(sim, every):
@@ -451,7 +426,11 @@ def test_the_plots_draw_a_moving_obstacle_where_it_is(tmp_path):
     path = tmp_path / "case.toml"
     path.write_text(
         TANK.format(
-            ppc=2, motion="{type = 'velocity', velocity = [0.05, 0.0]}", end=1.0, **PISTON_TANK
+            ppc=2,
+            pressure="zero",
+            motion="{type = 'velocity', velocity = [0.05, 0.0]}",
+            end=1.0,
+            **PISTON_TANK,
         ).replace("snapshots = false", "snapshot_interval = 0.5")
     )
     run = tmp_path / "run"
