@@ -14,8 +14,9 @@ t = 0, where the case file gives the shape. The core reads:
   per period or ramp) that the interpolation's error is below 1e-6 of its amplitude; a
   table's rates are its second-order differences.
 
-The outputs (``Simulation``'s bodies.csv) evaluate the same interpolation here
-(``Mover.pose``), so the position written is the one the step used.
+bodies.csv writes the core's own state (``State.body_state``); ``Trajectory.at`` evaluates
+the core's interpolation here, for a reader of a path (the tests check it against the
+motions).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..arrays import Bools, Floats
+from ..arrays import Floats
 from ..errors import CaseError
 from ..geometry.shapes import Shape
 from ..grid import Grid
@@ -374,8 +375,3 @@ def of_case(case: Case) -> list[Mover]:
         name = spec.name or f"obstacle{k}"
         movers.append(Mover(k, name, shape, pivot, axis, walls in ("no_slip", "bonded"), path))
     return movers
-
-
-def fixed_flags(node_no_slip: Bools | None) -> Bools:
-    """The fixed obstacles' per-node no-slip flags for the core (empty: none)."""
-    return np.zeros(0, dtype=np.bool_) if node_no_slip is None else node_no_slip

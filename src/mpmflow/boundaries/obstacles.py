@@ -60,9 +60,9 @@ class Tables:
     normal: Floats  # (m, D) their unit normals, into the solid
     no_slip: Bools  # (m,) whether the node's obstacle is no-slip
     solids: list[Shape] = field(default_factory=list)  # the obstacles' shapes
-    # (nnodes,) whether each node's nearest obstacle is no-slip (None: no obstacle); moving
+    # (nnodes,) whether each node's nearest obstacle is no-slip (empty: no obstacle); moving
     # obstacles (boundaries/moving.py) read it where their cells meet a fixed one's
-    node_no_slip: Bools | None = None
+    node_no_slip: Bools = field(default_factory=lambda: np.zeros(0, dtype=np.bool_))
 
     def distance(self, points: Floats) -> Floats:
         """The signed distance (m) of points to the nearest obstacle, negative inside."""

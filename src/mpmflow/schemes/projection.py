@@ -168,9 +168,7 @@ class ProjectionScheme:
         _check_movers(case, grid, self.movers)
         if self.movers:
             self.core.set_bodies(
-                [m.core(grid) for m in self.movers],
-                moving.fixed_flags(self.solids.node_no_slip),
-                obstacles.SUBCELLS,
+                [m.core(grid) for m in self.movers], self.solids.node_no_slip, obstacles.SUBCELLS
             )
         # amg, direct, petsc: solvers from Python, plugged into the compiled step
         self.python_solver = (
