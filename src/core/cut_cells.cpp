@@ -253,7 +253,7 @@ index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
 }
 
 template <int D>
-void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> theta) {
+void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> theta, bool swept) {
   // only sliver cells are written, only cells with open >= SLIVER read: no race
   parallel_for(g.ncells, [&](index_t c) {
     if (!(0.0 < open_(c) && open_(c) < SLIVER)) return;
@@ -268,6 +268,27 @@ void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> t
         if (open_(nb) >= SLIVER && theta(nb) > best) best = theta(nb);
       }
     if (best >= 0.0) theta(c) = best;
+  });
+  if (!swept) return;
+  // empty cut cells ahead of a face: marked with minus their value first, read only where
+  // positive, so that no cell reads a neighbour written in the same pass
+  parallel_for(g.ncells, [&](index_t c) {
+    if (!(SLIVER <= open_(c) && open_(c) < 1.0 && theta(c) == 0.0)) return;
+    double best = 0.0;
+    index_t cx[D];
+    g.cell_coords(c, cx);
+    for (int k = 0; k < D; ++k)
+      for (int step = -1; step <= 1; step += 2) {
+        const index_t j = cx[k] + step;
+        if (j < 0 || j >= g.cells[k]) continue;
+        const index_t nb = c + step * g.cs[k];
+        if (open_(nb) >= 1.0 && theta(nb) == 0.0) return;  // air beside it
+        if (open_(nb) > 0.0 && theta(nb) > best) best = theta(nb);
+      }
+    theta(c) = -best;
+  });
+  parallel_for(g.ncells, [&](index_t c) {
+    if (theta(c) < 0.0) theta(c) = -theta(c);
   });
 }
 
@@ -325,7 +346,7 @@ void extend_velocity(const Grid<D>& g, View<const index_t> onode, View<const dou
                                      index_t, double*);                                         \
   template index_t push_out<D>(const Grid<D>&, View<double, 2>, View<double, 2>,                \
                                View<const double>, double, View<const double, 2>);              \
-  template void sliver_fractions<D>(const Grid<D>&, View<const double>, View<double>);          \
+  template void sliver_fractions<D>(const Grid<D>&, View<const double>, View<double>, bool);    \
   template void extend_velocity<D>(const Grid<D>&, View<const index_t>, View<const double>,     \
                                    View<double, 2>, View<double, 2>);
 

@@ -62,8 +62,15 @@ index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
 
 // The volume fraction theta of a cut cell whose fluid part is a sliver (0 < open < SLIVER):
 // the largest of its face neighbours' with open >= SLIVER (in place; unchanged without one).
+// With swept (a run whose obstacles move), also that of an empty cut cell (theta 0) with no
+// empty whole cell (air) beside it: the largest of its face neighbours' that hold material.
+// A face sweeping through the particles leaves the cut cells ahead of it a fluid part
+// thinner than a particle row plus the push-out margin, often empty; such a cell left out
+// of the pressure system put p = 0 at the nodes behind the face for a step (a body
+// descending at 1 cm/s felt a force spike of 70% of its buoyancy as it crossed a grid line).
 template <int D>
-void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> theta);
+void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> theta,
+                      bool swept = false);
 
 // The velocities (m/s, nnodes x D, in place) of the obstacle nodes onode that no particle
 // reaches (node_mass 0): the mass-weighted mean of their stencil neighbours' with mass.

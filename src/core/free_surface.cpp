@@ -10,19 +10,23 @@ namespace mpmflow {
 
 template <int D>
 void nodal_fraction(const Grid<D>& g, View<const double> theta, View<const double> open_,
-                    View<double> node_f) {
+                    View<double> node_f, bool swept, double sparse) {
   const auto offset = cell_offsets<D>(g);
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
     double fsum = 0.0, ncell = 0.0;
+    bool walled = false, filled = true;
     const index_t first = interior_first_cell<D>(g, ix);
     for (int b = 0; b < (1 << D); ++b) {
       const index_t c = first >= 0 ? first + offset[b] : cell_of_node<D>(g, ix, b);
-      if (c >= 0 && open_(c) > 0.0) {
+      if (c < 0) continue;
+      walled = walled || open_(c) < 1.0;
+      if (open_(c) > 0.0) {
         fsum += open_(c) * std::min(theta(c), 1.0);
         ncell += open_(c);
+        filled = filled && theta(c) > 0.0 && theta(c) >= sparse;
       }
     }
-    node_f(i) = ncell > 0.0 ? fsum / ncell : 0.0;
+    node_f(i) = ncell > 0.0 ? (swept && walled && filled ? 1.0 : fsum / ncell) : 0.0;
   });
 }
 
@@ -101,9 +105,9 @@ index_t number(View<index_t> row) {
 }
 
 template void nodal_fraction<2>(const Grid<2>&, View<const double>, View<const double>,
-                                View<double>);
+                                View<double>, bool, double);
 template void nodal_fraction<3>(const Grid<3>&, View<const double>, View<const double>,
-                                View<double>);
+                                View<double>, bool, double);
 template void enclosed_cells<2>(const Grid<2>&, View<const double>, View<bool>);
 template void enclosed_cells<3>(const Grid<3>&, View<const double>, View<bool>);
 template index_t classify_nodes<2>(const Grid<2>&, View<const index_t>, View<const index_t>,

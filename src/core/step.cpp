@@ -166,7 +166,7 @@ void State<D>::bin_particles(const Particles<D>& P) {
   auto theta = theta_.view(nc);
   cell_index<D>(grid_, P.x, cell);
   sort_with_fraction(cell, nc, P.volume, cell_volume_, ob_.open, start, order, theta);
-  if (obstacles_) sliver_fractions<D>(grid_, ob_.open, theta);
+  if (obstacles_) sliver_fractions<D>(grid_, ob_.open, theta, bodies_.present());
   binned_ = n;
 }
 
@@ -321,7 +321,9 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
   }
   if (obstacles_) extend_velocity<D>(grid_, ob_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
-  nodal_fraction<D>(grid_, theta_.view(nc), ob_.open, node_f_.view(nn));
+  // with moving obstacles, a node beside one whose cells all hold material is inside it
+  nodal_fraction<D>(grid_, theta_.view(nc), ob_.open, node_f_.view(nn), bodies_.present(),
+                    O.sparse);
   clock.lap(PHASE_FREE_SURFACE);
 }
 
