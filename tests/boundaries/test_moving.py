@@ -490,3 +490,61 @@ def test_the_plots_draw_a_moving_obstacle_where_it_is(tmp_path):
     assert (phi0[between] > 0).all() and (phi1[between] < 0).all()
     assert main(["plot", str(run)]) == 0
     assert (run / "plots" / "snapshots.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_bodies_are_written_for_paraview_where_they_are(tmp_path, dim):
+    """With snapshots, each moving obstacle's surface is written beside the particles
+    (bodies_NNNNNN.vtu, indexed by bodies.pvd) at its pose: a box turning at 30 degrees/s
+    about its centre (3D: about the axis (1, 1, 1)) while its centre moves at U is, at each
+    snapshot, the box at t = 0 turned by 30 t degrees and moved by U t, each point's
+    velocity U + omega x r, its cells carrying the body's number."""
+    import meshio
+
+    from mpmflow.cli import main
+
+    vec = lambda *a: "[" + ", ".join(str(x) for x in a[:dim]) + "]"  # noqa: E731
+    U = np.array([0.05, 0.02, 0.01][:dim])
+    axis = np.array([1.0, 1.0, 1.0]) / np.sqrt(3) if dim == 3 else np.array([0.0, 0.0, 1.0])
+    path = tmp_path / "case.toml"
+    path.write_text(
+        TANK.format(
+            ppc=2,
+            pressure="hydrostatic",
+            size=vec(0.6, 0.4, 0.4),
+            h=0.02,
+            water_min=vec(0.0, 0.0, 0.0),
+            water_max=vec(0.6, 0.2, 0.4) if dim == 2 else "[0.6, 0.4, 0.2]",
+            water_velocity=vec(0.0, 0.0, 0.0),
+            body_min=vec(0.25, 0.15, 0.15) if dim == 2 else "[0.25, 0.15, 0.15]",
+            body_max=vec(0.35, 0.25, 0.25) if dim == 2 else "[0.35, 0.25, 0.25]",
+            motion=f"{{type = 'velocity', velocity = {vec(*U)}, rate = 30.0"
+            + (", axis = [1.0, 1.0, 1.0]}" if dim == 3 else "}"),
+            gravity=vec(0.0, -9.81) if dim == 2 else "[0.0, 0.0, -9.81]",
+            dt=0.01,
+            end=0.4,
+            interval=0.1,
+        ).replace("snapshots = false", "snapshot_interval = 0.2")
+    )
+    run = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(run), "-q"]) == 0
+    index = (run / "bodies.pvd").read_text()
+    names = [f"bodies_{k:06d}.vtu" for k in range(3)]
+    assert all(f'file="{n}"' in index for n in names)
+    centre0 = np.array([0.3, 0.2, 0.2][:dim])
+    lo, hi = centre0 - 0.05, centre0 + 0.05
+    from mpmflow.geometry.shapes import Box
+
+    start, _ = Box(lo, hi).boundary()
+    for k, t in enumerate([0.0, 0.2, 0.4]):
+        mesh = meshio.read(run / names[k])
+        a = np.radians(30.0 * t)
+        K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        R = (np.eye(3) + np.sin(a) * K + (1 - np.cos(a)) * K @ K)[:dim, :dim]
+        want = centre0 + U * t + (start - centre0) @ R.T
+        assert np.abs(mesh.points[:, :dim] - want).max() < 1e-9, t
+        arm = np.zeros((len(want), 3))
+        arm[:, :dim] = want - centre0 - U * t
+        speed = U + np.cross(np.radians(30.0) * axis, arm)[:, :dim]
+        assert np.abs(mesh.point_data["velocity"][:, :dim] - speed).max() < 1e-9, t
+        assert (mesh.cell_data["body"][0] == 0).all()

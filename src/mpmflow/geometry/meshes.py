@@ -110,6 +110,9 @@ class Mesh(Shape):
     def support(self, direction: Any) -> float:
         return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
 
+    def boundary(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.vertices.copy(), self.faces.copy()
+
 
 # --------------------------------------------------------------------------- mesh files
 

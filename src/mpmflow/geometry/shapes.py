@@ -71,6 +71,24 @@ class Shape:
     def support(self, direction: Any) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def boundary(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
+        """The surface as a mesh for drawing: vertices (n, D) m and cells (m, D) vertex
+        indices, line segments in 2D and triangles in 3D, outward by the right-hand rule
+        (2D: counter-clockwise)."""
+        raise NotImplementedError
+
+
+# segments of a circle and sections of a cylinder's drawn surface, subdivisions of a sphere's
+# icosahedron (642 vertices): within 0.12% of the radius
+ROUND = 64
+SPHERE_SUBDIVISIONS = 3
+
+
+def _ring(n: int) -> np.ndarray:
+    """Segments (n, 2) joining n points in a closed ring."""
+    i = np.arange(n, dtype=np.int64)
+    return np.stack([i, (i + 1) % n], axis=1)
+
 
 class Box(Shape):
     """Axis-aligned box [lo, hi] (m), 2D or 3D."""
@@ -100,6 +118,17 @@ class Box(Shape):
         d = np.asarray(direction, dtype=float)
         return float(np.sum(np.where(d > 0, self.hi, self.lo) * d))
 
+    def boundary(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.lo, self.hi
+        if self.dim == 2:
+            corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+            return corners, _ring(4)
+        # corner i lies at hi along axis k where bit k of i is set
+        corners = np.array([[(lo, hi)[(i >> k) & 1][k] for k in range(3)] for i in range(8)])
+        quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+        faces = [(a, b, c) for a, b, c, _ in quads] + [(a, c, d) for a, _, c, d in quads]
+        return corners, np.array(faces, dtype=np.int64)
+
 
 class Ball(Shape):
     """Points within ``radius`` (m) of ``centre``: a disc in 2D, a sphere in 3D."""
@@ -123,6 +152,16 @@ class Ball(Shape):
     def support(self, direction: Any) -> float:
         d = np.asarray(direction, dtype=float)
         return float(self.centre @ d + self.radius * np.linalg.norm(d))
+
+    def boundary(self) -> tuple[np.ndarray, np.ndarray]:
+        if self.dim == 2:
+            a = np.linspace(0.0, 2.0 * math.pi, ROUND, endpoint=False)
+            ring = np.stack([np.cos(a), np.sin(a)], axis=1)
+            return self.centre + self.radius * ring, _ring(ROUND)
+        import trimesh
+
+        sphere = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=self.radius)
+        return self.centre + np.asarray(sphere.vertices), np.asarray(sphere.faces, np.int64)
 
 
 Disc = Sphere = Ball
@@ -167,6 +206,15 @@ class Cylinder(Shape):
         along = self.axis @ d
         across = math.sqrt(max(float(d @ d) - along * along, 0.0))
         return float(self.base @ d + max(0.0, self.length * along) + self.radius * across)
+
+    def boundary(self) -> tuple[np.ndarray, np.ndarray]:
+        import trimesh
+
+        # trimesh's cylinder stands on the z axis, centred on the origin
+        c = trimesh.creation.cylinder(radius=self.radius, height=self.length, sections=ROUND)
+        turn = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], self.axis)[:3, :3]
+        centre = self.base + 0.5 * self.length * self.axis
+        return centre + np.asarray(c.vertices) @ turn.T, np.asarray(c.faces, np.int64)
 
 
 class Polygon(Shape):
@@ -218,6 +266,12 @@ class Polygon(Shape):
 
     def support(self, direction: Any) -> float:
         return float(np.max(self.vertices @ np.asarray(direction, dtype=float)))
+
+    def boundary(self) -> tuple[np.ndarray, np.ndarray]:
+        v = self.vertices
+        x, y = v[:, 0], v[:, 1]
+        ccw = float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)) > 0.0
+        return (v if ccw else v[::-1]).copy(), _ring(len(v))
 
 
 def polygon_problem(vertices: Any) -> str | None:

@@ -125,7 +125,7 @@ class Simulation:
         movers = getattr(self.scheme, "movers", None)
         if movers:
             self.builtin_writers["bodies"] = writers.Bodies(movers, self.grid.dim)
-        self.builtin_writers["snapshots"] = writers.Snapshots()
+        self.builtin_writers["snapshots"] = writers.Snapshots(movers)
         w = self.builtin_writers
 
         builtin = partial(Action, builtin=True)

@@ -7,7 +7,8 @@
 - ``Bodies``: the moving obstacles' pose, velocity, force and torque into bodies.csv, at
   the same times;
 - ``Snapshots``: the particles into particles_NNNNNN.vtu and particles.pvd, at the first
-  output time at or after each multiple of ``output.snapshot_interval`` and at the end;
+  output time at or after each multiple of ``output.snapshot_interval`` and at the end; with
+  moving obstacles, their surfaces where they are into bodies_NNNNNN.vtu and bodies.pvd;
 - the checkpointer (``checkpointer.Checkpointer``), at the first output time at or after
   each multiple of ``checkpoint.interval``.
 
@@ -28,7 +29,7 @@ import numpy as np
 from ..arrays import Floats
 from ..boundaries import moving
 from ..diagnostics import probes
-from ..output.snapshots import SnapshotWriter
+from ..output.snapshots import SnapshotWriter, write_surface_vtu
 from ..output.timeseries import (
     COLUMNS,
     CsvAppender,
@@ -204,14 +205,20 @@ class Bodies(_Rows):
 
 class Snapshots:
     """Snapshots when the case asks for them (``output.snapshots``) and there is a folder;
-    otherwise the schedule still runs (its phase is in the checkpoints)."""
+    otherwise the schedule still runs (its phase is in the checkpoints). With moving
+    obstacles (``movers``), their surfaces (``Shape.boundary``) where the core puts them, in
+    a file of their own beside each particles' (``Surfaces``)."""
 
-    def __init__(self) -> None:
+    def __init__(self, movers: list[moving.Mover] | None = None) -> None:
         self.file: SnapshotWriter | None = None
+        self.movers = movers or []
+        self.surfaces: Surfaces | None = None
 
     def open(self, sim: Simulation, resume: int | None) -> None:
         if sim.out_dir is not None and sim.case.output.snapshots:
             self.file = SnapshotWriter(sim.out_dir, resume=resume)
+            if self.movers:
+                self.surfaces = Surfaces(self.movers, SnapshotWriter(sim.out_dir, "bodies", resume))
 
     def __call__(self, sim: Simulation) -> None:
         sim.forget_bins()  # the cells' bins are no longer needed: freed before the copies
@@ -219,6 +226,8 @@ class Snapshots:
             # a solid's stress history (empty for a fluid; the split scheme has none)
             history = getattr(sim.scheme, "history", {})
             self.file.write(sim.time, sim.particles, history)
+        if self.surfaces is not None:
+            self.surfaces.write(sim)
 
     def position(self) -> int | None:
         return len(self.file.entries) if self.file is not None else None
@@ -226,6 +235,67 @@ class Snapshots:
     def sync(self) -> None:
         if self.file is not None:
             self.file.sync()
+        if self.surfaces is not None:
+            self.surfaces.file.sync()
+
+
+class Surfaces:
+    """The moving obstacles' surfaces for ParaView: at each snapshot one bodies_NNNNNN.vtu
+    (indexed by bodies.pvd) holding every moving obstacle's surface (``Shape.boundary``: 2D
+    line segments, 3D triangles) at its pose in the core's state, with each point's velocity
+    (m/s, the body's v + omega x r) and, per cell, its body's number in bodies.csv's order
+    (``body``), the pressure's force (N; 2D N/m) and torque about the pivot (N m; 2D N m/m)
+    of the last step."""
+
+    def __init__(self, movers: list[moving.Mover], file: SnapshotWriter) -> None:
+        self.file = file
+        self.frames = []  # each body's surface in its own frame: about its pivot at t = 0
+        for m in movers:
+            points, cells = m.shape.boundary()
+            self.frames.append((points - m.pivot, cells))
+
+    def write(self, sim: Simulation) -> None:
+        core = sim.scheme.core  # type: ignore[attr-defined]  # only the projection moves them
+        force, torque, state = core.body_force, core.body_torque, core.body_state.copy()
+        D = sim.grid.dim
+        points, cells, velocity, body = [], [], [], []
+        count = 0
+        for b, (y, c) in enumerate(self.frames):
+            centre, v, w, q = state[b, :D], state[b, 3 : 3 + D], state[b, 6:9], state[b, 9:13]
+            r = _rotation(q)[:D, :D] @ y.T  # the surface's arms about the pivot, (D, n)
+            points.append(centre + r.T)
+            arm = np.zeros((3, r.shape[1]))
+            arm[:D] = r
+            velocity.append(v + np.cross(w, arm.T)[:, :D])
+            cells.append(c + count)
+            body.append(np.full(len(c), b, dtype=np.int64))
+            count += len(y)
+        index = np.concatenate(body)
+        name = f"bodies_{len(self.file.entries):06d}.vtu"
+        write_surface_vtu(
+            self.file.folder / name,
+            np.concatenate(points),
+            np.concatenate(cells),
+            {"velocity": np.concatenate(velocity)},
+            {
+                "body": index,
+                "force": force[index],
+                "torque": (torque[:, 2:] if D == 2 else torque)[index],
+            },
+        )
+        self.file.add(sim.time, name)
+
+
+def _rotation(q: Floats) -> Floats:
+    """The rotation matrix (3 x 3) of the unit quaternion q = (w, x, y, z)."""
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 Builtin = TimeSeries | Probes | CentreOfMass | Bodies | Snapshots  # the built-in writers
