@@ -265,10 +265,14 @@ void BodyTables<D>::setup(const Grid<D>& g, const ObstacleTables<D>& fixed,
     body.velocity_star = body.velocity_now;
     body.omega_star = body.omega_now;
   }
-  index_t most = 0;  // contacts: each surface point against each wall and the obstacles
+  // contacts: each surface point against each wall, the fixed obstacles and the other bodies
+  index_t most = 0;
+  const index_t others = static_cast<index_t>(bodies_.size()) - 1;
   for (const Body<D>& body : bodies_)
-    if (body.free) most = std::max(most, body.surface.extent(0) * (2 * D + 1));
-  contacts_.reserve(7 * std::max<index_t>(most, 1));
+    if (body.free) most = std::max(most, body.surface.extent(0) * (2 * D + 1 + others));
+  contacts_.reserve(CONTACT * std::max<index_t>(most, 1));
+  contact_poses_.assign(bodies_.size(), Pose<D>{});
+  inverse_inertia_.assign(bodies_.size(), {});
   const index_t nq = free_dofs();
   small_.reserve(nq * nq);
   rhs_small_.reserve(nq);
@@ -727,7 +731,7 @@ void BodyTables<D>::apply_impulse(View<const double> impulse) {
 }
 
 template <int D>
-void BodyTables<D>::integrate(double dt) {
+void BodyTables<D>::integrate(double dt, double t) {
   for (Body<D>& b : bodies_) {
     if (!b.free) continue;
     for (int k = 0; k < D; ++k) b.centre_now[k] += dt * b.velocity_now[k];
@@ -748,36 +752,94 @@ void BodyTables<D>::integrate(double dt) {
     b.velocity_star = b.velocity_now;
     b.omega_star = b.omega_now;
   }
-  contact();
+  contact(t);
 }
 
 template <int D>
-index_t BodyTables<D>::contact() {
+std::array<std::array<double, 3>, 3> BodyTables<D>::inverse_inertia(const Body<D>& b) const {
+  std::array<std::array<double, 3>, 3> Iinv{};
+  if constexpr (D == 2) {
+    if (!b.locked[2]) Iinv[2][2] = 1.0 / b.inertia[2][2];
+  } else {
+    const auto Iw = world_inertia(rotation_of<3>(b.quat), b.inertia);
+    for (int c = 0; c < 3; ++c) {
+      double A[9], t[3] = {0.0, 0.0, 0.0};
+      t[c] = 1.0;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) A[i * 3 + j] = Iw[i][j];
+      if (solve_dense(3, A, t))
+        for (int i = 0; i < 3; ++i) Iinv[i][c] = b.locked[3 + i] || b.locked[3 + c] ? 0.0 : t[i];
+    }
+  }
+  return Iinv;
+}
+
+template <int D>
+index_t BodyTables<D>::contact(double t) {
   index_t count = 0;
   const double touch = 1e-3 * g_.h;  // a point this close counts as touching (resting)
-  for (Body<D>& b : bodies_) {
+  const index_t nb = static_cast<index_t>(bodies_.size());
+  for (index_t a = 0; a < nb; ++a) {
+    Body<D>& b = bodies_[a];
     if (!b.free || b.surface.size() == 0) continue;
+    // the other bodies where they are now (a free one after the contacts before this one's)
+    for (index_t o = 0; o < nb; ++o) {
+      contact_poses_[o] = bodies_[o].pose(t);
+      if (bodies_[o].free) inverse_inertia_[o] = inverse_inertia(bodies_[o]);
+    }
     const auto R = rotation_of<D>(b.quat);
     const index_t m = b.surface.extent(0);
     // the contacts: each surface point beyond (or on) a wall or inside (or on) a fixed
-    // obstacle, with the normal out of it, into contacts_ as (point, normal); the deepest
+    // obstacle or another body, with the normal out of it, into contacts_ as (point, normal,
+    // impulse, the other body or -1); the deepest one's normal and depth
     double deepest = 0.0;
     std::array<double, 3> push{};
     index_t nc = 0;
-    auto contacts = contacts_.template view<2>({contacts_.capacity() / 7, 7});
-    auto add = [&](const std::array<double, D>& x, const double* n, double depth) {
+    auto contacts = contacts_.template view<2>({contacts_.capacity() / CONTACT, CONTACT});
+    auto add = [&](const std::array<double, D>& x, const double* n, double depth, index_t other) {
       if (nc >= contacts.extent(0)) return;
       for (int k = 0; k < 3; ++k) {
         contacts(nc, k) = k < D ? x[k] : 0.0;
         contacts(nc, 3 + k) = k < D ? n[k] : 0.0;
       }
       contacts(nc, 6) = 0.0;  // the impulse it has taken so far
+      contacts(nc, 7) = static_cast<double>(other);
       ++nc;
       if (depth > deepest) {
         deepest = depth;
         push = {};
         for (int k = 0; k < D; ++k) push[k] = n[k];
       }
+    };
+    // a distance's gradient at x by central differences over half the body's lattice
+    // spacing, into n (unit); returns its length (0 where the lattice does not reach)
+    auto gradient = [&](const Body<D>& body, const Pose<D>& q, const std::array<double, D>& x,
+                        double* n) {
+      double gn = 0.0;
+      for (int k = 0; k < D; ++k) {
+        std::array<double, D> xp = x, xm = x;
+        xp[k] += 0.5 * body.spacing;
+        xm[k] -= 0.5 * body.spacing;
+        const double up = body.distance(q, xp.data()), down = body.distance(q, xm.data());
+        if (!(up < FAR && down < FAR)) return 0.0;
+        n[k] = (up - down) / body.spacing;
+        gn += n[k] * n[k];
+      }
+      gn = std::sqrt(gn);
+      for (int k = 0; k < D; ++k) n[k] = gn > 0.0 ? n[k] / gn : 0.0;
+      return gn;
+    };
+    // the contact's normal (out of what is touched): this body's own inward normal where
+    // its surface is flat at the point (its distance's gradient of length 1 to FLAT; at an
+    // edge or corner the interpolated distance's gradient shortens and turns), else that of
+    // what it touches: a face resting on another body's edge is pushed along its own normal,
+    // not sideways by the edge's rounded distance (a box resting across an edge slid off,
+    // frictionless), and a corner resting on a face along the face's
+    const Pose<D> self = b.pose(t);
+    auto flatter = [&](const std::array<double, D>& x, double* n) {
+      double own[D];
+      if (gradient(b, self, x, own) >= FLAT)
+        for (int k = 0; k < D; ++k) n[k] = -own[k];
     };
     for (index_t e = 0; e < m; ++e) {
       std::array<double, D> x;
@@ -791,17 +853,16 @@ index_t BodyTables<D>::contact() {
         const double below = -x[k], above = x[k] - g_.cells[k] * g_.h;
         if (below > -touch) {
           n[k] = 1.0;
-          add(x, n, below);
+          add(x, n, below, -1);
         }
         if (above > -touch) {
           n[k] = -1.0;
-          add(x, n, above);
+          add(x, n, above, -1);
         }
       }
-      if (fixed_.phi.size() > 0) {  // a fixed obstacle: phi interpolated, its gradient
-        bool inside = true;
-        for (int k = 0; k < D; ++k) inside = inside && x[k] >= 0.0 && x[k] <= g_.cells[k] * g_.h;
-        if (!inside) continue;
+      bool inside = true;
+      for (int k = 0; k < D; ++k) inside = inside && x[k] >= 0.0 && x[k] <= g_.cells[k] * g_.h;
+      if (inside && fixed_.phi.size() > 0) {  // a fixed obstacle: phi interpolated, its gradient
         double grad[D];
         const double px =
             interpolate_phi<D>(g_, fixed_.phi, View<const double, 2>(x.data(), {1, D}), 0, grad);
@@ -811,8 +872,20 @@ index_t BodyTables<D>::contact() {
         if (px < touch && gn > 0.01) {
           double n[D];
           for (int k = 0; k < D; ++k) n[k] = grad[k] / gn;
-          add(x, n, -px);
+          flatter(x, n);
+          add(x, n, -px, -1);
         }
+      }
+      for (index_t o = 0; o < nb; ++o) {  // another body: its distance, its gradient
+        if (o == a) continue;
+        const Body<D>& other = bodies_[o];
+        const double po = other.distance(contact_poses_[o], x.data());
+        if (!(po < touch)) continue;
+        double n[D];
+        const double gn = gradient(other, contact_poses_[o], x, n);
+        if (!(gn > 0.01)) continue;
+        flatter(x, n);
+        add(x, n, -po, o);
       }
     }
     if (nc == 0) continue;
@@ -820,44 +893,54 @@ index_t BodyTables<D>::contact() {
     // back out along the deepest contact's normal (the held translations stay)
     for (int k = 0; k < D; ++k)
       if (!b.locked[k]) b.centre_now[k] += deepest * push[k];
-    // the world inertia's inverse over the free rotations (2D: about z)
-    double Iinv[3][3] = {};
-    if constexpr (D == 2) {
-      if (!b.locked[2]) Iinv[2][2] = 1.0 / b.inertia[2][2];
-    } else {
-      const auto Iw = world_inertia(R, b.inertia);
-      for (int c = 0; c < 3; ++c) {
-        double A[9], t[3] = {0.0, 0.0, 0.0};
-        t[c] = 1.0;
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) A[i * 3 + j] = Iw[i][j];
-        if (solve_dense(3, A, t))
-          for (int i = 0; i < 3; ++i) Iinv[i][c] = b.locked[3 + i] || b.locked[3 + c] ? 0.0 : t[i];
-      }
-    }
+    const auto Iinv = inverse_inertia(b);
+    // a body's share of a contact's inverse mass along n, and the turn an impulse along n
+    // gives it
+    auto share = [&](const Body<D>& body, const std::array<std::array<double, 3>, 3>& I,
+                     const std::array<double, 3>& r, const std::array<double, 3>& n,
+                     std::array<double, 3>& turn) {
+      double inv = 0.0;
+      for (int k = 0; k < D; ++k)
+        if (!body.locked[k]) inv += n[k] * n[k] / body.mass;
+      const auto rn = cross(r, n);
+      turn = {};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) turn[i] += I[i][j] * rn[j];
+      for (int k = 0; k < 3; ++k) inv += rn[k] * turn[k];
+      return inv;
+    };
     // projected Gauss-Seidel on the contacts' impulses (each >= 0, pushing only): contact
-    // by contact, the impulse that zeroes its normal velocity added to what it has taken,
-    // clamped at 0 (a contact may give back what an earlier one made it take), in sweeps until
-    // they agree: an inelastic, frictionless landing (two corners of a box resting flat)
-    for (int sweep = 0; sweep < 50; ++sweep) {
+    // by contact, the impulse that zeroes its normal velocity (relative to the other body's
+    // there) added to what it has taken, clamped at 0 (a contact may give back what an
+    // earlier one made it take), in sweeps until they agree: an inelastic, frictionless
+    // landing (two corners of a box resting flat). A free other body takes the opposite
+    // impulse; a body on a path is not moved by it.
+    for (int sweep = 0; sweep < 500; ++sweep) {
       double change = 0.0;
       for (index_t c = 0; c < nc; ++c) {
-        std::array<double, 3> r{}, n{};
+        std::array<double, 3> r{}, n{}, x{};
         for (int k = 0; k < 3; ++k) {
-          r[k] = contacts(c, k) - (k < D ? b.centre_now[k] : 0.0);
+          x[k] = contacts(c, k);
+          r[k] = x[k] - (k < D ? b.centre_now[k] : 0.0);
           n[k] = contacts(c, 3 + k);
         }
         const auto w = cross(b.omega_now, r);
         double vn = 0.0;
         for (int k = 0; k < D; ++k) vn += (b.velocity_now[k] + w[k]) * n[k];
-        double inv = 0.0;
-        for (int k = 0; k < D; ++k)
-          if (!b.locked[k]) inv += n[k] * n[k] / b.mass;
-        const auto rn = cross(r, n);
-        std::array<double, 3> turn{};
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) turn[i] += Iinv[i][j] * rn[j];
-        for (int k = 0; k < 3; ++k) inv += rn[k] * turn[k];
+        std::array<double, 3> turn{}, turn_o{}, r_o{};
+        double inv = share(b, Iinv, r, n, turn);
+        const auto o = static_cast<index_t>(contacts(c, 7));
+        Body<D>* other = o >= 0 && bodies_[o].free ? &bodies_[o] : nullptr;
+        if (other != nullptr) {
+          for (int k = 0; k < D; ++k) r_o[k] = x[k] - other->centre_now[k];
+          const auto wo = cross(other->omega_now, r_o);
+          for (int k = 0; k < D; ++k) vn -= (other->velocity_now[k] + wo[k]) * n[k];
+          inv += share(*other, inverse_inertia_[o], r_o, n, turn_o);
+        } else if (o >= 0) {
+          double u[D];
+          contact_poses_[o].velocity_at(x.data(), u);
+          for (int k = 0; k < D; ++k) vn -= u[k] * n[k];
+        }
         if (!(inv > 0.0)) continue;  // every degree of freedom along it is held
         const double taken = contacts(c, 6);
         const double now = std::max(0.0, taken - vn / inv);
@@ -868,11 +951,18 @@ index_t BodyTables<D>::contact() {
         for (int k = 0; k < D; ++k)
           if (!b.locked[k]) b.velocity_now[k] += j * n[k] / b.mass;
         for (int k = 0; k < 3; ++k) b.omega_now[k] += j * turn[k];
+        if (other != nullptr) {
+          for (int k = 0; k < D; ++k)
+            if (!other->locked[k]) other->velocity_now[k] -= j * n[k] / other->mass;
+          for (int k = 0; k < 3; ++k) other->omega_now[k] -= j * turn_o[k];
+        }
       }
       if (change < 1e-9) break;
     }
-    b.velocity_star = b.velocity_now;
-    b.omega_star = b.omega_now;
+    for (Body<D>& body : bodies_) {
+      body.velocity_star = body.velocity_now;
+      body.omega_star = body.omega_now;
+    }
   }
   return count;
 }

@@ -147,16 +147,18 @@ class BodyTables {
   // the velocities after the pressure: q = q* + M^-1 impulse (impulse: dofs, N s; 2D N s/m)
   void apply_impulse(View<const double> impulse);
   // the free bodies' poses moved over dt at their velocities, then their contacts
-  void integrate(double dt);
-  // Contact of the free bodies with the domain's walls (those not periodic) and the fixed
-  // obstacles: rigid, frictionless and inelastic. Every surface point on or beyond a wall, or
-  // on or inside an obstacle (the fixed phi <= 0, its normal grad phi), is a contact; the body
-  // is moved back out along the deepest one's normal by its depth, and the contacts'
-  // velocities into the walls are removed by impulses there (through its mass and inertia;
-  // a held degree of freedom takes none), each impulse >= 0 (projected Gauss-Seidel: contact
-  // by contact, in sweeps until they agree).
-  // Contact between bodies is not checked. Returns the contacts.
-  index_t contact();
+  void integrate(double dt, double t);
+  // Contact of the free bodies with the domain's walls (those not periodic), the fixed
+  // obstacles and each other (t: the time of the bodies' poses, s): rigid, frictionless and
+  // inelastic. Every surface point on or beyond a wall, on or inside an obstacle (the fixed
+  // phi <= 0, its normal grad phi) or another body (its distance, normal its gradient) is a
+  // contact; the body is moved back out along the deepest one's normal by its depth, and the
+  // contacts' velocities into what they touch (relative to a body's velocity there) are
+  // removed by impulses there (through its mass and inertia; a held degree of freedom takes
+  // none), each impulse >= 0 (projected Gauss-Seidel: contact by contact, in sweeps until
+  // they agree). Another free body takes the opposite impulse; a body on a path is not
+  // moved by it. Returns the contacts.
+  index_t contact(double t);
   // each body's pose and velocity at time t (bodies x 13: pivot (3), velocity (3), angular
   // velocity (3), orientation quaternion (4); 2D: z entries 0, rotation about z)
   void state(double t, View<double, 2> out) const;
@@ -167,7 +169,16 @@ class BodyTables {
   std::vector<std::array<index_t, 2>> dofs_;    // (body, kind: 0..D-1 translation, D.. rotation)
   std::vector<std::array<index_t, 6>> dof_of_;  // per body and kind: its dof (-1: held)
   Buffer<double> small_, rhs_small_;            // the dense solves of the free dofs
-  Buffer<double> contacts_;                     // contact(): (point, normal, impulse) per contact
+  // contact(): per contact, point (3), normal (3), impulse, the other body (-1: none)
+  static constexpr index_t CONTACT = 8;
+  // a distance's gradient at least this long marks a flat part of a body's surface (contact)
+  static constexpr double FLAT = 0.999;
+  Buffer<double> contacts_;
+  std::vector<Pose<D>> contact_poses_;  // contact(): each body where it is
+  std::vector<std::array<std::array<double, 3>, 3>> inverse_inertia_;  // contact(): free ones'
+  // the inverse of a free body's inertia in the grid's frame over its free rotations (2D:
+  // about z; held rotations' rows and columns 0)
+  std::array<std::array<double, 3>, 3> inverse_inertia(const Body<D>& b) const;
   void restore();
   // f(ix) for each node ix of the last place's box, its upper ends shrunk by shrink (1: the
   // first node of each of the box's cells), axis 0 fastest

@@ -894,7 +894,7 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
   if (bodies_.present()) {  // the bodies' force of this step, then the bodies at its end
     bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
                    body_torque_.template view<2>({bodies_.count(), 3}));
-    bodies_.integrate(O.dt);  // the free bodies' new poses
+    bodies_.integrate(O.dt, time_ + O.dt);  // the free bodies' new poses
     bodies_.place(time_ + O.dt);
     bodies_.hold(time_ + O.dt);
     ob_ = bodies_.tables();

@@ -548,3 +548,75 @@ def test_the_bodies_are_written_for_paraview_where_they_are(tmp_path, dim):
         speed = U + np.cross(np.radians(30.0) * axis, arm)[:, :dim]
         assert np.abs(mesh.point_data["velocity"][:, :dim] - speed).max() < 1e-9, t
         assert (mesh.cell_data["body"][0] == 0).all()
+
+
+STACK = """
+title = "a box dropped onto another"
+[domain]
+size = [2.0, 0.8]
+walls = "slip"
+[grid]
+spacing = 0.02
+[[bodies]]
+type = "box"
+min = [1.95, 0.0]
+max = [2.0, 0.05]
+particles_per_cell = 2
+[[obstacles]]
+name = "lower"
+type = "box"
+min = [0.2, 0.0]
+max = [0.6, 0.1]
+motion = {lower}
+[[obstacles]]
+name = "upper"
+type = "box"
+min = [{x0}, 0.3]
+max = [{x1}, 0.4]
+motion = {{type = "free", density = 500.0}}
+[material]
+density = 1000.0
+[physics]
+gravity = [0.0, -9.81]
+[time]
+dt = 0.005
+end = 1.0
+[output]
+interval = 0.1
+snapshots = false
+"""
+
+
+@pytest.mark.parametrize("lower", ["free", "held"])
+@pytest.mark.parametrize(
+    ("x0", "x1", "rests"), [(0.3, 0.5, True), (0.45, 0.65, True), (0.55, 0.75, False)]
+)
+def test_a_free_body_lands_on_another_and_rests_or_tips_off(tmp_path, lower, x0, x1, rests):
+    """Contact between bodies (BodyTables::contact): a box 0.2 m wide dropped from 0.3 m onto
+    a box 0.4 m wide lying on the floor, free (density 500) or held at rest (a path at zero
+    velocity). Centred, or overhanging the lower box's edge by 0.05 m with its centre over
+    it, it lands and rests flat on it, its centre 0.15 m up, without sliding (frictionless:
+    the contact pushes along the face's normal, not the edge's rounded distance: with the
+    edge's, the overhanging box slid off at 1 cm/s); the lower one rests on the floor. Its
+    centre beyond the edge, it tips off and falls to the floor."""
+    motion = (
+        "{type = 'free', density = 500.0}"
+        if lower == "free"
+        else ("{type = 'velocity', velocity = [0.0, 0.0]}")
+    )
+    path = tmp_path / "stack.toml"
+    path.write_text(STACK.format(lower=motion, x0=x0, x1=x1))
+    sim = Simulation(load_case(path))
+    sim.run()
+    state = sim.scheme.core.body_state
+    # on the floor: within 0.5 mm (a box knocked sideways may come to rest tilted by up to
+    # 0.1 degree on its corners' surface points, sampled from the distance lattice)
+    assert state[0, 1] == pytest.approx(0.05, abs=5e-4)
+    if rests:  # no sliding: within a micrometre (the impulses' convergence, 1e-9 m/s a sweep)
+        assert state[0, 0] == pytest.approx(0.4, abs=1e-6)
+        assert state[1, 0] == pytest.approx(0.5 * (x0 + x1), abs=1e-6)
+        assert state[1, 1] == pytest.approx(0.15, abs=1e-4)
+        assert np.abs(state[:, 3:9]).max() < 1e-6  # both at rest
+        assert abs(np.degrees(2 * np.arctan2(state[1, 12], state[1, 9]))) < 0.01
+    else:
+        assert state[1, 0] > 0.6 + 0.05 and state[1, 1] < 0.1 + 1e-3  # off the edge, down
