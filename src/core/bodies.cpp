@@ -614,13 +614,23 @@ void BodyTables<D>::predict(double dt, const std::array<double, D>& g) {
     for (int k = 0; k < D; ++k)
       b.velocity_star[k] = b.velocity_now[k] + (b.locked[k] ? 0.0 : dt * g[k]);
     b.omega_star = b.omega_now;
-    if constexpr (D == 3) {  // omega' = -I^-1 (omega x I omega), explicitly
+    // gravity's torque about a hinge, m (R offset) x g (0 about the centroid)
+    const auto R = rotation_of<D>(b.quat);
+    std::array<double, 3> arm{}, weight{};
+    for (int k = 0; k < D; ++k) {
+      weight[k] = b.mass * g[k];
+      for (int j = 0; j < D; ++j) arm[k] += R[k][j] * b.offset[j];
+    }
+    const auto lever = cross(arm, weight);
+    if constexpr (D == 2) {
+      if (!b.locked[2]) b.omega_star[2] += dt * lever[2] / b.inertia[2][2];
+    } else {  // omega' = I^-1 (m r x g - omega x I omega), explicitly
       const auto Iw = world_inertia(rotation_of<3>(b.quat), b.inertia);
       std::array<double, 3> Iomega{};
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) Iomega[i] += Iw[i][j] * b.omega_now[j];
       const auto torque = cross(b.omega_now, Iomega);
-      double A[9], rhs[3] = {-torque[0], -torque[1], -torque[2]};
+      double A[9], rhs[3] = {lever[0] - torque[0], lever[1] - torque[1], lever[2] - torque[2]};
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) A[i * 3 + j] = Iw[i][j];
       if (solve_dense(3, A, rhs))

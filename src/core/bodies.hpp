@@ -94,6 +94,9 @@ struct Body {
   std::array<double, D> centre_now{}, velocity_now{}, velocity_star{};
   std::array<double, 4> quat{1.0, 0.0, 0.0, 0.0};
   std::array<double, 3> omega_now{}, omega_star{};
+  // its centroid from its pivot in its own frame (m): 0 but for a hinge (a pivot elsewhere,
+  // every translation held), about which gravity then turns it
+  std::array<double, D> offset{};
   // points on a free body's surface in its own frame (m x D, m; empty: no contact), which
   // the contact with the domain's walls and the fixed obstacles checks (BodyTables::contact)
   View<const double, 2> surface;

@@ -415,6 +415,12 @@ void bind_dim(nb::module_& m) {
                   b.velocity_now[k] = v[k];
                 }
                 for (int k = 0; k < 4; ++k) b.quat[k] = q[k];
+                if (d.contains("offset")) {
+                  const auto o = nb::cast<std::vector<double>>(d["offset"]);
+                  if (o.size() != D)
+                    throw std::invalid_argument("set_bodies: offset needs D entries");
+                  for (int k = 0; k < D; ++k) b.offset[k] = o[k];
+                }
                 if (d.contains("surface")) {
                   b.surface = table<double, 2>(d["surface"], "body surface", keep);
                   if (b.surface.size() > 0 && b.surface.extent(1) != D)

@@ -87,15 +87,17 @@ class Trajectory:
 
 @dataclass
 class Freedom:
-    """A free body's mass (kg; 2D kg/m), inertia about its centroid (3 x 3, kg m^2; 2D the
+    """A free body's mass (kg; 2D kg/m), inertia about its pivot (3 x 3, kg m^2; 2D the
     zz entry, kg m), held degrees of freedom (6 flags: translations, then rotations; 2D:
-    x, y, rotation about z) and starting velocity (m/s) and turning rate (rad/s)."""
+    x, y, rotation about z), starting velocity (m/s) and turning rate (rad/s), and its
+    centroid from its pivot (m; 0 but for a hinge)."""
 
     mass: float
     inertia: Floats
     locked: list[bool]
     velocity: Floats
     rate: float
+    offset: Floats
 
 
 @dataclass
@@ -171,6 +173,7 @@ class Mover:
             "velocity_now": velocity[:D],
             "omega_now": [0.0, 0.0, float(f.rate)] if D == 2 else [0.0, 0.0, 0.0],
             "quat": [1.0, 0.0, 0.0, 0.0],
+            "offset": [float(o) for o in f.offset],
         }
 
 
@@ -312,7 +315,8 @@ def mass_properties(
 
 
 def _freedom(case: Case, k: int, shape: Shape, where: str) -> tuple[Freedom, Floats]:
-    """A free body's mass properties and its centroid (its pivot)."""
+    """A free body's mass properties and its pivot: its centroid, or a hinge (motion.pivot,
+    every translation held; the inertia then about it, by the parallel-axis theorem)."""
     from ..case.motion import DOF_NAMES
 
     motion = case.obstacles[k].motion
@@ -325,16 +329,30 @@ def _freedom(case: Case, k: int, shape: Shape, where: str) -> tuple[Freedom, Flo
             f"{where}.locked = {motion.locked}: {', '.join(wrong)} is not a degree of freedom "
             f"of a {D}D body; give some of {', '.join(repr(n) for n in names)}"
         )
-    if motion.pivot is not None:
-        raise CaseError(f"{where}.pivot: a free body turns about its centroid; remove the pivot")
     mass, centroid, inertia = mass_properties(
         shape, float(case.grid.spacing), motion.density, motion.mass
     )
     flags = [n in motion.locked for n in names]
+    pivot = centroid
+    if motion.pivot is not None:
+        free = [n for n, held in zip(names[:D], flags[:D]) if not held]
+        if free:
+            raise CaseError(
+                f"{where}.pivot = {motion.pivot}: a free body turns about its centroid; a pivot "
+                f"elsewhere is a hinge, which holds it there: add {free} to locked, or remove "
+                "the pivot"
+            )
+        pivot = np.asarray(motion.pivot, dtype=float)
+        d = centroid - pivot
+        d3 = np.zeros(3)
+        d3[:D] = d
+        shift = mass * (float(d3 @ d3) * np.eye(3) - np.outer(d3, d3))
+        inertia = inertia + (shift if D == 3 else np.diag([0.0, 0.0, shift[2, 2]]))
     # the core's order: translations, then rotations (2D: x, y, rotation; the rest unused)
     locked = (flags + [True] * 3) if D == 2 else flags
     velocity = np.asarray(motion.velocity or [0.0] * D, dtype=float)
-    return Freedom(mass, inertia, locked, velocity, math.radians(motion.rate)), centroid
+    rate = math.radians(motion.rate)
+    return Freedom(mass, inertia, locked, velocity, rate, centroid - pivot), pivot
 
 
 def of_case(case: Case) -> list[Mover]:

@@ -72,7 +72,9 @@ class Motion(Section):
     pivot: list[float] | None = Field(
         None,
         description="The point (m, at t = 0) the obstacle turns about and whose displacement "
-        "the motion gives; none: the centre of the obstacle's bounding box.",
+        "the motion gives; none: the centre of the obstacle's bounding box (a free body: its "
+        "centroid). A free body with a pivot elsewhere is hinged there: hold its translations "
+        '(locked = ["x", "y"], 3D also "z" and two of the rotations).',
         min_length=2,
         max_length=3,
     )
