@@ -252,21 +252,32 @@ index_t push_out(const Grid<D>& g, View<double, 2> x, View<double, 2> v,
   });
 }
 
+namespace {
+// f(nb) for each face neighbour nb of cell c inside the domain, until f returns false;
+// returns whether every call returned true
+template <int D, class F>
+bool each_face_neighbour(const Grid<D>& g, index_t c, F&& f) {
+  index_t cx[D];
+  g.cell_coords(c, cx);
+  for (int k = 0; k < D; ++k)
+    for (int step = -1; step <= 1; step += 2) {
+      const index_t j = cx[k] + step;
+      if (j >= 0 && j < g.cells[k] && !f(c + step * g.cs[k])) return false;
+    }
+  return true;
+}
+}  // namespace
+
 template <int D>
 void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> theta, bool swept) {
   // only sliver cells are written, only cells with open >= SLIVER read: no race
   parallel_for(g.ncells, [&](index_t c) {
     if (!(0.0 < open_(c) && open_(c) < SLIVER)) return;
     double best = -1.0;
-    index_t cx[D];
-    g.cell_coords(c, cx);
-    for (int k = 0; k < D; ++k)
-      for (int step = -1; step <= 1; step += 2) {
-        const index_t j = cx[k] + step;
-        if (j < 0 || j >= g.cells[k]) continue;
-        const index_t nb = c + step * g.cs[k];
-        if (open_(nb) >= SLIVER && theta(nb) > best) best = theta(nb);
-      }
+    each_face_neighbour<D>(g, c, [&](index_t nb) {
+      if (open_(nb) >= SLIVER && theta(nb) > best) best = theta(nb);
+      return true;
+    });
     if (best >= 0.0) theta(c) = best;
   });
   if (!swept) return;
@@ -275,17 +286,12 @@ void sliver_fractions(const Grid<D>& g, View<const double> open_, View<double> t
   parallel_for(g.ncells, [&](index_t c) {
     if (!(SLIVER <= open_(c) && open_(c) < 1.0 && theta(c) == 0.0)) return;
     double best = 0.0;
-    index_t cx[D];
-    g.cell_coords(c, cx);
-    for (int k = 0; k < D; ++k)
-      for (int step = -1; step <= 1; step += 2) {
-        const index_t j = cx[k] + step;
-        if (j < 0 || j >= g.cells[k]) continue;
-        const index_t nb = c + step * g.cs[k];
-        if (open_(nb) >= 1.0 && theta(nb) == 0.0) return;  // air beside it
-        if (open_(nb) > 0.0 && theta(nb) > best) best = theta(nb);
-      }
-    theta(c) = -best;
+    const bool no_air = each_face_neighbour<D>(g, c, [&](index_t nb) {
+      if (open_(nb) >= 1.0 && theta(nb) == 0.0) return false;  // air beside it
+      if (open_(nb) > 0.0 && theta(nb) > best) best = theta(nb);
+      return true;
+    });
+    if (no_air) theta(c) = -best;
   });
   parallel_for(g.ncells, [&](index_t c) {
     if (theta(c) < 0.0) theta(c) = -theta(c);
