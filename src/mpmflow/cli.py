@@ -93,6 +93,7 @@ VALIDATION_CASES = (
     "cantilever",
     "heave_cylinder",
     "wave_maker",
+    "archimedes",
 )
 
 

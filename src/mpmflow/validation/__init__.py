@@ -66,6 +66,7 @@ CASES: dict[str, CaseRun] = {
     "cantilever": solids.run_cantilever,
     "heave_cylinder": bodies.run,
     "wave_maker": bodies.run_wave_maker,
+    "archimedes": bodies.run_archimedes,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {
@@ -88,6 +89,7 @@ EXAMPLE_FILES = {
     "cantilever": ("cantilever.toml",),
     "heave_cylinder": ("heave_cylinder.toml",),
     "wave_maker": ("wave_maker.toml",),
+    "archimedes": ("floating_box.toml", "heave_cylinder.toml"),
 }  # the examples/ files each runs
 
 

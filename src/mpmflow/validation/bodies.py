@@ -337,3 +337,145 @@ def run_wave_maker(out: Path, quick: bool = False, context: Context | None = Non
         ],
     )
     return res
+
+
+# -------------------------------------------------------------------------- Archimedes
+# A floating box (examples/floating_box.toml: 0.2 x 0.1 m, density 500, released with a
+# draft of 0.03 m instead of 0.05 m) and the floating cylinder of the heave case
+# (examples/heave_cylinder.toml: radius 0.0762 m, density 500, released a / 3 high), each
+# held to heave, run for 10 s between sponges. Reference: Archimedes, the draft the weight
+# gives at the level the water then has: at density 500 both float half immersed, their
+# centre (the pivot) on the level, (the particles' volume + the immersed half) / the tank's
+# width. Measures over the last second: the body's mean
+# distance from that equilibrium over its height, its largest vertical speed, and the
+# water's largest particle speed (the issue: the water round it stays at rest).
+ARCHIMEDES_END, ARCHIMEDES_END_QUICK = 10.0, 3.0  # s
+SETTLED = 1.0  # s: the last second of the run
+TOL_DRAFT = 0.01
+WHY_DRAFT = "the issue's criterion: the draft its weight gives within 1% of the body's height"
+TOL_REST = 1e-3  # m/s
+WHY_REST = "the issue's criterion: speed under 1 mm/s after settling"
+WHY_WATER = (
+    "the issue's criterion (the water round the body stays at rest): the body's 1 mm/s "
+    "applied to every particle"
+)
+FLOATERS = (
+    # (name, example, height (m), immersed area at rest (m^2; 2D), tank width (m))
+    ("box", "floating_box.toml", 0.1, 0.2 * 0.05, 2.0),
+    ("cylinder", "heave_cylinder.toml", 2 * A, math.pi * A**2 / 2, WIDTH),
+)
+
+
+def run_archimedes(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
+    end = ARCHIMEDES_END_QUICK if quick else ARCHIMEDES_END
+    floaters = FLOATERS[:1] if quick else FLOATERS
+    res = CaseResult(
+        "archimedes", "Archimedes: a floating box and cylinder released off their draft"
+    )
+    lines = []
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(10, 4))
+    for name, example, height, immersed, width in floaters:
+        rows: list[tuple[float, float, float, float]] = []
+
+        def record(sim: Simulation, rows: list[tuple[float, float, float, float]] = rows) -> None:
+            state = sim.scheme.core.body_state[0]  # type: ignore[attr-defined]
+            speed = float(np.sqrt((sim.particles.v**2).sum(axis=1)).max())
+            rows.append((sim.time, float(state[1]), float(state[4]), speed))
+
+        sim = run_example(example, [f"time.end={end}", "output.interval=0.05"], on_output=record)
+        rest = (float(sim.particles.volume.sum()) + immersed) / width  # the level
+        a = np.array(rows)
+        late = a[:, 0] >= end - SETTLED - 1e-9
+        offset = float(abs(a[late, 1].mean() - rest) / height)
+        speed = float(np.abs(a[late, 2]).max())
+        water = float(a[late, 3].max())
+        lines.append(
+            (
+                name,
+                fmt(height),
+                fmt(rest),
+                fmt(a[late, 1].mean()),
+                fmt(offset),
+                fmt(speed),
+                fmt(water),
+            )
+        )
+        ax.plot(a[:, 0], (a[:, 1] - rest) / height, label=name)
+        what = f"{name}, last {SETTLED:g} s of {end:g}"
+        res.rows.append(
+            Row(
+                "archimedes",
+                f"draft, {what}",
+                "|mean pivot height - Archimedes'| / body height",
+                offset,
+                TOL_DRAFT,
+                WHY_DRAFT,
+                miss=(
+                    "the body floats 0.1-0.2 h deeper than Archimedes gives at the particles' "
+                    "level, the cause not found; see the text"
+                ),
+            )
+        )
+        res.rows.append(
+            Row(
+                "archimedes",
+                f"body at rest, {what}",
+                "largest |vertical speed| (m/s)",
+                speed,
+                TOL_REST,
+                WHY_REST,
+                unit="m/s",
+                miss=(
+                    "the water's surface keeps particle noise after the release's waves, which "
+                    "moves the body; see the text"
+                ),
+            )
+        )
+        res.rows.append(
+            Row(
+                "archimedes",
+                f"water at rest, {what}",
+                "largest particle speed (m/s)",
+                water,
+                TOL_REST,
+                WHY_WATER,
+                unit="m/s",
+                miss=(
+                    "the surface particles keep centimetres a second of noise after a "
+                    "disturbance, the body held still or not; see the text"
+                ),
+            )
+        )
+    ax.axhline(0.0, color="grey", lw=0.5)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("(y - y_rest) / height")
+    ax.legend(loc="upper right")
+    fig.tight_layout()
+    save(fig, out / "archimedes.png")
+    res.figures.append(
+        ("archimedes.png", "Each body's height above Archimedes' rest, over its own height.")
+    )
+    res.text = (
+        "Archimedes' rest at the level the water has with the body in it; measures over the "
+        "last second of the run. Two defects keep the rows from passing. The bodies float "
+        "deeper than Archimedes gives, by about a tenth of a cell, at the level their water's "
+        "volume gives (the particles' volume; the cause is not found). And the water's surface "
+        "keeps particle noise after a disturbance, with FLIP's increments kept at 1% PIC per "
+        "millisecond: docs/design/bodies.md ('Archimedes') measures it with the body held "
+        "still after a dip, and with 10% PIC per millisecond (`solver.flip = 0.9`, not the "
+        "default the report runs) the box's speed falls below 1 mm/s.\n\n"
+        + markdown_table(
+            [
+                "body",
+                "height (m)",
+                "rest (m)",
+                "mean (m)",
+                "|offset| / height",
+                "body speed (m/s)",
+                "water speed (m/s)",
+            ],
+            lines,
+        )
+    )
+    return res
