@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import CaseError
+from ..geometry.rotation import quaternion_matrix
 from ..grid import Grid
 from ..output import check_out_dir
 from ..results import Snapshot, open_run
@@ -324,16 +325,7 @@ def _at_start(pts: Floats, poses: dict[str, Floats], name: str, t: float) -> Flo
         angle = np.radians(np.interp(t, time, poses[f"{name}_angle"]))
         R = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
     else:
-        w, x, y, z = (np.interp(t, time, poses[f"{name}_q{q}"]) for q in "wxyz")
-        norm = np.sqrt(w * w + x * x + y * y + z * z)
-        w, x, y, z = w / norm, x / norm, y / norm, z / norm
-        R = np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-            ]
-        )
+        R = quaternion_matrix(*(float(np.interp(t, time, poses[f"{name}_q{q}"])) for q in "wxyz"))
     moved: Floats = (pts - c) @ R + c0
     return moved
 

@@ -29,6 +29,7 @@ import numpy as np
 from ..arrays import Floats
 from ..boundaries import moving
 from ..diagnostics import probes
+from ..geometry.rotation import quaternion_matrix
 from ..output.snapshots import SnapshotWriter, write_surface_vtu
 from ..output.timeseries import (
     COLUMNS,
@@ -262,7 +263,7 @@ class Surfaces:
         count = 0
         for b, (y, c) in enumerate(self.frames):
             centre, v, w, q = state[b, :D], state[b, 3 : 3 + D], state[b, 6:9], state[b, 9:13]
-            r = _rotation(q)[:D, :D] @ y.T  # the surface's arms about the pivot, (D, n)
+            r = quaternion_matrix(*q)[:D, :D] @ y.T  # the surface's arms about the pivot, (D, n)
             points.append(centre + r.T)
             arm = np.zeros((3, r.shape[1]))
             arm[:D] = r
@@ -284,18 +285,6 @@ class Surfaces:
             },
         )
         self.file.add(sim.time, name)
-
-
-def _rotation(q: Floats) -> Floats:
-    """The rotation matrix (3 x 3) of the unit quaternion q = (w, x, y, z)."""
-    w, x, y, z = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 Builtin = TimeSeries | Probes | CentreOfMass | Bodies | Snapshots  # the built-in writers
