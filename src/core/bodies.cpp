@@ -625,7 +625,7 @@ void BodyTables<D>::predict(double dt, const std::array<double, D>& g) {
     if constexpr (D == 2) {
       if (!b.locked[2]) b.omega_star[2] += dt * lever[2] / b.inertia[2][2];
     } else {  // omega' = I^-1 (m r x g - omega x I omega), explicitly
-      const auto Iw = world_inertia(rotation_of<3>(b.quat), b.inertia);
+      const auto Iw = world_inertia(R, b.inertia);
       std::array<double, 3> Iomega{};
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) Iomega[i] += Iw[i][j] * b.omega_now[j];

@@ -170,18 +170,13 @@ def test_a_body_at_rest_in_still_water_feels_the_hydrostatic_force(tmp_path):
     H = 0.1
     case = _case(
         tmp_path,
-        size="[0.5, 0.3]",
-        h=0.01,
-        water_min="[0.105, 0.0]",
-        water_max="[0.5, 0.1]",
-        water_velocity="[0.0, 0.0]",
-        body_min="[0.0, 0.0]",
-        body_max="[0.105, 0.3]",  # its face between grid lines
+        **{
+            **PISTON_TANK,
+            "water_min": "[0.105, 0.0]",
+            "body_max": "[0.105, 0.3]",  # its face between grid lines
+        },
         motion="{type = 'velocity', velocity = [0.0, 0.0]}",
-        gravity="[0.0, -9.81]",
-        dt=0.005,
         end=0.3,
-        interval=0.1,
     )
     sim, rows = _run(case, 0.1)
     for t, _x, v in rows:
