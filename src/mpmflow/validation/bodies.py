@@ -69,6 +69,12 @@ def extrema(t: np.ndarray, s: np.ndarray) -> list[tuple[float, float]]:
     return found
 
 
+def level_at_rest(sim: Simulation, immersed: float, width: float) -> float:
+    """The water's level (m) with a floating body at rest in a 2D tank of this width (m): the
+    particles' volume and the body's immersed area (m^2) over the width."""
+    return (float(sim.particles.volume.sum()) + immersed) / width
+
+
 def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     spacings = SPACINGS_QUICK if quick else SPACINGS
     end = END_QUICK if quick else END
@@ -84,7 +90,7 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
         sim = run_example(
             "heave_cylinder.toml", [f"grid.spacing={h}", f"time.end={end}"], on_output=record
         )
-        level = (float(sim.particles.volume.sum()) + math.pi * A**2 / 2) / WIDTH
+        level = level_at_rest(sim, math.pi * A**2 / 2, WIDTH)
         a = np.array(rows)
         y0 = a[0, 1] - level
         tau, eta = a[:, 0] * scale, (a[:, 1] - level) / y0
@@ -384,7 +390,7 @@ def run_archimedes(out: Path, quick: bool = False, context: Context | None = Non
             rows.append((sim.time, float(state[1]), float(state[4]), speed))
 
         sim = run_example(example, [f"time.end={end}", "output.interval=0.05"], on_output=record)
-        rest = (float(sim.particles.volume.sum()) + immersed) / width  # the level
+        rest = level_at_rest(sim, immersed, width)
         a = np.array(rows)
         late = a[:, 0] >= end - SETTLED - 1e-9
         offset = float(abs(a[late, 1].mean() - rest) / height)
