@@ -295,7 +295,51 @@ index_t State<D>::renumber() {
 template <int D>
 index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool correct) {
   scatter(P, O, correct);
-  return classify(P, O);
+  const bool shared = exchange_->shared();
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  if (shared) {  // the owners' values at the nodes (and cells) round a rank's box
+    const View<double, 2> nodes[] = {
+        node_mass_.template view<2>({nn, 1}), node_vol_.template view<2>({nn, 1}),
+        v_old_.template view<2>({nn, D}), v_star_.template view<2>({nn, D}),
+        node_f_.template view<2>({nn, 1})};
+    exchange_->fill_nodes(nodes, 5);
+    // the cells' particle volume reaches past a cell: the owners' sums
+    if (correct) {
+      const View<double, 2> cells[] = {cell_vol_.template view<2>({nc, 1})};
+      exchange_->fill_cells(cells, 1);
+    }
+  }
+  classify(P, O);
+  if (shared) {  // the owners decide which nodes round the box are unknowns
+    exchange_->own_unknowns(node_row_.view(nn));
+    renumber();
+  }
+  return nrows_;
+}
+
+template <int D>
+index_t State<D>::owned_rows() {
+  const auto owned = exchange_->owned_nodes();
+  if (owned.size() == 0) return nrows_;
+  auto rows = rows_.view(nrows_);
+  index_t n = 0;
+  for (index_t r = 0; r < nrows_; ++r) n += owned(rows(r)) ? 1 : 0;
+  return n;
+}
+
+template <int D>
+index_t State<D>::owned_contacts() {
+  const auto owned = exchange_->owned_nodes();
+  const index_t nn = grid_.nnodes;
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  index_t n = 0;
+  for (index_t i = 0; i < nn; ++i) {
+    if (owned.size() > 0 && !owned(i)) continue;
+    for (int k = 0; k < D; ++k) n += contact(i, k) ? 1 : 0;
+    n += ocontact(i) ? 1 : 0;
+  }
+  return n;
 }
 
 template <int D>
@@ -521,10 +565,23 @@ bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
 template <int D>
 int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   warm_start();
-  const bool anchored = pressure_matrix(O);
+  bool anchored = pressure_matrix(O);
   report.pockets += npockets_;
   const index_t n = nrows_;
-  if (n == 0) return OK;
+  const bool shared = exchange_->shared();
+  if (shared) {  // the whole system's unknowns, and whether any of them meets a free surface
+    if (!solver_)
+      throw std::logic_error("State: a rank's pressure step needs a solver over the ranks");
+    if (exchange_->sum(owned_rows()) == 0) return OK;
+    const auto owned = exchange_->owned_nodes();
+    auto air = anchored_.view(n);
+    auto rows = rows_.view(n);
+    index_t mine = 0;
+    for (index_t r = 0; r < n; ++r) mine += air(r) && (owned.size() == 0 || owned(rows(r)));
+    anchored = exchange_->sum(mine) > 0;
+  } else if (n == 0) {
+    return OK;
+  }
   if (!anchored) return SINGULAR;
   std::array<index_t, D> dims{}, period{};
   for (int k = 0; k < D; ++k) {
@@ -567,12 +624,23 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
     pressure_rhs(O);
     if (!solve(rhs, x)) return PRESSURE_NOT_CONVERGED;
     if (free && !couple_bodies(O, solve)) return PRESSURE_NOT_CONVERGED;
-    const index_t released = release_walls(x);
+    index_t released = 0;
+    if (shared) {  // the releases at the nodes each rank owns, over the ranks
+      const index_t before = owned_contacts();
+      release_walls(x);
+      released = exchange_->sum(before - owned_contacts());
+    } else {
+      released = release_walls(x);
+    }
     if (released == 0) break;
     report.released += released;
   }
   report.max_iterations = std::max(report.max_iterations, step_iterations);
   extend_pressure(O);
+  if (shared) {
+    const View<double, 2> p[] = {p_node_.template view<2>({grid_.nnodes, 1})};
+    exchange_->fill_nodes(p, 1);
+  }
   return OK;
 }
 
@@ -616,8 +684,9 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
     const double cap = viscosity_cap(O.model, View<const double>(O.model_params.data(), {8}));
     auto eta = eta_.view(nc);
     auto weight = eta_weight_.view(nc);
+    const auto owned = exchange_->owned_cells();  // a rank counts the cells it owns
     for (index_t c = 0; c < nc; ++c)
-      if (weight(c) > 0.0 && eta(c) >= cap) report.capped += 1;
+      if (weight(c) > 0.0 && eta(c) >= cap && (owned.size() == 0 || owned(c))) report.capped += 1;
   }
   auto base = v_c_.template view<2>({nn, D});
   correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
@@ -655,7 +724,29 @@ index_t State<D>::viscous_system(const Options<D>& O) {
 template <int D>
 int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   viscous_start(O, report);
+  if (!O.viscous) return OK;
+  const index_t nn = grid_.nnodes;
+  if (exchange_->shared()) {
+    // the corrector at the nodes on a rank's edge reaches past its cells: the owners' values
+    const View<double, 2> base[] = {v_c_.template view<2>({nn, D})};
+    exchange_->fill_nodes(base, 1);
+  }
   const index_t n = viscous_system(O);
+  if (viscous_solver_) {  // a rank's: over the ranks, whether it has unknowns or not
+    auto x = vx_.view(n);
+    const SolveResult res = viscous_solver_->solve(x);
+    report.viscous_iterations += res.iterations;
+    if (!(res.residual <= O.tol)) {
+      report.fail_iterations = res.iterations;
+      report.fail_residual = res.residual;
+      report.fail_size = n;
+      return VISCOUS_NOT_CONVERGED;
+    }
+    viscous_apply(x);
+    const View<double, 2> v[] = {v_star_.template view<2>({nn, D})};
+    exchange_->fill_nodes(v, 1);
+    return OK;
+  }
   if (n == 0) return OK;
   auto cols = vcols_.template view<3>({D, n, NS});
   auto vals = vvals_.template view<3>({D, n, NS});
@@ -784,7 +875,24 @@ template <int D>
 int State<D>::volume_correction(const Options<D>& O, Report& report) {
   const index_t n = volume_system(O);
   auto q = qx_.view(n);
-  if (n > 0 && vol_anchored_) {
+  bool solve = n > 0 && vol_anchored_;
+  if (exchange_->shared()) {  // the whole system's rows, and whether any touches air
+    const auto owned = exchange_->owned_cells();
+    auto rows = vol_rows_.view(n);
+    auto air = vol_air_.view(n);
+    index_t mine = 0, wet = 0;
+    for (index_t r = 0; r < n; ++r) {
+      const bool own = owned.size() == 0 || owned(rows(r));
+      mine += own ? 1 : 0;
+      wet += own && air(r) ? 1 : 0;
+    }
+    vol_anchored_ = exchange_->sum(wet) > 0;
+    solve = exchange_->sum(mine) > 0 && vol_anchored_;
+    if (!solve) vol_anchored_ = false;  // nothing to move: volume_apply zeroes the faces
+    if (solve && !volume_solver_)
+      throw std::logic_error("State: a rank's volume correction needs a solver over the ranks");
+  }
+  if (solve) {
     PhaseClock clock(phase_seconds_);
     const index_t nc = grid_.ncells;
     auto rows = vol_rows_.view(n);
@@ -798,8 +906,14 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
       dims[k] = grid_.cells[k];
       if (grid_.periodic[k]) period[k] = grid_.cells[k];
     }
-    volume_mg_.setup(cols, vals, rows, dims, COARSEST, period);
-    const SolveResult res = volume_mg_.pcg(rhs, q, O.volume_tol, O.volume_max_iterations, 1);
+    SolveResult res;
+    if (volume_solver_) {
+      volume_solver_->setup(cols, vals, rows);
+      res = volume_solver_->solve(rhs, q);
+    } else {
+      volume_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+      res = volume_mg_.pcg(rhs, q, O.volume_tol, O.volume_max_iterations, 1);
+    }
     report.volume_iterations += res.iterations;
     clock.lap(PHASE_VOLUME);
     if (!(res.residual <= O.volume_tol)) {
@@ -821,7 +935,8 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
     const int status = volume_correction(O, report);
     if (status != OK) return status;
   }
-  report.moved += to_particles(P, O, correct);
+  // a rank moves its own particles, not the halo
+  report.moved += to_particles(P.head(exchange_->owned(P)), O, correct);
   return OK;
 }
 
@@ -918,7 +1033,9 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
     bodies_.predict(O.dt, O.gravity);
     bodies_.hold(time_ + 0.5 * O.dt);
   }
-  const index_t n = predict(P, O, correct);
+  predict(P, O, correct);
+  // the unknowns of the whole system (a rank's rows round its box are its owners')
+  const index_t n = exchange_->shared() ? exchange_->sum(owned_rows()) : nrows_;
   report.unknowns = std::max(report.unknowns, n);
   report.last_unknowns = n;
   PhaseClock clock(phase_seconds_);
@@ -934,6 +1051,7 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
     emit_layers<D>(T_.inlets, O.dt, inlet_travel(), pool_, P.x, P.v, P.mass, P.volume, P.pressure,
                    P.affine);
   if (status == OK) {
+    exchange_->migrate();  // a rank's particles to the ranks that own their new cells
     time_ += O.dt;
     report.steps += 1;
     report.dt_min = report.steps == 1 ? O.dt : std::min(report.dt_min, O.dt);
@@ -945,14 +1063,17 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
 template <int D>
 index_t State<D>::advance(const Particles<D>& P, const Options<D>& O, index_t first, index_t nsteps,
                           Report& report, const Between& between) {
+  // a rank that stopped alone would leave the others waiting: ranks stop at chunk ends
+  const bool check = between && !exchange_->shared();
   for (index_t k = 0; k < nsteps; ++k) {
     report.step = k;
-    const int status = step_once(P, O, volume_due_fixed(first + k, O.volume_every), report);
+    const Particles<D> L = exchange_->particles(P);
+    const int status = step_once(L, O, volume_due_fixed(first + k, O.volume_every), report);
     if (status != OK) {
       report.status = status;
       return k;
     }
-    if (between && k + 1 < nsteps && !between()) {
+    if (check && k + 1 < nsteps && !between()) {
       report.status = INTERRUPTED;
       return k + 1;
     }
@@ -965,21 +1086,24 @@ double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double
                               index_t max_steps, Report& report, const Between& between) {
   double elapsed = 0.0;
   Options<D> Ok = O;
+  const bool check = between && !exchange_->shared();  // as in advance
   for (index_t k = 0; k < max_steps && elapsed < span; ++k) {
     report.step = k;
-    const index_t n = P.count();
+    const Particles<D> L = exchange_->particles(P);
+    const index_t n = L.count();
     double vmax2 = reduce_chunks<double>(
         n,
         [&](index_t lo, index_t hi) {
           double m = 0.0;
           for (index_t p = lo; p < hi; ++p) {
             double s = 0.0;
-            for (int d = 0; d < D; ++d) s += P.v(p, d) * P.v(p, d);
+            for (int d = 0; d < D; ++d) s += L.v(p, d) * L.v(p, d);
             m = std::max(m, s);
           }
           return m;
         },
         [](double a, double b) { return std::max(a, b); });
+    vmax2 = exchange_->max(vmax2);  // over every rank's particles
     // a moving body's points count as the particles do: it crosses at most courant cells
     const double body = bodies_.present() ? bodies_.max_speed(time_) : 0.0;
     vmax2 = std::max(vmax2, body * body);
@@ -988,13 +1112,13 @@ double State<D>::advance_span(const Particles<D>& P, const Options<D>& O, double
     Ok.dt = dt;
     Ok.flip = flip_per_step(O.flip_rate, dt);
     const bool correct = volume_due_adaptive(since_volume_, dt, O.volume_rate, O.volume_interval);
-    const int status = step_once(P, Ok, correct, report);
+    const int status = step_once(L, Ok, correct, report);
     if (status != OK) {
       report.status = status;
       return elapsed;
     }
     elapsed = dt >= rest ? span : elapsed + dt;
-    if (between && elapsed < span && !between()) {
+    if (check && elapsed < span && !between()) {
       report.status = INTERRUPTED;
       return elapsed;
     }

@@ -9,11 +9,14 @@
 //        steps: volume_system -> solve -> volume_apply) -> to_particles (grid_to_particles
 //        -> push out of obstacles)
 //
-// The phases are public, so that a caller can run a step in parts: a domain decomposition
-// over MPI (issue 28, docs/design/mpi.md, section 2), which exchanges the nodes' values
-// between scatter and classify, renumbers the unknowns, decides the sealed pockets across
-// ranks and moves only the particles a rank owns. A pressure solver from Python plugs into
-// the whole step instead (PressureSolver, use_solver).
+// One loop takes the steps for every configuration (advance: fixed steps, advance_span:
+// adaptive ones, both through step_once): one process, or a rank of a domain split over MPI
+// (issue 42, docs/design/mpi.md, section 2). A rank's State is given an Exchange
+// (exchange.hpp), which the phases call where a step meets the other ranks (the halo, the
+// owners' values at the nodes round its box, the owners' say on the unknowns, reductions,
+// migration), and solvers that solve its systems across the ranks (LinearSolver,
+// ViscousSolver, use_solvers). A pressure solver from Python (amg, direct) plugs in the
+// same way. The phases stay public for checks and for callers that run a step in parts.
 //
 // A State<D> owns everything the step needs beyond the particles: the grid's fixed tables
 // (walls, obstacles' cut cells), the work arrays (sized once to the grid, grown to the
@@ -30,6 +33,7 @@
 #include <vector>
 
 #include "bodies.hpp"
+#include "exchange.hpp"
 #include "grid.hpp"
 #include "inlets.hpp"
 #include "multigrid.hpp"
@@ -126,24 +130,6 @@ struct Options {
   double volume_interval = 2e-3;
 };
 
-// The particles: views of the caller's arrays (n particles).
-template <int D>
-struct Particles {
-  View<double, 2> x;    // n x D (m)
-  View<double, 2> v;    // n x D (m/s)
-  View<double> mass;    // kg; written only where an outlet retires a particle (0)
-  View<double> volume;  // m^3; likewise
-  View<double> pressure;
-  // n x D x D (1/s): each particle's affine velocity matrix C_p with APIC transfers (empty:
-  // FLIP/PIC, Options::flip)
-  View<double, 3> affine{};
-  // solids (plasticity.hpp; empty: a fluid): the deviatoric stress s_p (n x D x D, Pa), the
-  // equivalent plastic strain and whether the particle yielded in the last step (n, 0 or 1)
-  View<double, 3> stress{};
-  View<double> plastic_strain{}, yielding{};
-  index_t count() const { return x.extent(0); }
-};
-
 // The grid's fixed tables (views of arrays the caller keeps alive for the State's life).
 // Walls: the wall nodes with the axis and side of their wall and its condition (no-slip
 // flag per pair). Obstacles (empty phi: none):
@@ -212,19 +198,32 @@ inline bool volume_due_adaptive(double& since, double dt, double rate, double in
   return true;
 }
 
-// A pressure solver the step calls instead of its own multigrid (bindings/step.cpp: one
-// from Python, amg, direct or PETSc's, solver.linear_solver): set up for the step's matrix
-// (ELL rows, row r on node rows(r)), then solve for each right-hand side the wall release
-// asks for, x the initial guess in and the solution out, returning the iterations and the
-// true relative residual ||rhs - A x|| / ||rhs||. The step decides what a residual above
-// the tolerance means (PRESSURE_NOT_CONVERGED), as for its multigrid; an exception (a
-// setup that fails) stops the chunk and reaches the caller.
-class PressureSolver {
+// A solver the step calls instead of its own multigrid for one of its ELL systems, the
+// pressure's or the volume correction's (bindings/step.cpp: one from Python, amg, direct
+// or PETSc's, solver.linear_solver; a rank's, over the ranks): set up for the step's
+// matrix (row r on node or cell rows(r)), then solve for each right-hand side (the wall
+// release asks for several), x the initial guess in and the solution out (on a rank, at
+// every local row: the owners' values at the rows it does not own), returning the
+// iterations and the true relative residual ||rhs - A x|| / ||rhs||. The step decides what
+// a residual above the tolerance means (PRESSURE_NOT_CONVERGED, VOLUME_NOT_CONVERGED), as
+// for its multigrid; an exception (a setup that fails) stops the chunk and reaches the
+// caller. On a rank both calls are collective: they come on every rank, rows or none.
+class LinearSolver {
  public:
-  virtual ~PressureSolver() = default;
+  virtual ~LinearSolver() = default;
   virtual void setup(View<const index_t, 2> cols, View<const double, 2> vals,
                      View<const index_t> rows) = 0;
   virtual SolveResult solve(View<const double> rhs, View<double> x) = 0;
+};
+
+// The viscous predictor's solver instead of the step's own (a rank's, over the ranks): the
+// system of the last viscous_system (viscous_rows, viscous_off, viscous_cols, viscous_vals,
+// viscous_rhs), x its start in (viscous_x) and its solution out at every local unknown.
+// Collective on a rank.
+class ViscousSolver {
+ public:
+  virtual ~ViscousSolver() = default;
+  virtual SolveResult solve(View<double> x) = 0;
 };
 
 template <int D>
@@ -290,9 +289,16 @@ class State {
     set_time(time_);
   }
 
-  // The pressure step's solver: solver (not owned; it must outlive its use), or the
-  // step's own multigrid (nullptr, the default).
-  void use_solver(PressureSolver* solver) { solver_ = solver; }
+  // The systems' solvers (not owned; they must outlive their use): the pressure's, the
+  // volume correction's and the viscous predictor's; nullptr (the default): the step's own.
+  void use_solvers(LinearSolver* pressure, LinearSolver* volume = nullptr,
+                   ViscousSolver* viscous = nullptr) {
+    solver_ = pressure;
+    volume_solver_ = volume;
+    viscous_solver_ = viscous;
+  }
+  // Where the step meets the other ranks (not owned); nullptr: one process alone.
+  void use_exchange(Exchange<D>* exchange) { exchange_ = exchange ? exchange : &alone_; }
 
   // The phases, for a caller that owns a part of the domain (MPI) and for checks.
   // predict = scatter, then classify; returns the pressure unknowns.
@@ -465,7 +471,14 @@ class State {
   Buffer<index_t> cols_;
   Buffer<double> vals_, rhs_, x_, scratch_;
   Multigrid<D> pressure_mg_;
-  PressureSolver* solver_ = nullptr;
+  LinearSolver* solver_ = nullptr;
+  LinearSolver* volume_solver_ = nullptr;
+  ViscousSolver* viscous_solver_ = nullptr;
+  Exchange<D> alone_;
+  Exchange<D>* exchange_ = &alone_;
+  // the rows at nodes this part owns (all: nrows_), the owned nodes' wall contacts
+  index_t owned_rows();
+  index_t owned_contacts();
   // volume correction
   Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];
   Buffer<index_t> cell_row_, vol_cols_, vol_rows_;

@@ -1,4 +1,4 @@
-"""A pressure solver from Python inside the core's step (State.use_solver,
+"""A pressure solver from Python inside the core's step (State.use_solvers,
 schemes/pressure.py's PythonSolver): its failures reach the user as the multigrid's do."""
 
 import numpy as np

@@ -24,53 +24,72 @@ namespace mpmflow::bind {
 
 namespace {
 
-// A pressure solver from Python (State.use_solver): setup(cols, vals, rows) and
-// solve(rhs, x) -> (iterations, residual), called with the GIL (the step runs without it).
-// The arrays are read-only views of the step's storage, valid during the call only (a
-// solver keeps copies); solve writes its solution into x, which holds the initial guess.
-class PythonSolver : public PressureSolver {
+// A NumPy view of the step's storage (rv_policy::reference: without an owner nanobind would
+// hand Python a copy, and what Python writes into it would be lost); valid during a call.
+template <class T, int R>
+nb::object numpy_view(View<T, R> v) {
+  std::array<std::size_t, R> shape{};
+  for (int k = 0; k < R; ++k) shape[k] = static_cast<std::size_t>(v.extent(k));
+  return nb::cast(nb::ndarray<nb::numpy, std::remove_const_t<T>>(
+                      const_cast<std::remove_const_t<T>*>(v.data()), R, shape.data(), nb::handle()),
+                  nb::rv_policy::reference);
+}
+
+// (iterations, relative residual) from Python
+SolveResult solve_result(nb::object out) {
+  SolveResult r;
+  r.iterations = nb::cast<index_t>(out[0]);
+  r.residual = nb::cast<double>(out[1]);
+  return r;
+}
+
+// A solver from Python for one of the step's ELL systems (State.use_solvers: the pressure's,
+// amg or direct, or a rank's over the ranks; the volume correction's, a rank's): its
+// setup(cols, vals, rows) and solve(rhs, x) -> (iterations, residual), called with the GIL
+// (the step runs without it). The arrays are views of the step's storage, valid during the
+// call only (a solver keeps copies); solve writes its solution into x, which holds the
+// initial guess.
+class PythonLinear : public LinearSolver {
  public:
-  PythonSolver(nb::object setup, nb::object solve)
-      : setup_(std::move(setup)), solve_(std::move(solve)) {}
-  ~PythonSolver() override {
+  explicit PythonLinear(nb::object solver) : solver_(std::move(solver)) {}
+  ~PythonLinear() override {
     nb::gil_scoped_acquire acquire;
-    setup_.reset();
-    solve_.reset();
+    solver_.reset();
   }
   void setup(View<const index_t, 2> cols, View<const double, 2> vals,
              View<const index_t> rows) override {
     nb::gil_scoped_acquire acquire;
-    setup_(array(cols), array(vals), array(rows));
+    solver_.attr("setup")(numpy_view(cols), numpy_view(vals), numpy_view(rows));
   }
   SolveResult solve(View<const double> rhs, View<double> x) override {
     nb::gil_scoped_acquire acquire;
-    nb::object out = solve_(array(rhs), array(x));
-    SolveResult r;
-    r.iterations = nb::cast<index_t>(out[0]);
-    r.residual = nb::cast<double>(out[1]);
-    return r;
+    return solve_result(solver_.attr("solve")(numpy_view(rhs), numpy_view(x)));
   }
 
  private:
-  // a NumPy view of the step's storage (rv_policy::reference: without an owner nanobind
-  // would hand Python a copy, and the solution written into x would be lost)
-  template <class T, int R>
-  static nb::object array(View<T, R> v) {
-    std::array<std::size_t, R> shape{};
-    for (int k = 0; k < R; ++k) shape[k] = static_cast<std::size_t>(v.extent(k));
-    return nb::cast(nb::ndarray<nb::numpy, T>(v.data(), R, shape.data(), nb::handle()),
-                    nb::rv_policy::reference);
+  nb::object solver_;
+};
+
+// The viscous predictor's solver from Python (a rank's): solve(x) -> (iterations, residual),
+// the system read from the state's viscous_* arrays.
+class PythonViscous : public ViscousSolver {
+ public:
+  explicit PythonViscous(nb::object solver) : solver_(std::move(solver)) {}
+  ~PythonViscous() override {
+    nb::gil_scoped_acquire acquire;
+    solver_.reset();
   }
-  nb::object setup_, solve_;
+  SolveResult solve(View<double> x) override {
+    nb::gil_scoped_acquire acquire;
+    return solve_result(solver_.attr("solve")(numpy_view(x)));
+  }
+
+ private:
+  nb::object solver_;
 };
 
 template <int D>
-struct BoundState {
-  std::vector<nb::object> keep;      // the arrays the tables view
-  std::array<bool, 2 * D> outlet{};  // the outlet sides the tables view
-  std::unique_ptr<PythonSolver> solver;
-  std::unique_ptr<State<D>> state;
-};
+struct BoundState;
 
 // Between two steps of a chunk (run without the GIL): Python's signal handlers run, so
 // that a SIGINT or SIGTERM whose handler raises (the run's second signal: stop at once)
@@ -171,6 +190,96 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<double> mass, Arr
   }
   return P;
 }
+
+// A rank's exchange from Python (State.use_exchange; mpmflow.parallel's RankExchange,
+// over MPI): each call of the seam (exchange.hpp) calls the method of the same name with
+// the GIL. particles() returns (owned, x, v, mass, volume, pressure, affine or None), arrays
+// the Python object keeps alive until its next call; fill_nodes and fill_cells get NumPy
+// views of the step's arrays to overwrite in place.
+template <int D>
+class PythonExchange : public Exchange<D> {
+ public:
+  PythonExchange(nb::object exchange, nb::object owned_nodes, nb::object owned_cells)
+      : exchange_(std::move(exchange)),
+        nodes_(std::move(owned_nodes)),
+        cells_(std::move(owned_cells)),
+        owned_nodes_(view<const bool>(nb::cast<Array<const bool>>(nodes_, false), "owned_nodes")),
+        owned_cells_(view<const bool>(nb::cast<Array<const bool>>(cells_, false), "owned_cells")) {}
+  ~PythonExchange() override {
+    nb::gil_scoped_acquire acquire;
+    exchange_.reset();
+    nodes_.reset();
+    cells_.reset();
+  }
+  bool shared() const override { return true; }
+  Particles<D> particles(const Particles<D>&) override {
+    nb::gil_scoped_acquire acquire;
+    nb::tuple t = nb::cast<nb::tuple>(exchange_.attr("particles")());
+    if (t.size() != 7)
+      throw std::invalid_argument(
+          "exchange.particles() must return (owned, x, v, mass, volume, pressure, affine)");
+    owned_ = nb::cast<index_t>(t[0]);
+    auto arr = [&](int k) { return nb::cast<Array<double>>(t[k], false); };
+    Affine affine = std::nullopt;
+    if (!t[6].is_none()) affine = arr(6);
+    Particles<D> P = mpmflow::bind::particles<D>(arr(1), arr(2), arr(3), arr(4), arr(5), affine);
+    if (owned_ < 0 || owned_ > P.count())
+      throw std::invalid_argument("exchange.particles(): owned out of range");
+    return P;
+  }
+  index_t owned(const Particles<D>& P) override { return std::min(owned_, P.count()); }
+  void fill_nodes(const View<double, 2>* fields, int count) override {
+    fill("fill_nodes", fields, count);
+  }
+  void fill_cells(const View<double, 2>* fields, int count) override {
+    fill("fill_cells", fields, count);
+  }
+  void own_unknowns(View<index_t> node_row) override {
+    nb::gil_scoped_acquire acquire;
+    exchange_.attr("own_unknowns")(numpy_view(node_row));
+  }
+  double max(double x) override {
+    nb::gil_scoped_acquire acquire;
+    return nb::cast<double>(exchange_.attr("max")(x));
+  }
+  index_t sum(index_t x) override {
+    nb::gil_scoped_acquire acquire;
+    return nb::cast<index_t>(exchange_.attr("sum")(x));
+  }
+  void migrate() override {
+    nb::gil_scoped_acquire acquire;
+    exchange_.attr("migrate")();
+  }
+  View<const bool> owned_nodes() override { return owned_nodes_; }
+  View<const bool> owned_cells() override { return owned_cells_; }
+
+ private:
+  void fill(const char* name, const View<double, 2>* fields, int count) {
+    nb::gil_scoped_acquire acquire;
+    nb::list arrays;
+    for (int k = 0; k < count; ++k) {
+      const View<double, 2>& f = fields[k];
+      if (f.extent(1) == 1)  // one value per row: a vector
+        arrays.append(numpy_view(View<double>(f.data(), {f.extent(0)})));
+      else
+        arrays.append(numpy_view(f));
+    }
+    exchange_.attr(name)(*arrays);
+  }
+  nb::object exchange_, nodes_, cells_;
+  View<const bool> owned_nodes_, owned_cells_;
+  index_t owned_ = 0;
+};
+
+template <int D>
+struct BoundState {
+  std::vector<nb::object> keep;      // the arrays the tables view
+  std::array<bool, 2 * D> outlet{};  // the outlet sides the tables view
+  std::unique_ptr<PythonLinear> solver, volume_solver;
+  std::unique_ptr<PythonViscous> viscous_solver;
+  std::unique_ptr<PythonExchange<D>> exchange;
+  std::unique_ptr<State<D>> state;
+};
 
 // the particle arguments: those a step writes must not be silently copied
 #define MPMFLOW_PARTICLE_ARGS                                                      \
@@ -310,21 +419,46 @@ void bind_dim(nb::module_& m) {
           "Build the step's state for a grid (spacing h, cell counts, periodic axes), the "
           "domain's corners (lower, upper: where particles are put back inside) and its tables.")
       .def(
-          "use_solver",
-          [](S& self, nb::object setup, nb::object solve) {
-            if (setup.is_none() != solve.is_none())
-              throw std::invalid_argument("use_solver: give both setup and solve, or neither");
-            self.state->use_solver(nullptr);
+          "use_solvers",
+          [](S& self, nb::object pressure, nb::object volume, nb::object viscous) {
+            self.state->use_solvers(nullptr);
             self.solver.reset();
-            if (setup.is_none()) return;
-            self.solver = std::make_unique<PythonSolver>(setup, solve);
-            self.state->use_solver(self.solver.get());
+            self.volume_solver.reset();
+            self.viscous_solver.reset();
+            if (!pressure.is_none()) self.solver = std::make_unique<PythonLinear>(pressure);
+            if (!volume.is_none()) self.volume_solver = std::make_unique<PythonLinear>(volume);
+            if (!viscous.is_none()) self.viscous_solver = std::make_unique<PythonViscous>(viscous);
+            self.state->use_solvers(self.solver.get(), self.volume_solver.get(),
+                                    self.viscous_solver.get());
           },
-          nb::arg("setup").none(), nb::arg("solve").none(),
-          "The pressure step's solver from Python: setup(cols, vals, rows) for each step's "
-          "matrix, solve(rhs, x) -> (iterations, true relative residual) for each right-hand "
-          "side, the solution written into x (the initial guess); the arrays are views valid "
-          "during the call. None, None: the step's own multigrid.")
+          nb::arg("pressure").none() = nb::none(), nb::arg("volume").none() = nb::none(),
+          nb::arg("viscous").none() = nb::none(),
+          "The systems' solvers from Python (None: the step's own multigrid): pressure and "
+          "volume with setup(cols, vals, rows) for each matrix and solve(rhs, x) -> "
+          "(iterations, true relative residual) for each right-hand side, the solution "
+          "written into x (the initial guess); viscous with solve(x) -> (iterations, "
+          "residual) on the last viscous_system. The arrays are views valid during the call.")
+      .def(
+          "use_exchange",
+          [](S& self, nb::object exchange, nb::object owned_nodes, nb::object owned_cells) {
+            self.state->use_exchange(nullptr);
+            self.exchange.reset();
+            if (exchange.is_none()) return;
+            self.exchange = std::make_unique<PythonExchange<D>>(exchange, owned_nodes, owned_cells);
+            const auto& g = self.state->grid();
+            if (self.exchange->owned_nodes().size() != g.nnodes ||
+                self.exchange->owned_cells().size() != g.ncells) {
+              self.exchange.reset();
+              throw std::invalid_argument("use_exchange: one owned flag per node and per cell");
+            }
+            self.state->use_exchange(self.exchange.get());
+          },
+          nb::arg("exchange").none(), nb::arg("owned_nodes").none() = nb::none(),
+          nb::arg("owned_cells").none() = nb::none(),
+          "Where the step meets the other ranks (src/core/exchange.hpp): an object with "
+          "particles(), fill_nodes(*arrays), fill_cells(*arrays), own_unknowns(node_row), "
+          "max(x), sum(n) and migrate(), and the nodes and cells this rank owns (bool "
+          "arrays). None: one process alone.")
       .def(
           "advance",
           [](S& self, Array<double> x, Array<double> v, Array<double> mass, Array<double> volume,

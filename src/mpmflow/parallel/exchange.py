@@ -188,3 +188,80 @@ class Halo:
         out = {r: _take(arrays, wanted[local]) for r, wanted in self.wanted.items()}
         got = swap(comm, self.neighbours, out, HALO)
         return _join([got[r] for r in self.neighbours if got[r] is not None], arrays)
+
+
+class RankExchange:
+    """The core's exchange seam on one rank (src/core/exchange.hpp; ``State.use_exchange``):
+    the compiled step calls these methods where a step meets the other ranks. It holds the
+    rank's own particles between steps (global coordinates, with their numbers ``id``) and
+    the local set of a step (its own, then the halo, in the local grid's coordinates)."""
+
+    def __init__(
+        self,
+        comm: Comm,
+        boxes: Boxes,
+        sub: Subgrid,
+        neighbours: list[int],
+        fields: tuple[str, ...],
+        traffic: dict[str, int],
+    ) -> None:
+        self.comm, self.boxes, self.sub = comm, boxes, sub
+        self.neighbours = neighbours
+        self.fields = fields
+        self.traffic = traffic
+        self.nodes = NodeExchange(comm, sub)
+        self.cells = NodeExchange(comm, sub, cells=True)
+        self.halo = Halo(comm, boxes, sub, neighbours)
+        self.foreign = ~sub.owned_nodes
+        self.owned: ParticleArrays = {}
+        self.local: ParticleArrays = {}
+        self.step = 0  # the steps begun in this chunk (where the solvers' messages point)
+
+    def start(self, owned: ParticleArrays) -> None:
+        """A chunk's start: the rank's own particles."""
+        self.owned = owned
+        self.step = 0
+
+    # the seam's calls, in the order of a step
+    def particles(self) -> tuple[int, Any, Any, Any, Any, Any, Any]:
+        """The step's particles: the owned ones, then the halo (local coordinates)."""
+        ghosts = self.halo(self.owned)
+        self.traffic["halo particles"] += int(ghosts["id"].size)
+        arrays = {f: np.concatenate([self.owned[f], ghosts[f]]) for f in self.fields}
+        arrays["x"] -= self.sub.offset
+        self.local = {f: np.ascontiguousarray(a) for f, a in arrays.items()}
+        self.step += 1
+        a = self.local
+        m = int(self.owned["x"].shape[0])
+        return m, a["x"], a["v"], a["mass"], a["volume"], a["pressure"], a.get("affine")
+
+    def fill_nodes(self, *arrays: NDArray[Any]) -> None:
+        self.nodes.fill(*arrays)
+
+    def fill_cells(self, *arrays: NDArray[Any]) -> None:
+        self.cells.fill(*arrays)
+
+    def own_unknowns(self, node_row: NDArray[np.int64]) -> None:
+        """The owners say which nodes round the box are unknowns (0: one, -1: not; the core
+        numbers its rows again)."""
+        unknown = (node_row >= 0).astype(float)
+        self.nodes.fill(unknown)
+        node_row[self.foreign] = np.where(unknown[self.foreign] > 0, 0, -1)
+
+    def max(self, x: float) -> float:
+        return float(max(self.comm.allgather(float(x))))
+
+    def sum(self, n: int) -> int:
+        return int(self.comm.allreduce(int(n)))
+
+    def migrate(self) -> None:
+        """The owned particles, moved by the step, to the ranks that own their cells."""
+        m = int(self.owned["x"].shape[0])
+        moved = {f: a[:m] for f, a in self.local.items()}
+        moved["x"] = moved["x"] + self.sub.offset
+        moved["id"] = self.owned["id"]
+        owner = owners(self.boxes, self.sub, moved["x"])
+        self.traffic["migrated particles"] += int((owner != self.comm.rank).sum())
+        self.traffic["steps"] += 1
+        self.owned = migrate(self.comm, owner, moved, self.neighbours)
+        self.local = {}

@@ -1,20 +1,22 @@
 """The projection scheme on several MPI ranks (issue 28; docs/design/mpi.md, section 2).
 
 Each rank steps the particles of its box of cells (``boxes``) on its local grid (the box and
-one ghost layer, ``subgrid``) with the core's phases, and the ranks meet where a step needs
-its neighbours:
+one ghost layer, ``subgrid``) with the core's own loop (``State.advance`` and
+``advance_span``, the one-process loop): the step calls the rank's exchange
+(``exchange.RankExchange``, through src/core/exchange.hpp) where it meets its neighbours,
+and solves its systems with PETSc over the ranks (``pressure``, ``viscous``, ``volume``):
 
-1. the halo: copies of the neighbours' particles in the ghost layer (``exchange.halo``);
+1. the halo: copies of the neighbours' particles in the ghost layer, after the rank's own;
 2. ``scatter`` (particle-to-grid, nodal fractions), then the owners' node values at the
-   nodes a rank holds without owning them (``NodeExchange.fill``), then ``classify``;
-3. which nodes are pressure unknowns is the owner's decision (``renumber``); each rank's
-   owned unknowns are numbered after those of the ranks before it; a viscous material's
-   predictor is solved over the ranks likewise (``viscous``);
-4. the pressure system: each rank assembles its rows, PETSc solves (``petsc``), the
-   solution reaches the nodes round each box, the walls release and the system is solved
-   again while any rank released one;
-5. the ghost pressures, the owners' values again, the corrector, grid-to-particle on the
-   owned particles; then each particle goes to the rank that owns its new cell.
+   nodes a rank holds without owning them, then ``classify`` with the owners' say on which
+   of those nodes are pressure unknowns;
+3. a viscous material's predictor, solved over the ranks;
+4. the pressure system: each rank's owned unknowns are numbered after those of the ranks
+   before, PETSc solves, the solution reaches the nodes round each box, the walls release
+   and the system is solved again while any rank released one;
+5. the corrector, the volume correction (solved over the ranks), grid-to-particle on the
+   owned particles; then each particle goes to the rank that owns its new cell. The
+   adaptive step's size comes from the largest speed over the ranks.
 
 Between chunks (at the output times) every rank holds the whole particle set and nodal
 pressure, gathered in the particles' original order: the Simulation's measures, probes,
@@ -33,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import materials, state
-from ..arrays import Floats, Ints
+from ..arrays import Floats
 from ..boundaries import inlets, obstacles, outlets, walls
 from ..errors import SolverError
 from ..grid import Grid
@@ -47,13 +49,10 @@ from ..schemes.projection import (
     most_steps,
     preset,
 )
-from ..schemes.projection import ParticleArrays as CoreParticles
-from ..state import CoreOptions, CoreReport
 from .boxes import Boxes, bisect, cell_weights
 from .comm import Comm, world
-from .exchange import Halo, NodeExchange, ParticleArrays, migrate, owners
-from .petsc import DistributedSystem
-from .pockets import sealed_pockets
+from .exchange import ParticleArrays, RankExchange
+from .pressure import DistributedPressure
 from .subgrid import neighbours, restrict_obstacles, restrict_walls, subgrid
 from .viscous import DistributedViscous
 from .volume import DistributedVolume
@@ -65,7 +64,6 @@ if TYPE_CHECKING:
 # waits for the slowest rank, so below 0.8 a fifth of the machine idles; measured at chunk
 # starts only (a re-split costs a rebuild of the local state, a few steps' time)
 BALANCE = 0.8
-Numbered = tuple[Ints, int, int, Floats]  # owned rows, first global row, count, global numbers
 FIELDS = ("x", "v", "mass", "volume", "pressure")
 
 
@@ -89,7 +87,6 @@ class DistributedProjection(ProjectionScheme):
         )
         self.solids = obstacles.of_case(case, grid)
         self._walls = walls.of_case(case, grid).as_tuple()
-        self.system = DistributedSystem(s.tolerance, s.max_iterations, s.petsc_preconditioner)
         self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
         self.volume = DistributedVolume(self.comm, s.tolerance, s.petsc_preconditioner)
         self.steps = 0
@@ -102,17 +99,18 @@ class DistributedProjection(ProjectionScheme):
         # of its next solve; in checkpoints, which one process continues too)
         self.q_global = np.zeros(grid.ncells if self.corrects else 0)
         self.boxes: Boxes | None = None
+        self._exchange: RankExchange | None = None  # this split's (``_split``)
         self.balance = 1.0  # particles per rank: the least loaded over the most
         self.splits = 0
-        self.step_seconds = 0.0  # this rank's time in steps, and in PETSc's set-up and solves
-        self.solve_seconds = 0.0
+        self.step_seconds = 0.0  # this rank's time in steps
         self.ranks_report: dict[str, Any] = {}
-        self.last_owned = 0  # this rank's pressure unknowns in the last step
         self.node_bytes = 0  # sent in node fills under earlier splits
         # what this rank received or sent, summed over its steps (benchmarks/mpi/)
         self.traffic = dict.fromkeys(
             ("steps", "halo particles", "migrated particles", "ghost columns", "iterations"), 0
         )
+        self.pressure = DistributedPressure(self.comm, s, s.petsc_preconditioner, self.traffic)
+        self._where: Callable[[int], str] = lambda k: ""  # the chunk's names of its steps
         self.particles = particles
 
     # the particles: every rank holds them all between chunks
@@ -141,6 +139,13 @@ class DistributedProjection(ProjectionScheme):
     def p_node(self) -> Floats:
         return self.p_global
 
+    @property
+    def exchange(self) -> RankExchange:
+        """The exchange of the present split (this rank's, over MPI)."""
+        if self._exchange is None:
+            raise RuntimeError("DistributedProjection: no split yet")
+        return self._exchange
+
     # --- the split and the local state ---------------------------------------------------
     def _split(self) -> None:
         """Split the grid into boxes on the particles' places (again when the load is
@@ -154,13 +159,16 @@ class DistributedProjection(ProjectionScheme):
         self.splits += 1
         sub = subgrid(g, self.boxes, self.comm.rank)
         self.sub = sub
-        if self.splits > 1:  # what the last split's exchange sent
-            self.node_bytes += self.nodes.sent
-        self.nodes: NodeExchange = NodeExchange(self.comm, sub)
-        self.cells = NodeExchange(self.comm, sub, cells=True)
-        self.neighbours = neighbours(self.boxes, self.comm.rank)
-        self.halo = Halo(self.comm, self.boxes, sub, self.neighbours)
-        self.foreign = ~sub.owned_nodes
+        if self._exchange is not None:  # what the last split's exchange sent
+            self.node_bytes += self._exchange.nodes.sent
+        self._exchange = RankExchange(
+            self.comm,
+            self.boxes,
+            sub,
+            neighbours(self.boxes, self.comm.rank),
+            self.fields,
+            self.traffic,
+        )
         offset = sub.offset
         cells = tuple(int(c) for c in sub.grid.cells)
         self.core = state.step_state(
@@ -179,7 +187,26 @@ class DistributedProjection(ProjectionScheme):
             lower=[-float(o) for o in offset],
             upper=[float(u) - float(o) for u, o in zip(g.size, offset)],
         )
+        # the core's loop steps this rank: its exchange and its solvers over the ranks
+        self.core.use_exchange(
+            self.exchange,
+            np.ascontiguousarray(sub.owned_nodes, dtype=bool),
+            np.ascontiguousarray(sub.owned_cells, dtype=bool),
+        )
+        where = self._step_name
+        self.pressure.bind(self.core, sub, self.exchange.nodes, where)
+        self.viscous_solve.bind(self.core, sub, self.exchange.nodes, where)
+        self.volume.bind(self.core, sub, self.exchange.cells, where)
+        self.core.use_solvers(
+            pressure=self.pressure,
+            volume=self.volume if self.corrects else None,
+            viscous=self.viscous_solve if self.viscous else None,
+        )
         self._owners()
+
+    def _step_name(self) -> str:
+        """The step in progress, as the chunk names it in messages."""
+        return self._where(max(self.exchange.step - 1, 0))
 
     def _owners(self) -> None:
         """Each particle's rank under the current boxes, and the balance they give."""
@@ -222,7 +249,12 @@ class DistributedProjection(ProjectionScheme):
     def _report(self, owned: ParticleArrays) -> None:
         """The load of each rank (summary.json's "mpi"): particles now, unknowns of the
         last step, seconds in steps and in PETSc so far; balance = least / most particles."""
-        mine = (int(owned["id"].size), int(self.last_owned), self.step_seconds, self.solve_seconds)
+        mine = (
+            int(owned["id"].size),
+            int(self.pressure.last_owned),
+            self.step_seconds,
+            self.pressure.seconds,
+        )
         loads = self.comm.allgather(mine)
         particles = [p for p, _, _, _ in loads]
         self.ranks_report = {
@@ -234,242 +266,72 @@ class DistributedProjection(ProjectionScheme):
             "balance": round(min(particles) / max(max(particles), 1), 3),
             "splits": self.splits,
             "pressure": f"PETSc CG + {self.case.solver.petsc_preconditioner}",
-            "node_bytes_sent": self.comm.allgather(self.node_bytes + self.nodes.sent),
+            "node_bytes_sent": self.comm.allgather(self.node_bytes + self.exchange.nodes.sent),
             "traffic": self.comm.allgather(dict(self.traffic)),
         }
 
-    # --- one step -------------------------------------------------------------------------
-    def _local(self, owned: ParticleArrays) -> ParticleArrays:
-        """The core's particle arrays: the owned particles, then the halo, in the local
-        grid's coordinates."""
-        assert self.boxes is not None
-        ghosts = self.halo(owned)
-        self.traffic["halo particles"] += int(ghosts["id"].size)
-        arrays = {f: np.concatenate([owned[f], ghosts[f]]) for f in self.fields}
-        arrays["x"] -= self.sub.offset
-        return {f: np.ascontiguousarray(a) for f, a in arrays.items()}
-
-    @staticmethod
-    def _core_arrays(arrays: ParticleArrays, m: int | None = None) -> CoreParticles:
-        """x, v, mass, volume, pressure (the first m particles: None, all) for the core."""
-        a = arrays
-        return a["x"][:m], a["v"][:m], a["mass"][:m], a["volume"][:m], a["pressure"][:m]
-
-    def _owned_contacts(self) -> int:
-        mine = self.sub.owned_nodes
-        return int(self.core.contact[mine].sum() + self.core.ocontact[mine].sum())
-
-    def _number(self, O: CoreOptions) -> Numbered:
-        """Classify with the owners' say on the nodes round the box; number the owned
-        unknowns after the ranks before. Returns the owned rows (local row numbers), the
-        first global row, the global count and each local row's global number."""
-        core = self.core
-        unknown = (core.node_row >= 0).astype(float)
-        self.nodes.fill(unknown)
-        rows = core.node_row
-        rows[self.foreign] = np.where(unknown[self.foreign] > 0, 0, -1)
-        core.renumber()
-        local_rows = core.rows
-        owned = np.flatnonzero(self.sub.owned_nodes[local_rows])
-        counts = self.comm.allgather(int(owned.size))
-        first = int(sum(counts[: self.comm.rank]))
-        number = np.full(self.sub.grid.nnodes, -1.0)
-        number[local_rows[owned]] = first + np.arange(owned.size)
-        self.nodes.fill(number)
-        return owned, first, int(sum(counts)), number[local_rows]
-
-    def _pressure(self, O: CoreOptions, report: CoreReport, where: str, numbered: Numbered) -> None:
-        """The pressure solve on the unknowns ``_number`` numbered."""
-        core = self.core
-        owned, first, n, number = numbered
-        self.last_owned = owned.size
-        report.unknowns = max(int(report.unknowns), n)
-        report.last_unknowns = n
-        core.warm_start()
-        x0 = core.x0[owned].copy()
-        core.pressure_matrix(O)
-        if n == 0:
-            return
-        air = core.anchored[owned]  # the rows next to a free surface
-        if not self.comm.allreduce(int(air.any())):
-            raise pressure.singular(where)
-        cols = core.matrix_cols[owned]
-        global_cols = np.where(cols >= 0, number[np.maximum(cols, 0)], -1).astype(np.int64)
-        # every rank decides together: one rank raising alone would leave the others
-        # waiting in the next exchange
-        if self.comm.allreduce(int(np.any((cols >= 0) & (global_cols < 0)))):
-            raise SolverError(f"A pressure row{where} couples to a node no rank numbered.")
-        nn = self.sub.grid.nnodes
-        if sealed_pockets(self.comm, self.nodes, core.matrix_cols, core.rows, owned, air, nn):
-            raise SolverError(
-                f"Water sealed off from the free surface{where} lies across ranks: such "
-                "pockets are held at their top on one process only. Run this case on one "
-                "process."
-            )
-        clock = time.perf_counter()
-        self.system.prepare(first, global_cols, core.matrix_vals[owned].copy(), n)
-        self.solve_seconds += time.perf_counter() - clock
-        self.traffic["ghost columns"] += self.system.ghost_columns
-        iterations = 0
-        while True:
-            core.pressure_rhs(O)
-            clock = time.perf_counter()
-            result = self.system.solve(core.rhs[owned].copy(), x0)
-            self.solve_seconds += time.perf_counter() - clock
-            report.solves += 1
-            report.iterations += result.iterations
-            self.traffic["iterations"] += result.iterations
-            iterations += result.iterations
-            report.residual = max(float(report.residual), result.residual)
-            if not result.converged:
-                raise pressure.not_converged(
-                    where,
-                    result.residual,
-                    result.iterations,
-                    self.case.solver,
-                    n,
-                    self._worst(core.rhs[owned].copy(), result.x, core.rows[owned]),
-                )
-            p = np.zeros(self.sub.grid.nnodes)
-            p[core.rows[owned]] = result.x
-            self.nodes.fill(p)
-            before = self._owned_contacts()
-            core.release_walls(np.ascontiguousarray(p[core.rows]))
-            released = self.comm.allreduce(before - self._owned_contacts())
-            if released == 0:
-                break
-            report.released += released
-            x0 = result.x
-        report.max_iterations = max(int(report.max_iterations), iterations)
-        core.extend_pressure(O)
-        self.nodes.fill(core.p_node)
-
-    def _worst(self, b: Floats, x: Floats, nodes: Ints) -> Floats:
-        """The position of the largest residual over all ranks (collective)."""
-        r = np.abs(self.system.residual(b, x))
-        mine = (-1.0, np.zeros(self.grid.dim))
-        if r.size:
-            k = int(np.argmax(r))
-            mine = (float(r[k]), self.sub.node_position(int(nodes[k])))
-        worst: Floats = max(self.comm.allgather(mine), key=lambda item: item[0])[1]
-        return worst
-
-    def _predict(self, owned: ParticleArrays, O: CoreOptions, correct: bool) -> ParticleArrays:
-        """The step up to the pressure system (the core's ``predict``), with the owners'
-        values at the nodes (and cells) round the box; returns the core's particle arrays
-        (owned, then the halo)."""
-        core = self.core
-        local = self._local(owned)
-        core.scatter(*self._core_arrays(local), O, correct, affine=local.get("affine"))
-        self.nodes.fill(core.node_mass, core.node_vol, core.v_old, core.v_star, core.node_f)
-        if correct:  # the cells' particle volume reaches past a cell: the owners' sums
-            self.cells.fill(core.cell_vol)
-        core.classify(*self._core_arrays(local), O)
-        return local
-
-    def _step(
-        self, owned: ParticleArrays, O: CoreOptions, report: CoreReport, where: str, correct: bool
-    ) -> ParticleArrays:
-        """One step of the owned particles (``correct``: with the volume correction)."""
-        core = self.core
-        local = self._predict(owned, O, correct)
-        affine = local.get("affine")
-        # the owners' classification first: the viscous step's walls hold by it
-        numbered = self._number(O)
-        if self.viscous:
-            self.viscous_solve.predict(core, self.sub, self.nodes, O, report, where)
-        self._pressure(O, report, where, numbered)
-        core.correct(O)
-        if correct:
-            self.volume.correct(core, self.sub, self.cells, O, report, where)
-        m = owned["x"].shape[0]
-        mine = None if affine is None else affine[:m]
-        core.to_particles(*self._core_arrays(local, m), O, correct, affine=mine)
-        moved = {f: a[:m] for f, a in local.items()}
-        moved["x"] = moved["x"] + self.sub.offset
-        moved["id"] = owned["id"]
-        assert self.boxes is not None
-        owner = owners(self.boxes, self.sub, moved["x"])
-        self.traffic["migrated particles"] += int((owner != self.comm.rank).sum())
-        self.traffic["steps"] += 1
-        return migrate(self.comm, owner, moved, self.neighbours)
-
+    # --- a chunk of steps: the core's loop ----------------------------------------------
     def advance(
         self, dt: float, nsteps: int, where: Callable[[int], str] = lambda k: ""
     ) -> StepReport:
         """nsteps steps of dt, or with time.dt = "auto" steps set by the flow over the span
-        dt x nsteps (the rule of the core's ``State::advance_span``)."""
+        dt x nsteps, taken by the core's loop (``State.advance``, ``advance_span``) on this
+        rank's particles."""
         self._split()
         O = self.options(dt)
         O.pockets = False
         report = state.Report()
-        self.core.p_node[:] = self.p_global[self.sub.node_global]
-        if self.q_global.size and self.core.volume_q.size:
-            self.core.volume_q[:] = self.q_global[self.sub.cell_global]
-        self._owned = self._distribute()
+        core = self.core
+        core.p_node[:] = self.p_global[self.sub.node_global]
+        if self.q_global.size and core.volume_q.size:
+            core.volume_q[:] = self.q_global[self.sub.cell_global]
+        core.since_volume = self.since_volume
+        self._where = where
+        self.exchange.start(self._distribute())
+        # the arrays the core is handed; its exchange gives each step the rank's own and halo
+        own = self.exchange.owned
+        arrays = (own["x"], own["v"], own["mass"], own["volume"], own["pressure"])
+        span = dt * nsteps
+        covered = span
         clock = time.perf_counter()
         try:
             if self.auto:
-                done = self._span(O, dt * nsteps, report, where)
+                s = self.case.solver
+                most = most_steps(span, s.max_speed, O.courant, self.grid.spacing, O.dt_max)
+                covered = core.advance_span(*arrays, O, span, most, report)
+                done = int(report.steps)
             else:
-                for k in range(nsteps):
-                    report.step = k
-                    # the volume correction every n-th step
-                    correct = state.volume_due_fixed(self.steps + k + 1, O.volume_every)
-                    self._owned = self._step(self._owned, O, report, where(k), correct)
-                done = nsteps
+                done = core.advance(*arrays, O, self.steps + 1, nsteps, report)
         finally:
             self.step_seconds += time.perf_counter() - clock
+            self._owned = self.exchange.owned
             self._gather(self._owned)
             self._report(self._owned)
+        self.since_volume = float(core.since_volume)
         self.steps += done
         self.last_unknowns = int(report.last_unknowns)
+        if report.status != state.OK:
+            self._fail(report, where(done))
         r = StepReport.of(report)
         r.moved_inside = int(self.comm.allreduce(int(report.moved)))
         r.capped = int(self.comm.allreduce(int(report.capped)))
         if not self.auto:
             return r
-        self.dt_range = [min(self.dt_range[0], report.dt_min), max(self.dt_range[1], report.dt_max)]
+        if covered < span * (1 - 1e-9):
+            raise SolverError(
+                f"The adaptive steps{where(done)} took {done} steps without reaching the next "
+                f"output time: the flow is faster than solver.max_speed = "
+                f"{self.case.solver.max_speed:g} m/s allows for. Raise solver.max_speed if such "
+                "speeds are real, or use a fixed time.dt."
+            )
+        if done:
+            self.dt_range = [
+                min(self.dt_range[0], report.dt_min),
+                max(self.dt_range[1], report.dt_max),
+            ]
         return AdaptiveReport(
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
-
-    def _span(
-        self, O: CoreOptions, span: float, report: CoreReport, where: Callable[[int], str]
-    ) -> int:
-        """Steps of adaptive size over the span (s), by the core's rules (``adaptive_dt``,
-        ``volume_due_adaptive``: src/core/step.hpp) on the largest particle speed over all
-        ranks, as ``State::advance_span`` takes them. Returns the steps taken."""
-        s = self.case.solver
-        h = self.grid.spacing
-        most = most_steps(span, s.max_speed, O.courant, h, O.dt_max)
-        elapsed, done = 0.0, 0
-        while done < most and elapsed < span:
-            report.step = done
-            v = self._owned["v"]
-            mine = float(np.max(np.sum(v * v, axis=1))) if v.shape[0] else 0.0
-            vmax2 = max(self.comm.allgather(mine))
-            rest = span - elapsed
-            dt = state.adaptive_dt(vmax2, O.courant, h, O.dt_max, rest)
-            O.dt = dt
-            O.flip = state.flip_per_step(O.flip_rate, dt)
-            correct, self.since_volume = state.volume_due_adaptive(
-                self.since_volume, dt, O.volume_rate, O.volume_interval
-            )
-            self._owned = self._step(self._owned, O, report, where(done), correct)
-            done += 1
-            report.steps = done
-            report.dt_min = dt if done == 1 else min(report.dt_min, dt)
-            report.dt_max = max(report.dt_max, dt)
-            elapsed = span if dt >= rest else elapsed + dt
-        if elapsed < span * (1 - 1e-9):
-            raise SolverError(
-                f"The adaptive steps{where(done)} took {done} steps without reaching the next "
-                f"output time: the flow is faster than solver.max_speed = {s.max_speed:g} m/s "
-                "allows for. Raise solver.max_speed if such speeds are real, or use a fixed "
-                "time.dt."
-            )
-        return done
 
     def owned_particles(self) -> ParticleArrays:
         """This rank's own particles (global coordinates, with their numbers ``id``, in
@@ -487,10 +349,14 @@ class DistributedProjection(ProjectionScheme):
         self._split()
         O = self.options(1.0)
         O.pockets = False
-        self._predict(self._distribute(), O, False)
-        rows, _, n, _ = self._number(O)
-        self.core.pressure_matrix(O)
-        anchored = self.comm.allreduce(int(self.core.anchored[rows].any()))
+        self.exchange.start(self._distribute())
+        _, x, v, mass, volume, p, affine = self.exchange.particles()
+        core = self.core
+        core.predict(x, v, mass, volume, p, O, False, affine=affine)
+        core.pressure_matrix(O)
+        owned = self.sub.owned_nodes[core.rows]
+        n = self.comm.allreduce(int(owned.sum()))
+        anchored = self.comm.allreduce(int(core.anchored[owned].any()))
         if n and not anchored:
             raise pressure.singular(" at the start")
 

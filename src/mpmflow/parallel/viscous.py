@@ -1,27 +1,29 @@
 """The viscous predictor (docs/method.md, "Viscous materials") over MPI ranks: its system
 assembled per rank, solved by PETSc, applied per rank.
 
-After the classification (with the owners' say on the nodes round the box, so that the
-walls hold the same nodes on every rank), ``viscous_start`` gives each rank the cells'
-viscosity and the velocity the solve starts from (the owners' values at the nodes round the
-box, where the local corrector lacks cells), and ``viscous_system`` the rows of its local
-nodes' velocity components, D x D blocks whose columns
-are numbered within their component. The owned rows are numbered after the ranks before
+The compiled step (src/core/step.cpp, viscous_predictor) does the rest on each rank: after
+the classification (with the owners' say on the nodes round the box, so that the walls hold
+the same nodes on every rank), ``viscous_start`` gives each rank the cells' viscosity (the
+capped cells counted where it owns them) and the velocity the solve starts from (the
+owners' values at the nodes round the box, where the local corrector lacks cells), and
+``viscous_system`` the rows of its local nodes' velocity components, D x D blocks whose
+columns are numbered within their component. The owned rows are numbered after the ranks before
 (node by node, component by component), the ghost layer takes its owners' numbers, and the
 blocks become one row of global columns per unknown: PETSc solves the coupled system to
 ``solver.tolerance`` by conjugate gradients (the core solves the same system with one
 multigrid cycle per diagonal block as its preconditioner; both stop on the true residual).
-The solution reaches the ghost layer, ``viscous_apply`` writes it into v*, and v* at the
-nodes round the box takes the owners' values again.
+Here the solution reaches the ghost layer; the step's ``viscous_apply`` writes it into v*,
+and v* at the nodes round the box takes the owners' values again.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..arrays import Floats, Ints
+from ..arrays import Floats
 from ..errors import SolverError
 from .comm import Comm
 from .exchange import NodeExchange
@@ -29,40 +31,31 @@ from .petsc import DistributedSystem, Preconditioner
 from .subgrid import Subgrid
 
 if TYPE_CHECKING:
-    from ..state.step import CoreOptions, CoreReport, CoreState
-
-# the parameter that holds a rheology's max_viscosity, by its code (src/core/rheology.hpp:
-# Herschel-Bulkley 2, mu(I) 3)
-MODEL_CAP = {2: 3, 3: 5}
+    from ..state.step import CoreState
 
 
 class DistributedViscous:
-    """The viscous predictor's solve over the ranks (its own PETSc system)."""
+    """The viscous predictor's solve over the ranks (its own PETSc system): the core's
+    viscous solver on a rank (``State.use_solvers``); ``bind`` gives it a split's local
+    state."""
 
     def __init__(
         self, comm: Comm, tolerance: float, max_iterations: int, preconditioner: Preconditioner
     ) -> None:
         self.comm = comm
         self.system = DistributedSystem(tolerance, max_iterations, preconditioner)
+        self.where: Callable[[], str] = lambda: ""
 
-    def predict(
-        self,
-        core: CoreState,
-        sub: Subgrid,
-        nodes: NodeExchange,
-        options: CoreOptions,
-        report: CoreReport,
-        where: str,
+    def bind(
+        self, core: CoreState, sub: Subgrid, nodes: NodeExchange, where: Callable[[], str]
     ) -> None:
-        """One viscous predictor (collective): v* of the local nodes updated in the core."""
-        comm = self.comm
-        capped = int(report.capped)
-        core.viscous_start(options, report)
-        report.capped = capped + self._capped(core, sub, options)
-        # the corrector at the nodes on the local grid's edge reaches past its cells: the
-        # owners' values (the held components of the rows beside them take theirs)
-        nodes.fill(core.viscous_base)
-        n = core.viscous_system(options)
+        self.core, self.sub, self.nodes, self.where = core, sub, nodes, where
+
+    def solve(self, x: Floats) -> tuple[int, float]:
+        """Solve the last ``viscous_system`` (collective): x, the start at each local
+        unknown, takes the solution, the owners' values at the nodes this rank does not
+        own."""
+        comm, sub, core = self.comm, self.sub, self.core
         rows = core.viscous_rows  # nn x D
         unknown = rows >= 0
         mine = unknown & sub.owned_nodes[:, None]
@@ -71,16 +64,15 @@ class DistributedViscous:
         first = int(sum(counts[: comm.rank]))
         total = int(sum(counts))
         if total == 0:
-            core.viscous_apply(np.zeros(n))
-            nodes.fill(core.v_star)
-            return
+            return 0, 0.0
         number = np.full(rows.shape, -1.0)
         number[mine] = first + np.arange(count)
-        nodes.fill(number)
-        glob = np.full(n, -1, dtype=np.int64)
+        self.nodes.fill(number)
+        glob = np.full(x.size, -1, dtype=np.int64)
         glob[rows[unknown]] = number[unknown].astype(np.int64)
         # a ghost node the owner does not solve for, or the reverse, would couple the ranks'
         # systems wrongly: every rank decides together
+        where = self.where()
         if comm.allreduce(int(np.any(glob < 0))):
             raise SolverError(
                 f"A viscous unknown{where} lies on a node its owner holds: the ranks disagree "
@@ -100,9 +92,8 @@ class DistributedViscous:
         )
         gvals = np.concatenate([vals[m, owned] for m in range(D)], axis=1)
         self.system.prepare(first, gcols, gvals, total)
-        result = self.system.solve(core.viscous_rhs[owned].copy(), core.viscous_x[owned].copy())
-        report.viscous_iterations += result.iterations
-        if not result.converged:
+        result = self.system.solve(core.viscous_rhs[owned].copy(), x[owned].copy())
+        if not result.converged:  # the same verdict on every rank: the residual is global
             raise SolverError(
                 f"The viscous solve did not converge{where} over the MPI ranks: relative "
                 f"residual {result.residual:.3e} after {result.iterations} iterations "
@@ -112,19 +103,6 @@ class DistributedViscous:
             )
         values = np.zeros(rows.shape)
         values[mine] = result.x
-        nodes.fill(values)
-        x = np.empty(n)
+        self.nodes.fill(values)
         x[rows[unknown]] = values[unknown]
-        core.viscous_apply(x)
-        nodes.fill(core.v_star)
-
-    @staticmethod
-    def _capped(core: CoreState, sub: Subgrid, options: CoreOptions) -> int:
-        """The owned cells held at the rheology's max_viscosity (the core counts the ghost
-        layer's too, which their owners count)."""
-        slot = MODEL_CAP.get(int(options.model))
-        if slot is None:
-            return 0
-        eta: Floats = core.eta
-        owned: Ints = np.flatnonzero(sub.owned_cells)
-        return int(np.count_nonzero(eta[owned] >= options.model_params[slot]))
+        return result.iterations, result.residual

@@ -1,84 +1,94 @@
 """The volume correction (docs/method.md, "Volume correction") over MPI ranks: its
 cell-centred system assembled per rank, solved by PETSc, applied per rank.
 
-On a step that corrects, the particle volume each cell holds (``cell_vol``, from
-``scatter``) is completed at the cells a rank holds without owning them by their owners'
-values; ``volume_system`` assembles the rows of the local cells (the ghost layer's cells
-have every particle of theirs in the halo, so a rank and the owner agree on which cells are
-rows); the owned rows are numbered after the ranks before, PETSc solves to
-``solver.tolerance``, the solution reaches the ghost layer, and ``volume_apply`` moves the
-faces the particles are displaced by in ``to_particles``.
+On a step that corrects, the compiled step (src/core/step.cpp, volume_correction) completes
+the particle volume each cell holds (``cell_vol``, from ``scatter``) at the cells a rank
+holds without owning them by their owners' values, and ``volume_system`` assembles the rows
+of the local cells (the ghost layer's cells have every particle of theirs in the halo, so a
+rank and the owner agree on which cells are rows); the ranks decide together whether the
+system has rows and touches an empty cell. Here (the core's volume solver on a rank) the
+owned rows are numbered after the ranks before, PETSc solves to ``solver.tolerance`` and the
+solution reaches the ghost layer; the step's ``volume_apply`` moves the faces the particles
+are displaced by in ``to_particles``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
+from ..arrays import Floats, Ints
 from ..errors import SolverError
 from ..schemes import volume_correction
-from ..state import CoreOptions, CoreReport, CoreState
 from .comm import Comm
 from .exchange import NodeExchange
 from .petsc import DistributedSystem, Preconditioner
 from .pockets import sealed_pockets
 from .subgrid import Subgrid
 
+if TYPE_CHECKING:
+    from ..state.step import CoreState
+
 
 class DistributedVolume:
-    """The volume correction's solve over the ranks (its own PETSc system)."""
+    """The volume correction's solve over the ranks (its own PETSc system): the core's
+    volume solver on a rank (``State.use_solvers``); ``bind`` gives it a split's local
+    state."""
 
     def __init__(self, comm: Comm, tolerance: float, preconditioner: Preconditioner) -> None:
         self.comm = comm
         self.system = DistributedSystem(tolerance, volume_correction.MAX_ITERATIONS, preconditioner)
         self.iterations = 0
+        self.where: Callable[[], str] = lambda: ""
 
-    def correct(
-        self,
-        core: CoreState,
-        sub: Subgrid,
-        cells: NodeExchange,
-        options: CoreOptions,
-        report: CoreReport,
-        where: str,
+    def bind(
+        self, core: CoreState, sub: Subgrid, cells: NodeExchange, where: Callable[[], str]
     ) -> None:
-        """One volume correction (collective); the faces are left in the core."""
-        comm = self.comm
-        core.volume_system(options)
-        rows = core.volume_rows
+        self.core, self.sub, self.cells, self.where = core, sub, cells, where
+
+    def setup(self, cols: Ints, vals: Floats, rows: Ints) -> None:
+        """Number the owned rows (cells) over the ranks and hand PETSc this rank's block."""
+        comm, sub = self.comm, self.sub
         owned = np.flatnonzero(sub.owned_cells[rows])
         counts = comm.allgather(int(owned.size))
         first = int(sum(counts[: comm.rank]))
         n = int(sum(counts))
-        number = np.full(sub.grid.ncells, -1.0)
+        count = sub.grid.ncells
+        number = np.full(count, -1.0)
         number[rows[owned]] = first + np.arange(owned.size)
-        cells.fill(number)
-        air = core.volume_air[owned]
-        core.volume_anchored = bool(comm.allreduce(int(air.any())))
-        if n == 0 or not core.volume_anchored:
-            # nothing, or material filling the whole domain: its volume cannot change
-            core.volume_apply(options, np.zeros(rows.size))
-            return
-        cols = core.volume_cols[owned]
-        global_cols = np.where(cols >= 0, number[rows[np.maximum(cols, 0)]], -1)
-        if comm.allreduce(int(np.any((cols >= 0) & (global_cols < 0)))):  # together
+        self.cells.fill(number)
+        mine = cols[owned]
+        global_cols = np.where(mine >= 0, number[rows[np.maximum(mine, 0)]], -1)
+        where = self.where()
+        if comm.allreduce(int(np.any((mine >= 0) & (global_cols < 0)))):  # together
             raise SolverError(
                 f"A volume-correction row{where} couples to a cell its owner does not count "
                 "as wet: the ranks disagree on the ghost layer."
             )
-        count = sub.grid.ncells
-        if sealed_pockets(comm, cells, core.volume_cols, rows, owned, air, count):
+        air = self.core.volume_air[owned]
+        if sealed_pockets(comm, self.cells, cols, rows, owned, air, count):
             raise SolverError(
                 f"Water sealed off from every empty cell{where} lies across ranks: its "
                 "volume correction is held on one process only. Run this case on one process."
             )
-        self.system.prepare(first, global_cols.astype(np.int64), core.volume_vals[owned].copy(), n)
-        q0 = np.ascontiguousarray(core.volume_q[rows[owned]])
-        result = self.system.solve(core.volume_rhs[owned].copy(), q0)
+        self.system.prepare(first, global_cols.astype(np.int64), vals[owned].copy(), n)
+        self.owned, self.rows, self.n = owned, rows.copy(), n
+
+    def solve(self, rhs: Floats, q: Floats) -> tuple[int, float]:
+        """Solve for the owned rows; q (the last correction's solution in) takes the
+        solution at every local row, the owners' values at the cells this rank does not
+        own."""
+        owned = self.owned
+        result = self.system.solve(rhs[owned].copy(), q[owned].copy())
         self.iterations += result.iterations
-        report.volume_iterations += result.iterations
-        if not result.converged:
-            raise volume_correction.not_converged(where, result.residual, result.iterations, n)
-        q = np.zeros(count)
-        q[rows[owned]] = result.x
-        cells.fill(q)
-        report.clamped += core.volume_apply(options, np.ascontiguousarray(q[rows]))
+        if not result.converged:  # the same verdict on every rank: the residual is global
+            raise volume_correction.not_converged(
+                self.where(), result.residual, result.iterations, self.n
+            )
+        whole = np.zeros(self.sub.grid.ncells)
+        whole[self.rows[owned]] = result.x
+        self.cells.fill(whole)
+        q[:] = whole[self.rows]
+        return result.iterations, result.residual

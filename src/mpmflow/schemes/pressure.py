@@ -5,7 +5,7 @@ solve, release the wall nodes whose pressure comes out negative while v* leaves 
 and solve again, extend the pressure to the ghost nodes) runs in the compiled core for every
 solver. The default solver (``multigrid``) is the core's own; the others (``amg``,
 ``direct``, ``petsc``; for comparison and tests) plug into the same step through
-``State.use_solver``: ``PythonSolver`` sets the linear solver up for each step's matrix and
+``State.use_solvers``: ``PythonSolver`` sets the linear solver up for each step's matrix and
 solves for each right-hand side the wall release asks for.
 """
 
@@ -58,7 +58,7 @@ def not_converged(
 
 class PythonSolver:
     """``linalg.solvers.LinearSolver`` (amg, direct or petsc) as the core's pressure solver:
-    ``use(core)`` plugs it into the step (``State.use_solver``), which calls ``setup`` and
+    ``use(core)`` plugs it into the step (``State.use_solvers``), which calls ``setup`` and
     ``solve`` with views of its own storage (valid during the call only)."""
 
     def __init__(self, grid: Grid, settings: Solver) -> None:
@@ -71,7 +71,7 @@ class PythonSolver:
         )
 
     def use(self, core: state.CoreState) -> None:
-        core.use_solver(self.setup, self.solve)
+        core.use_solvers(pressure=self)
 
     def setup(self, cols: Ints, vals: Floats, rows: Ints) -> None:
         self.solver.prepare(PressureMatrix(cols.copy(), vals.copy(), rows.copy(), self.grid.nodes))

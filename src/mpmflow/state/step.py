@@ -216,12 +216,18 @@ class CoreState(Protocol):
         (an image node of a periodic axis shares its master's row); returns the unknowns."""
         ...
 
-    def use_solver(
-        self,
-        setup: Callable[[Ints, Floats, Ints], None] | None,
-        solve: Callable[[Floats, Floats], tuple[int, float]] | None,
+    def use_solvers(
+        self, pressure: Any = None, volume: Any = None, viscous: Any = None
     ) -> None:
-        """The pressure step's solver from Python (None, None: the core's multigrid)."""
+        """The systems' solvers from Python (None: the core's multigrid): pressure and volume
+        with ``setup(cols, vals, rows)`` and ``solve(rhs, x) -> (iterations, residual)``,
+        viscous with ``solve(x) -> (iterations, residual)``."""
+        ...
+
+    def use_exchange(
+        self, exchange: Any, owned_nodes: Bools | None = None, owned_cells: Bools | None = None
+    ) -> None:
+        """Where the step meets the other ranks (src/core/exchange.hpp; None: one process)."""
         ...
 
     def pressure_solve(self, options: CoreOptions, report: CoreReport) -> int:
