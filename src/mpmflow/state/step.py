@@ -216,9 +216,7 @@ class CoreState(Protocol):
         (an image node of a periodic axis shares its master's row); returns the unknowns."""
         ...
 
-    def use_solvers(
-        self, pressure: Any = None, volume: Any = None, viscous: Any = None
-    ) -> None:
+    def use_solvers(self, pressure: Any = None, volume: Any = None, viscous: Any = None) -> None:
         """The systems' solvers from Python (None: the core's multigrid): pressure and volume
         with ``setup(cols, vals, rows)`` and ``solve(rhs, x) -> (iterations, residual)``,
         viscous with ``solve(x) -> (iterations, residual)``."""
