@@ -99,16 +99,23 @@ def _join(parts: list[ParticleArrays], like: ParticleArrays) -> ParticleArrays:
 
 
 def owners(boxes: Boxes, sub: Subgrid, x: NDArray[np.float64]) -> NDArray[np.int64]:
-    """The rank owning the cell of each point (global coordinates, m): looked up in the
-    local grid's table where the point lies in it (after a step, every particle of the
-    rank), by the boxes elsewhere."""
-    ijk = cells_of(x, sub.grid.spacing, boxes.cells) - sub.origin
-    inside = np.all((ijk >= 0) & (ijk < np.asarray(sub.grid.cells)), axis=1)
-    owner = np.empty(x.shape[0], dtype=np.int64)
-    flat = np.ravel_multi_index(tuple(ijk[inside].T), sub.grid.cells, order="F")
-    owner[inside] = sub.cell_owner[flat]
+    """The rank owning the cell of each point (global coordinates, m): this rank where the
+    cell lies in its box (after a step, almost every particle of the rank), else looked up
+    in the local grid's table where the point lies in it, by the boxes elsewhere."""
+    ijk = cells_of(x, sub.grid.spacing, boxes.cells)
+    me = sub.rank
+    owner = np.full(x.shape[0], me, dtype=np.int64)
+    away = ~np.all((ijk >= boxes.lo[me]) & (ijk < boxes.hi[me]), axis=1)
+    if not away.any():
+        return owner
+    rel = ijk[away] - sub.origin
+    inside = np.all((rel >= 0) & (rel < np.asarray(sub.grid.cells)), axis=1)
+    found = np.empty(rel.shape[0], dtype=np.int64)
+    flat = np.ravel_multi_index(tuple(rel[inside].T), sub.grid.cells, order="F")
+    found[inside] = sub.cell_owner[flat]
     if not inside.all():
-        owner[~inside] = boxes.owner_of_cells(ijk[~inside] + sub.origin)
+        found[~inside] = boxes.owner_of_cells(rel[~inside] + sub.origin)
+    owner[away] = found
     return owner
 
 
