@@ -742,6 +742,10 @@ void BodyTables<D>::apply_impulse(View<const double> impulse) {
 
 template <int D>
 void BodyTables<D>::integrate(double dt, double t) {
+  // the contacts first, where the bodies are (semi-implicit Euler: the move takes the
+  // velocities the contacts left, so that a body held by static friction on an incline
+  // stays where it is, and one resting on the floor does not sink and come back each step)
+  contact(t - dt, dt);
   for (Body<D>& b : bodies_) {
     if (!b.free) continue;
     for (int k = 0; k < D; ++k) b.centre_now[k] += dt * b.velocity_now[k];
@@ -762,7 +766,6 @@ void BodyTables<D>::integrate(double dt, double t) {
     b.velocity_star = b.velocity_now;
     b.omega_star = b.omega_now;
   }
-  contact(t);
 }
 
 template <int D>
@@ -785,9 +788,12 @@ std::array<std::array<double, 3>, 3> BodyTables<D>::inverse_inertia(const Body<D
 }
 
 template <int D>
-index_t BodyTables<D>::contact(double t) {
+index_t BodyTables<D>::contact(double t, double dt) {
   index_t count = 0;
   const double touch = 1e-3 * g_.h;  // a point this close counts as touching (resting)
+  // a point this close is a contact ahead (speculative): the move may not close its gap
+  // faster than gap / dt (a box rocking on one corner meets the floor with the other)
+  const double reach = 0.5 * g_.h;
   const index_t nb = static_cast<index_t>(bodies_.size());
   for (index_t a = 0; a < nb; ++a) {
     Body<D>& b = bodies_[a];
@@ -814,6 +820,8 @@ index_t BodyTables<D>::contact(double t) {
       }
       contacts(nc, 6) = 0.0;  // the impulse it has taken so far
       contacts(nc, 7) = static_cast<double>(other);
+      for (int k = 8; k < 11; ++k) contacts(nc, k) = 0.0;  // the friction's likewise
+      contacts(nc, 11) = depth > -touch ? 0.0 : -depth;    // the gap ahead (m)
       ++nc;
       if (depth > deepest) {
         deepest = depth;
@@ -861,11 +869,11 @@ index_t BodyTables<D>::contact(double t) {
         if (g_.periodic[k]) continue;
         double n[D] = {};
         const double below = -x[k], above = x[k] - g_.cells[k] * g_.h;
-        if (below > -touch) {
+        if (below > -reach) {
           n[k] = 1.0;
           add(x, n, below, -1);
         }
-        if (above > -touch) {
+        if (above > -reach) {
           n[k] = -1.0;
           add(x, n, above, -1);
         }
@@ -879,7 +887,7 @@ index_t BodyTables<D>::contact(double t) {
         double gn = 0.0;
         for (int k = 0; k < D; ++k) gn += grad[k] * grad[k];
         gn = std::sqrt(gn);
-        if (px < touch && gn > 0.01) {
+        if (px < reach && gn > 0.01) {
           double n[D];
           for (int k = 0; k < D; ++k) n[k] = grad[k] / gn;
           flatter(x, n);
@@ -890,7 +898,7 @@ index_t BodyTables<D>::contact(double t) {
         if (o == a) continue;
         const Body<D>& other = bodies_[o];
         const double po = other.distance(contact_poses_[o], x.data());
-        if (!(po < touch)) continue;
+        if (!(po < reach)) continue;
         double n[D];
         const double gn = gradient(other, contact_poses_[o], x, n);
         if (!(gn > 0.01)) continue;
@@ -919,12 +927,25 @@ index_t BodyTables<D>::contact(double t) {
       for (int k = 0; k < 3; ++k) inv += rn[k] * turn[k];
       return inv;
     };
-    // projected Gauss-Seidel on the contacts' impulses (each >= 0, pushing only): contact
-    // by contact, the impulse that zeroes its normal velocity (relative to the other body's
-    // there) added to what it has taken, clamped at 0 (a contact may give back what an
-    // earlier one made it take), in sweeps until they agree: an inelastic, frictionless
-    // landing (two corners of a box resting flat). A free other body takes the opposite
-    // impulse; a body on a path is not moved by it.
+    // an impulse P (3) at r from the centre into a body's velocities (sign -1: the reaction)
+    auto impulse = [&](Body<D>& body, const std::array<std::array<double, 3>, 3>& I,
+                       const std::array<double, 3>& r, const std::array<double, 3>& P,
+                       double sign) {
+      for (int k = 0; k < D; ++k)
+        if (!body.locked[k]) body.velocity_now[k] += sign * P[k] / body.mass;
+      const auto rp = cross(r, P);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) body.omega_now[i] += sign * I[i][j] * rp[j];
+    };
+    // projected Gauss-Seidel on the contacts' impulses, contact by contact in sweeps until
+    // they agree: the normal impulse (>= 0, pushing only) that zeroes the contact's normal
+    // velocity (relative to the other body's there) added to what it has taken, clamped at 0
+    // (a contact may give back what an earlier one made it take): an inelastic landing (two
+    // corners of a box resting flat). Then Coulomb's friction: the tangential impulse that
+    // stops the sliding at the point, added to what it has taken and held within mu times
+    // the normal impulse (mu: the body's friction; between two free bodies the geometric mean
+    // of theirs). A free other body takes the opposite impulses; a body on a path is not
+    // moved by them.
     for (int sweep = 0; sweep < 500; ++sweep) {
       double change = 0.0;
       for (index_t c = 0; c < nc; ++c) {
@@ -934,38 +955,107 @@ index_t BodyTables<D>::contact(double t) {
           r[k] = x[k] - (k < D ? b.centre_now[k] : 0.0);
           n[k] = contacts(c, 3 + k);
         }
-        const auto w = cross(b.omega_now, r);
-        double vn = 0.0;
-        for (int k = 0; k < D; ++k) vn += (b.velocity_now[k] + w[k]) * n[k];
-        std::array<double, 3> turn{}, turn_o{}, r_o{};
-        double inv = share(b, Iinv, r, n, turn);
         const auto o = static_cast<index_t>(contacts(c, 7));
         Body<D>* other = o >= 0 && bodies_[o].free ? &bodies_[o] : nullptr;
-        if (other != nullptr) {
+        std::array<double, 3> r_o{};
+        if (other != nullptr)
           for (int k = 0; k < D; ++k) r_o[k] = x[k] - other->centre_now[k];
-          const auto wo = cross(other->omega_now, r_o);
-          for (int k = 0; k < D; ++k) vn -= (other->velocity_now[k] + wo[k]) * n[k];
-          inv += share(*other, inverse_inertia_[o], r_o, n, turn_o);
-        } else if (o >= 0) {
-          double u[D];
-          contact_poses_[o].velocity_at(x.data(), u);
-          for (int k = 0; k < D; ++k) vn -= u[k] * n[k];
+        // the velocity at the point relative to what it touches
+        auto relative = [&]() {
+          std::array<double, 3> u{};
+          const auto w = cross(b.omega_now, r);
+          for (int k = 0; k < D; ++k) u[k] = b.velocity_now[k] + w[k];
+          if (other != nullptr) {
+            const auto wo = cross(other->omega_now, r_o);
+            for (int k = 0; k < D; ++k) u[k] -= other->velocity_now[k] + wo[k];
+          } else if (o >= 0) {
+            double uo[D];
+            contact_poses_[o].velocity_at(x.data(), uo);
+            for (int k = 0; k < D; ++k) u[k] -= uo[k];
+          }
+          return u;
+        };
+        // the contact's inverse mass along a direction d
+        auto inverse_mass = [&](const std::array<double, 3>& d) {
+          std::array<double, 3> turn{};
+          double inv = share(b, Iinv, r, d, turn);
+          if (other != nullptr) inv += share(*other, inverse_inertia_[o], r_o, d, turn);
+          return inv;
+        };
+        auto apply = [&](const std::array<double, 3>& P) {
+          impulse(b, Iinv, r, P, 1.0);
+          if (other != nullptr) impulse(*other, inverse_inertia_[o], r_o, P, -1.0);
+        };
+        {  // the normal impulse (as written before friction, to the last bit)
+          const auto w = cross(b.omega_now, r);
+          double vn = 0.0;
+          for (int k = 0; k < D; ++k) vn += (b.velocity_now[k] + w[k]) * n[k];
+          std::array<double, 3> turn{}, turn_o{};
+          double inv = share(b, Iinv, r, n, turn);
+          if (other != nullptr) {
+            const auto wo = cross(other->omega_now, r_o);
+            for (int k = 0; k < D; ++k) vn -= (other->velocity_now[k] + wo[k]) * n[k];
+            inv += share(*other, inverse_inertia_[o], r_o, n, turn_o);
+          } else if (o >= 0) {
+            double u[D];
+            contact_poses_[o].velocity_at(x.data(), u);
+            for (int k = 0; k < D; ++k) vn -= u[k] * n[k];
+          }
+          const double taken = contacts(c, 6);
+          // inv 0: every degree of freedom along it is held
+          // the normal velocity may close the gap ahead over the step, not more
+          const double ahead = contacts(c, 11) / dt;
+          const double now = inv > 0.0 ? std::max(0.0, taken - (vn + ahead) / inv) : taken;
+          const double j = now - taken;
+          if (j != 0.0) {
+            contacts(c, 6) = now;
+            change = std::max(change, std::abs(j) * inv);  // the velocity it changed (m/s)
+            for (int k = 0; k < D; ++k)
+              if (!b.locked[k]) b.velocity_now[k] += j * n[k] / b.mass;
+            for (int k = 0; k < 3; ++k) b.omega_now[k] += j * turn[k];
+            if (other != nullptr) {
+              for (int k = 0; k < D; ++k)
+                if (!other->locked[k]) other->velocity_now[k] -= j * n[k] / other->mass;
+              for (int k = 0; k < 3; ++k) other->omega_now[k] -= j * turn_o[k];
+            }
+          }
         }
-        if (!(inv > 0.0)) continue;  // every degree of freedom along it is held
-        const double taken = contacts(c, 6);
-        const double now = std::max(0.0, taken - vn / inv);
-        const double j = now - taken;
-        if (j == 0.0) continue;
-        contacts(c, 6) = now;
-        change = std::max(change, std::abs(j) * inv);  // the velocity it changed (m/s)
-        for (int k = 0; k < D; ++k)
-          if (!b.locked[k]) b.velocity_now[k] += j * n[k] / b.mass;
-        for (int k = 0; k < 3; ++k) b.omega_now[k] += j * turn[k];
-        if (other != nullptr) {
-          for (int k = 0; k < D; ++k)
-            if (!other->locked[k]) other->velocity_now[k] -= j * n[k] / other->mass;
-          for (int k = 0; k < 3; ++k) other->omega_now[k] -= j * turn_o[k];
+        const double mu = other != nullptr ? std::sqrt(b.friction * other->friction) : b.friction;
+        if (!(mu > 0.0)) continue;
+        const auto u = relative();
+        double un = 0.0;
+        for (int k = 0; k < D; ++k) un += u[k] * n[k];
+        std::array<double, 3> slide{}, before{}, after{};
+        double speed = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          slide[k] = u[k] - un * n[k];
+          speed += slide[k] * slide[k];
+          before[k] = after[k] = contacts(c, 8 + k);
         }
+        speed = std::sqrt(speed);
+        if (speed > 0.0) {
+          std::array<double, 3> t{};
+          for (int k = 0; k < 3; ++k) t[k] = slide[k] / speed;
+          const double inv_t = inverse_mass(t);
+          if (inv_t > 0.0)
+            for (int k = 0; k < 3; ++k) after[k] -= speed / inv_t * t[k];
+        }
+        const double limit = mu * contacts(c, 6);
+        double size = 0.0;
+        for (int k = 0; k < 3; ++k) size += after[k] * after[k];
+        size = std::sqrt(size);
+        if (size > limit)
+          for (int k = 0; k < 3; ++k) after[k] *= limit / size;
+        std::array<double, 3> dP{};
+        double step = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          dP[k] = after[k] - before[k];
+          step += dP[k] * dP[k];
+          contacts(c, 8 + k) = after[k];
+        }
+        if (step == 0.0) continue;
+        change = std::max(change, std::sqrt(step) / b.mass);
+        apply(dP);
       }
       if (change < 1e-9) break;
     }

@@ -91,6 +91,7 @@ struct Body {
   double mass = 0.0;
   std::array<std::array<double, 3>, 3> inertia{};
   std::array<bool, 6> locked{};
+  double friction = 0.0;  // the Coulomb coefficient of its contacts (contact())
   std::array<double, D> centre_now{}, velocity_now{}, velocity_star{};
   std::array<double, 4> quat{1.0, 0.0, 0.0, 0.0};
   std::array<double, 3> omega_now{}, omega_star{};
@@ -149,19 +150,23 @@ class BodyTables {
   void mass_matrix(View<double, 2> M) const;
   // the velocities after the pressure: q = q* + M^-1 impulse (impulse: dofs, N s; 2D N s/m)
   void apply_impulse(View<const double> impulse);
-  // the free bodies' poses moved over dt at their velocities, then their contacts
+  // the free bodies' contacts where they are (at t - dt), then their poses moved over dt at
+  // the velocities the contacts leave (t: the time at the end of the move, s)
   void integrate(double dt, double t);
   // Contact of the free bodies with the domain's walls (those not periodic), the fixed
-  // obstacles and each other (t: the time of the bodies' poses, s): rigid, frictionless and
-  // inelastic. Every surface point on or beyond a wall, on or inside an obstacle (the fixed
-  // phi <= 0, its normal grad phi) or another body (its distance, normal its gradient) is a
-  // contact; the body is moved back out along the deepest one's normal by its depth, and the
-  // contacts' velocities into what they touch (relative to a body's velocity there) are
-  // removed by impulses there (through its mass and inertia; a held degree of freedom takes
-  // none), each impulse >= 0 (projected Gauss-Seidel: contact by contact, in sweeps until
-  // they agree). Another free body takes the opposite impulse; a body on a path is not
-  // moved by it. Returns the contacts.
-  index_t contact(double t);
+  // obstacles and each other (t: the time of the bodies' poses, s; dt: the step's, s): rigid
+  // and inelastic, with Coulomb's friction (Body::friction; 0: frictionless). Every surface
+  // point on or beyond a wall, on or inside an obstacle (the fixed phi <= 0, its normal grad
+  // phi) or another body (its distance, normal its gradient) is a contact; the body is moved
+  // back out along the deepest one's normal by its depth, and the contacts' velocities into
+  // what they touch (relative to a body's velocity there) are removed by impulses there
+  // (through its mass and inertia; a held degree of freedom takes none), each impulse >= 0,
+  // and the sliding at each is stopped by a tangential impulse up to mu times its normal one
+  // (projected Gauss-Seidel: contact by contact, in sweeps until they agree). A point within
+  // half a cell of a surface is a contact ahead: its velocity may close the gap over the
+  // step, not more (a speculative contact). Another free body takes the opposite impulses; a
+  // body on a path is not moved by them. Returns the contacts.
+  index_t contact(double t, double dt);
   // each body's pose and velocity at time t (bodies x 13: pivot (3), velocity (3), angular
   // velocity (3), orientation quaternion (4); 2D: z entries 0, rotation about z)
   void state(double t, View<double, 2> out) const;
@@ -172,8 +177,9 @@ class BodyTables {
   std::vector<std::array<index_t, 2>> dofs_;    // (body, kind: 0..D-1 translation, D.. rotation)
   std::vector<std::array<index_t, 6>> dof_of_;  // per body and kind: its dof (-1: held)
   Buffer<double> small_, rhs_small_;            // the dense solves of the free dofs
-  // contact(): per contact, point (3), normal (3), impulse, the other body (-1: none)
-  static constexpr index_t CONTACT = 8;
+  // contact(): per contact, point (3), normal (3), normal impulse, the other body (-1:
+  // none), friction impulse (3), the gap ahead (m; 0: touching)
+  static constexpr index_t CONTACT = 12;
   // a distance's gradient at least this long marks a flat part of a body's surface (contact)
   static constexpr double FLAT = 0.999;
   Buffer<double> contacts_;

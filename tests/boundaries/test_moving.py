@@ -611,6 +611,86 @@ def test_a_free_body_lands_on_another_and_rests_or_tips_off(tmp_path, lower, x0,
         assert state[1, 0] > 0.6 + 0.05 and state[1, 1] < 0.1 + 1e-3  # off the edge, down
 
 
+# gravity tilted by 10 degrees towards +x: the dry tank's floor is an incline (tan = 0.176)
+INCLINE = math.radians(10.0)
+SLOPE = (
+    DRY_TANK.format(title="boxes on an incline", height=0.4)
+    + """
+[[obstacles]]
+name = "lower"
+type = "box"
+min = [0.2, 0.0]
+max = [{x1}, 0.1]
+motion = {{type = "free", density = 500.0, friction = {mu}}}
+{upper}
+[material]
+density = 1000.0
+[physics]
+gravity = [{gx}, {gy}]
+[time]
+dt = 0.005
+end = {end}
+[output]
+interval = 0.1
+snapshots = false
+"""
+)
+UPPER = """[[obstacles]]
+name = "upper"
+type = "box"
+min = [0.3, 0.1]
+max = [0.4, 0.2]
+motion = {{type = "free", density = 500.0, friction = {mu}}}"""
+
+
+def _slide(mu: float) -> float:
+    """Coulomb's acceleration (m/s^2) down the incline, 0 where friction holds."""
+    return max(G * (math.sin(INCLINE) - mu * math.cos(INCLINE)), 0.0)
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.1, 0.3])
+def test_a_box_on_an_incline_slides_or_holds_by_coulombs_law(tmp_path, mu):
+    """Friction (obstacles.N.motion.friction, BodyTables::contact): a box resting on the floor
+    with gravity 10 degrees off the vertical slides with a = g (sin - mu cos) where mu <
+    tan 10 degrees = 0.176, and holds where mu is larger. Semi-implicit Euler (the contacts,
+    then the move) gives the velocity a t exactly and the distance a dt^2 n (n + 1) / 2 after
+    n steps; a held box does not creep (it did at g sin dt, 8.5 mm/s, when the move came
+    before the contacts). It stays flat on the floor."""
+    path = tmp_path / "incline.toml"
+    end, dt = 0.6, 0.005
+    gx, gy = G * math.sin(INCLINE), -G * math.cos(INCLINE)
+    path.write_text(SLOPE.format(x1=0.4, mu=mu, upper="", gx=gx, gy=gy, end=end))
+    sim = Simulation(load_case(path))
+    sim.run()
+    state = sim.scheme.core.body_state[0]
+    a, n = _slide(mu), round(end / dt)
+    assert state[3] == pytest.approx(a * end, rel=1e-6, abs=1e-8)
+    assert state[0] - 0.3 == pytest.approx(0.5 * a * dt**2 * n * (n + 1), rel=1e-6, abs=1e-8)
+    assert state[1] == pytest.approx(0.05, abs=1e-6)
+    assert abs(state[4]) < 1e-8 and abs(state[8]) < 1e-6  # no lift, no turn
+
+
+@pytest.mark.parametrize("mu", [0.05, 0.3])
+def test_a_box_on_another_slides_at_the_mean_of_their_frictions(tmp_path, mu):
+    """Between two free bodies mu is the geometric mean of theirs: a box on a longer box
+    that friction (0.3) holds on the incline slides at Coulomb's rate for sqrt(0.3 mu)
+    (0.122 for mu = 0.05, under tan 10 degrees) and holds at mu = 0.3; the lower one does
+    not move."""
+    path = tmp_path / "stack.toml"
+    end, dt = 0.4, 0.005
+    gx, gy = G * math.sin(INCLINE), -G * math.cos(INCLINE)
+    upper = UPPER.format(mu=mu)
+    path.write_text(SLOPE.format(x1=0.6, mu=0.3, upper=upper, gx=gx, gy=gy, end=end))
+    sim = Simulation(load_case(path))
+    sim.run()
+    lower, top = sim.scheme.core.body_state
+    a, n = _slide(math.sqrt(0.3 * mu)), round(end / dt)
+    assert lower[0] == pytest.approx(0.4, abs=1e-8) and abs(lower[3]) < 1e-8
+    assert top[3] == pytest.approx(a * end, rel=1e-6, abs=1e-8)
+    assert top[0] - 0.35 == pytest.approx(0.5 * a * dt**2 * n * (n + 1), rel=1e-6, abs=1e-8)
+    assert top[1] == pytest.approx(0.15, abs=1e-6)
+
+
 HINGED = """
 title = "a hinged bar"
 [domain]

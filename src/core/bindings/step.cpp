@@ -549,6 +549,11 @@ void bind_dim(nb::module_& m) {
                   b.velocity_now[k] = v[k];
                 }
                 for (int k = 0; k < 4; ++k) b.quat[k] = q[k];
+                if (d.contains("friction")) {
+                  b.friction = nb::cast<double>(d["friction"]);
+                  if (!(b.friction >= 0.0))
+                    throw std::invalid_argument("set_bodies: friction must be >= 0");
+                }
                 if (d.contains("offset")) {
                   const auto o = nb::cast<std::vector<double>>(d["offset"]);
                   if (o.size() != D)

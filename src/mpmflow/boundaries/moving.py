@@ -89,8 +89,9 @@ class Trajectory:
 class Freedom:
     """A free body's mass (kg; 2D kg/m), inertia about its pivot (3 x 3, kg m^2; 2D the
     zz entry, kg m), held degrees of freedom (6 flags: translations, then rotations; 2D:
-    x, y, rotation about z), starting velocity (m/s) and turning rate (rad/s), and its
-    centroid from its pivot (m; 0 but for a hinge)."""
+    x, y, rotation about z), starting velocity (m/s) and turning rate (rad/s), its
+    centroid from its pivot (m; 0 but for a hinge) and its contacts' Coulomb friction
+    coefficient."""
 
     mass: float
     inertia: Floats
@@ -98,6 +99,7 @@ class Freedom:
     velocity: Floats
     rate: float
     offset: Floats
+    friction: float = 0.0
 
 
 @dataclass
@@ -174,6 +176,7 @@ class Mover:
             "omega_now": [0.0, 0.0, float(f.rate)] if D == 2 else [0.0, 0.0, 0.0],
             "quat": [1.0, 0.0, 0.0, 0.0],
             "offset": [float(o) for o in f.offset],
+            "friction": float(f.friction),
         }
 
 
@@ -352,7 +355,10 @@ def _freedom(case: Case, k: int, shape: Shape, where: str) -> tuple[Freedom, Flo
     locked = (flags + [True] * 3) if D == 2 else flags
     velocity = np.asarray(motion.velocity or [0.0] * D, dtype=float)
     rate = math.radians(motion.rate)
-    return Freedom(mass, inertia, locked, velocity, rate, centroid - pivot), pivot
+    freedom = Freedom(
+        mass, inertia, locked, velocity, rate, centroid - pivot, float(motion.friction)
+    )
+    return freedom, pivot
 
 
 def of_case(case: Case) -> list[Mover]:

@@ -98,6 +98,14 @@ class Motion(Section):
         description='Mass (kg; 2D kg per metre of depth) of a free body (type = "free"), '
         "instead of its density: its inertia from its shape at the density this gives.",
     )
+    friction: float = Field(
+        0.0,
+        ge=0,
+        description='Coulomb friction coefficient mu of a free body (type = "free") where it '
+        "touches a wall, an obstacle or another body: the contact's tangential impulse stops "
+        "the sliding up to mu times its normal impulse (between two free bodies mu is the "
+        "geometric mean of theirs). 0: frictionless (the default).",
+    )
     locked: list[Literal["x", "y", "z", "rotation", "rx", "ry", "rz"]] = Field(
         [],
         description='Degrees of freedom a free body keeps at their start (type = "free"): '
@@ -119,10 +127,10 @@ class Motion(Section):
                 'type = "free" needs the body\'s density (kg/m^3) or its mass (kg), one of '
                 "them: give density = ... or mass = ..."
             )
-        if self.type != "free" and (self.density or self.mass or self.locked):
+        if self.type != "free" and (self.density or self.mass or self.locked or self.friction):
             raise ValueError(
-                f'density, mass and locked are for type = "free"; type = "{self.type}" '
-                "follows its path whatever its mass: remove them"
+                f'density, mass, locked and friction are for type = "free"; type = '
+                f'"{self.type}" follows its path whatever its mass: remove them'
             )
         if not any(self.axis):
             raise ValueError("axis must not be [0, 0, 0]; give the direction, e.g. [0, 1, 0]")
