@@ -90,6 +90,24 @@ class NodeExchange:
                 col += w
 
 
+def number_rows(
+    comm: Comm, exchange: NodeExchange, shape: tuple[int, ...], mine: NDArray[Any]
+) -> tuple[NDArray[np.float64], int, int]:
+    """The global numbers of a system's rows split over the ranks (the pressure's on nodes,
+    the volume correction's on cells, the viscous predictor's on node components): this
+    rank's own rows, ``mine`` (an index or a mask into an array of ``shape``, one entry per
+    local node or cell and component), numbered in their order after those of the ranks
+    before. Returns the numbers at every local place (-1: no row; the owners' numbers where
+    this rank does not own the place), the first of this rank's and the total. Collective."""
+    count = int(np.count_nonzero(mine)) if mine.dtype == bool else int(mine.size)
+    counts = comm.allgather(count)
+    first = int(sum(counts[: comm.rank]))
+    number = np.full(shape, -1.0)
+    number[mine] = first + np.arange(count)
+    exchange.fill(number)
+    return number, first, int(sum(counts))
+
+
 def _take(arrays: ParticleArrays, mask: NDArray[Any]) -> ParticleArrays:
     return {k: a[mask] for k, a in arrays.items()}
 

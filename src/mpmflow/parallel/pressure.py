@@ -21,7 +21,7 @@ from ..arrays import Floats, Ints
 from ..errors import SolverError
 from ..schemes import pressure
 from .comm import Comm
-from .exchange import NodeExchange
+from .exchange import NodeExchange, number_rows
 from .petsc import DistributedSystem, Preconditioner
 from .pockets import sealed_pockets
 from .subgrid import Subgrid
@@ -55,12 +55,7 @@ class DistributedPressure:
         """Number the owned rows over the ranks and hand PETSc this rank's block."""
         comm, sub = self.comm, self.sub
         owned = np.flatnonzero(sub.owned_nodes[rows])
-        counts = comm.allgather(int(owned.size))
-        first = int(sum(counts[: comm.rank]))
-        n = int(sum(counts))
-        number = np.full(sub.grid.nnodes, -1.0)
-        number[rows[owned]] = first + np.arange(owned.size)
-        self.nodes.fill(number)
+        number, first, n = number_rows(comm, self.nodes, (sub.grid.nnodes,), rows[owned])
         number = number[rows]
         self.owned, self.rows = owned, rows.copy()
         self.last_owned = int(owned.size)

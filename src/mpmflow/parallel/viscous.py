@@ -26,7 +26,7 @@ import numpy as np
 from ..arrays import Floats
 from ..errors import SolverError
 from .comm import Comm
-from .exchange import NodeExchange
+from .exchange import NodeExchange, number_rows
 from .petsc import DistributedSystem, Preconditioner
 from .subgrid import Subgrid
 
@@ -59,15 +59,9 @@ class DistributedViscous:
         rows = core.viscous_rows  # nn x D
         unknown = rows >= 0
         mine = unknown & sub.owned_nodes[:, None]
-        count = int(mine.sum())
-        counts = comm.allgather(count)
-        first = int(sum(counts[: comm.rank]))
-        total = int(sum(counts))
+        number, first, total = number_rows(comm, self.nodes, rows.shape, mine)
         if total == 0:
             return 0, 0.0
-        number = np.full(rows.shape, -1.0)
-        number[mine] = first + np.arange(count)
-        self.nodes.fill(number)
         glob = np.full(x.size, -1, dtype=np.int64)
         glob[rows[unknown]] = number[unknown].astype(np.int64)
         # a ghost node the owner does not solve for, or the reverse, would couple the ranks'

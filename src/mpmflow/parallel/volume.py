@@ -23,7 +23,7 @@ from ..arrays import Floats, Ints
 from ..errors import SolverError
 from ..schemes import volume_correction
 from .comm import Comm
-from .exchange import NodeExchange
+from .exchange import NodeExchange, number_rows
 from .petsc import DistributedSystem, Preconditioner
 from .pockets import sealed_pockets
 from .subgrid import Subgrid
@@ -52,13 +52,8 @@ class DistributedVolume:
         """Number the owned rows (cells) over the ranks and hand PETSc this rank's block."""
         comm, sub = self.comm, self.sub
         owned = np.flatnonzero(sub.owned_cells[rows])
-        counts = comm.allgather(int(owned.size))
-        first = int(sum(counts[: comm.rank]))
-        n = int(sum(counts))
         count = sub.grid.ncells
-        number = np.full(count, -1.0)
-        number[rows[owned]] = first + np.arange(owned.size)
-        self.cells.fill(number)
+        number, first, n = number_rows(comm, self.cells, (count,), rows[owned])
         mine = cols[owned]
         global_cols = np.where(mine >= 0, number[rows[np.maximum(mine, 0)]], -1)
         where = self.where()
