@@ -317,7 +317,7 @@ class State {
   // image node of a periodic axis shares its master's row, the master's entry deciding).
   // Right after classify it changes nothing. Returns the unknowns.
   index_t renumber();
-  // The pressure step after predict: assembly, the solve (the solver of use_solver, or the
+  // The pressure step after predict: assembly, the solve (the solver of use_solvers, or the
   // multigrid) for each right-hand side the wall release asks for, the ghost values.
   // Returns a Status (OK, SINGULAR, PRESSURE_NOT_CONVERGED).
   int pressure_solve(const Options<D>& O, Report& report);
