@@ -108,6 +108,18 @@ def number_rows(
     return number, first, int(sum(counts))
 
 
+def spread(
+    exchange: NodeExchange, shape: tuple[int, ...], mine: NDArray[Any], values: NDArray[Any]
+) -> NDArray[np.float64]:
+    """A solution over the ranks at every local place: this rank's values at its own rows
+    (``mine``, as ``number_rows`` took them), the owners' elsewhere, 0 off the rows.
+    Collective."""
+    whole = np.zeros(shape)
+    whole[mine] = values
+    exchange.fill(whole)
+    return whole
+
+
 def _take(arrays: ParticleArrays, mask: NDArray[Any]) -> ParticleArrays:
     return {k: a[mask] for k, a in arrays.items()}
 

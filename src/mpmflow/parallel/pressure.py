@@ -21,7 +21,7 @@ from ..arrays import Floats, Ints
 from ..errors import SolverError
 from ..schemes import pressure
 from .comm import Comm
-from .exchange import NodeExchange, number_rows
+from .exchange import NodeExchange, number_rows, spread
 from .petsc import DistributedSystem, Preconditioner
 from .pockets import sealed_pockets
 from .subgrid import Subgrid
@@ -97,10 +97,7 @@ class DistributedPressure:
                 self.n,
                 self._worst(b, result.x),
             )
-        p = np.zeros(self.sub.grid.nnodes)
-        p[self.rows[owned]] = result.x
-        self.nodes.fill(p)
-        x[:] = p[self.rows]
+        x[:] = spread(self.nodes, (self.sub.grid.nnodes,), self.rows[owned], result.x)[self.rows]
         return result.iterations, result.residual
 
     def _worst(self, b: Floats, x: Floats) -> Floats:

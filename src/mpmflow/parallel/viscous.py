@@ -26,7 +26,7 @@ import numpy as np
 from ..arrays import Floats
 from ..errors import SolverError
 from .comm import Comm
-from .exchange import NodeExchange, number_rows
+from .exchange import NodeExchange, number_rows, spread
 from .petsc import DistributedSystem, Preconditioner
 from .subgrid import Subgrid
 
@@ -95,8 +95,6 @@ class DistributedViscous:
                 f"{self.system.max_iterations}); {total} unknowns (velocity components). Try "
                 "a smaller time.dt or a larger solver.max_iterations."
             )
-        values = np.zeros(rows.shape)
-        values[mine] = result.x
-        self.nodes.fill(values)
+        values = spread(self.nodes, rows.shape, mine, result.x)
         x[rows[unknown]] = values[unknown]
         return result.iterations, result.residual

@@ -23,7 +23,7 @@ from ..arrays import Floats, Ints
 from ..errors import SolverError
 from ..schemes import volume_correction
 from .comm import Comm
-from .exchange import NodeExchange, number_rows
+from .exchange import NodeExchange, number_rows, spread
 from .petsc import DistributedSystem, Preconditioner
 from .pockets import sealed_pockets
 from .subgrid import Subgrid
@@ -82,8 +82,5 @@ class DistributedVolume:
             raise volume_correction.not_converged(
                 self.where(), result.residual, result.iterations, self.n
             )
-        whole = np.zeros(self.sub.grid.ncells)
-        whole[self.rows[owned]] = result.x
-        self.cells.fill(whole)
-        q[:] = whole[self.rows]
+        q[:] = spread(self.cells, (self.sub.grid.ncells,), self.rows[owned], result.x)[self.rows]
         return result.iterations, result.residual
