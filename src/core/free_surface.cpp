@@ -59,19 +59,24 @@ index_t number_masters(const Grid<D>& g, View<index_t> node_row) {
 template <int D>
 index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
                        View<const index_t> static_slot, View<const double> node_f, bool subcell,
-                       View<index_t> node_row) {
+                       View<index_t> node_row, bool any) {
   const auto offset = cell_offsets<D>(g);
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
     bool unknown = !(subcell && node_f(i) <= 0.5);
     bool fluid = false;  // some cell of the node lies outside every solid
+    bool some = false;   // some such cell takes part
     const index_t first = interior_first_cell<D>(g, ix);
     for (int b = 0; b < (1 << D); ++b) {
       const index_t c = first >= 0 ? first + offset[b] : cell_of_node<D>(g, ix, b);
       if (c >= 0 && static_slot(c) >= 0) {
         fluid = true;
-        if (cell_slot(c) < 0) unknown = false;
+        if (cell_slot(c) < 0)
+          unknown = false;
+        else
+          some = true;
       }
     }
+    if (any) unknown = some;
     node_row(i) = unknown && fluid && !g.is_image(ix.data()) ? 0 : -1;
   });
   return number_masters<D>(g, node_row);
@@ -111,9 +116,9 @@ template void nodal_fraction<3>(const Grid<3>&, View<const double>, View<const d
 template void enclosed_cells<2>(const Grid<2>&, View<const double>, View<bool>);
 template void enclosed_cells<3>(const Grid<3>&, View<const double>, View<bool>);
 template index_t classify_nodes<2>(const Grid<2>&, View<const index_t>, View<const index_t>,
-                                   View<const double>, bool, View<index_t>);
+                                   View<const double>, bool, View<index_t>, bool);
 template index_t classify_nodes<3>(const Grid<3>&, View<const index_t>, View<const index_t>,
-                                   View<const double>, bool, View<index_t>);
+                                   View<const double>, bool, View<index_t>, bool);
 template index_t renumber_nodes<2>(const Grid<2>&, View<index_t>);
 template index_t renumber_nodes<3>(const Grid<3>&, View<index_t>);
 

@@ -69,12 +69,13 @@ void enclosed_cells(const Grid<D>& g, View<const double> node_f, View<bool> encl
 // Number the pressure unknowns into node_row (row of each node, -1 = none); returns their
 // count. A node is an unknown when all its in-domain cells outside solids (static_slot >= 0)
 // take part in the system (cell_slot >= 0), there is at least one such cell and, with
-// subcell, node_f > 1/2. Unknowns are numbered in node order; an image node (periodic
-// axes) shares its master's row.
+// subcell, node_f > 1/2; with any (a solid's cell pressure, whose nodes mark where the
+// material is), when any of those cells takes part. Unknowns are numbered in node order; an
+// image node (periodic axes) shares its master's row.
 template <int D>
 index_t classify_nodes(const Grid<D>& g, View<const index_t> cell_slot,
                        View<const index_t> static_slot, View<const double> node_f, bool subcell,
-                       View<index_t> node_row);
+                       View<index_t> node_row, bool any = false);
 
 // Number again the unknowns of node_row (entries >= 0: an unknown, -1: not; e.g. after a
 // caller took some out) as classify_nodes numbers them: in node order, an image node

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "binning.hpp"
+#include "cell_pressure.hpp"
 #include "corrector.hpp"
 #include "cut_cells.hpp"
 #include "free_surface.hpp"
@@ -97,6 +98,7 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
   anchored_.reserve(nn);
   p_node_.reserve(nn);
   for (index_t i = 0; i < nn; ++i) p_node_.view(nn)(i) = 0.0;
+  p_cell_.reserve(nc);  // zeros (calloc)
   for (index_t i = 0; i < nn * D; ++i) v_new_.view(nn * D)(i) = 0.0;
   for (index_t i = 0; i < nn; ++i) ocontact_.view(nn)(i) = false;
   partial_.reserve(nc);
@@ -180,12 +182,13 @@ void State<D>::cell_integrals(const Particles<D>& P, const Options<D>& O) {
   auto slot = slot_.view(nc);
   auto stat = ob_.static_slot;
   const index_t ns = ob_.K.extent(0);
+  const bool particles = O.partial_particles || O.cell_pressure;
   index_t npartial = 0, nsurface = 0;
   for (index_t c = 0; c < nc; ++c) {
     const bool counted = theta(c) >= O.sparse;
     slot(c) = (counted || enclosed(c)) && stat(c) >= 0 ? stat(c) : -1;
     if (counted && theta(c) < O.full && stat(c) >= 0) {
-      if (O.partial_particles)
+      if (particles)
         npartial += 1;
       else if (!enclosed(c))
         nsurface += 1;
@@ -217,7 +220,7 @@ void State<D>::cell_integrals(const Particles<D>& P, const Options<D>& O) {
   }
   I_.slot = slot;
   I_.K = K;
-  if (O.surface == GAUSS || O.partial_particles) {
+  if (O.surface == GAUSS || particles) {
     I_.rhs_slot = I_.cor_slot = slot;
     I_.rhs_C = I_.cor_C = C;
     I_.rhs_V = I_.cor_V = V;
@@ -268,8 +271,15 @@ void State<D>::classify_nodes(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
   auto node_row = node_row_.view(nn);
   nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, ob_.static_slot, node_f_.view(nn), O.subcell,
-                                      node_row);
+                                      node_row, O.cell_pressure);
   fill_rows();
+  if (O.cell_pressure) {  // a solid's pressure per cell: its rows and their gradients
+    const index_t nc = grid_.ncells;
+    npc_ = number_cells(I_.cor_slot, pc_row_.sized(nc), pc_rows_.sized(nc));
+    cell_gradients<D>(grid_, I_.cor_slot, I_.cor_C, pc_rows_.view(npc_),
+                      pc_G_.template sized<3>({npc_, NC, D}));
+    node_volumes<D>(grid_, I_.cor_slot, I_.cor_V, pc_vol_.sized(nn));
+  }
 }
 
 template <int D>
@@ -563,7 +573,111 @@ bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
 }
 
 template <int D>
+bool State<D>::counted_solve(const Options<D>& O, Report& report, View<const index_t, 2> cols,
+                             View<const double, 2> vals, View<const index_t> rows,
+                             View<const double> b, View<double> y, View<double> scratch,
+                             index_t& iterations, bool cells) {
+  const SolveResult res =
+      solver_ ? solver_->solve(b, y) : pressure_mg_.pcg(b, y, O.tol, O.max_iterations, O.sweeps);
+  report.solves += 1;
+  report.iterations += res.iterations;
+  iterations += res.iterations;
+  report.residual = std::max(report.residual, res.residual);
+  if (res.residual <= O.tol) return true;
+  report.fail_iterations = res.iterations;
+  report.fail_residual = res.residual;
+  const index_t worst = rows(worst_row(cols, vals, y, b, scratch));
+  // a cell's row: its first node, for the message's place
+  report.fail_node = cells ? grid_.cell_first_node(worst) : worst;
+  report.fail_size = rows.size();
+  return false;
+}
+
+template <int D>
+void State<D>::cell_hold() {
+  const index_t nn = grid_.nnodes;
+  hold_projector(T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact_.template view<2>({nn, D}),
+                 ob_.onode, ob_.onormal, ob_.ono_slip, ocontact_.view(nn),
+                 pc_P_.template sized<3>({nn, D, D}));
+}
+
+template <int D>
+int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
+  if (exchange_->shared())
+    throw std::logic_error("State: a solid's cell pressure runs in one process");
+  if (bodies_.free_dofs() > 0)
+    throw std::logic_error("State: a solid's cell pressure does not take free bodies");
+  const index_t nn = grid_.nnodes, nc = grid_.ncells, n = npc_;
+  auto v_star = v_star_.template view<2>({nn, D});
+  auto node_row = node_row_.view(nn);
+  auto contact = contact_.template view<2>({nn, D});
+  auto ocontact = ocontact_.view(nn);
+  start_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, contact,
+                T_.wall_bonded);
+  start_obstacles(ob_.onode, ob_.onormal, v_star, node_row, ocontact, ob_.velocity);
+  auto p_cell = p_cell_.view(nc);
+  if (n == 0) {
+    for (index_t c = 0; c < nc; ++c) p_cell(c) = 0.0;
+    cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, pc_row_.view(nc), pc_rows_.view(0), p_cell,
+                     View<double, 2>(), View<double, 2>(), p_node_.view(nn));
+    return OK;
+  }
+  auto rows = pc_rows_.view(n);
+  auto cell_row = pc_row_.view(nc);
+  auto G = pc_G_.template view<3>({n, NC, D});
+  auto vol = pc_vol_.view(nn);
+  auto cols = cols_.template sized<2>({n, NS});
+  auto vals = vals_.template sized<2>({n, NS});
+  auto rhs = rhs_.sized(n);
+  auto x = x_.sized(n);
+  auto scratch = scratch_.sized(n);
+  for (index_t r = 0; r < n; ++r) x(r) = p_cell(rows(r));  // the last step's, to start from
+  std::array<index_t, D> dims{}, period{};
+  for (int k = 0; k < D; ++k) {
+    dims[k] = grid_.cells[k];
+    if (grid_.periodic[k]) period[k] = grid_.cells[k];
+  }
+  auto v = v_c_.template view<2>({nn, D});
+  index_t step_iterations = 0;
+  while (true) {
+    cell_hold();
+    assemble_cells<D>(grid_, cell_row, rows, G, pc_P_.template view<3>({nn, D, D}), vol, cols,
+                      vals);
+    std::copy(v_star.data(), v_star.data() + nn * D, v.data());
+    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v, contact,
+                T_.wall_velocity);
+    apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v, ocontact, View<const double>(),
+                    ob_.velocity);
+    cell_rhs<D>(grid_, rows, G, v, O.rho / O.dt, rhs);
+    if (solver_)
+      solver_->setup(cols, vals, rows);
+    else
+      pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+    if (!counted_solve(O, report, cols, vals, rows, rhs, x, scratch, step_iterations, true))
+      return PRESSURE_NOT_CONVERGED;
+    for (index_t c = 0; c < nc; ++c) p_cell(c) = 0.0;
+    for (index_t r = 0; r < n; ++r) p_cell(rows(r)) = x(r);
+    // the walls let go where the cells round a node pull (their plain mean is negative)
+    auto mean = pc_mean_.sized(nn);
+    cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell, View<double, 2>(),
+                     View<double, 2>(), mean);
+    const index_t released =
+        release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, mean, contact,
+                        T_.wall_bonded) +
+        release_obstacles(ob_.onode, ob_.onormal, v_star, node_row, mean, ocontact, ob_.velocity);
+    if (released == 0) break;
+    report.released += released;
+  }
+  cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell,
+                   pc_X_.template sized<2>({n, D}), pc_grad_.template sized<2>({n, D}),
+                   p_node_.view(nn));
+  report.max_iterations = std::max(report.max_iterations, step_iterations);
+  return OK;
+}
+
+template <int D>
 int State<D>::pressure_solve(const Options<D>& O, Report& report) {
+  if (O.cell_pressure) return cell_pressure_solve(O, report);
   warm_start();
   bool anchored = pressure_matrix(O);
   report.pockets += npockets_;
@@ -600,20 +714,8 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   index_t step_iterations = 0;
   // one solve of the pressure matrix, counted; false: it did not converge (reported)
   auto solve = [&](View<const double> b, View<double> y) {
-    const SolveResult res =
-        solver_ ? solver_->solve(b, y) : pressure_mg_.pcg(b, y, O.tol, O.max_iterations, O.sweeps);
-    report.solves += 1;
-    report.iterations += res.iterations;
-    step_iterations += res.iterations;
-    report.residual = std::max(report.residual, res.residual);
-    if (!(res.residual <= O.tol)) {
-      report.fail_iterations = res.iterations;
-      report.fail_residual = res.residual;
-      report.fail_node = rows(worst_row(cols, vals, y, b, scratch_.view(n)));
-      report.fail_size = n;
-      return false;
-    }
-    return true;
+    return counted_solve(O, report, cols, vals, rows, b, y, scratch_.view(n), step_iterations,
+                         false);
   };
   const bool free = bodies_.free_dofs() > 0;
   while (true) {
@@ -689,7 +791,20 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
       if (weight(c) > 0.0 && eta(c) >= cap && (owned.size() == 0 || owned(c))) report.capped += 1;
   }
   auto base = v_c_.template view<2>({nn, D});
-  correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
+  if (O.cell_pressure) {
+    cell_hold();
+    correct_cells<D>(grid_, pc_row_.view(nc), pc_G_.template view<3>({npc_, NC, D}),
+                     pc_P_.template view<3>({nn, D, D}), pc_vol_.view(nn), p_cell_.view(nc), v_star,
+                     O.dt / O.rho, base);
+    // what the walls and obstacles hold at their own velocity: the projector left v* there,
+    // which the solve would keep at a slip wall's held normal (and the stress would read)
+    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, base, contact,
+                T_.wall_velocity);
+    apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, base, ocontact, View<const double>(),
+                    ob_.velocity);
+  } else {
+    correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p, v_star, O.dt / O.rho, base);
+  }
 }
 
 template <int D>
@@ -723,6 +838,19 @@ index_t State<D>::viscous_system(const Options<D>& O) {
 
 template <int D>
 int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
+  if (O.cell_pressure && O.viscous) {
+    // a solid's first step (no cell pressure yet): the pressure that answers v* before the
+    // elastic step starts it, as the incompressible material's instant response to its
+    // load; from 0 the elastic solve met the whole load and stored a stress the pressure
+    // then took over (a column at rest kept 250 Pa of it)
+    auto p_cell = p_cell_.view(grid_.ncells);
+    bool zero = true;
+    for (index_t c = 0; c < grid_.ncells && zero; ++c) zero = p_cell(c) == 0.0;
+    if (zero) {
+      const int status = cell_pressure_solve(O, report);
+      if (status != OK) return status;
+    }
+  }
   viscous_start(O, report);
   if (!O.viscous) return OK;
   const index_t nn = grid_.nnodes;
@@ -947,8 +1075,15 @@ void State<D>::correct(const Options<D>& O) {
   auto v_new = v_new_.template view<2>({nn, D});
   auto contact = contact_.template view<2>({nn, D});
   auto ocontact = ocontact_.view(nn);
-  correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p_node_.view(nn),
-                      v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
+  if (O.cell_pressure) {  // the contacts' projector as the pressure step left them
+    const index_t nc = grid_.ncells;
+    correct_cells<D>(grid_, pc_row_.view(nc), pc_G_.template view<3>({npc_, NC, D}),
+                     pc_P_.template view<3>({nn, D, D}), pc_vol_.view(nn), p_cell_.view(nc),
+                     v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
+  } else {
+    correct_velocity<D>(grid_, I_.cor_slot, I_.cor_C, I_.cor_V, p_node_.view(nn),
+                        v_star_.template view<2>({nn, D}), O.dt / O.rho, v_new);
+  }
   apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_new, contact,
               T_.wall_velocity);
   // with the face term (wall_flux) only the obstacle nodes in the solid: the corrected
@@ -1035,7 +1170,8 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
   }
   predict(P, O, correct);
   // the unknowns of the whole system (a rank's rows round its box are its owners')
-  const index_t n = exchange_->shared() ? exchange_->sum(owned_rows()) : nrows_;
+  const index_t n =
+      exchange_->shared() ? exchange_->sum(owned_rows()) : (O.cell_pressure ? npc_ : nrows_);
   report.unknowns = std::max(report.unknowns, n);
   report.last_unknowns = n;
   PhaseClock clock(phase_seconds_);

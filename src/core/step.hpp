@@ -102,6 +102,9 @@ struct Options {
   double full = 0.9;
   double sparse = 0.0;
   bool partial_particles = false;
+  // a solid's pressure: one value per cell, its surface natural (cell_pressure.hpp); the
+  // cells' integrals are then the particles' in a partial cell, as with partial_particles
+  bool cell_pressure = false;
   int surface = GAUSS;
   bool subcell = true;
   bool wall_flux = true;
@@ -322,6 +325,14 @@ class State {
   // Returns a Status (OK, SINGULAR, PRESSURE_NOT_CONVERGED).
   int pressure_solve(const Options<D>& O, Report& report);
   bool pressure_matrix(const Options<D>& O);  // assemble; false: singular (no free surface)
+  // O.cell_pressure's pressure step in place of the nodes' (cell_pressure.hpp)
+  int cell_pressure_solve(const Options<D>& O, Report& report);
+  void cell_hold();  // the projector onto the components walls and obstacles do not hold
+  // one solve of the pressure matrix (cols, vals over rows: nodes, or cells), counted in the
+  // report; false: it did not converge (the report names the worst row's node)
+  bool counted_solve(const Options<D>& O, Report& report, View<const index_t, 2> cols,
+                     View<const double, 2> vals, View<const index_t> rows, View<const double> b,
+                     View<double> y, View<double> scratch, index_t& iterations, bool cells);
   void pressure_rhs(const Options<D>& O);
   index_t release_walls(View<const double> x);  // the solution in; returns nodes released
   void extend_pressure(const Options<D>& O);
@@ -376,6 +387,8 @@ class State {
 
   // the arrays Python reads (views of the state's own storage)
   View<double> p_node() { return p_node_.view(grid_.nnodes); }
+  // a solid's pressure per cell (Options::cell_pressure; 0 elsewhere), Pa
+  View<double> p_cell() { return p_cell_.view(grid_.ncells); }
   View<double, 2> v_new() { return v_new_.template view<2>({grid_.nnodes, D}); }
   View<bool, 2> contact() { return contact_.template view<2>({grid_.nnodes, D}); }
   View<double> eta() { return eta_.view(viscous_on_ ? grid_.ncells : 0); }
@@ -467,6 +480,11 @@ class State {
   index_t npockets_ = 0;
   Buffer<bool> contact_, ocontact_, anchored_;
   Buffer<double> p_node_;
+  // the cell pressure's rows, gradients (rows x 2^D x D), hold projectors (nn x D x D), node
+  // volumes and pressure (cell_pressure.hpp); grown at a solid's first step
+  Buffer<index_t> pc_row_, pc_rows_;
+  Buffer<double> pc_G_, pc_P_, pc_vol_, pc_X_, pc_grad_, pc_mean_, p_cell_;
+  index_t npc_ = 0;
   Buffer<double> K_, C_, V_, Cs_, Vs_, Vcells_;  // the step's element integrals
   Buffer<index_t> cols_;
   Buffer<double> vals_, rhs_, x_, scratch_;

@@ -307,6 +307,7 @@ void bind_dim(nb::module_& m) {
       .def_rw("full", &O::full)
       .def_rw("sparse", &O::sparse)
       .def_rw("partial_particles", &O::partial_particles)
+      .def_rw("cell_pressure", &O::cell_pressure)
       .def_rw("surface", &O::surface)
       .def_rw("subcell", &O::subcell)
       .def_rw("wall_flux", &O::wall_flux)
@@ -760,6 +761,7 @@ void bind_dim(nb::module_& m) {
                      return std::vector<double>(t.begin(), t.end());
                    })
       .def_prop_ro("p_node", &state_view<D, &State<D>::p_node>)
+      .def_prop_ro("p_cell", &state_view<D, &State<D>::p_cell>)
       .def_prop_ro("v_new", &state_view<D, &State<D>::v_new>)
       .def_prop_ro("contact", &state_view<D, &State<D>::contact>)
       .def_prop_ro("eta", &state_view<D, &State<D>::eta>)

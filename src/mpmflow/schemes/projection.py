@@ -274,6 +274,7 @@ class ProjectionScheme:
             full=float(s.full_cell_threshold),
             sparse=float(preset(s.sparse_cell_threshold, "sparse_cell_threshold")),
             partial_particles=particles,
+            cell_pressure=materials.is_solid(m),
             surface=(
                 state.SURFACE_QUADRATURE["gauss"]
                 if particles
@@ -313,6 +314,8 @@ class ProjectionScheme:
             "dt_range": np.array(self.dt_range),
             "time": np.array(self.time),
         }
+        if materials.is_solid(self.case.material):  # a solid's pressure is the cells'
+            saved["p_cell"] = self.core.p_cell.copy()
         if self.movers:  # the free bodies' poses and velocities
             saved["body_state"] = self.core.body_state.copy()
         q = self.core.volume_q
@@ -332,6 +335,8 @@ class ProjectionScheme:
     def restore(self, saved: dict[str, NDArray[Any]]) -> None:
         """Continue from ``state()`` (a checkpoint)."""
         np.copyto(self.core.p_node, saved["p_node"])
+        if "p_cell" in saved:  # a solid's cell pressure (checkpoints before it carry none)
+            np.copyto(self.core.p_cell, saved["p_cell"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
         if "since_volume" in saved:  # checkpoints written before adaptive steps lack them
@@ -384,6 +389,8 @@ class ProjectionScheme:
         buffers are overwritten by the step). Lets a run refuse such a case before it
         starts instead of failing at step 1."""
         O = self.options(1.0)  # the step size does not change which nodes are unknowns
+        if O.cell_pressure:  # a solid's surface is natural: no level to refer to
+            return
         n = self.core.predict(*self._particles(), O, False, **self._extra())
         if n and not self.core.pressure_matrix(O):
             raise pressure.singular(" at the start")

@@ -79,6 +79,7 @@ class CoreOptions(Protocol):
     full: float
     sparse: float
     partial_particles: bool
+    cell_pressure: bool  # a solid's pressure per cell (src/core/cell_pressure.hpp)
     surface: int
     subcell: bool
     wall_flux: bool
@@ -327,6 +328,8 @@ class CoreState(Protocol):
     def phase_seconds(self) -> list[float]: ...
     @property
     def p_node(self) -> Floats: ...
+    @property
+    def p_cell(self) -> Floats: ...  # a solid's pressure per cell (Pa; cell_pressure.hpp)
     @property
     def v_new(self) -> Floats: ...
     @property

@@ -1,0 +1,327 @@
+#include "cell_pressure.hpp"
+
+#include <array>
+#include <cmath>
+#include <utility>
+
+#include "parallel.hpp"
+#include "stencil.hpp"
+
+namespace mpmflow {
+
+index_t number_cells(View<const index_t> cell_slot, View<index_t> cell_row, View<index_t> rows) {
+  index_t n = 0;
+  for (index_t c = 0; c < cell_slot.size(); ++c) {
+    if (cell_slot(c) >= 0) {
+      cell_row(c) = n;
+      rows(n) = c;
+      n += 1;
+    } else {
+      cell_row(c) = -1;
+    }
+  }
+  return n;
+}
+
+template <int D>
+void cell_gradients(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 4> C,
+                    View<const index_t> rows, View<double, 3> G) {
+  constexpr int NC = 1 << D;
+  parallel_for(rows.size(), [&](index_t r) {
+    const index_t s = cell_slot(rows(r));
+    for (int a = 0; a < NC; ++a)
+      for (int k = 0; k < D; ++k) {
+        double sum = 0.0;
+        for (int b = 0; b < NC; ++b) sum += C(s, b, a, k);
+        G(r, a, k) = sum;
+      }
+  });
+}
+
+// Calls f(c, a) for each cell c of node i (coordinates ix) in the domain, a the node's corner
+// in it (periodic axes wrapped).
+template <int D, class F>
+inline void node_cells_each(const Grid<D>& g, const std::array<index_t, D>& ix, F&& f) {
+  for (int b = 0; b < (1 << D); ++b) {
+    const NodeCell nc = node_cell<D>(g, ix, b);
+    if (nc.c >= 0) f(nc.c, nc.a);
+  }
+}
+
+template <int D>
+void node_volumes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                  View<double> vol) {
+  parallel_for(g.nnodes, [&](index_t i) {
+    std::array<index_t, D> ix;
+    g.node_coords(i, ix.data());
+    double sum = 0.0;
+    node_cells_each<D>(g, ix, [&](index_t c, int a) {
+      if (cell_slot(c) >= 0) sum += V(cell_slot(c), a);
+    });
+    vol(i) = sum;
+  });
+}
+
+void hold_projector(View<const index_t> wall_node, View<const index_t> wall_axis,
+                    View<const bool> wall_no_slip, View<const bool, 2> contact,
+                    View<const index_t> onode, View<const double, 2> onormal,
+                    View<const bool> ono_slip, View<const bool> ocontact, View<double, 3> P) {
+  const index_t nn = P.extent(0), D = P.extent(1);
+  parallel_for(nn, [&](index_t i) {
+    for (index_t k = 0; k < D; ++k)
+      for (index_t m = 0; m < D; ++m) P(i, k, m) = k == m ? 1.0 : 0.0;
+  });
+  const auto zero = [&](index_t i) {
+    for (index_t k = 0; k < D; ++k)
+      for (index_t m = 0; m < D; ++m) P(i, k, m) = 0.0;
+  };
+  for (index_t e = 0; e < wall_node.size(); ++e) {
+    const index_t i = wall_node(e), k = wall_axis(e);
+    if (!contact(i, k)) continue;
+    if (wall_no_slip(e)) {
+      zero(i);
+      continue;
+    }
+    for (index_t m = 0; m < D; ++m) P(i, k, m) = P(i, m, k) = 0.0;
+  }
+  for (index_t e = 0; e < onode.size(); ++e) {
+    const index_t i = onode(e);
+    if (!ocontact(i)) continue;
+    if (ono_slip(e)) {
+      zero(i);
+      continue;
+    }
+    // less the normal as the wall's projector leaves it (P n): P - (P n)(P n)^T / |P n|^2,
+    // still a symmetric projector
+    double Pn[3] = {0.0, 0.0, 0.0};
+    for (index_t k = 0; k < D; ++k)
+      for (index_t m = 0; m < D; ++m) Pn[k] += P(i, k, m) * onormal(e, m);
+    double nn2 = 0.0;
+    for (index_t k = 0; k < D; ++k) nn2 += Pn[k] * Pn[k];
+    if (nn2 <= 0.0) continue;
+    for (index_t k = 0; k < D; ++k)
+      for (index_t m = 0; m < D; ++m) P(i, k, m) -= Pn[k] * Pn[m] / nn2;
+  }
+}
+
+template <int D>
+void assemble_cells(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                    View<const double, 3> G, View<const double, 3> P, View<const double> vol,
+                    View<index_t, 2> cols, View<double, 2> vals) {
+  constexpr int NC = 1 << D;
+  constexpr int NS = stencil_size(D);
+  parallel_for(rows.size(), [&](index_t r) {
+    for (int s = 0; s < NS; ++s) {
+      cols(r, s) = -1;
+      vals(r, s) = 0.0;
+    }
+    const index_t c = rows(r);
+    std::array<index_t, D> cx;
+    g.cell_coords(c, cx.data());
+    for (int a = 0; a < NC; ++a) {
+      std::array<index_t, D> ix;
+      for (int k = 0; k < D; ++k) ix[k] = cx[k] + ((a >> k) & 1);
+      const index_t i = g.cell_first_node(c) + g.corner[a];
+      if (!(vol(i) > 0.0)) continue;
+      // P_i g_ci / V_i
+      double pg[D];
+      for (int k = 0; k < D; ++k) {
+        pg[k] = 0.0;
+        for (int m = 0; m < D; ++m) pg[k] += P(i, k, m) * G(r, a, m);
+        pg[k] /= vol(i);
+      }
+      for (int b = 0; b < NC; ++b) {
+        const NodeCell nc = node_cell<D>(g, ix, b);
+        if (nc.c < 0) continue;
+        const index_t r2 = cell_row(nc.c);
+        if (r2 < 0) continue;
+        int slot = 0, stride = 1;
+        for (int k = 0; k < D; ++k) {
+          // the neighbour's offset along k: -1, 0 or 1 (from the corner bits)
+          const int d = ((a >> k) & 1) + ((b >> k) & 1) - 1;
+          slot += (d + 1) * stride;
+          stride *= 3;
+        }
+        double v = 0.0;
+        for (int k = 0; k < D; ++k) v += pg[k] * G(r2, nc.a, k);
+        cols(r, slot) = r2;
+        vals(r, slot) += v;
+      }
+    }
+    vals(r, NS / 2) *= 1.0 + 1e-12;
+  });
+}
+
+template <int D>
+void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> G,
+              View<const double, 2> v, double rho_over_dt, View<double> rhs) {
+  constexpr int NC = 1 << D;
+  parallel_for(rows.size(), [&](index_t r) {
+    const index_t first = g.cell_first_node(rows(r));
+    double div = 0.0;
+    for (int a = 0; a < NC; ++a) {
+      const index_t i = first + g.corner[a];
+      for (int k = 0; k < D; ++k) div += G(r, a, k) * v(i, k);
+    }
+    rhs(r) = -rho_over_dt * div;
+  });
+}
+
+template <int D>
+void correct_cells(const Grid<D>& g, View<const index_t> cell_row, View<const double, 3> G,
+                   View<const double, 3> P, View<const double> vol, View<const double> p_cell,
+                   View<const double, 2> vstar, double dt_over_rho, View<double, 2> v_new) {
+  parallel_for(g.nnodes, [&](index_t i) {
+    std::array<index_t, D> ix;
+    g.node_coords(i, ix.data());
+    double f[D] = {};
+    node_cells_each<D>(g, ix, [&](index_t c, int a) {
+      const index_t r = cell_row(c);
+      if (r < 0) return;
+      for (int k = 0; k < D; ++k) f[k] += G(r, a, k) * p_cell(c);
+    });
+    for (int k = 0; k < D; ++k) {
+      double pf = 0.0;
+      for (int m = 0; m < D; ++m) pf += P(i, k, m) * f[m];
+      v_new(i, k) = vstar(i, k) + (vol(i) > 0.0 ? dt_over_rho * pf / vol(i) : 0.0);
+    }
+  });
+}
+
+template <int D>
+void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                   View<const index_t> cell_row, View<const index_t> rows,
+                   View<const double> p_cell, View<double, 2> X, View<double, 2> grad,
+                   View<double> p_node) {
+  constexpr int NC = 1 << D;
+  const bool linear = X.size() > 0;
+  const index_t n = linear ? rows.size() : 0;
+  // each cell's material centroid
+  parallel_for(n, [&](index_t r) {
+    const index_t c = rows(r), s = cell_slot(c);
+    std::array<index_t, D> cx;
+    g.cell_coords(c, cx.data());
+    double w = 0.0, x[D] = {};
+    for (int a = 0; a < NC; ++a) {
+      w += V(s, a);
+      for (int k = 0; k < D; ++k)
+        x[k] += V(s, a) * g.h * static_cast<double>(cx[k] + ((a >> k) & 1));
+    }
+    for (int k = 0; k < D; ++k) X(r, k) = w > 0.0 ? x[k] / w : g.h * (cx[k] + 0.5);
+  });
+  // the least-squares gradient over the neighbours in the system (periodic axes: the
+  // neighbour's centroid moved by the period)
+  parallel_for(n, [&](index_t r) {
+    const index_t c = rows(r);
+    std::array<index_t, D> cx;
+    g.cell_coords(c, cx.data());
+    double A[D][D] = {}, b[D] = {};
+    const int total = stencil_size(D);
+    for (int q = 0; q < total; ++q) {
+      index_t c2 = 0;
+      double shift[D] = {};
+      bool inside = true;
+      int rem = q;
+      for (int k = 0; k < D; ++k) {
+        const index_t d = rem % 3 - 1;
+        rem /= 3;
+        index_t j = cx[k] + d;
+        if (j < 0 || j >= g.cells[k]) {
+          if (!g.periodic[k]) {
+            inside = false;
+            break;
+          }
+          shift[k] = (j < 0 ? -1.0 : 1.0) * g.h * static_cast<double>(g.cells[k]);
+          j = g.wrap_cell(k, j);
+        }
+        c2 += j * g.cs[k];
+      }
+      if (!inside || c2 == c) continue;
+      const index_t r2 = cell_row(c2);
+      if (r2 < 0) continue;
+      double dx[D];
+      for (int k = 0; k < D; ++k) dx[k] = X(r2, k) + shift[k] - X(r, k);
+      const double dp = p_cell(c2) - p_cell(c);
+      for (int k = 0; k < D; ++k) {
+        b[k] += dx[k] * dp;
+        for (int m = 0; m < D; ++m) A[k][m] += dx[k] * dx[m];
+      }
+    }
+    // solve A grad = b (Gauss with partial pivoting); a direction without neighbours keeps
+    // no gradient along it
+    double M[D][D + 1];
+    for (int k = 0; k < D; ++k) {
+      for (int m = 0; m < D; ++m) M[k][m] = A[k][m];
+      M[k][D] = b[k];
+    }
+    const double tiny = 1e-12 * g.h * g.h;
+    bool ok = true;
+    for (int k = 0; k < D && ok; ++k) {
+      int piv = k;
+      for (int m = k + 1; m < D; ++m)
+        if (std::abs(M[m][k]) > std::abs(M[piv][k])) piv = m;
+      if (std::abs(M[piv][k]) <= tiny) {
+        ok = false;
+        break;
+      }
+      for (int m = 0; m <= D; ++m) std::swap(M[k][m], M[piv][m]);
+      for (int m = k + 1; m < D; ++m) {
+        const double f = M[m][k] / M[k][k];
+        for (int l = k; l <= D; ++l) M[m][l] -= f * M[k][l];
+      }
+    }
+    double gr[D] = {};
+    if (ok)
+      for (int k = D - 1; k >= 0; --k) {
+        double v = M[k][D];
+        for (int m = k + 1; m < D; ++m) v -= M[k][m] * gr[m];
+        gr[k] = v / M[k][k];
+      }
+    for (int k = 0; k < D; ++k) grad(r, k) = gr[k];
+  });
+  parallel_for(g.nnodes, [&](index_t i) {
+    std::array<index_t, D> ix;
+    g.node_coords(i, ix.data());
+    double sum = 0.0, w = 0.0;
+    for (int b = 0; b < NC; ++b) {
+      const NodeCell nc = node_cell<D>(g, ix, b);
+      if (nc.c < 0) continue;
+      const index_t r = cell_row(nc.c);
+      if (r < 0) continue;
+      const index_t s = cell_slot(nc.c);
+      // the node as a corner of this cell (across a periodic end: the cell's own corner)
+      std::array<index_t, D> cx;
+      g.cell_coords(nc.c, cx.data());
+      double p = p_cell(nc.c);
+      for (int k = 0; k < D && linear; ++k) {
+        const double xi = g.h * static_cast<double>(cx[k] + ((nc.a >> k) & 1));
+        p += grad(r, k) * (xi - X(r, k));
+      }
+      sum += V(s, nc.a) * p;
+      w += V(s, nc.a);
+    }
+    p_node(i) = w > 0.0 ? sum / w : 0.0;
+  });
+}
+
+#define MPMFLOW_INSTANTIATE(D)                                                                  \
+  template void cell_gradients<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,   \
+                                  View<const index_t>, View<double, 3>);                        \
+  template void node_volumes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,     \
+                                View<double>);                                                  \
+  template void assemble_cells<D>(const Grid<D>&, View<const index_t>, View<const index_t>,     \
+                                  View<const double, 3>, View<const double, 3>,                 \
+                                  View<const double>, View<index_t, 2>, View<double, 2>);       \
+  template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,         \
+                            View<const double, 2>, double, View<double>);                       \
+  template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,    \
+                                 View<const double, 3>, View<const double>, View<const double>, \
+                                 View<const double, 2>, double, View<double, 2>);               \
+  template void cell_to_nodes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,    \
+                                 View<const index_t>, View<const index_t>, View<const double>,  \
+                                 View<double, 2>, View<double, 2>, View<double>);
+MPMFLOW_INSTANTIATE(2)
+MPMFLOW_INSTANTIATE(3)
+#undef MPMFLOW_INSTANTIATE
+
+}  // namespace mpmflow
