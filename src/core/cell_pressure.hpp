@@ -27,8 +27,8 @@
 // volume correction's), symmetric positive semi-definite; no stabilisation term enters, so
 // a static state is a fixed point of the step whatever dt. Q1-P0 is not inf-sup stable: a
 // chequerboard of cell pressures can exert no force. The nodal pressure the particles read
-// (their pressure, the yield criteria, the bodies' force) is the cells' volume-weighted
-// mean round each node, which filters it.
+// (their pressure, the yield criteria, the bodies' force) is the cells' values carried
+// linearly to the nodes and averaged there (cell_to_nodes), which filters it.
 #pragma once
 
 #include "grid.hpp"
