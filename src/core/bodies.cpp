@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "cut_cells.hpp"
+#include "dense.hpp"
 
 namespace mpmflow {
 
@@ -92,31 +93,6 @@ std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<dou
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 
-// A x = b for a small dense A (n x n, row-major, destroyed; partial pivoting), x into b;
-// false when A is singular
-bool solve_dense(index_t n, double* A, double* b) {
-  for (index_t k = 0; k < n; ++k) {
-    index_t best = k;
-    for (index_t i = k + 1; i < n; ++i)
-      if (std::abs(A[i * n + k]) > std::abs(A[best * n + k])) best = i;
-    if (!(std::abs(A[best * n + k]) > 0.0)) return false;
-    if (best != k) {
-      for (index_t j = 0; j < n; ++j) std::swap(A[k * n + j], A[best * n + j]);
-      std::swap(b[k], b[best]);
-    }
-    for (index_t i = k + 1; i < n; ++i) {
-      const double f = A[i * n + k] / A[k * n + k];
-      for (index_t j = k; j < n; ++j) A[i * n + j] -= f * A[k * n + j];
-      b[i] -= f * b[k];
-    }
-  }
-  for (index_t k = n - 1; k >= 0; --k) {
-    double v = b[k];
-    for (index_t j = k + 1; j < n; ++j) v -= A[k * n + j] * b[j];
-    b[k] = v / A[k * n + k];
-  }
-  return true;
-}
 }  // namespace
 
 template <int D>

@@ -1,9 +1,8 @@
 #include "cell_pressure.hpp"
 
 #include <array>
-#include <cmath>
-#include <utility>
 
+#include "dense.hpp"
 #include "parallel.hpp"
 #include "stencil.hpp"
 
@@ -247,59 +246,30 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
         for (int m = 0; m < D; ++m) A[k][m] += dx[k] * dx[m];
       }
     }
-    // solve A grad = b (Gauss with partial pivoting); a direction without neighbours keeps
-    // no gradient along it
-    double M[D][D + 1];
-    for (int k = 0; k < D; ++k) {
-      for (int m = 0; m < D; ++m) M[k][m] = A[k][m];
-      M[k][D] = b[k];
-    }
-    const double tiny = 1e-12 * g.h * g.h;
-    bool ok = true;
-    for (int k = 0; k < D && ok; ++k) {
-      int piv = k;
-      for (int m = k + 1; m < D; ++m)
-        if (std::abs(M[m][k]) > std::abs(M[piv][k])) piv = m;
-      if (std::abs(M[piv][k]) <= tiny) {
-        ok = false;
-        break;
-      }
-      for (int m = 0; m <= D; ++m) std::swap(M[k][m], M[piv][m]);
-      for (int m = k + 1; m < D; ++m) {
-        const double f = M[m][k] / M[k][k];
-        for (int l = k; l <= D; ++l) M[m][l] -= f * M[k][l];
-      }
-    }
-    double gr[D] = {};
-    if (ok)
-      for (int k = D - 1; k >= 0; --k) {
-        double v = M[k][D];
-        for (int m = k + 1; m < D; ++m) v -= M[k][m] * gr[m];
-        gr[k] = v / M[k][k];
-      }
-    for (int k = 0; k < D; ++k) grad(r, k) = gr[k];
+    // A grad = b; where the neighbours do not span every direction (a column one cell wide)
+    // the cell keeps no gradient at all
+    const bool spans = solve_dense(D, &A[0][0], b, 1e-12 * g.h * g.h);
+    for (int k = 0; k < D; ++k) grad(r, k) = spans ? b[k] : 0.0;
   });
   parallel_for(g.nnodes, [&](index_t i) {
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
     double sum = 0.0, w = 0.0;
-    for (int b = 0; b < NC; ++b) {
-      const NodeCell nc = node_cell<D>(g, ix, b);
-      if (nc.c < 0) continue;
-      const index_t r = cell_row(nc.c);
-      if (r < 0) continue;
-      const index_t s = cell_slot(nc.c);
+    node_cells_each<D>(g, ix, [&](index_t c, int a) {
+      const index_t r = cell_row(c);
+      if (r < 0) return;
+      const index_t s = cell_slot(c);
       // the node as a corner of this cell (across a periodic end: the cell's own corner)
       std::array<index_t, D> cx;
-      g.cell_coords(nc.c, cx.data());
-      double p = p_cell(nc.c);
+      g.cell_coords(c, cx.data());
+      double p = p_cell(c);
       for (int k = 0; k < D && linear; ++k) {
-        const double xi = g.h * static_cast<double>(cx[k] + ((nc.a >> k) & 1));
+        const double xi = g.h * static_cast<double>(cx[k] + ((a >> k) & 1));
         p += grad(r, k) * (xi - X(r, k));
       }
-      sum += V(s, nc.a) * p;
-      w += V(s, nc.a);
-    }
+      sum += V(s, a) * p;
+      w += V(s, a);
+    });
     p_node(i) = w > 0.0 ? sum / w : 0.0;
   });
 }

@@ -10,6 +10,7 @@
 #include "cell_pressure.hpp"
 #include "corrector.hpp"
 #include "cut_cells.hpp"
+#include "dense.hpp"
 #include "free_surface.hpp"
 #include "ghost_pressure.hpp"
 #include "parallel.hpp"
@@ -541,24 +542,9 @@ bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
     for (index_t r = 0; r < n; ++r) kp += K(i, r) * x(r);
     z(i) = kp;
   }
-  // z = S^-1 K p0 (Gauss with partial pivoting on the small system)
-  for (index_t k = 0; k < nq; ++k) {
-    index_t best = k;
-    for (index_t i = k + 1; i < nq; ++i)
-      if (std::abs(S(i, k)) > std::abs(S(best, k))) best = i;
-    for (index_t j = 0; j < nq; ++j) std::swap(S(k, j), S(best, j));
-    std::swap(z(k), z(best));
-    for (index_t i = k + 1; i < nq; ++i) {
-      const double f = S(i, k) / S(k, k);
-      for (index_t j = k; j < nq; ++j) S(i, j) -= f * S(k, j);
-      z(i) -= f * z(k);
-    }
-  }
-  for (index_t k = nq - 1; k >= 0; --k) {
-    double v = z(k);
-    for (index_t j = k + 1; j < nq; ++j) v -= S(k, j) * z(j);
-    z(k) = v / S(k, k);
-  }
+  // z = S^-1 K p0 (S = M / rho + K Y is positive definite: a zero pivot is not a coupling)
+  if (!solve_dense(nq, S.data(), z.data()))
+    throw std::logic_error("State: the free bodies' coupling matrix is singular");
   for (index_t d = 0; d < nq; ++d)
     for (index_t r = 0; r < n; ++r) x(r) -= Y(d, r) * z(d);
   // the pressure's impulse on the bodies, dt K p, and their velocities after it
