@@ -48,16 +48,14 @@ inline void node_cells_each(const Grid<D>& g, const std::array<index_t, D>& ix, 
 }
 
 template <int D>
-void node_volumes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
-                  View<double> vol) {
+void node_volumes(const Grid<D>& g, View<const index_t> cell_slot, View<const double> node_mass,
+                  double rho, View<double> vol) {
   parallel_for(g.nnodes, [&](index_t i) {
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
-    double sum = 0.0;
-    node_cells_each<D>(g, ix, [&](index_t c, int a) {
-      if (cell_slot(c) >= 0) sum += V(cell_slot(c), a);
-    });
-    vol(i) = sum;
+    bool counted = false;
+    node_cells_each<D>(g, ix, [&](index_t c, int) { counted = counted || cell_slot(c) >= 0; });
+    vol(i) = counted ? node_mass(i) / rho : 0.0;
   });
 }
 
@@ -274,21 +272,21 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
   });
 }
 
-#define MPMFLOW_INSTANTIATE(D)                                                                  \
-  template void cell_gradients<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,   \
-                                  View<const index_t>, View<double, 3>);                        \
-  template void node_volumes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,     \
-                                View<double>);                                                  \
-  template void assemble_cells<D>(const Grid<D>&, View<const index_t>, View<const index_t>,     \
-                                  View<const double, 3>, View<const double, 3>,                 \
-                                  View<const double>, View<index_t, 2>, View<double, 2>);       \
-  template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,         \
-                            View<const double, 2>, double, View<double>);                       \
-  template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,    \
-                                 View<const double, 3>, View<const double>, View<const double>, \
-                                 View<const double, 2>, double, View<double, 2>);               \
-  template void cell_to_nodes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,    \
-                                 View<const index_t>, View<const index_t>, View<const double>,  \
+#define MPMFLOW_INSTANTIATE(D)                                                                   \
+  template void cell_gradients<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,    \
+                                  View<const index_t>, View<double, 3>);                         \
+  template void node_volumes<D>(const Grid<D>&, View<const index_t>, View<const double>, double, \
+                                View<double>);                                                   \
+  template void assemble_cells<D>(const Grid<D>&, View<const index_t>, View<const index_t>,      \
+                                  View<const double, 3>, View<const double, 3>,                  \
+                                  View<const double>, View<index_t, 2>, View<double, 2>);        \
+  template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,          \
+                            View<const double, 2>, double, View<double>);                        \
+  template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
+                                 View<const double, 3>, View<const double>, View<const double>,  \
+                                 View<const double, 2>, double, View<double, 2>);                \
+  template void cell_to_nodes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,     \
+                                 View<const index_t>, View<const index_t>, View<const double>,   \
                                  View<double, 2>, View<double, 2>, View<double>);
 MPMFLOW_INSTANTIATE(2)
 MPMFLOW_INSTANTIATE(3)

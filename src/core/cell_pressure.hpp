@@ -46,10 +46,19 @@ template <int D>
 void cell_gradients(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 4> C,
                     View<const index_t> rows, View<double, 3> G);
 
-// vol (nnodes, m^D): V_i = sum over the node's cells in the system of V[s, a_i].
+// vol (nnodes, m^D): V_i = M_i / rho, the node's lumped mass (node_mass, kg) over the
+// density (kg/m^3), at the nodes of the cells in the system (0 elsewhere and where M_i = 0).
+// The projection's correction -dt / rho P_i sum_c g_ci p_c / V_i is then the pressure force
+// over the mass the momentum has (the mass-weighted projection, which does no work). With
+// each cell's own volumes instead (the Gauss cells' V = h^D / 2^D per corner, the
+// particles' where a cell is partial) it was oblique wherever the particles sit unevenly in
+// a full cell, as they do once a solid has moved (up to 90% off the node's mass at a
+// cantilever's faces): the linearised step's bending period came out 0.07-0.15 s against
+// 0.16 s, and the swinging beam 25% too stiff with 2 x 2 particles a cell, right with 4 x 4
+// (docs/method.md, "Solids").
 template <int D>
-void node_volumes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
-                  View<double> vol);
+void node_volumes(const Grid<D>& g, View<const index_t> cell_slot, View<const double> node_mass,
+                  double rho, View<double> vol);
 
 // P (nnodes x D x D): the projector onto the components of a node's velocity that are not
 // held: the identity, less the axis of a wall in contact (every axis on a no-slip wall),

@@ -46,43 +46,16 @@ void yielded_share(const Grid<D>& g, View<const double> mass, View<const double>
 }
 
 template <int D>
-void velocity_to_grid(const GridToParticle<D>& g2p, View<const double> mass,
-                      View<const index_t> order, View<const index_t> start,
-                      View<const double> node_mass, View<double, 2> out) {
-  const Grid<D>& g = g2p.g;
-  parallel_for(g.nnodes, [&](index_t i) {
-    for (int k = 0; k < D; ++k) out(i, k) = 0.0;
-  });
-  scatter_particles<D>(g, order, start, [&](index_t p) {
-    constexpr int NC = Grid<D>::NC;
-    double w[NC], vp[D];
-    const index_t base = g.weights_at(&g2p.x(p, 0), w);
-    g2p.new_velocity(p, vp);
-    for (int a = 0; a < NC; ++a)
-      for (int k = 0; k < D; ++k) out(base + g.corner[a], k) += w[a] * mass(p) * vp[k];
-  });
-  if (g.any_periodic) fold_images<D>(g, out);
-  parallel_for(g.nnodes, [&](index_t i) {
-    const double m = node_mass[i];
-    for (int k = 0; k < D; ++k) out(i, k) = m > 0.0 ? out(i, k) / m : 0.0;
-  });
-}
-
-template <int D>
-void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                     View<const double> volume, View<const double, 3> stress,
-                     View<const index_t> order, View<const index_t> start,
-                     View<const double> node_mass, double dt, View<double, 2> acc,
-                     View<double, 2> dv, View<double, 2> v_star) {
+void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
+                     View<const double, 3> stress, View<const index_t> order,
+                     View<const index_t> start, View<const double> node_mass, double dt,
+                     View<double, 2> acc, View<double, 2> v_star) {
   constexpr int NC = Grid<D>::NC;
   const index_t nn = g.nnodes;
   parallel_for(nn, [&](index_t i) {
-    for (int k = 0; k < D; ++k) {
-      acc(i, k) = 0.0;
-      dv(i, k) = 0.0;
-    }
+    for (int k = 0; k < D; ++k) acc(i, k) = 0.0;
   });
-  // the old stress's force: f_i = -sum_p V_p s_p grad N_i(x_p)
+  // f_i = -sum_p V_p s_p grad N_i(x_p)
   scatter_particles<D>(g, order, start, [&](index_t p) {
     double w[NC], frac[D];
     const index_t base = g.weights_at(&x(p, 0), w);
@@ -100,22 +73,8 @@ void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const doubl
   if (g.any_periodic) fold_images<D>(g, acc);
   parallel_for(nn, [&](index_t i) {
     const double m = node_mass[i];
-    for (int k = 0; k < D; ++k) acc(i, k) = m > 0.0 ? acc(i, k) / m : 0.0;
-  });
-  // to the particles and back
-  scatter_particles<D>(g, order, start, [&](index_t p) {
-    double w[NC], ap[D] = {};
-    const index_t base = g.weights_at(&x(p, 0), w);
-    for (int a = 0; a < NC; ++a)
-      for (int k = 0; k < D; ++k) ap[k] += w[a] * acc(base + g.corner[a], k);
-    for (int a = 0; a < NC; ++a)
-      for (int k = 0; k < D; ++k) dv(base + g.corner[a], k) += w[a] * mass(p) * ap[k];
-  });
-  if (g.any_periodic) fold_images<D>(g, dv);
-  parallel_for(nn, [&](index_t i) {
-    const double m = node_mass[i];
     if (m > 0.0)
-      for (int k = 0; k < D; ++k) v_star(i, k) += dt * dv(i, k) / m;
+      for (int k = 0; k < D; ++k) v_star(i, k) += dt * acc(i, k) / m;
   });
 }
 
@@ -154,19 +113,16 @@ index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const do
   });
 }
 
-#define MPMFLOW_SOLID(D)                                                                           \
-  template void yielded_share<D>(const Grid<D>&, View<const double>, View<const double>,           \
-                                 View<const index_t>, View<const index_t>, View<double>);          \
-  template void velocity_to_grid<D>(const GridToParticle<D>&, View<const double>,                  \
-                                    View<const index_t>, View<const index_t>, View<const double>,  \
-                                    View<double, 2>);                                              \
-  template void internal_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,      \
-                                   View<const double>, View<const double, 3>, View<const index_t>, \
-                                   View<const index_t>, View<const double>, double,                \
-                                   View<double, 2>, View<double, 2>, View<double, 2>);             \
-  template index_t update_stresses<D>(const Grid<D>&, View<const double, 2>, View<const double>,   \
-                                      View<const double, 2>, View<const double>, double, int,      \
-                                      View<const double>, View<double, 3>, View<double>,           \
+#define MPMFLOW_SOLID(D)                                                                         \
+  template void yielded_share<D>(const Grid<D>&, View<const double>, View<const double>,         \
+                                 View<const index_t>, View<const index_t>, View<double>);        \
+  template void internal_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,    \
+                                   View<const double, 3>, View<const index_t>,                   \
+                                   View<const index_t>, View<const double>, double,              \
+                                   View<double, 2>, View<double, 2>);                            \
+  template index_t update_stresses<D>(const Grid<D>&, View<const double, 2>, View<const double>, \
+                                      View<const double, 2>, View<const double>, double, int,    \
+                                      View<const double>, View<double, 3>, View<double>,         \
                                       View<double>);
 MPMFLOW_SOLID(2)
 MPMFLOW_SOLID(3)

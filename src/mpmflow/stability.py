@@ -54,7 +54,6 @@ def time_step(case: Case) -> float:
 
 def longest_projection_step(case: Case) -> float:
     """The longest step the projection scheme takes with time.dt = "auto" (s): time.max_dt,
-    and for a solid at most the shear wave's step (``materials.shear_wave_step``: the step
-    at which its shear waves are followed; its elastic step is implicit, so this is a
-    choice of accuracy, not of stability, and a fixed time.dt may exceed it)."""
+    and for a solid at most its shear wave's step (``materials.shear_wave_step``, the
+    solid's stable step, which a fixed time.dt may not exceed either)."""
     return min(case.time.max_dt, materials.shear_wave_step(case.material, case.grid.spacing))

@@ -5,9 +5,10 @@ Physics: a column at rest stays at rest with the hydrostatic pressure; the stres
 objective (a rigid spin turns the stress without changing its invariant) and returns to the
 yield surface exactly; an elastic layer on a slope oscillates at the shear-wave period 4 H /
 c_s, converging as the mesh is refined; a clay layer stands where its strength exceeds the
-shear the slope puts on it and flows where it does not; the elastic step is implicit, so a
-layer settles at steps far past the shear wave's. Input: schemes and runs that do not carry
-the stress refuse solids by name.
+shear the slope puts on it and flows where it does not, converging at first order; a
+cantilever swings about and comes to rest at its static deflection. Input: schemes and runs
+that do not carry the stress refuse solids by name, and a fixed step above a solid's stable
+step is refused with the step to take.
 """
 
 import math
@@ -41,9 +42,9 @@ def test_a_solid_column_at_rest_stays_at_rest(extra):
     cell above a row of nodes, needs no ghost value: its cells' pressures are the
     hydrostatic one at their material's centroid and the particles read it through the
     cells' linear reconstruction. What is left is the solves' tolerance (solver.tolerance =
-    1e-8, a relative residual): the pressure within 1e-8 of rho g H (measured 4e-9), the
-    velocities it leaves (2e-10 m/s) integrated by the stress to under 1e-5 Pa, 5e-9 of
-    rho g H (measured 1.9e-6 Pa). The water's node pressure meets the same column to 1e-12."""
+    1e-8, a relative residual): the pressure within 1e-8 of rho g H (measured 2.3e-9), the
+    velocities it leaves (1e-10 m/s) integrated by the stress to under 1e-5 Pa, 5e-9 of
+    rho g H (measured 1.4e-6 Pa with APIC, 7e-7 without). The water's node pressure meets the same column to 1e-12."""
     case = load_case(
         ROOT / HYDRO,
         ["time.end=0.2", "output.snapshots=false", "material.shear_modulus=1e4", *extra],
@@ -59,8 +60,8 @@ def test_a_solid_column_at_rest_stays_at_rest(extra):
 
 def test_a_free_standing_elastic_block_settles_and_bulges():
     """An incompressible elastic block (0.2 x 0.1 m, G = 1 MPa) on a bonded floor, its
-    sides and top free, comes to rest under gravity with its top settled and its sides
-    bulged out: its volume is kept, so what the top loses the sides gain. The settlement is
+    sides and top free, comes to rest under gravity (damped by PIC transfers) with its top
+    settled and its sides bulged out: its volume is kept, so what the top loses the sides gain. The settlement is
     bounded above by that of the same block on a frictionless floor, a column in uniaxial
     stress (rho g H^2 / (2 E), E = 3 G), which the bonded floor can only stiffen. With the
     fluid's free surface (p = 0 at the surface nodes) the top rose and the sides moved in."""
@@ -77,41 +78,59 @@ def test_a_free_standing_elastic_block_settles_and_bulges():
     bulge = P.x[side, 0] - x0[side, 0]
     uniaxial = 1000.0 * 9.81 * 0.1**2 / (2 * 3 * 1e6)
     assert np.abs(P.v).max() < 1e-6  # m/s: at rest
-    assert 0.2 * uniaxial < sag < uniaxial  # measured 8.3e-6 m, 0.51 of it
-    assert bulge > 0.0  # measured 1.0e-5 m
+    assert 0.2 * uniaxial < sag < uniaxial  # measured 6.7e-6 m, 0.41 of it
+    assert bulge > 0.0  # measured 9.5e-6 m
 
 
-def test_a_cantilever_settles_near_beam_theory():
-    """The cantilever of examples/cantilever.toml at h = H / 4, damped (PIC transfers, steps
-    15 times the shear wave's): over its last 0.3 s its tip within 30% of Timoshenko's static
-    deflection (measured +19% to +26%) and slower than 1 cm/s (0.3 m/s in its first swing;
-    it still drifts, by 0.7 cm/s at the particles at 0.6 s). With the fluid's
-    free surface the beam sagged to the floor (14 to 25 times the deflection); the cells'
-    pressure with its natural surface carries the bending. The bound is not the issue's 3%: the discretisation alone (Q1 velocities,
-    the particles' quadrature, one incompressibility constraint per cell) is within 1.2% of
-    the theory at this mesh (a static check, docs/method.md, "Solids"); the step's transfers
-    add the rest, a known miss: this bound guards the surface, not the issue's row."""
+def _cantilever(sets):
+    """The cantilever of examples/cantilever.toml at h = H / 4 under ``sets``: the tip's
+    deflection (the particle nearest the end of the neutral axis) over Timoshenko's static
+    one at each output from t = 0, and the run."""
     from mpmflow.validation import solids
 
     case = load_case(
-        ROOT / "examples/cantilever.toml",
-        [
-            "output.snapshots=false",
-            "grid.spacing=0.025",
-            "time.dt=5e-4",
-            "time.end=0.6",
-            "output.interval=0.05",
-            "solver.flip=0.0",
-        ],
+        ROOT / "examples/cantilever.toml", ["output.snapshots=false", "grid.spacing=0.025", *sets]
     )
     sim = Simulation(case)
     x0 = sim.particles.x.copy()
     k = int(np.argmin(np.abs(x0[:, 0] - x0[:, 0].max()) + np.abs(x0[:, 1] - 0.3)))
-    late: list[float] = []
-    sim.on_output = lambda s: late.append((x0[k, 1] - s.particles.x[k, 1]) / solids.DELTA)
+    tips: list[float] = []
+    sim.on_output = lambda s: tips.append((x0[k, 1] - s.particles.x[k, 1]) / solids.DELTA)
     sim.run()
-    assert np.abs(sim.particles.v).max() < 1e-2  # m/s
-    assert all(0.8 < r < 1.3 for r in late[-7:])  # t = 0.3 to 0.6 s
+    return np.array(tips), sim
+
+
+def test_a_cantilever_swings_about_its_static_deflection():
+    """Released suddenly, the beam swings between 0 and twice the static deflection with the
+    period of its first mode, T = 0.161 s: over the first period its tip's mean is the
+    static deflection (the validation row's measure, docs/validation), within the issue's 3%
+    (measured +2.1%; 0.874 of it before the projection took the nodes' mass and the stress's
+    force stopped passing through the particles), and its deepest point comes at half the
+    period within 5% (measured 2.03 times the deflection at 0.512 T; 1.98 at 0.44 T before,
+    and 1.44 at 0.375 T at h = H / 8)."""
+    from mpmflow.validation import solids
+
+    n = 80
+    tips, _ = _cantilever(
+        [f"time.end={solids.PERIOD:.6f}", f"output.interval={solids.PERIOD / n:.6f}"]
+    )
+    assert abs(tips[:n].mean() - 1) < 0.03, tips[:n].mean()
+    assert abs(np.argmax(tips) / n - 0.5) < 0.05, np.argmax(tips) / n
+
+
+def test_a_damped_cantilever_comes_to_rest_at_its_static_deflection():
+    """Damped by PIC transfers at the solid's step, the beam comes to rest where its spatial
+    discretisation puts it: Q1 velocities, the particles' quadrature and one
+    incompressibility constraint per cell, solved statically (scripts/solid_statics.py),
+    give 1.012 times Timoshenko's deflection at h = H / 4. From 0.64 s (four periods) to 0.8 s
+    the tip stays within 1% of that (measured 1.004 to 1.013) and so within the issue's 3% of
+    the theory, and the particles are slower than 2 mm/s (0.77 mm/s; 0.3 m/s in the first
+    swing). With the particles' velocities mapped back to the grid for the stress (modified
+    update-stress-last) it came to rest 34% too deep: the stress fell behind the strain."""
+    tips, sim = _cantilever(["solver.flip=0.0", "time.end=0.8", "output.interval=0.02"])
+    late = tips[32:]  # t = 0.64 to 0.8 s
+    assert np.abs(late - 1.012).max() < 0.01, late
+    assert np.abs(sim.particles.v).max() < 2e-3  # m/s
 
 
 PAR = np.array([1e6, 0.0, 0.0, 0.0])  # G = 1 MPa
@@ -225,81 +244,63 @@ def _period(u, dt=2e-4):
 
 def test_an_elastic_layer_rings_at_the_shear_wave_period():
     """The fundamental period of a layer fixed at its base and free at its top is 4 H / c_s
-    (c_s = sqrt(G / rho) = 7.07 m/s: 28.3 ms). Measured (top's velocity, 0.15 s): +8.7% at
-    H / 10, +4.0% at H / 20, +1.9% at H / 40; asserted: within 5% at H / 20, closer than at
-    H / 10."""
+    (c_s = sqrt(G / rho) = 7.07 m/s: 28.3 ms). Measured (top's velocity, 0.15 s): +0.58% at
+    H / 10, +0.10% at H / 20, +0.026% at H / 40, second order (+8.7%, +4.0%, +1.9% with the
+    stress's force through the particles and the stress from their velocities); asserted:
+    within 1% at H / 20, and at least 3 times closer than at H / 10."""
     exact = 4 * 0.05 / math.sqrt(1e5 / 2000.0)
     errors = [abs(_period(_layer(h, "elastic", 0.15)[1]) / exact - 1) for h in (0.005, 0.0025)]
-    assert errors[1] < 0.05 and errors[1] < errors[0], errors
+    assert errors[1] < 0.01 and errors[0] > 3 * errors[1], errors
 
 
 def test_an_elastic_layer_rings_at_the_shear_wave_period_in_3d():
     """The same layer in 3D (the kernels are written once for both; the 3D layer is the 2D
-    one repeated across y): measured +8.7% at H / 10 and +4.0% at H / 20, the 2D numbers;
-    asserted within 5% at H / 20."""
+    one repeated across y): measured +0.10% at H / 20, the 2D number; asserted within 1%."""
     exact = 4 * 0.05 / math.sqrt(1e5 / 2000.0)
     error = abs(_period(_layer(0.0025, "elastic", 0.15, dim=3)[1]) / exact - 1)
-    assert error < 0.05, error
+    assert error < 0.01, error
 
 
 def test_a_clay_layer_stands_or_flows_by_its_strength():
     """The slope puts a shear of rho g sin(20 deg) H = 335 Pa on the base, up to twice that
     while the suddenly loaded layer rings. At s_u = 2 kPa the layer stands: no particle
     yields and the top rings about rest (its mean velocity over the last 0.1 s, 3.5 periods,
-    under 5 mm/s). At s_u = 100 Pa the base yields and the layer slides as a block held back
-    by s_u: it accelerates at g sin(20 deg) - s_u / (rho H) = 2.355 m/s^2 (measured from 0.2
-    to 0.3 s: 2.374, +0.8%; asserted within 3%)."""
+    under 5 mm/s). At s_u = 100 Pa the base yields and the layer slides, held back by s_u:
+    g sin(20 deg) - s_u / (rho H) = 2.355 m/s^2 for a block on a yield line of no
+    thickness. On the grid the bonded floor's nodes hold the lowest half cell of material
+    (its mass lumped there, h / (2 H) of the layer's), which gravity then cannot pull, so the
+    layer accelerates at g sin(20 deg) (1 - h / (2 H)) - s_u / (rho H), first order in h:
+    2.187 and 2.271 m/s^2 at h = 5 and 2.5 mm, measured (from 0.2 to 0.3 s) 2.195 and 2.282,
+    -6.8% and -3.1% from the thin-line value. Asserted: within 1% of the lumped-mass value
+    at both meshes, and the error against the thin line halving with h (first order). (The
+    particles' force passed through the particles and back, before, leaked the floor
+    nodes' share back into the layer: +0.8% at 5 mm.)"""
     sim, u = _layer(0.005, "von_mises", 0.3, strength=2000.0)
     assert sim.history["plastic_strain"].max() == 0.0
     assert abs(u[-500:].mean()) < 5e-3, u[-500:].mean()
-    sim, u = _layer(0.005, "von_mises", 0.3, strength=100.0)
-    theory = 9.81 * math.sin(math.radians(20.0)) - 100.0 / (2000.0 * 0.05)
-    acceleration = (u[-1] - u[999]) / 0.1  # u every 0.2 ms: from 0.2 s to 0.3 s
-    assert acceleration == pytest.approx(theory, rel=0.03)
-    assert sim.history["plastic_strain"].max() > 0.0
+    g, H, su, rho = 9.81 * math.sin(math.radians(20.0)), 0.05, 100.0, 2000.0
+    errors = []
+    for h in (0.005, 0.0025):
+        sim, u = _layer(h, "von_mises", 0.3, strength=su)
+        acceleration = (u[-1] - u[999]) / 0.1  # u every 0.2 ms: from 0.2 s to 0.3 s
+        lumped = g * (1 - h / (2 * H)) - su / (rho * H)
+        assert acceleration == pytest.approx(lumped, rel=0.01), (h, acceleration)
+        assert sim.history["plastic_strain"].max() > 0.0
+        errors.append(abs(acceleration / (g - su / (rho * H)) - 1))
+    assert errors[0] / errors[1] > 1.8, errors
 
 
-def _settled(h, dt, end=0.5):
-    """The elastic layer of ``_layer`` under steps of dt (s), run to ``end``: the top row's
-    mean downslope displacement over the static one (rho g sin(20 deg) H^2 / (2 G) = 84 um),
-    and the largest particle speed at the end (m/s)."""
-    H, th = 0.05, math.radians(20.0)
-    sets = [
-        f"domain.size=[{8 * h}, 0.1]",
-        "domain.walls={y_min='bonded'}",
-        "domain.periodic=[true, false]",
-        f"grid.spacing={h}",
-        f"bodies.0.max=[{8 * h}, {H}]",
-        "bodies.0.particles_per_cell=2",
-        "material.model='elastic'",
-        "material.density=2000.0",
-        "material.shear_modulus=1e5",
-        f"physics.gravity={[9.81 * math.sin(th), -9.81 * math.cos(th)]}",
-        f"time.dt={dt}",
-        f"time.end={end}",
-        "output.snapshots=false",
-    ]
-    sim = Simulation(load_case(ROOT / HYDRO, sets))
-    x0 = sim.particles.x.copy()
-    top = x0[:, 1] > H - h
-    sim.run()
-    static = 2000.0 * 9.81 * math.sin(th) * H**2 / (2 * 1e5)
-    moved = (sim.particles.x[top, 0] - x0[top, 0]).mean()
-    return moved / static, float(np.abs(sim.particles.v).max())
-
-
-def test_the_elastic_step_is_implicit_and_settles_a_layer_at_steps_past_the_shear_wave():
-    """The elastic step is the viscous solve with eta = G dt, so it is stable far past the
-    shear wave's step (0.18 ms at H / 20): at 2 ms (11 times it) the suddenly loaded layer
-    settles to its static shear. Measured, top displacement over the static one: 1.152 at
-    H / 10, 1.077 at H / 20, 1.039 at H / 40 (first order, as the period's error), the
-    largest speed at 0.5 s 2e-12 and 8e-12 m/s (7e-9 and 8e-7 with the node pressure);
-    asserted: within 10% at H / 20, the error
-    halving from H / 10, speeds under 1e-5 m/s (the layer's own ringing: 2e-2 m/s)."""
-    coarse, v_coarse = _settled(0.005, 2e-3)
-    fine, v_fine = _settled(0.0025, 2e-3)
-    assert abs(fine - 1) < 0.10 and abs(coarse - 1) > 1.6 * abs(fine - 1), (coarse, fine)
-    assert max(v_coarse, v_fine) < 1e-5
+def test_a_fixed_step_above_a_solids_stable_step_is_refused():
+    """A solid's step is held under its shear wave's crossing of a cell (time.dt = "auto"
+    takes it): above it the elastic solve and the stress's update from the corrected
+    velocity grow a swinging beam (at 1.5 times it in 2D, 0.7 in 3D against the 0.5 kept;
+    docs/method.md, "Solids"). A fixed time.dt above it is refused, naming the step to take."""
+    sets = ["material.model='elastic'", "material.shear_modulus=1e5", "material.density=2000.0"]
+    h = load_case(ROOT / HYDRO, [*sets, "time.dt='auto'"]).grid.spacing
+    stable = 0.5 * h / math.sqrt(1e5 / 2000.0)
+    load_case(ROOT / HYDRO, [*sets, f"time.dt={stable}"])  # at it: taken
+    with pytest.raises(CaseError, match=r"time.dt = .* above a solid's stable step"):
+        load_case(ROOT / HYDRO, [*sets, f"time.dt={1.01 * stable}"])
 
 
 def test_schemes_and_runs_that_do_not_carry_the_stress_refuse_solids():

@@ -457,6 +457,17 @@ class Case(Section):
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
                     "material.bulk_modulus"
                 )
+        solid_step = materials.shear_wave_step(self.material, self.grid.spacing)
+        if self.time.dt != "auto" and self.time.dt > solid_step * (1 + 1e-9):
+            c = (self.material.shear_modulus / self.material.density) ** 0.5
+            raise ValueError(
+                f"time.dt = {self.time.dt:g} s is above a solid's stable step, {solid_step:.4g} "
+                f"s = {materials.SHEAR_COURANT:g} grid.spacing / sqrt(material.shear_modulus / "
+                f"material.density) = {materials.SHEAR_COURANT:g} x {self.grid.spacing:g} m / "
+                f"{c:.4g} m/s (its shear wave's crossing of a cell; the stress follows the "
+                f'corrected velocity, docs/method.md, "Solids"): set time.dt to at most '
+                f'{solid_step:.4g} s, or time.dt = "auto", which takes it'
+            )
         if self.time.dt != "auto" and self.output.interval < self.time.dt * (1 - 1e-9):
             raise ValueError(
                 f"output.interval = {self.output.interval:g} s is shorter than time.dt = "

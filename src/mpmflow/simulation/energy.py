@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import materials
 from ..boundaries import outlets
 
 if TYPE_CHECKING:
@@ -181,6 +182,14 @@ def advice(sim: Simulation) -> str:
     crosses in one step: the issue measured gains of 7.5% to 15 times the start at C = 0.026
     to 0.092 (0.004 to 0.0114 m, dt = 1e-4 to 2.5e-4 s) and none at C = 0.18 and above."""
     case = sim.case
+    if materials.is_solid(case.material):
+        return (
+            "A solid's step is held under its shear wave's (time.dt at most "
+            f"{materials.SHEAR_COURANT:g} grid.spacing / sqrt(material.shear_modulus / "
+            "material.density)), where the solids' step is measured stable; a blow-up within "
+            'it is not a known limit of the method (docs/method.md, "Solids"): please report '
+            "the case."
+        )
     if case.solver.scheme == "explicit":
         return (
             'Try a smaller time.dt (or time.dt = "auto"): the explicit step must stay below '
