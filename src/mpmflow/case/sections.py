@@ -128,10 +128,9 @@ class Material(Section):
         description='Shear modulus G (Pa) of the solids "elastic", "von_mises" and '
         "\"drucker_prager\": s = 2 G (deviatoric strain); Young's modulus is 3 G (Poisson's "
         "ratio 0.5: the solid is incompressible). It sets the shear-wave speed "
-        'sqrt(G / density) and with it the longest step time.dt = "auto" takes, 0.5 '
-        "grid.spacing / sqrt(G / density), at which the shear waves are followed; the "
-        "elastic step is implicit, so a longer fixed time.dt is stable and damps them (for "
-        "a load that comes to rest).",
+        "sqrt(G / density) and with it a solid's step, 0.5 grid.spacing / sqrt(G / "
+        'density): time.dt = "auto" takes it, at which the shear waves are followed, and a '
+        'fixed time.dt may not exceed it (docs/method.md, "Solids").',
     )
     undrained_strength: float = Field(
         20e3,

@@ -101,9 +101,10 @@ def viscous_solve(m: Material) -> bool:
 # a solid's longest step, as a fraction of the time a shear wave takes to cross a cell: the
 # step time.dt = "auto" takes and the most a fixed time.dt may be. The stress is updated
 # from the corrected velocity after the elastic solve, and that split is stable only up
-# to about a shear wave's crossing: a swinging cantilever grew at 1.5 in 2D and at 0.7 in
-# 3D (after four periods), and holds at 0.5 (eight periods in 2D and 3D). At it the waves
-# are followed (a layer's period within 4% at H / 20). Docs/method.md, "Solids".
+# to about a shear wave's crossing: a swinging cantilever grew at 1.5 in 2D, crept at 0.7
+# in 3D and broke down there at 1.0 after four periods, and holds at 0.5 (eight periods in
+# 2D and 3D). At it the waves are followed (a layer's period within 0.1% at H / 20).
+# Docs/method.md, "Solids".
 SHEAR_COURANT = 0.5
 
 
