@@ -45,8 +45,8 @@ PROGRAM = 70 * MB  # Python, NumPy, SciPy and the compiled core
 PER_PARTICLE = 84  # B: x, v (2 each), pressure, mass, volume, the cell index and order
 AFFINE = 8  # B per entry of a particle's D x D affine matrix (solver.transfer = "apic")
 # a solid's history (material.model = "elastic", ...): its D x D deviatoric stress, its
-# plastic strain and yielding flag, 8 B each per particle; and the step's D force values a
-# node (counted, not measured: arrays of that size)
+# plastic strain and yielding flag, 8 B each per particle; the step's D force values a node
+# and its pressure's per node and per cell (counted, not measured: arrays of that size)
 HISTORY = 8
 PER_NODE = 195  # B: nodal arrays of the scheme, the free surface, quadrature, corrections
 PER_UNKNOWN = 590  # B: matrix (9 entries), multigrid levels, CG vectors (2D)
@@ -190,6 +190,12 @@ def estimate(case: Case) -> Estimate:
         HISTORY * (D * D + 2) if solid else 0
     )
     force = HISTORY * D if solid else 0
+    # a solid's pressure per cell (src/core/cell_pressure.hpp, counted, not measured): a
+    # node's held projector (D x D), volume and mean; a cell's corner gradients (2^D x D),
+    # centroid and gradient (D each), value, and its row's two indices
+    if solid:
+        force += 8 * (D * D + 2)
+    per_cell = 8 * (2**D * D + 2 * D + 1) + 16 if solid else 0
     disk = (
         rows * (170 + 12 * len(case.probes))
         + snaps * (120 * particles + 200)
@@ -203,7 +209,7 @@ def estimate(case: Case) -> Estimate:
         program=program,
         particle_bytes=(PER_PARTICLE + carried) * particles,
         grid_bytes=(PER_NODE + force) * nodes,
-        solver_bytes=(PER_UNKNOWN_3D if D == 3 else PER_UNKNOWN) * unknowns,
+        solver_bytes=((PER_UNKNOWN_3D if D == 3 else PER_UNKNOWN) + per_cell) * unknowns,
         rows_bytes=PER_ROW * values * rows,
         passing_bytes=passing,
         passing_what=what,
