@@ -660,8 +660,161 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
 }
 
 template <int D>
+bool State<D>::elastic_velocity(const Options<D>& O, Report& report, View<double, 2> out) {
+  const index_t nn = grid_.nnodes;
+  const index_t n = viscous_system(O);
+  auto vu = vu_.template view<2>({nn, D});
+  auto vrow = vrow_.template view<2>({nn, D});
+  if (n > 0) {
+    if (!viscous_solve(O, report, n)) return false;
+    auto x = vx_.view(n);
+    for (index_t i = 0; i < nn; ++i)
+      for (int k = 0; k < D; ++k) out(i, k) = vrow(i, k) >= 0 ? x(vrow(i, k)) : vu(i, k);
+  } else {
+    for (index_t i = 0; i < nn; ++i)
+      for (int k = 0; k < D; ++k) out(i, k) = vu(i, k);
+  }
+  return true;
+}
+
+template <int D>
+int State<D>::coupled_solve(const Options<D>& O, Report& report) {
+  if (ob_.onode.size() > 0)
+    throw std::logic_error("State::coupled_solve: a solid's coupled step takes no obstacles");
+  for (index_t w = 0; w < T_.wall_velocity.extent(0); ++w)
+    for (int k = 0; k < D; ++k)
+      if (T_.wall_velocity(w, k) != 0.0)
+        throw std::logic_error("State::coupled_solve: a solid's coupled step takes walls at rest");
+  const index_t nn = grid_.nnodes, nc = grid_.ncells, n = npc_;
+  if (n == 0) return OK;
+  auto rows = pc_rows_.view(n);
+  auto cell_row = pc_row_.view(nc);
+  auto G = pc_G_.template view<3>({n, NC, D});
+  auto P = pc_P_.template view<3>({nn, D, D});
+  auto vol = pc_vol_.view(nn);
+  auto v0 = cp_v0_.template view<2>({nn, D});
+  auto base = v_c_.template view<2>({nn, D});
+  auto x = cp_x_.template sized<2>({nn, D});
+  auto dx = cp_dx_.template sized<2>({nn, D});
+  auto cells = cp_cells_.template sized<2>({6, n});
+  auto pr = cells.row(0), r = cells.row(1), z = cells.row(2), zold = cells.row(3), d = cells.row(4),
+       q = cells.row(5);
+  auto cols = cols_.template view<2>({n, NS});
+  auto vals = vals_.template view<2>({n, NS});
+  auto scratch = scratch_.sized(n);
+  auto p_cell = p_cell_.view(nc);   // the split step's pressure: the first guess
+  auto field = pc_mean_.sized(nc);  // a cell-indexed vector for correct_cells
+  const double dt_rho = O.dt / O.rho, rho_dt = O.rho / O.dt;
+  const double cell_volume = std::pow(grid_.h, D);
+  auto theta = theta_.view(nc);
+  // the base velocity of pressure y (cells' values by row): v0 - dt / rho V^-1 P G^T y, the
+  // held components at rest (linear: v0 = 0 for the search direction's part)
+  auto set_base = [&](View<const double> y, bool affine) {
+    for (index_t c = 0; c < nc; ++c) field(c) = 0.0;
+    for (index_t k = 0; k < n; ++k) field(rows(k)) = y(k);
+    if (affine) {
+      correct_cells<D>(grid_, cell_row, G, P, vol, field, v0, dt_rho, base);
+    } else {
+      for (index_t i = 0; i < nn * D; ++i) dx.data()[i] = 0.0;
+      correct_cells<D>(grid_, cell_row, G, P, vol, field, dx, dt_rho, base);
+    }
+    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, base,
+                contact_.template view<2>({nn, D}), T_.wall_velocity);
+  };
+  // the preconditioner: the Poisson operator's inverse (its multigrid, set up by the split
+  // step) plus G dt^2 / (rho V_c), the Schur complement's inverse where the elastic
+  // stiffness dominates
+  index_t step_iterations = 0;
+  const double stiff = O.model_params[0] * O.dt * O.dt / O.rho;
+  auto precondition = [&](View<const double> res, View<double> out) {
+    for (index_t k = 0; k < n; ++k) out(k) = 0.0;
+    if (!counted_solve(O, report, cols, vals, rows, res, out, scratch, step_iterations, true))
+      return false;
+    for (index_t k = 0; k < n; ++k)
+      out(k) += stiff * res(k) / (std::max(theta(rows(k)), 1e-3) * cell_volume);
+    return true;
+  };
+  auto dot = [&](View<const double> a, View<const double> b) {
+    double sum = 0.0;
+    for (index_t k = 0; k < n; ++k) sum += a(k) * b(k);
+    return sum;
+  };
+  // the scale: the size of the divergence's terms in v* (a sum of magnitudes, which does
+  // not vanish where v* is divergence-free already, as in simple shear)
+  double scale2 = 0.0;
+  for (index_t k = 0; k < n; ++k) {
+    const index_t first = grid_.cell_first_node(rows(k));
+    double t = 0.0;
+    for (int a = 0; a < NC; ++a)
+      for (int m = 0; m < D; ++m) t += std::abs(G(k, a, m) * v0(first + grid_.corner[a], m));
+    scale2 += rho_dt * rho_dt * t * t;
+  }
+  const double scale = std::sqrt(scale2);
+  for (index_t k = 0; k < n; ++k) pr(k) = p_cell(rows(k));
+  set_base(pr, true);
+  if (!elastic_velocity(O, report, x)) return VISCOUS_NOT_CONVERGED;
+  cell_rhs<D>(grid_, rows, G, x, rho_dt, r);  // the residual: x's divergence
+  const double tol = 1e2 * O.tol * (scale > 0.0 ? scale : 1.0);
+  index_t it = 0;
+  double rz = 0.0;
+  while (std::sqrt(dot(r, r)) > tol) {
+    if (it == O.max_iterations) {
+      report.fail_iterations = it;
+      report.fail_residual = std::sqrt(dot(r, r)) / (scale > 0.0 ? scale : 1.0);
+      report.fail_size = n;
+      return PRESSURE_NOT_CONVERGED;
+    }
+    if (!precondition(r, z)) return PRESSURE_NOT_CONVERGED;
+    if (it == 0) {
+      for (index_t k = 0; k < n; ++k) d(k) = z(k);
+    } else {  // flexible (Polak-Ribiere): the preconditioner is itself an iterative solve
+      double rzold = 0.0;
+      for (index_t k = 0; k < n; ++k) rzold += r(k) * zold(k);
+      const double beta = (rz != 0.0) ? (dot(r, z) - rzold) / rz : 0.0;
+      for (index_t k = 0; k < n; ++k) d(k) = z(k) + beta * d(k);
+    }
+    rz = dot(r, z);
+    for (index_t k = 0; k < n; ++k) zold(k) = z(k);
+    // q = S d = -(rho / dt) C x_lin(d), x_lin the elastic velocity of the base -dt/rho V^-1 P G^T d
+    set_base(d, false);
+    if (!elastic_velocity(O, report, dx)) return VISCOUS_NOT_CONVERGED;
+    cell_rhs<D>(grid_, rows, G, dx, rho_dt, q);
+    for (index_t k = 0; k < n; ++k) q(k) = -q(k);
+    const double dq = dot(d, q);
+    if (!(dq > 0.0)) {  // S is positive definite: only rounding (or a fault) gets here
+      report.fail_iterations = it;
+      report.fail_residual = std::sqrt(dot(r, r)) / (scale > 0.0 ? scale : 1.0);
+      report.fail_size = n;
+      return PRESSURE_NOT_CONVERGED;
+    }
+    const double alpha = rz / dq;
+    for (index_t k = 0; k < n; ++k) {
+      pr(k) += alpha * d(k);
+      r(k) -= alpha * q(k);
+    }
+    for (index_t i = 0; i < nn * D; ++i) x.data()[i] += alpha * dx.data()[i];
+    it += 1;
+  }
+  report.max_iterations = std::max(report.max_iterations, step_iterations);
+  // the pressure, and v_star such that the corrector gives x: v_star = x + dt/rho V^-1 P G^T p
+  for (index_t c = 0; c < nc; ++c) p_cell(c) = 0.0;
+  for (index_t k = 0; k < n; ++k) p_cell(rows(k)) = pr(k);
+  for (index_t i = 0; i < nn * D; ++i) dx.data()[i] = 0.0;
+  auto v_star = v_star_.template view<2>({nn, D});
+  correct_cells<D>(grid_, cell_row, G, P, vol, p_cell, dx, dt_rho, v_star);  // -dt/rho V^-1 P G^T p
+  for (index_t i = 0; i < nn * D; ++i) v_star.data()[i] = x.data()[i] - v_star.data()[i];
+  cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell,
+                   pc_X_.template sized<2>({n, D}), pc_grad_.template sized<2>({n, D}),
+                   p_node_.view(nn));
+  return OK;
+}
+
+template <int D>
 int State<D>::pressure_solve(const Options<D>& O, Report& report) {
-  if (O.cell_pressure) return cell_pressure_solve(O, report);
+  if (O.cell_pressure) {
+    const int status = cell_pressure_solve(O, report);
+    return status == OK && O.coupled && O.viscous ? coupled_solve(O, report) : status;
+  }
   warm_start();
   bool anchored = pressure_matrix(O);
   report.pockets += npockets_;
@@ -838,6 +991,11 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   viscous_start(O, report);
   if (!O.viscous) return OK;
   const index_t nn = grid_.nnodes;
+  if (O.coupled) {  // v* before the elastic increment, for the coupled solve
+    auto v_star = v_star_.template view<2>({nn, D});
+    auto v0 = cp_v0_.template sized<2>({nn, D});
+    std::copy(v_star.data(), v_star.data() + nn * D, v0.data());
+  }
   if (exchange_->shared()) {
     // the corrector at the nodes on a rank's edge reaches past its cells: the owners' values
     const View<double, 2> base[] = {v_c_.template view<2>({nn, D})};
@@ -860,6 +1018,13 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
     return OK;
   }
   if (n == 0) return OK;
+  if (!viscous_solve(O, report, n)) return VISCOUS_NOT_CONVERGED;
+  viscous_apply(vx_.view(n));
+  return OK;
+}
+
+template <int D>
+bool State<D>::viscous_solve(const Options<D>& O, Report& report, index_t n) {
   auto cols = vcols_.template view<3>({D, n, NS});
   auto vals = vvals_.template view<3>({D, n, NS});
   auto rhs = vrhs_.view(n);
@@ -870,15 +1035,12 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
   const SolveResult res = mpmflow::solve<D>(grid_, cols, vals, node, voff, rhs, x, O.tol,
                                             O.max_iterations, O.sweeps, viscous_mg_, work);
   report.viscous_iterations += res.iterations;
-  if (!(res.residual <= O.tol)) {
-    report.fail_iterations = res.iterations;
-    report.fail_residual = res.residual;
-    report.fail_node = node(mpmflow::worst_row(cols, vals, voff, x, rhs, work.row(0), work.row(1)));
-    report.fail_size = n;
-    return VISCOUS_NOT_CONVERGED;
-  }
-  viscous_apply(x);
-  return OK;
+  if (res.residual <= O.tol) return true;
+  report.fail_iterations = res.iterations;
+  report.fail_residual = res.residual;
+  report.fail_node = node(mpmflow::worst_row(cols, vals, voff, x, rhs, work.row(0), work.row(1)));
+  report.fail_size = n;
+  return false;
 }
 
 template <int D>

@@ -105,6 +105,10 @@ struct Options {
   // a solid's pressure: one value per cell, its surface natural (cell_pressure.hpp); the
   // cells' integrals are then the particles' in a partial cell, as with partial_particles
   bool cell_pressure = false;
+  // with cell_pressure and a solid's elastic solve: the elastic solve and the projection
+  // solved as one system (coupled_solve), for steps past the shear wave's crossing of a cell,
+  // where the split of the two grows a bending beam (docs/method.md, "Solids")
+  bool coupled = false;
   int surface = GAUSS;
   bool subcell = true;
   bool wall_flux = true;
@@ -327,6 +331,21 @@ class State {
   bool pressure_matrix(const Options<D>& O);  // assemble; false: singular (no free surface)
   // O.cell_pressure's pressure step in place of the nodes' (cell_pressure.hpp)
   int cell_pressure_solve(const Options<D>& O, Report& report);
+  // O.coupled: after cell_pressure_solve (the split step: the contacts, a first pressure
+  // and the Poisson operator's multigrid), the cells' pressure p at which the elastic
+  // solve's velocity x(p) = (M / dt + K)^-1 M / dt (v* - dt / rho V^-1 P G^T p) is itself
+  // divergence-free: flexible conjugate gradients on the Schur complement (rho / dt) C (M /
+  // dt + K)^-1 P G^T, preconditioned by the Poisson operator's inverse plus G dt^2 / (rho
+  // V_c) (Cahouet and Chabard 1988), each iteration one elastic and one Poisson solve. The
+  // corrected velocity is then x(p), and the stress (to_particles) follows it: the
+  // incompressible backward-Euler step, stable at any dt. Walls at rest, no obstacles.
+  int coupled_solve(const Options<D>& O, Report& report);
+  // the elastic solve's velocity (nn x D) from the base velocity in v_c_ (the viscous
+  // system assembled from it, solved, the fixed components as given); false: not converged
+  bool elastic_velocity(const Options<D>& O, Report& report, View<double, 2> out);
+  // the viscous system of the last viscous_system (n unknowns) solved into vx_, counted in
+  // the report; false: it did not converge (the report names the worst row's node)
+  bool viscous_solve(const Options<D>& O, Report& report, index_t n);
   void cell_hold();  // the projector onto the components walls and obstacles do not hold
   // one solve of the pressure matrix (cols, vals over rows: nodes, or cells), counted in the
   // report; false: it did not converge (the report names the worst row's node)
@@ -484,6 +503,9 @@ class State {
   // volumes and pressure (cell_pressure.hpp); grown at a solid's first step
   Buffer<index_t> pc_row_, pc_rows_;
   Buffer<double> pc_G_, pc_P_, pc_vol_, pc_X_, pc_grad_, pc_mean_, p_cell_;
+  // the coupled solve's (O.coupled): v* before the elastic solve, the elastic velocity and
+  // its part along the search direction (nn x D), the CG's cell vectors (rows x 6)
+  Buffer<double> cp_v0_, cp_x_, cp_dx_, cp_cells_;
   index_t npc_ = 0;
   Buffer<double> K_, C_, V_, Cs_, Vs_, Vcells_;  // the step's element integrals
   Buffer<index_t> cols_;

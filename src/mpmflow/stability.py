@@ -54,6 +54,6 @@ def time_step(case: Case) -> float:
 
 def longest_projection_step(case: Case) -> float:
     """The longest step the projection scheme takes with time.dt = "auto" (s): time.max_dt,
-    and for a solid at most its shear wave's step (``materials.shear_wave_step``, the
-    solid's stable step, which a fixed time.dt may not exceed either)."""
+    and for a solid at most its shear wave's step (``materials.shear_wave_step``, past which
+    a fixed time.dt takes the coupled step)."""
     return min(case.time.max_dt, materials.shear_wave_step(case.material, case.grid.spacing))

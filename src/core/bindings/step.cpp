@@ -308,6 +308,7 @@ void bind_dim(nb::module_& m) {
       .def_rw("sparse", &O::sparse)
       .def_rw("partial_particles", &O::partial_particles)
       .def_rw("cell_pressure", &O::cell_pressure)
+      .def_rw("coupled", &O::coupled)
       .def_rw("surface", &O::surface)
       .def_rw("subcell", &O::subcell)
       .def_rw("wall_flux", &O::wall_flux)

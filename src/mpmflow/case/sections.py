@@ -129,8 +129,9 @@ class Material(Section):
         "\"drucker_prager\": s = 2 G (deviatoric strain); Young's modulus is 3 G (Poisson's "
         "ratio 0.5: the solid is incompressible). It sets the shear-wave speed "
         "sqrt(G / density) and with it a solid's step, 0.5 grid.spacing / sqrt(G / "
-        'density): time.dt = "auto" takes it, at which the shear waves are followed, and a '
-        'fixed time.dt may not exceed it (docs/method.md, "Solids").',
+        'density): time.dt = "auto" takes it, at which the shear waves are followed; a '
+        "longer fixed time.dt solves the elastic step and the projection as one system "
+        '(stable at any step, damping the waves; no obstacles yet: docs/method.md, "Solids").',
     )
     undrained_strength: float = Field(
         20e3,

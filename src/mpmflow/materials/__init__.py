@@ -98,20 +98,18 @@ def viscous_solve(m: Material) -> bool:
     return is_viscous(m) or is_solid(m)
 
 
-# a solid's longest step, as a fraction of the time a shear wave takes to cross a cell: the
-# step time.dt = "auto" takes and the most a fixed time.dt may be. The stress is updated
-# from the corrected velocity after the elastic solve, and that split is stable only up
-# to about a shear wave's crossing: a swinging cantilever grew at 1.5 in 2D, crept at 0.7
-# in 3D and broke down there at 1.0 after four periods, and holds at 0.5 (eight periods in
-# 2D and 3D). At it the waves are followed (a layer's period within 0.1% at H / 20).
-# Docs/method.md, "Solids".
+# a solid's step, as a fraction of the time a shear wave takes to cross a cell: the longest
+# time.dt = "auto" takes (the waves are followed: a layer's period within 0.1% at H / 20),
+# and past which a fixed time.dt takes the coupled step (the elastic solve and the
+# projection as one system: their split grew a swinging cantilever at 1.5 in 2D, crept at
+# 0.7 in 3D and broke down there at 1.0; docs/method.md, "Solids")
 SHEAR_COURANT = 0.5
 
 
 def shear_wave_step(m: Material, spacing: float) -> float:
     """A solid's step (s) on cells of side ``spacing`` (m): SHEAR_COURANT h / sqrt(G /
-    density), the step time.dt = "auto" takes and the longest a fixed one may be; inf for
-    a fluid."""
+    density), the longest time.dt = "auto" takes and past which a fixed one takes the
+    coupled step; inf for a fluid."""
     if not is_solid(m):
         return float("inf")
     return float(SHEAR_COURANT * spacing / (m.shear_modulus / m.density) ** 0.5)

@@ -275,6 +275,9 @@ class ProjectionScheme:
             sparse=float(preset(s.sparse_cell_threshold, "sparse_cell_threshold")),
             partial_particles=particles,
             cell_pressure=materials.is_solid(m),
+            # past a solid's shear-wave step, the elastic solve and the projection as one
+            # system (docs/method.md, "Solids"): the split grows a bending beam there
+            coupled=dt > materials.shear_wave_step(m, self.grid.spacing) * (1 + 1e-9),
             surface=(
                 state.SURFACE_QUADRATURE["gauss"]
                 if particles

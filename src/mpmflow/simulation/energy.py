@@ -184,11 +184,10 @@ def advice(sim: Simulation) -> str:
     case = sim.case
     if materials.is_solid(case.material):
         return (
-            "A solid's step is held under its shear wave's (time.dt at most "
+            "A solid's step is measured stable at any time.dt (the split step up to "
             f"{materials.SHEAR_COURANT:g} grid.spacing / sqrt(material.shear_modulus / "
-            "material.density)), where the solids' step is measured stable; a blow-up within "
-            'it is not a known limit of the method (docs/method.md, "Solids"): please report '
-            "the case."
+            "material.density), the coupled step past it): a blow-up is not a known limit "
+            'of the method (docs/method.md, "Solids"): please report the case.'
         )
     if case.solver.scheme == "explicit":
         return (

@@ -80,6 +80,7 @@ class CoreOptions(Protocol):
     sparse: float
     partial_particles: bool
     cell_pressure: bool  # a solid's pressure per cell (src/core/cell_pressure.hpp)
+    coupled: bool  # a solid's elastic solve and projection as one system (State::coupled_solve)
     surface: int
     subcell: bool
     wall_flux: bool
