@@ -706,7 +706,6 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   auto field = pc_mean_.sized(nc);  // a cell-indexed vector for correct_cells
   const double dt_rho = O.dt / O.rho, rho_dt = O.rho / O.dt;
   const double cell_volume = std::pow(grid_.h, D);
-  auto theta = theta_.view(nc);
   // the base velocity of pressure y (cells' values by row): v0 - dt / rho V^-1 P G^T y, the
   // held components at rest (linear: v0 = 0 for the search direction's part)
   auto set_base = [&](View<const double> y, bool affine) {
@@ -722,16 +721,17 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
                 contact_.template view<2>({nn, D}), T_.wall_velocity);
   };
   // the preconditioner: the Poisson operator's inverse (its multigrid, set up by the split
-  // step) plus G dt^2 / (rho V_c), the Schur complement's inverse where the elastic
-  // stiffness dominates
+  // step) plus eta_c dt / (rho V_c), the Schur complement's inverse where the elastic
+  // stiffness dominates (eta_c = G dt, less a yielded cell's share, times a partial cell's
+  // fraction: the elastic solve's own weight)
   index_t step_iterations = 0;
-  const double stiff = O.model_params[0] * O.dt * O.dt / O.rho;
+  auto weight = eta_weight_.view(nc);
+  const double per_volume = O.dt / (O.rho * cell_volume);
   auto precondition = [&](View<const double> res, View<double> out) {
     for (index_t k = 0; k < n; ++k) out(k) = 0.0;
     if (!counted_solve(O, report, cols, vals, rows, res, out, scratch, step_iterations, true))
       return false;
-    for (index_t k = 0; k < n; ++k)
-      out(k) += stiff * res(k) / (std::max(theta(rows(k)), 1e-3) * cell_volume);
+    for (index_t k = 0; k < n; ++k) out(k) += weight(rows(k)) * per_volume * res(k);
     return true;
   };
   auto dot = [&](View<const double> a, View<const double> b) {
@@ -757,13 +757,19 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   const double tol = 1e2 * O.tol * (scale > 0.0 ? scale : 1.0);
   index_t it = 0;
   double rz = 0.0;
+  // not converged: the report names the cell of the largest divergence left
+  auto not_converged = [&]() {
+    index_t worst = 0;
+    for (index_t k = 1; k < n; ++k)
+      if (std::abs(r(k)) > std::abs(r(worst))) worst = k;
+    report.fail_iterations = it;
+    report.fail_residual = std::sqrt(dot(r, r)) / (scale > 0.0 ? scale : 1.0);
+    report.fail_node = grid_.cell_first_node(rows(worst));
+    report.fail_size = n;
+    return PRESSURE_NOT_CONVERGED;
+  };
   while (std::sqrt(dot(r, r)) > tol) {
-    if (it == O.max_iterations) {
-      report.fail_iterations = it;
-      report.fail_residual = std::sqrt(dot(r, r)) / (scale > 0.0 ? scale : 1.0);
-      report.fail_size = n;
-      return PRESSURE_NOT_CONVERGED;
-    }
+    if (it == O.max_iterations) return not_converged();
     if (!precondition(r, z)) return PRESSURE_NOT_CONVERGED;
     if (it == 0) {
       for (index_t k = 0; k < n; ++k) d(k) = z(k);
@@ -781,12 +787,8 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
     cell_rhs<D>(grid_, rows, G, dx, rho_dt, q);
     for (index_t k = 0; k < n; ++k) q(k) = -q(k);
     const double dq = dot(d, q);
-    if (!(dq > 0.0)) {  // S is positive definite: only rounding (or a fault) gets here
-      report.fail_iterations = it;
-      report.fail_residual = std::sqrt(dot(r, r)) / (scale > 0.0 ? scale : 1.0);
-      report.fail_size = n;
-      return PRESSURE_NOT_CONVERGED;
-    }
+    // S is positive definite: only rounding (or a fault) gets here
+    if (!(dq > 0.0)) return not_converged();
     const double alpha = rz / dq;
     for (index_t k = 0; k < n; ++k) {
       pr(k) += alpha * d(k);
