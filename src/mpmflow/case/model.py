@@ -460,16 +460,21 @@ class Case(Section):
         solid_step = materials.shear_wave_step(self.material, self.grid.spacing)
         if self.time.dt != "auto" and self.time.dt > solid_step * (1 + 1e-9):
             # past the solid's step the elastic solve and the projection are solved as one
-            # system (State::coupled_solve), for walls at rest (a solid takes no inlets) and
-            # without obstacles
-            if self.obstacles:
+            # system (State::coupled_solve), for walls at rest (a solid takes no inlets),
+            # without obstacles or damping zones (which act between the two solves)
+            held = [
+                name
+                for name, on in (("obstacles", self.obstacles), ("sponges", self.sponges))
+                if on
+            ]
+            if held:
                 c = (self.material.shear_modulus / self.material.density) ** 0.5
                 raise ValueError(
                     f"time.dt = {self.time.dt:g} s is above a solid's step, {solid_step:.4g} s "
                     f"= {materials.SHEAR_COURANT:g} grid.spacing / sqrt(material.shear_modulus "
                     f"/ material.density) = {materials.SHEAR_COURANT:g} x {self.grid.spacing:g} "
                     f"m / {c:.4g} m/s, past which the elastic solve and the projection are "
-                    f"solved together, which takes no obstacles yet "
+                    f"solved together, which takes no {' or '.join(held)} yet "
                     f'(docs/method.md, "Solids"): set time.dt to at most {solid_step:.4g} s, '
                     'or time.dt = "auto", which takes it'
                 )
