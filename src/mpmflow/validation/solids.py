@@ -13,9 +13,10 @@ plane strain, as the 2D beam).
 The step each scheme takes for this beam (computed, not run: the explicit comparator does
 not take solids): time.dt = "auto" takes 0.5 h / c_s, c_s = sqrt(G / rho) = 192 m/s, to
 follow the waves, and a longer fixed step takes the coupled step, which has no limit
-(docs/method.md, "Solids"); no bulk modulus enters either. An explicit compressible solid's stable step is 0.5 h / c_p, c_p = sqrt((K + 4 G / 3) /
-rho), with K = 2 G (1 + nu) / (3 (1 - 2 nu)): c_p = 7.2 c_s at nu = 0.49 and 22.4 c_s at
-nu = 0.499, and unbounded at the incompressible 0.5 the projection runs.
+(docs/method.md, "Solids"); no bulk modulus enters either. An explicit compressible
+solid's stable step is 0.5 h / c_p, c_p = sqrt((K + 4 G / 3) / rho), with K = 2 G (1 + nu)
+/ (3 (1 - 2 nu)): c_p = 7.2 c_s at nu = 0.49 and 22.4 c_s at nu = 0.499, and unbounded at
+the incompressible 0.5 the projection runs.
 """
 
 import math
