@@ -665,15 +665,10 @@ bool State<D>::elastic_velocity(const Options<D>& O, Report& report, View<double
   const index_t n = viscous_system(O);
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
-  if (n > 0) {
-    if (!viscous_solve(O, report, n)) return false;
-    auto x = vx_.view(n);
-    for (index_t i = 0; i < nn; ++i)
-      for (int k = 0; k < D; ++k) out(i, k) = vrow(i, k) >= 0 ? x(vrow(i, k)) : vu(i, k);
-  } else {
-    for (index_t i = 0; i < nn; ++i)
-      for (int k = 0; k < D; ++k) out(i, k) = vu(i, k);
-  }
+  if (n > 0 && !viscous_solve(O, report, n)) return false;
+  auto x = vx_.view(n);
+  for (index_t i = 0; i < nn; ++i)
+    for (int k = 0; k < D; ++k) out(i, k) = vrow(i, k) >= 0 ? x(vrow(i, k)) : vu(i, k);
   return true;
 }
 
@@ -703,7 +698,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   auto vals = vals_.template view<2>({n, NS});
   auto scratch = scratch_.sized(n);
   auto p_cell = p_cell_.view(nc);   // the split step's pressure: the first guess
-  auto field = pc_mean_.sized(nc);  // a cell-indexed vector for correct_cells
+  auto field = cp_field_.sized(nc);  // a cell-indexed vector for correct_cells
   const double dt_rho = O.dt / O.rho, rho_dt = O.rho / O.dt;
   const double cell_volume = std::pow(grid_.h, D);
   // the base velocity of pressure y (cells' values by row): v0 - dt / rho V^-1 P G^T y, the
@@ -749,12 +744,12 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
       for (int m = 0; m < D; ++m) t += std::abs(G(k, a, m) * v0(first + grid_.corner[a], m));
     scale2 += rho_dt * rho_dt * t * t;
   }
-  const double scale = std::sqrt(scale2);
+  const double scale = scale2 > 0.0 ? std::sqrt(scale2) : 1.0;
   for (index_t k = 0; k < n; ++k) pr(k) = p_cell(rows(k));
   set_base(pr, true);
   if (!elastic_velocity(O, report, x)) return VISCOUS_NOT_CONVERGED;
   cell_rhs<D>(grid_, rows, G, x, rho_dt, r);  // the residual: x's divergence
-  const double tol = 1e2 * O.tol * (scale > 0.0 ? scale : 1.0);
+  const double tol = 1e2 * O.tol * scale;
   index_t it = 0;
   double rz = 0.0;
   // not converged: the report names the cell of the largest divergence left
@@ -763,7 +758,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
     for (index_t k = 1; k < n; ++k)
       if (std::abs(r(k)) > std::abs(r(worst))) worst = k;
     report.fail_iterations = it;
-    report.fail_residual = std::sqrt(dot(r, r)) / (scale > 0.0 ? scale : 1.0);
+    report.fail_residual = std::sqrt(dot(r, r)) / scale;
     report.fail_node = grid_.cell_first_node(rows(worst));
     report.fail_size = n;
     return PRESSURE_NOT_CONVERGED;
@@ -774,9 +769,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
     if (it == 0) {
       for (index_t k = 0; k < n; ++k) d(k) = z(k);
     } else {  // flexible (Polak-Ribiere): the preconditioner is itself an iterative solve
-      double rzold = 0.0;
-      for (index_t k = 0; k < n; ++k) rzold += r(k) * zold(k);
-      const double beta = (rz != 0.0) ? (dot(r, z) - rzold) / rz : 0.0;
+      const double beta = (rz != 0.0) ? (dot(r, z) - dot(r, zold)) / rz : 0.0;
       for (index_t k = 0; k < n; ++k) d(k) = z(k) + beta * d(k);
     }
     rz = dot(r, z);

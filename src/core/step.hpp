@@ -504,8 +504,9 @@ class State {
   Buffer<index_t> pc_row_, pc_rows_;
   Buffer<double> pc_G_, pc_P_, pc_vol_, pc_X_, pc_grad_, pc_mean_, p_cell_;
   // the coupled solve's (O.coupled): v* before the elastic solve, the elastic velocity and
-  // its part along the search direction (nn x D), the CG's cell vectors (rows x 6)
-  Buffer<double> cp_v0_, cp_x_, cp_dx_, cp_cells_;
+  // its part along the search direction (nn x D), the CG's cell vectors (rows x 6), a
+  // pressure by cell (nc)
+  Buffer<double> cp_v0_, cp_x_, cp_dx_, cp_cells_, cp_field_;
   index_t npc_ = 0;
   Buffer<double> K_, C_, V_, Cs_, Vs_, Vcells_;  // the step's element integrals
   Buffer<index_t> cols_;
