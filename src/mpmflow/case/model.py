@@ -457,8 +457,9 @@ class Case(Section):
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
                     "material.bulk_modulus"
                 )
-        solid_step = materials.shear_wave_step(self.material, self.grid.spacing)
-        if self.time.dt != "auto" and self.time.dt > solid_step * (1 + 1e-9):
+        if self.time.dt != "auto" and materials.coupled_step(
+            self.material, self.grid.spacing, self.time.dt
+        ):
             # past the solid's step the elastic solve and the projection are solved as one
             # system (State::coupled_solve), for walls at rest (a solid takes no inlets),
             # without obstacles or damping zones (which act between the two solves)
@@ -468,6 +469,7 @@ class Case(Section):
                 if on
             ]
             if held:
+                solid_step = materials.shear_wave_step(self.material, self.grid.spacing)
                 c = (self.material.shear_modulus / self.material.density) ** 0.5
                 raise ValueError(
                     f"time.dt = {self.time.dt:g} s is above a solid's step, {solid_step:.4g} s "

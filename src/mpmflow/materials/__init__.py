@@ -113,3 +113,9 @@ def shear_wave_step(m: Material, spacing: float) -> float:
     if not is_solid(m):
         return float("inf")
     return float(SHEAR_COURANT * spacing / (m.shear_modulus / m.density) ** 0.5)
+
+
+def coupled_step(m: Material, spacing: float, dt: float) -> bool:
+    """Whether steps of dt (s) on cells of side ``spacing`` (m) take a solid's coupled step
+    (the elastic solve and the projection as one system: past ``shear_wave_step``)."""
+    return dt > shear_wave_step(m, spacing) * (1 + 1e-9)

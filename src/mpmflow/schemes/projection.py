@@ -277,7 +277,7 @@ class ProjectionScheme:
             cell_pressure=materials.is_solid(m),
             # past a solid's shear-wave step, the elastic solve and the projection as one
             # system (docs/method.md, "Solids"): the split grows a bending beam there
-            coupled=dt > materials.shear_wave_step(m, self.grid.spacing) * (1 + 1e-9),
+            coupled=materials.coupled_step(m, self.grid.spacing, dt),
             surface=(
                 state.SURFACE_QUADRATURE["gauss"]
                 if particles
