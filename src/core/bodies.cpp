@@ -283,6 +283,39 @@ void BodyTables<D>::restore() {
 }
 
 template <int D>
+bool BodyTables<D>::staircase_node(const std::array<index_t, D>& ix, index_t i, double* normal) {
+  auto phi = phi_.view(g_.nnodes);
+  auto slot = slot_.view(g_.ncells);
+  if (phi(i) > 0.0) return false;
+  bool open = false;  // a corner of a cell that is not solid: material may reach it
+  for (int a = 0; a < NC && !open; ++a) {
+    index_t c = 0;
+    bool in = true;
+    for (int k = 0; k < D; ++k) {
+      const index_t cx = ix[k] - ((a >> k) & 1);
+      if (cx < 0 || cx >= g_.cells[k]) in = false;
+      c += cx * g_.cs[k];
+    }
+    open = in && slot(c) >= 0;
+  }
+  if (!open) return false;
+  // into the solid: -grad phi, by differences over the neighbouring nodes (one-sided at
+  // the grid's ends)
+  double size = 0.0;
+  for (int k = 0; k < D; ++k) {
+    const index_t lo = ix[k] > 0 ? i - g_.ns[k] : i;
+    const index_t hi = ix[k] < g_.cells[k] ? i + g_.ns[k] : i;
+    normal[k] =
+        hi != lo ? -(phi(hi) - phi(lo)) / (static_cast<double>((hi - lo) / g_.ns[k]) * g_.h) : 0.0;
+    size += normal[k] * normal[k];
+  }
+  size = std::sqrt(size);
+  if (!(size > 0.0)) return false;  // a flat phi: no direction to hold
+  for (int k = 0; k < D; ++k) normal[k] /= size;
+  return true;
+}
+
+template <int D>
 void BodyTables<D>::place(double t) {
   restore();
   const index_t nn = g_.nnodes, nc = g_.ncells;
@@ -387,7 +420,7 @@ void BodyTables<D>::place(double t) {
       if (cx[k] > 0 && touching(c - g_.cs[k])) near = true;
       if (cx[k] + 1 < g_.cells[k] && touching(c + g_.cs[k])) near = true;
     }
-    if (near) cand(m++) = c;
+    if (near && nsub_ > 0) cand(m++) = c;  // the staircase (nsub 0) cuts none
   });
   // their integrals, after the fixed slots
   const index_t total = nfixed_ + m;
@@ -466,6 +499,15 @@ void BodyTables<D>::place(double t) {
   for_box(0, [&](const std::array<index_t, D>& ix) {
     index_t i = 0;
     for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
+    if (nsub_ == 0) {
+      if (staircase_node(ix, i, onormal.row(e).data())) {
+        onode(e) = i;
+        slip(e) = owner(i) >= 0 ? bodies_[owner(i)].no_slip
+                                : (fixed_no_slip_.size() > 0 && fixed_no_slip_(i));
+        ++e;
+      }
+      return;
+    }
     double n[D] = {};
     for (int a = 0; a < NC; ++a) {  // the cell whose corner a the node is
       index_t c = 0;
@@ -560,6 +602,33 @@ void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force,
         torque(b, 2) += r[0] * f[1] - r[1] * f[0];
       }
     }
+  }
+}
+
+template <int D>
+void BodyTables<D>::reactions(View<const double, 2> r, View<const bool> ocontact,
+                              View<double, 2> force, View<double, 2> torque) {
+  for (index_t i = 0; i < force.size(); ++i) force[i] = 0.0;
+  for (index_t i = 0; i < torque.size(); ++i) torque[i] = 0.0;
+  if (!placed_) return;
+  auto owner = owner_.view(g_.nnodes);
+  auto onode = onode_.view(nonode_);
+  auto onormal = onormal_.template view<2>({nonode_, D});
+  auto no_slip = ono_slip_.view(nonode_);
+  for (index_t e = 0; e < nonode_; ++e) {
+    const index_t i = onode(e), b = owner(i);
+    if (b < 0 || !ocontact(i)) continue;
+    double f[3] = {0.0, 0.0, 0.0}, arm[3] = {0.0, 0.0, 0.0};
+    double rn = 0.0;
+    for (int k = 0; k < D; ++k) rn += r(i, k) * onormal(e, k);
+    for (int k = 0; k < D; ++k) f[k] = -(no_slip(e) ? r(i, k) : rn * onormal(e, k));
+    index_t ix[D];
+    g_.node_coords(i, ix);
+    for (int k = 0; k < D; ++k) arm[k] = static_cast<double>(ix[k]) * g_.h - poses_[b].centre[k];
+    for (int k = 0; k < D; ++k) force(b, k) += f[k];
+    torque(b, 0) += arm[1] * f[2] - arm[2] * f[1];
+    torque(b, 1) += arm[2] * f[0] - arm[0] * f[2];
+    torque(b, 2) += arm[0] * f[1] - arm[1] * f[0];
   }
 }
 

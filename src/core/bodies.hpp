@@ -114,8 +114,8 @@ class BodyTables {
   static constexpr double FAR = 1e30;  // phi where no obstacle is near
   // fixed: the fixed obstacles' tables (phi empty: none); fixed_no_slip: per node, whether
   // its nearest fixed obstacle is no-slip (empty: none is); nsub: the cut cells' sub-cells
-  // per axis. Reserves the storage (a step then allocates only when the bodies cut more
-  // cells than any step before).
+  // per axis, or 0 for the staircase (a solid's tools, below). Reserves the storage (a step then
+  // allocates only when the bodies cut more cells than any step before).
   void setup(const Grid<D>& g, const ObstacleTables<D>& fixed, View<const bool> fixed_no_slip,
              std::vector<Body<D>> bodies, index_t nsub);
   bool present() const { return !bodies_.empty(); }
@@ -128,6 +128,12 @@ class BodyTables {
   // force (D) and torque (3) of the pressure p_node (Pa) on each body at its last place,
   // into force (count x D, N per m in 2D) and torque (count x 3)
   void forces(View<const double> p_node, View<double, 2> force, View<double, 2> torque);
+  // A solid's tools: the material's force (D) and torque (3, about the frame's origin) on
+  // each body, from r (nnodes x D, N; 2D N/m), the force each node needs beyond its
+  // stress and weight to move as it does (State::to_particles): minus the sum of r over the
+  // obstacle nodes in contact nearest the body (its normal component where it slips).
+  void reactions(View<const double, 2> r, View<const bool> ocontact, View<double, 2> force,
+                 View<double, 2> torque);
   ObstacleTables<D> tables();
 
   // Free bodies (bodies.cpp). Their unheld degrees of freedom, numbered body by body
@@ -189,6 +195,9 @@ class BodyTables {
   // about z; held rotations' rows and columns 0)
   std::array<std::array<double, 3>, 3> inverse_inertia(const Body<D>& b) const;
   void restore();
+  // the staircase (nsub 0): whether node ix (index i) of the box holds the material, phi <= 0
+  // at a corner of a cell that is not solid, and its normal into the solid (-grad phi, D)
+  bool staircase_node(const std::array<index_t, D>& ix, index_t i, double* normal);
   // f(ix) for each node ix of the last place's box, its upper ends shrunk by shrink (1: the
   // first node of each of the box's cells), axis 0 fastest
   template <class F>

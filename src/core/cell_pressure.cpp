@@ -165,6 +165,20 @@ void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> 
 }
 
 template <int D>
+void add_cell_forces(const Grid<D>& g, View<const index_t> cell_row, View<const double, 3> G,
+                     View<const double> p_cell, View<double, 2> f) {
+  parallel_for(g.nnodes, [&](index_t i) {
+    std::array<index_t, D> ix;
+    g.node_coords(i, ix.data());
+    node_cells_each<D>(g, ix, [&](index_t c, int a) {
+      const index_t r = cell_row(c);
+      if (r < 0) return;
+      for (int k = 0; k < D; ++k) f(i, k) += G(r, a, k) * p_cell(c);
+    });
+  });
+}
+
+template <int D>
 void correct_cells(const Grid<D>& g, View<const index_t> cell_row, View<const double, 3> G,
                    View<const double, 3> P, View<const double> vol, View<const double> p_cell,
                    View<const double, 2> vstar, double dt_over_rho, View<double, 2> v_new) {
@@ -282,6 +296,8 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
                                   View<const double>, View<index_t, 2>, View<double, 2>);        \
   template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,          \
                             View<const double, 2>, double, View<double>);                        \
+  template void add_cell_forces<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,   \
+                                   View<const double>, View<double, 2>);                         \
   template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
                                  View<const double, 3>, View<const double>, View<const double>,  \
                                  View<const double, 2>, double, View<double, 2>);                \

@@ -85,6 +85,11 @@ template <int D>
 void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> G,
               View<const double, 2> v, double rho_over_dt, View<double> rhs);
 
+// f_i += sum_c g_ci p_c (N; 2D N/m): the cells' pressure as the nodes' force (nnodes x D).
+template <int D>
+void add_cell_forces(const Grid<D>& g, View<const index_t> cell_row, View<const double, 3> G,
+                     View<const double> p_cell, View<double, 2> f);
+
 // v_new_i = v*_i + dt_over_rho P_i sum_c g_ci p_c / V_i at every node (v* where V_i = 0).
 template <int D>
 void correct_cells(const Grid<D>& g, View<const index_t> cell_row, View<const double, 3> G,

@@ -46,13 +46,11 @@ void yielded_share(const Grid<D>& g, View<const double> mass, View<const double>
 }
 
 template <int D>
-void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
-                     View<const double, 3> stress, View<const index_t> order,
-                     View<const index_t> start, View<const double> node_mass, double dt,
-                     View<double, 2> acc, View<double, 2> v_star) {
+void stress_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
+                   View<const double, 3> stress, View<const index_t> order,
+                   View<const index_t> start, View<double, 2> acc) {
   constexpr int NC = Grid<D>::NC;
-  const index_t nn = g.nnodes;
-  parallel_for(nn, [&](index_t i) {
+  parallel_for(g.nnodes, [&](index_t i) {
     for (int k = 0; k < D; ++k) acc(i, k) = 0.0;
   });
   // f_i = -sum_p V_p s_p grad N_i(x_p)
@@ -71,7 +69,15 @@ void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const doubl
     }
   });
   if (g.any_periodic) fold_images<D>(g, acc);
-  parallel_for(nn, [&](index_t i) {
+}
+
+template <int D>
+void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
+                     View<const double, 3> stress, View<const index_t> order,
+                     View<const index_t> start, View<const double> node_mass, double dt,
+                     View<double, 2> acc, View<double, 2> v_star) {
+  stress_forces<D>(g, x, volume, stress, order, start, acc);
+  parallel_for(g.nnodes, [&](index_t i) {
     const double m = node_mass[i];
     if (m > 0.0)
       for (int k = 0; k < D; ++k) v_star(i, k) += dt * acc(i, k) / m;
@@ -113,16 +119,19 @@ index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const do
   });
 }
 
-#define MPMFLOW_SOLID(D)                                                                         \
-  template void yielded_share<D>(const Grid<D>&, View<const double>, View<const double>,         \
-                                 View<const index_t>, View<const index_t>, View<double>);        \
-  template void internal_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,    \
-                                   View<const double, 3>, View<const index_t>,                   \
-                                   View<const index_t>, View<const double>, double,              \
-                                   View<double, 2>, View<double, 2>);                            \
-  template index_t update_stresses<D>(const Grid<D>&, View<const double, 2>, View<const double>, \
-                                      View<const double, 2>, View<const double>, double, int,    \
-                                      View<const double>, View<double, 3>, View<double>,         \
+#define MPMFLOW_SOLID(D)                                                                          \
+  template void yielded_share<D>(const Grid<D>&, View<const double>, View<const double>,          \
+                                 View<const index_t>, View<const index_t>, View<double>);         \
+  template void stress_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,       \
+                                 View<const double, 3>, View<const index_t>, View<const index_t>, \
+                                 View<double, 2>);                                                \
+  template void internal_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,     \
+                                   View<const double, 3>, View<const index_t>,                    \
+                                   View<const index_t>, View<const double>, double,               \
+                                   View<double, 2>, View<double, 2>);                             \
+  template index_t update_stresses<D>(const Grid<D>&, View<const double, 2>, View<const double>,  \
+                                      View<const double, 2>, View<const double>, double, int,     \
+                                      View<const double>, View<double, 3>, View<double>,          \
                                       View<double>);
 MPMFLOW_SOLID(2)
 MPMFLOW_SOLID(3)

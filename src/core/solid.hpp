@@ -8,6 +8,13 @@
 
 namespace mpmflow {
 
+// f (nn x D, N; 2D N/m): f_i = -sum_p V_p s_p grad N_i(x_p), the nodes' force of the particles'
+// deviatoric stress s_p (n x D x D, Pa), summed as internal_forces sums it (below).
+template <int D>
+void stress_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
+                   View<const double, 3> stress, View<const index_t> order,
+                   View<const index_t> start, View<double, 2> f);
+
 // The predictor's internal force of the particles' deviatoric stress s_p (n x D x D, Pa):
 // f_i = -sum_p V_p s_p grad N_i(x_p) (N), added to the predictor as the nodes' acceleration:
 // v_star_i += dt f_i / M_i where M_i > 0. It is applied at the nodes as it is, the same force

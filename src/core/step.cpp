@@ -1254,6 +1254,29 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
     update_stresses<D>(grid_, P.x, P.mass, v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt,
                        O.model, View<const double>(O.model_params.data(), {8}), P.stress,
                        P.plastic_strain, P.yielding);
+    if (bodies_.present()) {
+      // the material's force on its tools: at each node a tool holds, the force the node
+      // needs beyond its stress's (the deviatoric stress just updated, the cells' pressure)
+      // and its weight to change its momentum as it did, r_i = M_i ((v_new - v_old) / dt -
+      // g) - f_i, summed over the tool's nodes (the discrete reaction: pressure, shear and
+      // the inertia of the material the tool carries; the fluids' cut-cell pressure
+      // integral below would see the pressure only)
+      const index_t nc = grid_.ncells;
+      auto f = force_.template view<2>({nn, D});
+      stress_forces<D>(grid_, P.x, P.volume, P.stress, order_.view(P.count()), start_.view(nc + 1),
+                       f);
+      add_cell_forces<D>(grid_, pc_row_.view(nc), pc_G_.template view<3>({npc_, NC, D}),
+                         p_cell_.view(nc), f);
+      auto m = node_mass_.view(nn);
+      auto v_old = v_old_.template view<2>({nn, D});
+      auto v_new = v_new_.template view<2>({nn, D});
+      parallel_for(nn, [&](index_t i) {
+        for (int k = 0; k < D; ++k)
+          f(i, k) = m(i) * ((v_new(i, k) - v_old(i, k)) / O.dt - O.gravity[k]) - f(i, k);
+      });
+      bodies_.reactions(f, ocontact_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
+                        body_torque_.template view<2>({bodies_.count(), 3}));
+    }
     // a held component's increment is 0 (its velocity is set, not accelerated: MPM's boundary
     // condition on the acceleration; exact for walls at rest or at a steady speed): the
     // increment v_new - v_old there, with v_old the particles' own velocity, slowed the
@@ -1274,8 +1297,9 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
       View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
       faces, P.affine, Outlets{T_.outlet, P.mass, P.volume, T_.inlets.count() > 0});
   if (bodies_.present()) {  // the bodies' force of this step, then the bodies at its end
-    bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
-                   body_torque_.template view<2>({bodies_.count(), 3}));
+    if (!is_solid(O.model))  // a solid's: its reactions, above
+      bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
+                     body_torque_.template view<2>({bodies_.count(), 3}));
     bodies_.integrate(O.dt, time_ + O.dt);  // the free bodies' new poses
     bodies_.place(time_ + O.dt);
     bodies_.hold(time_ + O.dt);

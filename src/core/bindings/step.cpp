@@ -612,9 +612,10 @@ void bind_dim(nb::module_& m) {
           "orientation quaternion (4) at the state's time (a view, filled when read; 2D: z "
           "entries 0, rotation about z). Setting it puts the free bodies back (a checkpoint).")
       .def_prop_ro("body_force", &state_view<D, &State<D>::body_force>,
-                   "The pressure's force on each body in the last step (bodies x D; N, 2D N/m).")
+                   "The material's force on each body in the last step (bodies x D; N, 2D N/m): "
+                   "a fluid's pressure, a solid's reactions at the nodes the body holds.")
       .def_prop_ro("body_torque", &state_view<D, &State<D>::body_torque>,
-                   "The pressure's torque on each body about its frame's origin in the last "
+                   "The material's torque on each body about its frame's origin in the last "
                    "step (bodies x 3; N m, 2D N m/m).")
       .def(
           "set_inlet_pool",

@@ -168,7 +168,9 @@ class ProjectionScheme:
         _check_movers(case, grid, self.movers)
         if self.movers:
             self.core.set_bodies(
-                [m.core(grid) for m in self.movers], self.solids.node_no_slip, obstacles.SUBCELLS
+                [m.core(grid) for m in self.movers],
+                self.solids.node_no_slip,
+                0 if self.solid else obstacles.SUBCELLS,  # a solid's tools: the staircase
             )
         # amg, direct, petsc: solvers from Python, plugged into the compiled step
         self.python_solver = (

@@ -151,8 +151,9 @@ class CentreOfMass(_Rows):
 class Bodies(_Rows):
     """The moving obstacles (``obstacles.N.motion``) into bodies.csv at the output times: each
     one's pivot position (m), orientation (2D: its angle, degrees; 3D: its unit quaternion),
-    velocity (m/s), turning rate (degrees/s; 3D about each axis), and the pressure's force
-    (N; 2D N per metre of depth) and torque about the pivot (N m; 2D N m/m) in the last step
+    velocity (m/s), turning rate (degrees/s; 3D about each axis), and the material's force
+    (N; 2D N per metre of depth: a fluid's pressure, a solid's reactions at the nodes the
+    body holds) and torque about the pivot (N m; 2D N m/m) in the last step
     (columns ``{name}_{quantity}``; the core's state, src/core/bodies.hpp)."""
 
     file_name = "bodies.csv"
@@ -245,7 +246,7 @@ class Surfaces:
     (indexed by bodies.pvd) holding every moving obstacle's surface (``Shape.boundary``: 2D
     line segments, 3D triangles) at its pose in the core's state, with each point's velocity
     (m/s, the body's v + omega x r) and, per cell, its body's number in bodies.csv's order
-    (``body``), the pressure's force (N; 2D N/m) and torque about the pivot (N m; 2D N m/m)
+    (``body``), the material's force (N; 2D N/m) and torque about the pivot (N m; 2D N m/m)
     of the last step."""
 
     def __init__(self, movers: list[moving.Mover], file: SnapshotWriter) -> None:

@@ -116,7 +116,7 @@ class CoreState(Protocol):
     inlet_travel: Floats  # where each inlet row's next particle is (m; src/core/inlets.hpp)
     inlet_next: int  # the first particle of the inlets' pool not emitted yet
     time: float  # the flow time (s); setting it places the moving obstacles
-    body_force: Floats  # (bodies, D) the pressure's force on each moving obstacle (N; 2D N/m)
+    body_force: Floats  # (bodies, D) the material's force on each moving obstacle (N; 2D N/m)
     body_torque: Floats  # (bodies, 3) its torque about the pivot (N m; 2D N m/m)
     # (bodies, 13) pivot, velocity, angular velocity, orientation quaternion (settable)
     body_state: Floats
