@@ -91,6 +91,7 @@ VALIDATION_CASES = (
     "bingham_plug",
     "mu_i_layer",
     "cantilever",
+    "prandtl_footing",
     "heave_cylinder",
     "wave_maker",
     "archimedes",
