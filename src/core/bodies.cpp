@@ -286,7 +286,7 @@ template <int D>
 bool BodyTables<D>::staircase_node(const std::array<index_t, D>& ix, index_t i, double* normal) {
   auto phi = phi_.view(g_.nnodes);
   auto slot = slot_.view(g_.ncells);
-  if (phi(i) > 0.0) return false;
+  if (phi(i) >= REACH * g_.h) return false;
   bool open = false;  // a corner of a cell that is not solid: material may reach it
   for (int a = 0; a < NC && !open; ++a) {
     index_t c = 0;

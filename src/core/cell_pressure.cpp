@@ -146,6 +146,10 @@ void assemble_cells(const Grid<D>& g, View<const index_t> cell_row, View<const i
       }
     }
     vals(r, NS / 2) *= 1.0 + 1e-12;
+    // a cell whose every corner is held whole (its material moves with a tool) constrains
+    // nothing: its row decouples with p_c = 0 (its right-hand side vanishes with the
+    // held velocities' divergence)
+    if (vals(r, NS / 2) == 0.0) vals(r, NS / 2) = 1.0;
   });
 }
 

@@ -1285,8 +1285,12 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
     auto v_old = v_old_.template view<2>({nn, D});
     apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v_old,
                 contact_.template view<2>({nn, D}), T_.wall_velocity);
-    apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v_old, ocontact_.view(nn),
-                    View<const double>(), ob_.velocity);
+    // (not at a tool's nodes: it holds the nodes within a cell of its face, where the
+    // particles it has just taken along must take its velocity; with the increment 0 they
+    // kept their own, carried it out of the held cells, and a footing blew up in 20 steps)
+    if (!bodies_.present())
+      apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v_old, ocontact_.view(nn),
+                      View<const double>(), ob_.velocity);
   }
   std::array<View<const double>, D> faces{};  // empty: no displacement
   if (displaced)

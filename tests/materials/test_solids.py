@@ -101,7 +101,7 @@ def test_a_footings_force_is_the_clays_vertical_stress():
     yielding under it): its nodes' reactions against the clay's own vertical stress,
     integrated over a band 0.2-1.0 m deep, which carries the whole load of a weightless
     layer between frictionless side walls. The two are independent measures; they agree to
-    the inertia of the slowly moving clay (measured 1.1%). With the cut cells' pressure
+    the inertia of the slowly moving clay (measured 1.4%). With the cut cells' pressure
     integral that fluids' bodies take (the shear left out) and their cut-cell contact, the
     footing blew up within 0.05 s."""
     sim = Simulation(
