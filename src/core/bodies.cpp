@@ -283,20 +283,25 @@ void BodyTables<D>::restore() {
 }
 
 template <int D>
+index_t BodyTables<D>::corner_cell(const std::array<index_t, D>& ix, int a) const {
+  index_t c = 0;
+  for (int k = 0; k < D; ++k) {
+    const index_t cx = ix[k] - ((a >> k) & 1);
+    if (cx < 0 || cx >= g_.cells[k]) return -1;
+    c += cx * g_.cs[k];
+  }
+  return c;
+}
+
+template <int D>
 bool BodyTables<D>::staircase_node(const std::array<index_t, D>& ix, index_t i, double* normal) {
   auto phi = phi_.view(g_.nnodes);
   auto slot = slot_.view(g_.ncells);
   if (phi(i) >= REACH * g_.h) return false;
   bool open = false;  // a corner of a cell that is not solid: material may reach it
   for (int a = 0; a < NC && !open; ++a) {
-    index_t c = 0;
-    bool in = true;
-    for (int k = 0; k < D; ++k) {
-      const index_t cx = ix[k] - ((a >> k) & 1);
-      if (cx < 0 || cx >= g_.cells[k]) in = false;
-      c += cx * g_.cs[k];
-    }
-    open = in && slot(c) >= 0;
+    const index_t c = corner_cell(ix, a);
+    open = c >= 0 && slot(c) >= 0;
   }
   if (!open) return false;
   // into the solid: -grad phi, by differences over the neighbouring nodes (one-sided at
@@ -499,35 +504,25 @@ void BodyTables<D>::place(double t) {
   for_box(0, [&](const std::array<index_t, D>& ix) {
     index_t i = 0;
     for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
-    if (nsub_ == 0) {
-      if (staircase_node(ix, i, onormal.row(e).data())) {
-        onode(e) = i;
-        slip(e) = owner(i) >= 0 ? bodies_[owner(i)].no_slip
-                                : (fixed_no_slip_.size() > 0 && fixed_no_slip_(i));
-        ++e;
-      }
-      return;
-    }
     double n[D] = {};
-    for (int a = 0; a < NC; ++a) {  // the cell whose corner a the node is
-      index_t c = 0;
-      bool in = true;
-      for (int k = 0; k < D; ++k) {
-        const index_t cx = ix[k] - ((a >> k) & 1);
-        if (cx < 0 || cx >= g_.cells[k]) in = false;
-        c += cx * g_.cs[k];
+    if (nsub_ == 0) {
+      if (!staircase_node(ix, i, n)) return;
+    } else {
+      for (int a = 0; a < NC; ++a) {
+        const index_t c = corner_cell(ix, a);
+        if (c < 0 || slot(c) < 1) continue;
+        const index_t sc = slot(c);
+        for (int b = 0; b < NC; ++b)
+          for (int k = 0; k < D; ++k) n[k] += F(sc, a, b, k);
       }
-      if (!in || slot(c) < 1) continue;
-      const index_t sc = slot(c);
-      for (int b = 0; b < NC; ++b)
-        for (int k = 0; k < D; ++k) n[k] += F(sc, a, b, k);
+      double size = 0.0;
+      for (int k = 0; k < D; ++k) size += n[k] * n[k];
+      size = std::sqrt(size);
+      if (size <= threshold) return;
+      for (int k = 0; k < D; ++k) n[k] /= size;
     }
-    double size = 0.0;
-    for (int k = 0; k < D; ++k) size += n[k] * n[k];
-    size = std::sqrt(size);
-    if (size <= threshold) return;
     onode(e) = i;
-    for (int k = 0; k < D; ++k) onormal(e, k) = n[k] / size;
+    for (int k = 0; k < D; ++k) onormal(e, k) = n[k];
     slip(e) = owner(i) >= 0 ? bodies_[owner(i)].no_slip
                             : (fixed_no_slip_.size() > 0 && fixed_no_slip_(i));
     ++e;

@@ -207,6 +207,8 @@ class BodyTables {
   // REACH h at a corner of a cell that is not solid, and its normal into the solid (-grad
   // phi, D)
   bool staircase_node(const std::array<index_t, D>& ix, index_t i, double* normal);
+  // the cell of which node ix is corner a (-1: outside the grid)
+  index_t corner_cell(const std::array<index_t, D>& ix, int a) const;
   // f(ix) for each node ix of the last place's box, its upper ends shrunk by shrink (1: the
   // first node of each of the box's cells), axis 0 fastest
   template <class F>
