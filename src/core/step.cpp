@@ -674,12 +674,10 @@ bool State<D>::elastic_velocity(const Options<D>& O, Report& report, View<double
 
 template <int D>
 int State<D>::coupled_solve(const Options<D>& O, Report& report) {
-  if (ob_.onode.size() > 0)
-    throw std::logic_error("State::coupled_solve: a solid's coupled step takes no obstacles");
-  for (index_t w = 0; w < T_.wall_velocity.extent(0); ++w)
-    for (int k = 0; k < D; ++k)
-      if (T_.wall_velocity(w, k) != 0.0)
-        throw std::logic_error("State::coupled_solve: a solid's coupled step takes walls at rest");
+  struct Still {  // the linear part's holds last only while the solve runs
+    bool& on;
+    ~Still() { on = false; }
+  } still{held_still_};
   const index_t nn = grid_.nnodes, nc = grid_.ncells, n = npc_;
   if (n == 0) return OK;
   auto rows = pc_rows_.view(n);
@@ -701,19 +699,24 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   auto field = cp_field_.sized(nc);  // a cell-indexed vector for correct_cells
   const double dt_rho = O.dt / O.rho, rho_dt = O.rho / O.dt;
   const double cell_volume = std::pow(grid_.h, D);
-  // the base velocity of pressure y (cells' values by row): v0 - dt / rho V^-1 P G^T y, the
-  // held components at rest (linear: v0 = 0 for the search direction's part)
+  // the base velocity of pressure y (cells' values by row): v0 - dt / rho V^-1 P G^T y with
+  // the walls and tools holding their components at their velocities; linear (the search
+  // direction's part): from v0 = 0, the held components at 0 (P holds them: the contacts
+  // the split step settled, fixed through the solve), the elastic solve's held values too
   auto set_base = [&](View<const double> y, bool affine) {
     for (index_t c = 0; c < nc; ++c) field(c) = 0.0;
     for (index_t k = 0; k < n; ++k) field(rows(k)) = y(k);
+    held_still_ = !affine;
     if (affine) {
       correct_cells<D>(grid_, cell_row, G, P, vol, field, v0, dt_rho, base);
+      apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, base,
+                  contact_.template view<2>({nn, D}), T_.wall_velocity);
+      apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, base, ocontact_.view(nn),
+                      View<const double>(), ob_.velocity);
     } else {
       for (index_t i = 0; i < nn * D; ++i) dx.data()[i] = 0.0;
       correct_cells<D>(grid_, cell_row, G, P, vol, field, dx, dt_rho, base);
     }
-    apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, base,
-                contact_.template view<2>({nn, D}), T_.wall_velocity);
   };
   // the preconditioner: the Poisson operator's inverse (its multigrid, set up by the split
   // step) plus eta_c dt / (rho V_c), the Schur complement's inverse where the elastic
@@ -950,9 +953,12 @@ index_t State<D>::viscous_system(const Options<D>& O) {
   auto vu = vu_.template view<2>({nn, D});
   auto vrow = vrow_.template view<2>({nn, D});
   auto voff = voff_.view(D + 1);
-  const index_t n = number_unknowns<D>(
-      node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact, ob_.onode,
-      ocontact, ob_.ono_slip, base, vu, vrow, voff, &grid_, T_.wall_velocity, ob_.velocity);
+  // (the coupled solve's linear part holds its components at 0: held_still_)
+  const index_t n =
+      number_unknowns<D>(node_mass_.view(nn), T_.wall_node, T_.wall_axis, T_.wall_no_slip, contact,
+                         ob_.onode, ocontact, ob_.ono_slip, base, vu, vrow, voff, &grid_,
+                         held_still_ ? View<const double, 2>() : T_.wall_velocity,
+                         held_still_ ? View<const double, 2>() : ob_.velocity);
   if (n == 0) return 0;
   auto cols = vcols_.template sized<3>({D, n, NS});
   auto vals = vvals_.template sized<3>({D, n, NS});

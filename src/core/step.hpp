@@ -338,7 +338,8 @@ class State {
   // dt + K)^-1 P G^T, preconditioned by the Poisson operator's inverse plus G dt^2 / (rho
   // V_c) (Cahouet and Chabard 1988), each iteration one elastic and one Poisson solve. The
   // corrected velocity is then x(p), and the stress (to_particles) follows it: the
-  // incompressible backward-Euler step, stable at any dt. Walls at rest, no obstacles.
+  // incompressible backward-Euler step, stable at any dt. The walls and tools hold what the
+  // split step's contacts hold, at their velocities.
   int coupled_solve(const Options<D>& O, Report& report);
   // the elastic solve's velocity (nn x D) from the base velocity in v_c_ (the viscous
   // system assembled from it, solved, the fixed components as given); false: not converged
@@ -539,6 +540,7 @@ class State {
   // a solid's cells' share of particles that yielded in the last step (solid.hpp)
   Buffer<double> cell_yield_;
   bool solid_scattered_ = false;  // the last scatter's particles carry a solid's stress
+  bool held_still_ = false;       // viscous_system holds its held components at 0 (coupled_solve)
   bool rate_from_new_ = false;
   std::array<Multigrid<D>, D> viscous_mg_;
   // integrals of this step, as views into the buffers above

@@ -461,11 +461,22 @@ class Case(Section):
             self.material, self.grid.spacing, self.time.dt
         ):
             # past the solid's step the elastic solve and the projection are solved as one
-            # system (State::coupled_solve), for walls at rest (a solid takes no inlets),
-            # without obstacles or damping zones (which act between the two solves)
+            # system (State::coupled_solve), with the walls and the tools (obstacles on a
+            # path) holding what the split step's contacts hold; not with fixed obstacles
+            # (cut cells, not a solid's staircase) or damping zones (which act between the
+            # two solves)
+            fixed = [o for o in self.obstacles if getattr(o, "motion", None) is None]
+            # nor with plastic flow: each step's return to the yield surface acts on the
+            # whole long increment after the solve (no plastic tangent in it), and a
+            # footing on Tresca clay bore 2 s_u at 2.5 times the step against 5 s_u at it
+            plastic = self.material.model != "elastic"
             held = [
                 name
-                for name, on in (("obstacles", self.obstacles), ("sponges", self.sponges))
+                for name, on in (
+                    ("fixed obstacles", fixed),
+                    ("sponges", self.sponges),
+                    (f"plastic flow (material.model = {self.material.model!r})", plastic),
+                )
                 if on
             ]
             if held:
