@@ -25,7 +25,10 @@
 //     slot, the others are whole cells (slot 0);
 //   - the obstacle nodes: those of the fixed tables outside the box, and the box's nodes
 //     whose cut cells give int N_i n ds != 0 (its direction: the normal, into the solid),
-//     no-slip as their nearest obstacle or body is.
+//     no-slip as their nearest obstacle or body is;
+//   - with nsub = 0 (a solid's tools) no cell is cut, and the box's obstacle nodes are the
+//     staircase's (REACH, staircase_node).
+// A solid's force on its tools is the held nodes' reactions (reactions()), not forces().
 // hold(t) sets the velocity of each node of the box nearest a body to the body's there at
 // time t (nnodes x D, m/s; zero elsewhere): the step holds the node to it where it holds a fixed
 // obstacle's node at rest. forces(p) sums the pressure's force and torque on each body over the
