@@ -106,9 +106,9 @@ def run_footing(out: Path, quick: bool = False, context: Context | None = None) 
             TOL,
             WHY,
             miss=(
-                "q is still rising over 0.05-0.1 B (the clay's heave beside the footing, and "
-                "the plastic zone still spreading), and the implicit elastic step's overstress "
-                '(about 0.5 rho c_s v) adds to it (docs/method.md, "Solids")'
+                "q is still rising over 0.05-0.1 B: the clay's heave beside the footing, and "
+                "the plastic zone still spreading (the footing's speed does not enter; "
+                'docs/method.md, "Solids")'
             ),
         )
     )
