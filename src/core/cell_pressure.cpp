@@ -47,6 +47,18 @@ inline void node_cells_each(const Grid<D>& g, const std::array<index_t, D>& ix, 
   }
 }
 
+// f (D entries) = sum_c g_ci p_c: the cells' pressure as node i's force (coordinates ix)
+template <int D>
+inline void node_cell_force(const Grid<D>& g, const std::array<index_t, D>& ix,
+                            View<const index_t> cell_row, View<const double, 3> G,
+                            View<const double> p_cell, double* f) {
+  node_cells_each<D>(g, ix, [&](index_t c, int a) {
+    const index_t r = cell_row(c);
+    if (r < 0) return;
+    for (int k = 0; k < D; ++k) f[k] += G(r, a, k) * p_cell(c);
+  });
+}
+
 template <int D>
 void node_volumes(const Grid<D>& g, View<const index_t> cell_slot, View<const double> node_mass,
                   double rho, View<double> vol) {
@@ -174,11 +186,9 @@ void add_cell_forces(const Grid<D>& g, View<const index_t> cell_row, View<const 
   parallel_for(g.nnodes, [&](index_t i) {
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
-    node_cells_each<D>(g, ix, [&](index_t c, int a) {
-      const index_t r = cell_row(c);
-      if (r < 0) return;
-      for (int k = 0; k < D; ++k) f(i, k) += G(r, a, k) * p_cell(c);
-    });
+    double fi[D] = {};
+    node_cell_force<D>(g, ix, cell_row, G, p_cell, fi);
+    for (int k = 0; k < D; ++k) f(i, k) += fi[k];
   });
 }
 
@@ -190,11 +200,7 @@ void correct_cells(const Grid<D>& g, View<const index_t> cell_row, View<const do
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
     double f[D] = {};
-    node_cells_each<D>(g, ix, [&](index_t c, int a) {
-      const index_t r = cell_row(c);
-      if (r < 0) return;
-      for (int k = 0; k < D; ++k) f[k] += G(r, a, k) * p_cell(c);
-    });
+    node_cell_force<D>(g, ix, cell_row, G, p_cell, f);
     for (int k = 0; k < D; ++k) {
       double pf = 0.0;
       for (int m = 0; m < D; ++m) pf += P(i, k, m) * f[m];

@@ -1248,7 +1248,8 @@ template <int D>
 index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool displaced) {
   // Only the particles' own arrays and the grid's are read here (grid_to_particles, push_out
   // and update_stresses use no binning array: cell_, order_, start_), so P may be the first
-  // n of the particles scatter was given (a rank moves only the particles it owns).
+  // n of the particles scatter was given (a rank moves only the particles it owns); a solid's
+  // tools' reactions read the binning (stress_forces), and a solid runs in one process.
   const index_t nn = grid_.nnodes;
   PhaseClock clock(phase_seconds_);
   if (P.stress.size() > 0 && is_solid(O.model)) {
@@ -1267,6 +1268,8 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
       // g) - f_i, summed over the tool's nodes (the discrete reaction: pressure, shear and
       // the inertia of the material the tool carries; the fluids' cut-cell pressure
       // integral below would see the pressure only)
+      if (P.count() != binned_)
+        throw std::logic_error("to_particles: a solid's tools need the particles scattered");
       const index_t nc = grid_.ncells;
       auto f = force_.template view<2>({nn, D});
       stress_forces<D>(grid_, P.x, P.volume, P.stress, order_.view(P.count()), start_.view(nc + 1),
