@@ -119,13 +119,14 @@ def test_plastic_flow_past_its_step_is_refused():
 
 
 def test_a_footings_force_is_the_clays_vertical_stress():
-    """The footing of examples/footing.toml, 0.25 s in (a settlement of 0.025 B, the clay
-    yielding under it): its nodes' reactions against the clay's own vertical stress,
-    integrated over a band 0.5-2.5 m above the base (the footing's face is at 3 m), which
-    carries the whole load of a weightless layer between frictionless side walls. The two
-    are independent measures; they agree to the inertia of the slowly moving clay (measured
-    0.25%). With the cut cells' pressure integral that fluids' bodies take (the shear left
-    out) and their cut-cell contact, the footing blew up within 0.05 s."""
+    """The footing of examples/footing.toml, 0.25 s in (a settlement of 0.025 B, on the
+    load's plateau: the clay at its limit under it): its nodes' reactions against the
+    clay's own vertical stress, integrated over a band 0.5-2.5 m above the base (the
+    footing's face is at 3 m), which carries the whole load of a weightless layer between
+    frictionless side walls. The two are independent measures; they agree to the inertia
+    of the slowly moving clay (measured 0.42%; 0.25% at G = 100 s_u). With the cut cells'
+    pressure integral that fluids' bodies take (the shear left out) and their cut-cell
+    contact, the footing blew up within 0.05 s."""
     sim = Simulation(
         load_case(ROOT / "examples/footing.toml", ["time.end=0.25", "output.snapshots=false"])
     )
@@ -135,7 +136,7 @@ def test_a_footings_force_is_the_clays_vertical_stress():
     band = (P.x[:, 1] > 0.5) & (P.x[:, 1] < 2.5)
     carried = -np.sum(P.volume[band] * syy[band]) / 2.0  # N/m
     force = float(sim.scheme.core.body_force[0, 1])
-    assert force > 4.0 * 1e4 * 0.5  # past 4 s_u: yielding under the footing
+    assert force > 5.0 * 1e4 * 0.5  # past 5 s_u: the plateau (5.56 s_u at this mesh)
     assert abs(force / carried - 1) < 0.03
 
 
