@@ -67,6 +67,32 @@ index_t find_pockets(View<index_t, 2> cols, View<double, 2> vals, const Anchored
   return pockets;
 }
 
+// The rows a breadth-first walk over the system's couplings (cols: n x ns, -1 = none) reaches
+// from the rows where seed(r) is true: reached(r) = 1, else 0; order: n of scratch. On a rank of
+// a split run (src/mpmflow/parallel/pockets.py) it is the cheap test before the exact one: when
+// every row a rank owns is reached from an owned row next to a free surface, no part of the
+// whole system through that rank is sealed. Returns the rows reached.
+inline index_t reach(View<const index_t, 2> cols, View<const bool> seed, View<bool> reached,
+                     View<index_t> order) {
+  const index_t n = cols.extent(0);
+  const int ns = static_cast<int>(cols.extent(1));
+  index_t end = 0;
+  for (index_t r = 0; r < n; ++r) {
+    reached(r) = seed(r);
+    if (seed(r)) order(end++) = r;
+  }
+  for (index_t q = 0; q < end; ++q) {
+    const index_t r = order(q);
+    for (int s = 0; s < ns; ++s) {
+      const index_t j = cols(r, s);
+      if (j < 0 || reached(j)) continue;
+      reached(j) = true;
+      order(end++) = j;
+    }
+  }
+  return end;
+}
+
 // The right-hand side of the pockets found by find_pockets: its mean over each pocket
 // removed, 0 at the held rows. mean: npockets of scratch.
 inline void apply_pockets(View<const index_t> part, View<const index_t> anchors, View<double> mean,

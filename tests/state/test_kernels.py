@@ -265,3 +265,15 @@ def test_particle_divergence_tensors_match_the_full_particle_tensors():
     np.testing.assert_allclose(C2, C, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(V2, V, rtol=1e-13, atol=1e-15)
     assert V.sum() > 0
+
+
+def test_reach_walks_the_couplings_from_the_seeds_and_no_further():
+    """Two chains, 0-1-2 and 3-4 (ELL rows: the diagonal slot, then the neighbours): a
+    seed at 0 reaches its chain only; seeds in both reach every row; none reaches none."""
+    cols = np.array([[0, 1, -1], [1, 0, 2], [2, 1, -1], [3, 4, -1], [4, 3, -1]])
+    seed = np.zeros(5, dtype=bool)
+    np.testing.assert_array_equal(state.reach(cols, seed), [False] * 5)
+    seed[0] = True
+    np.testing.assert_array_equal(state.reach(cols, seed), [True, True, True, False, False])
+    seed[4] = True
+    np.testing.assert_array_equal(state.reach(cols, seed), [True] * 5)

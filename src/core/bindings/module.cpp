@@ -36,4 +36,5 @@ NB_MODULE(_core, m) {
   mpmflow::bind::bind_solid(m);
   mpmflow::bind::bind_explicit_scheme(m);
   mpmflow::bind::bind_totals(m);
+  mpmflow::bind::bind_pockets(m);
 }

@@ -23,5 +23,6 @@ void bind_viscous(nb::module_& m);
 void bind_solid(nb::module_& m);
 void bind_explicit_scheme(nb::module_& m);
 void bind_totals(nb::module_& m);
+void bind_pockets(nb::module_& m);
 
 }  // namespace mpmflow::bind

@@ -2,9 +2,14 @@
 on one process): a connected part of the pressure system with no row next to a free surface
 has its pressure fixed only up to a constant.
 
-Each rank labels the connected parts of its own rows (SciPy's connected components), the
-labels reach the nodes round its box (the owners' labels), and rank 0 joins the parts that
-meet across the boxes (a small graph: one vertex per part, one edge per pair that touch).
+First the cheap test, every step: each rank walks its local system (its own rows and those
+round its box) from its own rows next to a free surface (``state.reach``, compiled). When
+every rank reaches all its own rows, every part of the whole system touches a free surface
+(each part holds some rank's own row, and that rank's walk stayed inside the part), and the
+step goes on after one reduction. Otherwise the exact test: each rank labels the connected
+parts of its own rows (SciPy's connected components), the labels reach the nodes round its
+box (the owners' labels), and rank 0 joins the parts that meet across the boxes (a small
+graph: one vertex per part, one edge per pair that touch).
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from .. import state
 from ..arrays import Bools, Ints
 from .comm import Comm
 from .exchange import NodeExchange
@@ -33,6 +39,10 @@ def sealed_pockets(
     ``owned``: this rank's rows; ``open_``: whether each owned row touches a free surface;
     ``exchange``: the owners' values at the nodes or cells this rank does not own;
     ``count``: the local nodes or cells. Collective."""
+    seed = np.zeros(places.size, dtype=bool)
+    seed[owned] = open_
+    if not comm.allreduce(int(not state.reach(cols, seed)[owned].all())):
+        return False
     cols = cols[owned]
     m = owned.size
     position = np.full(places.size, -1, dtype=np.int64)  # local row -> place among owned

@@ -159,3 +159,17 @@ def dot(a: Floats, b: Floats) -> float:
 def worst_row(cols: Ints, vals: Floats, x: Floats, b: Floats) -> int:
     """The row of the largest |b - A x| (NaN counts as largest)."""
     return int(_core.worst_row(cols, vals, x, b, np.empty(len(b))))
+
+
+def reach(cols: Ints, seed: Bools) -> Bools:
+    """The rows of a system (cols: n x slots, -1 = none) reached from the ``seed`` rows over
+    its couplings (src/core/pockets.hpp)."""
+    n = cols.shape[0]
+    reached = np.zeros(n, dtype=bool)
+    _core.reach(
+        np.ascontiguousarray(cols, dtype=np.int64),
+        np.ascontiguousarray(seed, dtype=bool),
+        reached,
+        np.empty(n, dtype=np.int64),
+    )
+    return reached
