@@ -210,13 +210,11 @@ void correct_cells(const Grid<D>& g, View<const index_t> cell_row, View<const do
 }
 
 template <int D>
-void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
-                   View<const index_t> cell_row, View<const index_t> rows,
-                   View<const double> p_cell, View<double, 2> X, View<double, 2> grad,
-                   View<double> p_node) {
+void cell_slopes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                 View<const index_t> cell_row, View<const index_t> rows, View<const double> p_cell,
+                 View<double, 2> X, View<double, 2> grad) {
   constexpr int NC = 1 << D;
-  const bool linear = X.size() > 0;
-  const index_t n = linear ? rows.size() : 0;
+  const index_t n = X.size() > 0 ? rows.size() : 0;
   // each cell's material centroid
   parallel_for(n, [&](index_t r) {
     const index_t c = rows(r), s = cell_slot(c);
@@ -273,6 +271,13 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
     const bool spans = solve_dense(D, &A[0][0], b, 1e-12 * g.h * g.h);
     for (int k = 0; k < D; ++k) grad(r, k) = spans ? b[k] : 0.0;
   });
+}
+
+template <int D>
+void slopes_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                     View<const index_t> cell_row, View<const double> p_cell,
+                     View<const double, 2> X, View<const double, 2> grad, View<double> p_node) {
+  const bool linear = X.size() > 0;
   parallel_for(g.nnodes, [&](index_t i) {
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
@@ -296,24 +301,39 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
   });
 }
 
-#define MPMFLOW_INSTANTIATE(D)                                                                   \
-  template void cell_gradients<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,    \
-                                  View<const index_t>, View<double, 3>);                         \
-  template void node_volumes<D>(const Grid<D>&, View<const index_t>, View<const double>, double, \
-                                View<double>);                                                   \
-  template void assemble_cells<D>(const Grid<D>&, View<const index_t>, View<const index_t>,      \
-                                  View<const double, 3>, View<const double, 3>,                  \
-                                  View<const double>, View<index_t, 2>, View<double, 2>);        \
-  template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,          \
-                            View<const double, 2>, double, View<double>);                        \
-  template void add_cell_forces<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,   \
-                                   View<const double>, View<double, 2>);                         \
-  template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
-                                 View<const double, 3>, View<const double>, View<const double>,  \
-                                 View<const double, 2>, double, View<double, 2>);                \
-  template void cell_to_nodes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,     \
-                                 View<const index_t>, View<const index_t>, View<const double>,   \
-                                 View<double, 2>, View<double, 2>, View<double>);
+template <int D>
+void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                   View<const index_t> cell_row, View<const index_t> rows,
+                   View<const double> p_cell, View<double, 2> X, View<double, 2> grad,
+                   View<double> p_node) {
+  cell_slopes<D>(g, cell_slot, V, cell_row, rows, p_cell, X, grad);
+  slopes_to_nodes<D>(g, cell_slot, V, cell_row, p_cell, X, grad, p_node);
+}
+
+#define MPMFLOW_INSTANTIATE(D)                                                                     \
+  template void cell_gradients<D>(const Grid<D>&, View<const index_t>, View<const double, 4>,      \
+                                  View<const index_t>, View<double, 3>);                           \
+  template void node_volumes<D>(const Grid<D>&, View<const index_t>, View<const double>, double,   \
+                                View<double>);                                                     \
+  template void assemble_cells<D>(const Grid<D>&, View<const index_t>, View<const index_t>,        \
+                                  View<const double, 3>, View<const double, 3>,                    \
+                                  View<const double>, View<index_t, 2>, View<double, 2>);          \
+  template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,            \
+                            View<const double, 2>, double, View<double>);                          \
+  template void add_cell_forces<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
+                                   View<const double>, View<double, 2>);                           \
+  template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,       \
+                                 View<const double, 3>, View<const double>, View<const double>,    \
+                                 View<const double, 2>, double, View<double, 2>);                  \
+  template void cell_to_nodes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,       \
+                                 View<const index_t>, View<const index_t>, View<const double>,     \
+                                 View<double, 2>, View<double, 2>, View<double>);                  \
+  template void cell_slopes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,         \
+                               View<const index_t>, View<const index_t>, View<const double>,       \
+                               View<double, 2>, View<double, 2>);                                  \
+  template void slopes_to_nodes<D>(const Grid<D>&, View<const index_t>, View<const double, 2>,     \
+                                   View<const index_t>, View<const double>, View<const double, 2>, \
+                                   View<const double, 2>, View<double>);
 MPMFLOW_INSTANTIATE(2)
 MPMFLOW_INSTANTIATE(3)
 #undef MPMFLOW_INSTANTIATE

@@ -111,4 +111,16 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
                    View<const double> p_cell, View<double, 2> X, View<double, 2> grad,
                    View<double> p_node);
 
+// cell_to_nodes in its two halves, for a rank, whose cells round its box need their owners'
+// gradients (their neighbours lie past its grid) before the nodes read them: the cells'
+// centroids X and gradients grad (empty X: nothing), then the nodes' values from them.
+template <int D>
+void cell_slopes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                 View<const index_t> cell_row, View<const index_t> rows, View<const double> p_cell,
+                 View<double, 2> X, View<double, 2> grad);
+template <int D>
+void slopes_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 2> V,
+                     View<const index_t> cell_row, View<const double> p_cell,
+                     View<const double, 2> X, View<const double, 2> grad, View<double> p_node);
+
 }  // namespace mpmflow

@@ -339,6 +339,16 @@ index_t State<D>::owned_rows() {
 }
 
 template <int D>
+index_t State<D>::owned_cell_rows() {
+  const auto owned = exchange_->owned_cells();
+  if (owned.size() == 0) return npc_;
+  auto rows = pc_rows_.view(npc_);
+  index_t n = 0;
+  for (index_t r = 0; r < npc_; ++r) n += owned(rows(r)) ? 1 : 0;
+  return n;
+}
+
+template <int D>
 index_t State<D>::owned_contacts() {
   const auto owned = exchange_->owned_nodes();
   const index_t nn = grid_.nnodes;
@@ -587,8 +597,12 @@ void State<D>::cell_hold() {
 
 template <int D>
 int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
-  if (exchange_->shared())
-    throw std::logic_error("State: a solid's cell pressure runs in one process");
+  // on a rank: its local cells' rows (its own and the ghost layer's, whose particles the halo
+  // brings), solved over the ranks by its solver, which numbers the rows each rank owns and
+  // gives the ghost layer's rows their owners' values; every rank takes part in each solve
+  const bool shared = exchange_->shared();
+  if (shared && !solver_)
+    throw std::logic_error("State: a rank's cell pressure needs a solver over the ranks");
   if (bodies_.free_dofs() > 0)
     throw std::logic_error("State: a solid's cell pressure does not take free bodies");
   const index_t nn = grid_.nnodes, nc = grid_.ncells, n = npc_;
@@ -600,7 +614,7 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
                 T_.wall_bonded);
   start_obstacles(ob_.onode, ob_.onormal, v_star, node_row, ocontact, ob_.velocity);
   auto p_cell = p_cell_.view(nc);
-  if (n == 0) {
+  if (shared ? exchange_->sum(owned_cell_rows()) == 0 : n == 0) {
     for (index_t c = 0; c < nc; ++c) p_cell(c) = 0.0;
     cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, pc_row_.view(nc), pc_rows_.view(0), p_cell,
                      View<double, 2>(), View<double, 2>(), p_node_.view(nn));
@@ -645,16 +659,36 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
     auto mean = pc_mean_.sized(nn);
     cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell, View<double, 2>(),
                      View<double, 2>(), mean);
-    const index_t released =
+    // (on a rank: the releases at the nodes it owns, summed over the ranks, which all solve
+    // again while any released; a node round its box sees every cell about it but at the
+    // ghost layer's outer face, where only the ghost cells' rows, not a rank's own, read it)
+    const index_t before = shared ? owned_contacts() : 0;
+    index_t released =
         release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, mean, contact,
                         T_.wall_bonded) +
         release_obstacles(ob_.onode, ob_.onormal, v_star, node_row, mean, ocontact, ob_.velocity);
+    if (shared) released = exchange_->sum(before - owned_contacts());
     if (released == 0) break;
     report.released += released;
   }
-  cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell,
-                   pc_X_.template sized<2>({n, D}), pc_grad_.template sized<2>({n, D}),
-                   p_node_.view(nn));
+  auto X = pc_X_.template sized<2>({n, D});
+  auto grad = pc_grad_.template sized<2>({n, D});
+  cell_slopes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell, X, grad);
+  if (shared) {  // the ghost layer's gradients: their owners' (their neighbours lie past it)
+    auto cg = pc_cell_grad_.template sized<2>({nc, D});
+    for (index_t c = 0; c < nc * D; ++c) cg.data()[c] = 0.0;
+    for (index_t r = 0; r < n; ++r)
+      for (int k = 0; k < D; ++k) cg(rows(r), k) = grad(r, k);
+    const View<double, 2> fields[] = {cg};
+    exchange_->fill_cells(fields, 1);
+    for (index_t r = 0; r < n; ++r)
+      for (int k = 0; k < D; ++k) grad(r, k) = cg(rows(r), k);
+  }
+  slopes_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, p_cell, X, grad, p_node_.view(nn));
+  if (shared) {  // the ghost layer's outer nodes: their owners' mean of every cell round them
+    const View<double, 2> p[] = {p_node_.template view<2>({nn, 1})};
+    exchange_->fill_nodes(p, 1);
+  }
   report.max_iterations = std::max(report.max_iterations, step_iterations);
   return OK;
 }
@@ -674,6 +708,8 @@ bool State<D>::elastic_velocity(const Options<D>& O, Report& report, View<double
 
 template <int D>
 int State<D>::coupled_solve(const Options<D>& O, Report& report) {
+  if (exchange_->shared())  // (mpmflow.parallel.support refuses it by name)
+    throw std::logic_error("State: a solid's coupled step runs in one process");
   struct Still {  // the linear part's holds last only while the solve runs
     bool& on;
     ~Still() { on = false; }
@@ -984,6 +1020,8 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
     auto p_cell = p_cell_.view(grid_.ncells);
     bool zero = true;
     for (index_t c = 0; c < grid_.ncells && zero; ++c) zero = p_cell(c) == 0.0;
+    // (the ranks decide together: the solve is theirs; a rank without material holds zeros)
+    if (exchange_->shared()) zero = exchange_->sum(zero ? 0 : 1) == 0;
     if (zero) {
       const int status = cell_pressure_solve(O, report);
       if (status != OK) return status;
@@ -1339,8 +1377,9 @@ int State<D>::step_once(const Particles<D>& P, const Options<D>& O, bool correct
   }
   predict(P, O, correct);
   // the unknowns of the whole system (a rank's rows round its box are its owners')
-  const index_t n =
-      exchange_->shared() ? exchange_->sum(owned_rows()) : (O.cell_pressure ? npc_ : nrows_);
+  const index_t n = exchange_->shared()
+                        ? exchange_->sum(O.cell_pressure ? owned_cell_rows() : owned_rows())
+                        : (O.cell_pressure ? npc_ : nrows_);
   report.unknowns = std::max(report.unknowns, n);
   report.last_unknowns = n;
   PhaseClock clock(phase_seconds_);

@@ -504,6 +504,7 @@ class State {
   // volumes and pressure (cell_pressure.hpp); grown at a solid's first step
   Buffer<index_t> pc_row_, pc_rows_;
   Buffer<double> pc_G_, pc_P_, pc_vol_, pc_X_, pc_grad_, pc_mean_, p_cell_;
+  Buffer<double> pc_cell_grad_;  // a rank's cells' pressure gradients (its ghost layer's filled)
   // the coupled solve's (O.coupled): v* before the elastic solve, the elastic velocity and
   // its part along the search direction (nn x D), the CG's cell vectors (rows x 6), a
   // pressure by cell (nc)
@@ -520,6 +521,7 @@ class State {
   Exchange<D>* exchange_ = &alone_;
   // the rows at nodes this part owns (all: nrows_), the owned nodes' wall contacts
   index_t owned_rows();
+  index_t owned_cell_rows();  // a solid's cell-pressure rows a rank owns
   index_t owned_contacts();
   // volume correction
   Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];

@@ -193,7 +193,8 @@ Particles<D> particles(Array<double> x, Array<double> v, Array<double> mass, Arr
 
 // A rank's exchange from Python (State.use_exchange; mpmflow.parallel's RankExchange,
 // over MPI): each call of the seam (exchange.hpp) calls the method of the same name with
-// the GIL. particles() returns (owned, x, v, mass, volume, pressure, affine or None), arrays
+// the GIL. particles() returns (owned, x, v, mass, volume, pressure, affine, stress,
+// plastic_strain, yielding; None where not carried), arrays
 // the Python object keeps alive until its next call; fill_nodes and fill_cells get NumPy
 // views of the step's arrays to overwrite in place.
 template <int D>
@@ -215,14 +216,15 @@ class PythonExchange : public Exchange<D> {
   Particles<D> particles(const Particles<D>&) override {
     nb::gil_scoped_acquire acquire;
     nb::tuple t = nb::cast<nb::tuple>(exchange_.attr("particles")());
-    if (t.size() != 7)
+    if (t.size() != 10)
       throw std::invalid_argument(
-          "exchange.particles() must return (owned, x, v, mass, volume, pressure, affine)");
+          "exchange.particles() must return (owned, x, v, mass, volume, pressure, affine, "
+          "stress, plastic_strain, yielding)");
     owned_ = nb::cast<index_t>(t[0]);
     auto arr = [&](int k) { return nb::cast<Array<double>>(t[k], false); };
-    Affine affine = std::nullopt;
-    if (!t[6].is_none()) affine = arr(6);
-    Particles<D> P = mpmflow::bind::particles<D>(arr(1), arr(2), arr(3), arr(4), arr(5), affine);
+    auto optional = [&](int k) { return t[k].is_none() ? Affine(std::nullopt) : Affine(arr(k)); };
+    Particles<D> P = mpmflow::bind::particles<D>(
+        arr(1), arr(2), arr(3), arr(4), arr(5), optional(6), optional(7), optional(8), optional(9));
     if (owned_ < 0 || owned_ > P.count())
       throw std::invalid_argument("exchange.particles(): owned out of range");
     return P;

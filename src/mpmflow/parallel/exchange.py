@@ -269,8 +269,9 @@ class RankExchange:
         self.step = 0
 
     # the seam's calls, in the order of a step
-    def particles(self) -> tuple[int, Any, Any, Any, Any, Any, Any]:
-        """The step's particles: the owned ones, then the halo (local coordinates)."""
+    def particles(self) -> tuple[int, Any, Any, Any, Any, Any, Any, Any, Any, Any]:
+        """The step's particles: the owned ones, then the halo (local coordinates); with
+        APIC their affine matrices, a solid's history (None where not carried)."""
         ghosts = self.halo(self.owned)
         self.traffic["halo particles"] += int(ghosts["id"].size)
         # without a halo (one rank; a box away from the others) the owned arrays serve
@@ -283,7 +284,18 @@ class RankExchange:
         self.step += 1
         a = self.local
         m = int(self.owned["x"].shape[0])
-        return m, a["x"], a["v"], a["mass"], a["volume"], a["pressure"], a.get("affine")
+        return (
+            m,
+            a["x"],
+            a["v"],
+            a["mass"],
+            a["volume"],
+            a["pressure"],
+            a.get("affine"),
+            a.get("stress"),
+            a.get("plastic_strain"),
+            a.get("yielding"),
+        )
 
     def fill_nodes(self, *arrays: NDArray[Any]) -> None:
         self.nodes.fill(*arrays)

@@ -45,6 +45,7 @@ from ..errors import CaseError
 from ..geometry import bodies
 from ..geometry.lattice import lattice_indices
 from ..grid import Grid
+from ..materials import is_solid
 from .boxes import Boxes, Factors, bisect_separable, box_weight
 from .comm import ranks_here, world
 from .subgrid import GHOST
@@ -70,10 +71,12 @@ GATHER_COPIES = 3.05  # per particle of the run at an output time: the gathered 
 MAX_CELLS_PER_AXIS = 10**7
 
 
-def particle_fields(dim: int, apic: bool) -> int:
+def particle_fields(dim: int, apic: bool, solid: bool = False) -> int:
     """Bytes of one particle's fields in a run's particle set: x, v (D each), pressure,
-    mass, volume, and with APIC its D x D affine matrix."""
-    return 8 * (2 * dim + 3) + (8 * dim * dim if apic else 0)
+    mass, volume, with APIC its D x D affine matrix, and a solid's history (its D x D
+    deviatoric stress, plastic strain and yielding flag), which ride in every copy too."""
+    history = 8 * (dim * dim + 2) if solid else 0
+    return 8 * (2 * dim + 3) + (8 * dim * dim if apic else 0) + history
 
 
 @dataclass
@@ -245,7 +248,7 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
     except ValueError as err:
         raise CaseError(f"--ranks {ranks}: {err}; run on fewer ranks.") from None
     apic = case.solver.transfer == "apic"
-    fields = particle_fields(D, apic)
+    fields = particle_fields(D, apic, is_solid(case.material))
     whole = (fields + WHOLE_PER_PARTICLE) * N
     grid_whole = WHOLE_PER_NODE * nodes
     gather = GATHER_COPIES * fields * N

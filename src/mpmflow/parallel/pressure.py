@@ -2,7 +2,8 @@
 solver on a rank (``State.use_solvers``, src/core/step.hpp's LinearSolver).
 
 The compiled step assembles each rank's rows (its nodes' after the owners' say on the
-unknowns round its box) and calls ``setup`` and ``solve`` on every rank, rows or none. Here
+unknowns round its box; a solid's, its cells' with material: ``cells``) and calls ``setup``
+and ``solve`` on every rank, rows or none. Here
 the owned rows are numbered after those of the ranks before, their columns take the global
 numbers (the ghost layer's from their owners), PETSc solves to ``solver.tolerance``, and
 the solution reaches the rows a rank holds without owning them; the step's wall release
@@ -36,9 +37,17 @@ class DistributedPressure:
     split's local state."""
 
     def __init__(
-        self, comm: Comm, settings: Solver, preconditioner: Preconditioner, traffic: dict[str, int]
+        self,
+        comm: Comm,
+        settings: Solver,
+        preconditioner: Preconditioner,
+        traffic: dict[str, int],
+        cells: bool = False,
     ) -> None:
         self.comm = comm
+        # a solid's pressure, one per cell (src/core/cell_pressure.hpp): rows on cells, its
+        # surface natural (no row is held, so no part of it can be sealed off)
+        self.cells = cells
         self.settings = settings
         self.system = DistributedSystem(settings.tolerance, settings.max_iterations, preconditioner)
         self.traffic = traffic
@@ -47,15 +56,19 @@ class DistributedPressure:
         self.where: Callable[[], str] = lambda: ""
 
     def bind(
-        self, core: CoreState, sub: Subgrid, nodes: NodeExchange, where: Callable[[], str]
+        self, core: CoreState, sub: Subgrid, places: NodeExchange, where: Callable[[], str]
     ) -> None:
-        self.core, self.sub, self.nodes, self.where = core, sub, nodes, where
+        """The split's local state; ``places``: the exchange of the rows' places (the
+        nodes', or with ``cells`` the cells')."""
+        self.core, self.sub, self.nodes, self.where = core, sub, places, where
+        self.count = sub.grid.ncells if self.cells else sub.grid.nnodes
+        self.owned_places = sub.owned_cells if self.cells else sub.owned_nodes
 
     def setup(self, cols: Ints, vals: Floats, rows: Ints) -> None:
         """Number the owned rows over the ranks and hand PETSc this rank's block."""
-        comm, sub = self.comm, self.sub
-        owned = np.flatnonzero(sub.owned_nodes[rows])
-        number, first, n = number_rows(comm, self.nodes, (sub.grid.nnodes,), rows[owned])
+        comm = self.comm
+        owned = np.flatnonzero(self.owned_places[rows])
+        number, first, n = number_rows(comm, self.nodes, (self.count,), rows[owned])
         number = number[rows]
         self.owned, self.rows = owned, rows.copy()
         self.last_owned = int(owned.size)
@@ -66,8 +79,8 @@ class DistributedPressure:
         # waiting in the next exchange
         if comm.allreduce(int(np.any((mine >= 0) & (global_cols < 0)))):
             raise SolverError(f"A pressure row{where} couples to a node no rank numbered.")
-        air = self.core.anchored[owned]  # the rows next to a free surface
-        if sealed_pockets(comm, self.nodes, cols, rows, owned, air, sub.grid.nnodes):
+        air = None if self.cells else self.core.anchored[owned]  # rows next to a free surface
+        if air is not None and sealed_pockets(comm, self.nodes, cols, rows, owned, air, self.count):
             raise SolverError(
                 f"Water sealed off from the free surface{where} lies across ranks: such "
                 "pockets are held at their top on one process only. Run this case on one "
@@ -97,7 +110,7 @@ class DistributedPressure:
                 self.n,
                 self._worst(b, result.x),
             )
-        x[:] = spread(self.nodes, (self.sub.grid.nnodes,), self.rows[owned], result.x)[self.rows]
+        x[:] = spread(self.nodes, (self.count,), self.rows[owned], result.x)[self.rows]
         return result.iterations, result.residual
 
     def _worst(self, b: Floats, x: Floats) -> Floats:
@@ -106,6 +119,10 @@ class DistributedPressure:
         mine = (-1.0, np.zeros(self.sub.grid.dim))
         if r.size:
             k = int(np.argmax(r))
-            mine = (float(r[k]), self.sub.node_position(int(self.rows[self.owned[k]])))
+            place = int(self.rows[self.owned[k]])
+            mine = (
+                float(r[k]),
+                self.sub.cell_centre(place) if self.cells else self.sub.node_position(place),
+            )
         worst: Floats = max(self.comm.allgather(mine), key=lambda item: item[0])[1]
         return worst

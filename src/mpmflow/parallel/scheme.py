@@ -81,7 +81,10 @@ class DistributedProjection(ProjectionScheme):
         self.open = False
         self.outflow = outlets.Outflow()  # none: outlets are refused on several ranks
         self.inflow = inlets.Inflow()  # none: inlets are refused on several ranks
-        self.viscous = materials.is_viscous(case.material)
+        # a solid: its pressure per cell, its elastic predictor the viscous solve (eta = G
+        # dt), its stress history on the particles, travelling with them between ranks
+        self.solid = materials.is_solid(case.material)
+        self.viscous = materials.viscous_solve(case.material)
         self.viscous_solve = DistributedViscous(
             self.comm, s.tolerance, s.max_iterations, s.petsc_preconditioner
         )
@@ -98,6 +101,8 @@ class DistributedProjection(ProjectionScheme):
         # the volume correction's last solution on the whole grid's cells (the warm start
         # of its next solve; in checkpoints, which one process continues too)
         self.q_global = np.zeros(grid.ncells if self.corrects else 0)
+        # a solid's cell pressure on the whole grid's cells (where its next step starts from)
+        self.pc_global = np.zeros(grid.ncells if self.solid else 0)
         self.boxes: Boxes | None = None
         self._exchange: RankExchange | None = None  # this split's (``_split``)
         self.balance = 1.0  # particles per rank: the least loaded over the most
@@ -109,7 +114,9 @@ class DistributedProjection(ProjectionScheme):
         self.traffic = dict.fromkeys(
             ("steps", "halo particles", "migrated particles", "ghost columns", "iterations"), 0
         )
-        self.pressure = DistributedPressure(self.comm, s, s.petsc_preconditioner, self.traffic)
+        self.pressure = DistributedPressure(
+            self.comm, s, s.petsc_preconditioner, self.traffic, cells=self.solid
+        )
         self._where: Callable[[int], str] = lambda k: ""  # the chunk's names of its steps
         self.particles = particles
 
@@ -120,18 +127,30 @@ class DistributedProjection(ProjectionScheme):
 
     @particles.setter
     def particles(self, P: Particles) -> None:
-        """The whole particle set; with APIC also their affine matrices (zero, as the
-        one-process scheme starts them)."""
+        """The whole particle set; with APIC also their affine matrices, a solid's stress
+        history (zero, as the one-process scheme starts them)."""
         self._P = P
         D = self.grid.dim
         self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
-        self.fields = FIELDS + (("affine",) if self.apic else ())
+        self.history: dict[str, Floats] = (
+            {
+                "stress": np.zeros((P.count, D, D)),
+                "plastic_strain": np.zeros(P.count),
+                "yielding": np.zeros(P.count),
+            }
+            if self.solid
+            else {}
+        )
+        self.fields = FIELDS + (("affine",) if self.apic else ()) + tuple(self.history)
 
     def _whole(self, field: str) -> NDArray[Any]:
-        """The whole set's array of a field (the particles', or the affine matrices)."""
+        """The whole set's array of a field (the particles', the affine matrices or a
+        solid's history)."""
         if field == "affine":
             assert self.affine is not None
             return self.affine
+        if field in self.history:
+            return self.history[field]
         whole: NDArray[Any] = getattr(self._P, field)
         return whole
 
@@ -194,7 +213,8 @@ class DistributedProjection(ProjectionScheme):
             np.ascontiguousarray(sub.owned_cells, dtype=bool),
         )
         where = self._step_name
-        self.pressure.bind(self.core, sub, self.exchange.nodes, where)
+        places = self.exchange.cells if self.solid else self.exchange.nodes
+        self.pressure.bind(self.core, sub, places, where)
         self.viscous_solve.bind(self.core, sub, self.exchange.nodes, where)
         self.volume.bind(self.core, sub, self.exchange.cells, where)
         self.core.use_solvers(
@@ -245,6 +265,11 @@ class DistributedProjection(ProjectionScheme):
             parts = self.comm.allgather((sub.cell_global[cells], self.core.volume_q[cells]))
             for index, values in parts:
                 self.q_global[index] = values
+        if self.pc_global.size:
+            cells = sub.owned_cells
+            parts = self.comm.allgather((sub.cell_global[cells], self.core.p_cell[cells]))
+            for index, values in parts:
+                self.pc_global[index] = values
 
     def _report(self, owned: ParticleArrays) -> None:
         """The load of each rank (summary.json's "mpi"): particles now, unknowns of the
@@ -285,6 +310,8 @@ class DistributedProjection(ProjectionScheme):
         core.p_node[:] = self.p_global[self.sub.node_global]
         if self.q_global.size and core.volume_q.size:
             core.volume_q[:] = self.q_global[self.sub.cell_global]
+        if self.pc_global.size:
+            core.p_cell[:] = self.pc_global[self.sub.cell_global]
         core.since_volume = self.since_volume
         self._where = where
         self.exchange.start(self._distribute())
@@ -346,11 +373,13 @@ class DistributedProjection(ProjectionScheme):
 
     def check_free_surface(self) -> None:
         """As ``ProjectionScheme.check_free_surface``, over the ranks."""
-        self._split()
         O = self.options(1.0)
+        if O.cell_pressure:  # a solid's surface is natural: no level to refer to
+            return
+        self._split()
         O.pockets = False
         self.exchange.start(self._distribute())
-        _, x, v, mass, volume, p, affine = self.exchange.particles()
+        _, x, v, mass, volume, p, affine, *_ = self.exchange.particles()
         core = self.core
         core.predict(x, v, mass, volume, p, O, False, affine=affine)
         core.pressure_matrix(O)
@@ -372,8 +401,12 @@ class DistributedProjection(ProjectionScheme):
         }
         if self.q_global.size:
             saved["volume_q"] = self.q_global.copy()
+        if self.pc_global.size:
+            saved["p_cell"] = self.pc_global.copy()
         if self.affine is not None:
             saved["affine"] = self.affine.copy()
+        for name, a in self.history.items():
+            saved[name] = a.copy()
         return saved
 
     def restore(self, saved: dict[str, NDArray[Any]]) -> None:
@@ -387,3 +420,7 @@ class DistributedProjection(ProjectionScheme):
             self.dt_range = [float(t) for t in saved["dt_range"]]
         if self.affine is not None:
             np.copyto(self.affine, saved["affine"])
+        if self.pc_global.size and "p_cell" in saved:
+            np.copyto(self.pc_global, saved["p_cell"])
+        for name, a in self.history.items():
+            np.copyto(a, saved[name])  # KeyError: a checkpoint of a fluid continued as a solid

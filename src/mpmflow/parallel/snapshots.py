@@ -69,6 +69,8 @@ class RankSnapshots(Snapshots):
                 mine["pressure"],
                 mine["mass"],
                 mine["id"],
+                # a solid's history, as one process writes it
+                {k: mine[k] for k in ("stress", "plastic_strain", "yielding") if k in mine},
             )
         self.comm.Barrier()  # every piece is written before the .pvtu names it
         if rank == 0:

@@ -80,6 +80,12 @@ class Subgrid:
         out: Floats = ijk * self.grid.spacing
         return out
 
+    def cell_centre(self, local: int) -> Floats:
+        """The centre (m) of a local cell in the domain's coordinates."""
+        ijk = _unflat(self.cell_global[[local]], self.whole.cells)[0]
+        out: Floats = (ijk + 0.5) * self.grid.spacing
+        return out
+
     def local_cells(self, global_index: Ints) -> Ints:
         """The local index of global cells (-1 where the local grid does not hold one)."""
         ijk = _unflat(global_index, self.whole.cells) - self.origin

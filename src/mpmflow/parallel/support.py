@@ -25,10 +25,16 @@ def refusals(case: Case) -> list[str]:
         out.append(f'solver.scheme = "{s.scheme}" runs on one process: use "projection"')
     if case.domain.periodic and any(case.domain.periodic):
         out.append("periodic axes are not split over ranks yet: remove domain.periodic")
-    if materials.is_solid(case.material):
+    if (
+        materials.is_solid(case.material)
+        and case.time.dt != "auto"
+        and materials.coupled_step(case.material, case.grid.spacing, float(case.time.dt))
+    ):
+        step = materials.shear_wave_step(case.material, case.grid.spacing)
         out.append(
-            f'solids (material.model = "{case.material.model}") are not split over ranks yet: '
-            "their stress history does not travel with the particles between ranks"
+            f"a solid's steps past its shear wave's ({step:.3g} s on this grid) take the "
+            "coupled elastic-pressure solve, which is not split over ranks yet: set "
+            f'time.dt to at most {step:.3g} s, or time.dt = "auto"'
         )
     if any(case.domain.bonded_sides()):
         out.append('bonded walls are not split over ranks yet: make them "no_slip"')

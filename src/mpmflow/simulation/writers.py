@@ -225,7 +225,7 @@ class Snapshots:
     def __call__(self, sim: Simulation) -> None:
         sim.forget_bins()  # the cells' bins are no longer needed: freed before the copies
         if self.file is not None:
-            # a solid's stress history (empty for a fluid; the split scheme has none)
+            # a solid's stress history (empty for a fluid)
             history = getattr(sim.scheme, "history", {})
             self.file.write(sim.time, sim.particles, history)
         if self.surfaces is not None:
