@@ -174,6 +174,10 @@ void BodyTables<D>::setup(const Grid<D>& g, const ObstacleTables<D>& fixed,
                           View<const bool> fixed_no_slip, std::vector<Body<D>> bodies,
                           index_t nsub) {
   g_ = g;
+  for (int k = 0; k < D; ++k) {
+    origin_[k] = 0;
+    domain_[k] = g.cells[k];
+  }
   fixed_ = fixed;
   fixed_no_slip_ = fixed_no_slip;
   bodies_ = std::move(bodies);
@@ -321,6 +325,13 @@ bool BodyTables<D>::staircase_node(const std::array<index_t, D>& ix, index_t i, 
 }
 
 template <int D>
+void BodyTables<D>::set_domain(const std::array<index_t, D>& origin,
+                               const std::array<index_t, D>& cells) {
+  origin_ = origin;
+  domain_ = cells;
+}
+
+template <int D>
 void BodyTables<D>::place(double t) {
   restore();
   const index_t nn = g_.nnodes, nc = g_.ncells;
@@ -353,14 +364,17 @@ void BodyTables<D>::place(double t) {
     const double tol = 1e-9 * g_.h;
     for (int k = 0; k < D; ++k) {
       shifts[b][2 * k] = !g_.periodic[k] && slo[k] <= tol;
-      shifts[b][2 * k + 1] = !g_.periodic[k] && shi[k] >= g_.cells[k] * g_.h - tol;
+      shifts[b][2 * k + 1] = !g_.periodic[k] && shi[k] >= domain_[k] * g_.h - tol;
     }
   }
   for (int k = 0; k < D; ++k) {
-    box_lo_[k] = std::max<index_t>(0, static_cast<index_t>(std::floor(lo[k] * g_.inv_h)) - 1);
-    box_hi_[k] =
-        std::min<index_t>(g_.cells[k], static_cast<index_t>(std::ceil(hi[k] * g_.inv_h)) + 1);
-    if (box_lo_[k] > box_hi_[k]) box_lo_[k] = box_hi_[k];  // wholly outside: an empty-ish box
+    box_lo_[k] = std::clamp<index_t>(
+        static_cast<index_t>(std::floor(lo[k] * g_.inv_h)) - 1 - origin_[k], 0, g_.cells[k]);
+    box_hi_[k] = std::clamp<index_t>(
+        static_cast<index_t>(std::ceil(hi[k] * g_.inv_h)) + 1 - origin_[k], 0, g_.cells[k]);
+    // wholly outside (on a rank, a body beside its box): the grid's nearest plane of nodes,
+    // which it does not reach
+    if (box_lo_[k] > box_hi_[k]) box_lo_[k] = box_hi_[k];
   }
   placed_ = true;
   auto phi = phi_.view(nn);
@@ -372,9 +386,10 @@ void BodyTables<D>::place(double t) {
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       double x[D];
       for (int k = 0; k < D; ++k) {
-        x[k] = static_cast<double>(ix[k]) * g_.h;
-        if (ix[k] == 0 && shifts[b][2 * k]) x[k] += g_.h;
-        if (ix[k] == g_.cells[k] && shifts[b][2 * k + 1]) x[k] -= g_.h;
+        x[k] = at(ix[k], k);
+        // a node on a domain wall (on a rank: the grid's edge only where the domain's is)
+        if (ix[k] + origin_[k] == 0 && shifts[b][2 * k]) x[k] += g_.h;
+        if (ix[k] + origin_[k] == domain_[k] && shifts[b][2 * k + 1]) x[k] -= g_.h;
       }
       const double d = bodies_[b].distance(poses_[b], x);
       if (d < phi(i)) {
@@ -542,7 +557,7 @@ void BodyTables<D>::hold(double t) {
     for (int k = 0; k < D; ++k) i += ix[k] * g_.ns[k];
     if (owner(i) < 0) return;
     double x[D], v[D];
-    for (int k = 0; k < D; ++k) x[k] = static_cast<double>(ix[k]) * g_.h;
+    for (int k = 0; k < D; ++k) x[k] = at(ix[k], k);
     held_[owner(i)].velocity_at(x, v);
     for (int k = 0; k < D; ++k) vel(i, k) = v[k];
   });
@@ -567,8 +582,8 @@ double BodyTables<D>::max_speed(double t) const {
 }
 
 template <int D>
-void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force,
-                           View<double, 2> torque) {
+void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force, View<double, 2> torque,
+                           View<const bool> owned) {
   for (index_t i = 0; i < force.size(); ++i) force[i] = 0.0;
   for (index_t i = 0; i < torque.size(); ++i) torque[i] = 0.0;
   if (!placed_) return;
@@ -578,6 +593,7 @@ void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force,
   for (index_t s = nfixed_; s < nslots_; ++s) {
     if (sowner(s) < 0) continue;
     const index_t c = scell(s);
+    if (owned.size() > 0 && !owned(c)) continue;
     const index_t b = sowner(s);
     const Pose<D>& q = poses_[b];
     index_t cx[D], first = 0;
@@ -585,8 +601,7 @@ void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force,
     for (int k = 0; k < D; ++k) first += cx[k] * g_.ns[k];
     for (int a = 0; a < NC; ++a) {
       double r[3] = {0.0, 0.0, 0.0};
-      for (int k = 0; k < D; ++k)
-        r[k] = static_cast<double>(cx[k] + ((a >> k) & 1)) * g_.h - q.centre[k];
+      for (int k = 0; k < D; ++k) r[k] = at(cx[k] + ((a >> k) & 1), k) - q.centre[k];
       for (int bb = 0; bb < NC; ++bb) {
         const double p = p_node(first + g_.corner[bb]);
         double f[3] = {0.0, 0.0, 0.0};
@@ -619,7 +634,7 @@ void BodyTables<D>::reactions(View<const double, 2> r, View<const bool> ocontact
     for (int k = 0; k < D; ++k) f[k] = -(no_slip(e) ? r(i, k) : rn * onormal(e, k));
     index_t ix[D];
     g_.node_coords(i, ix);
-    for (int k = 0; k < D; ++k) arm[k] = static_cast<double>(ix[k]) * g_.h - poses_[b].centre[k];
+    for (int k = 0; k < D; ++k) arm[k] = at(ix[k], k) - poses_[b].centre[k];
     for (int k = 0; k < D; ++k) force(b, k) += f[k];
     torque(b, 0) += arm[1] * f[2] - arm[2] * f[1];
     torque(b, 1) += arm[2] * f[0] - arm[0] * f[2];
@@ -718,8 +733,7 @@ void BodyTables<D>::coupling(View<const index_t> cell_slot, View<const index_t> 
     for (int k = 0; k < D; ++k) first += cx[k] * g_.ns[k];
     std::array<std::array<double, 3>, NC> arm{};
     for (int a = 0; a < NC; ++a)
-      for (int k = 0; k < D; ++k)
-        arm[a][k] = static_cast<double>(cx[k] + ((a >> k) & 1)) * g_.h - q.centre[k];
+      for (int k = 0; k < D; ++k) arm[a][k] = at(cx[k] + ((a >> k) & 1), k) - q.centre[k];
     for (int a = 0; a < NC; ++a) {
       const index_t ia = first + g_.corner[a], ra = node_row(ia);
       for (int bb = 0; bb < NC; ++bb) {

@@ -129,6 +129,14 @@ class BodyTables {
   // allocates only when the bodies cut more cells than any step before).
   void setup(const Grid<D>& g, const ObstacleTables<D>& fixed, View<const bool> fixed_no_slip,
              std::vector<Body<D>> bodies, index_t nsub);
+  // A rank's grid (a box of the domain and its ghost layer): its first node's index in the
+  // domain's grid (origin) and the domain's cells per axis (by default the grid is the
+  // domain's). The bodies' paths stay in the domain's frame and every node a body reads sits
+  // at (i + origin) h, so that a rank computes a node's distance, velocity and arm with the
+  // same operations as one process (bit for bit: a face on a sub-cell point would otherwise
+  // fall on different sides of it); a body's distance is read one cell in at the domain's
+  // walls only. (The free bodies' contacts, refused on ranks, read the grid's own frame.)
+  void set_domain(const std::array<index_t, D>& origin, const std::array<index_t, D>& cells);
   bool present() const { return !bodies_.empty(); }
   index_t count() const { return static_cast<index_t>(bodies_.size()); }
   const Body<D>& body(index_t b) const { return bodies_[b]; }
@@ -138,7 +146,9 @@ class BodyTables {
   double max_speed(double t) const;
   // force (D) and torque (3) of the pressure p_node (Pa) on each body at its last place,
   // into force (count x D, N per m in 2D) and torque (count x 3)
-  void forces(View<const double> p_node, View<double, 2> force, View<double, 2> torque);
+  // (owned: the cells a rank owns, whose cut cells it sums; empty: every cell)
+  void forces(View<const double> p_node, View<double, 2> force, View<double, 2> torque,
+              View<const bool> owned = {});
   // A solid's tools: the material's force (D) and torque (3, about the frame's origin) on
   // each body, from r (nnodes x D, N; 2D N/m), the force each node needs beyond its
   // stress and weight to move as it does (State::to_particles): minus the sum of r over the
@@ -230,6 +240,10 @@ class BodyTables {
     }
   }
   Grid<D> g_;
+  std::array<index_t, D> origin_{}, domain_{};  // set_domain
+  // the coordinate k (m, the domain's frame) of grid point index ik (a node's, or a cell's
+  // corner: cx + 0 or 1)
+  double at(index_t ik, int k) const { return static_cast<double>(ik + origin_[k]) * g_.h; }
   ObstacleTables<D> fixed_;
   View<const bool> fixed_no_slip_;
   std::vector<Body<D>> bodies_;

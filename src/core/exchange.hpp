@@ -37,6 +37,8 @@ class Exchange {
   // reductions over the ranks (collective)
   virtual double max(double x) { return x; }
   virtual index_t sum(index_t x) { return x; }
+  // each value summed over the ranks, in place (the bodies' forces and torques)
+  virtual void sum_values(View<double> values) {}
   // After a step: each of the rank's particles to the rank that owns its new cell.
   // Collective over the neighbours.
   virtual void migrate() {}

@@ -140,6 +140,14 @@ void State<D>::set_bodies(std::vector<Body<D>> bodies, View<const bool> fixed_no
   ObstacleTables<D> fixed = ob_;
   fixed.velocity = View<const double, 2>();
   bodies_.setup(grid_, fixed, fixed_no_slip, std::move(bodies), nsub);
+  {  // a rank's grid: its first node in the domain's, which ends where the grid's upper does
+    std::array<index_t, D> origin{}, cells{};
+    for (int k = 0; k < D; ++k) {
+      origin[k] = static_cast<index_t>(std::llround(-lower_[k] * grid_.inv_h));
+      cells[k] = static_cast<index_t>(std::llround(upper_[k] * grid_.inv_h)) + origin[k];
+    }
+    bodies_.set_domain(origin, cells);
+  }
   body_force_.sized(bodies_.count() * D);
   body_torque_.sized(bodies_.count() * 3);
   for (index_t i = 0; i < bodies_.count() * D; ++i) body_force_.view(bodies_.count() * D)(i) = 0.0;
@@ -1347,10 +1355,16 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
       v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
       View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
       faces, P.affine, Outlets{T_.outlet, P.mass, P.volume, T_.inlets.count() > 0});
-  if (bodies_.present()) {  // the bodies' force of this step, then the bodies at its end
-    if (!is_solid(O.model))  // a solid's: its reactions, above
+  if (bodies_.present()) {     // the bodies' force of this step, then the bodies at its end
+    if (!is_solid(O.model)) {  // a solid's: its reactions, above
+      // (on a rank: the cut cells it owns, summed over the ranks)
       bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
-                     body_torque_.template view<2>({bodies_.count(), 3}));
+                     body_torque_.template view<2>({bodies_.count(), 3}), exchange_->owned_cells());
+      if (exchange_->shared()) {
+        exchange_->sum_values(body_force_.view(bodies_.count() * D));
+        exchange_->sum_values(body_torque_.view(bodies_.count() * 3));
+      }
+    }
     bodies_.integrate(O.dt, time_ + O.dt);  // the free bodies' new poses
     bodies_.place(time_ + O.dt);
     bodies_.hold(time_ + O.dt);

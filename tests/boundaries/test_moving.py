@@ -244,7 +244,8 @@ def test_the_sampled_paths_follow_their_motions():
 
 def test_a_table_path_and_bad_motions_are_told(tmp_path):
     """A table's path is read with its rates; a table that stops before time.end, an obstacle
-    faster than a cell a step, a periodic domain and several ranks are refused by name."""
+    faster than a cell a step and a periodic domain are refused by name; several MPI ranks
+    run a prescribed path (tests/parallel/test_split_bodies.py), not a free body."""
     common = PISTON_TANK
     (tmp_path / "path.csv").write_text("t,x,y\n0,0,0\n0.5,0.01,0\n1.0,0.02,0\n")
     case = _case(tmp_path, motion="{type = 'table', file = 'path.csv'}", end=1.0, **common)
@@ -258,7 +259,9 @@ def test_a_table_path_and_bad_motions_are_told(tmp_path):
     with pytest.raises(CaseError, match=r"give time.dt <= 0.00333 s"):
         Simulation(case)
     case = _case(tmp_path, motion="{type = 'velocity', velocity = [0.1, 0.0]}", end=0.1, **common)
-    assert any("moving obstacles" in p for p in refusals(case))
+    assert refusals(case) == []
+    case = _case(tmp_path, motion="{type = 'free', density = 500.0}", end=0.1, **common)
+    assert any("free bodies" in p for p in refusals(case))
     with pytest.raises(CaseError, match="needs its period"):
         _case(tmp_path, motion="{type = 'oscillation', amplitude = [0.01, 0.0]}", end=0.1, **common)
 

@@ -423,7 +423,7 @@ def test_a_solid_with_obstacles_past_its_step_is_refused():
 
 def test_schemes_and_runs_that_do_not_carry_the_stress_refuse_solids():
     """The explicit scheme carries no stress; over MPI ranks a solid runs at its own step
-    (tests/parallel/test_solids.py), and its coupled step past the shear wave's, which is
+    (tests/parallel/test_split_solids.py), and its coupled step past the shear wave's, which is
     not split, is refused naming the longest step it takes."""
     with pytest.raises(CaseError, match="solver.scheme"):
         load_case(

@@ -248,6 +248,10 @@ class PythonExchange : public Exchange<D> {
     nb::gil_scoped_acquire acquire;
     return nb::cast<index_t>(exchange_.attr("sum")(x));
   }
+  void sum_values(View<double> values) override {
+    nb::gil_scoped_acquire acquire;
+    exchange_.attr("sum_values")(numpy_view(values));
+  }
   void migrate() override {
     nb::gil_scoped_acquire acquire;
     exchange_.attr("migrate")();

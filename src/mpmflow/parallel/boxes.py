@@ -27,11 +27,13 @@ from ..arrays import Ints
 
 @dataclass(frozen=True)
 class Boxes:
-    """One box of cells per rank: ``lo[r, k]`` to ``hi[r, k]`` (exclusive) along axis k."""
+    """One box of cells per rank: ``lo[r, k]`` to ``hi[r, k]`` (exclusive) along axis k,
+    each with ``ghost`` layers of cells round it (``subgrid``)."""
 
     lo: Ints  # (ranks, D)
     hi: Ints  # (ranks, D)
     cells: tuple[int, ...]  # the whole grid's cells per axis
+    ghost: int = 1  # cell layers round each box (subgrid.ghost_layers)
 
     @property
     def ranks(self) -> int:

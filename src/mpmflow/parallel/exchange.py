@@ -316,6 +316,10 @@ class RankExchange:
     def sum(self, n: int) -> int:
         return int(self.comm.allreduce(int(n)))
 
+    def sum_values(self, values: NDArray[np.float64]) -> None:
+        """Each value summed over the ranks, in place (the bodies' forces and torques)."""
+        values[:] = self.comm.allreduce(values.copy())
+
     def migrate(self) -> None:
         """The owned particles, moved by the step, to the ranks that own their cells."""
         m = int(self.owned["x"].shape[0])

@@ -48,7 +48,7 @@ from ..grid import Grid
 from ..materials import is_solid
 from .boxes import Boxes, Factors, bisect_separable, box_weight
 from .comm import ranks_here, world
-from .subgrid import GHOST
+from .subgrid import ghost_layers
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -249,6 +249,7 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
         raise CaseError(f"--ranks {ranks}: {err}; run on fewer ranks.") from None
     apic = case.solver.transfer == "apic"
     fields = particle_fields(D, apic, is_solid(case.material))
+    ghost = ghost_layers(any(getattr(o, "motion", None) is not None for o in case.obstacles))
     whole = (fields + WHOLE_PER_PARTICLE) * N
     grid_whole = WHOLE_PER_NODE * nodes
     gather = GATHER_COPIES * fields * N
@@ -256,8 +257,8 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
     per_rank = []
     for r in range(ranks):
         lo, hi = boxes.lo[r], boxes.hi[r]
-        elo = np.maximum(lo - GHOST, 0)
-        ehi = np.minimum(hi + GHOST, np.asarray(cells))
+        elo = np.maximum(lo - ghost, 0)
+        ehi = np.minimum(hi + ghost, np.asarray(cells))
         own = box_weight(factors, lo, hi)
         halo = box_weight(factors, elo, ehi) - own
         local_nodes = float(np.prod([float(b - a + 1) for a, b in zip(elo, ehi)]))

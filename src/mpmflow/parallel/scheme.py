@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -36,7 +37,7 @@ from numpy.typing import NDArray
 
 from .. import materials, state
 from ..arrays import Floats
-from ..boundaries import inlets, obstacles, outlets, walls
+from ..boundaries import inlets, moving, obstacles, outlets, walls
 from ..errors import SolverError
 from ..grid import Grid
 from ..particles import Particles
@@ -46,6 +47,7 @@ from ..schemes.projection import (
     AdaptiveReport,
     ProjectionScheme,
     StepReport,
+    check_movers,
     most_steps,
     preset,
 )
@@ -53,7 +55,7 @@ from .boxes import Boxes, bisect, cell_weights
 from .comm import Comm, world
 from .exchange import ParticleArrays, RankExchange
 from .pressure import DistributedPressure
-from .subgrid import neighbours, restrict_obstacles, restrict_walls, subgrid
+from .subgrid import ghost_layers, neighbours, restrict_obstacles, restrict_walls, subgrid
 from .viscous import DistributedViscous
 from .volume import DistributedVolume
 
@@ -90,6 +92,10 @@ class DistributedProjection(ProjectionScheme):
         )
         self.solids = obstacles.of_case(case, grid)
         self._walls = walls.of_case(case, grid).as_tuple()
+        # obstacles on prescribed paths: each rank places them on its own grid
+        self.movers = moving.of_case(case)
+        self.time = 0.0  # s: the flow time the bodies are placed at
+        check_movers(case, grid, self.movers)
         self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
         self.volume = DistributedVolume(self.comm, s.tolerance, s.petsc_preconditioner)
         self.steps = 0
@@ -174,7 +180,8 @@ class DistributedProjection(ProjectionScheme):
             self._owners()
             if self.balance >= BALANCE:
                 return
-        self.boxes = bisect(cell_weights(self._P.x, g.spacing, g.cells), self.comm.size)
+        boxes = bisect(cell_weights(self._P.x, g.spacing, g.cells), self.comm.size)
+        self.boxes = replace(boxes, ghost=ghost_layers(bool(self.movers)))
         self.splits += 1
         sub = subgrid(g, self.boxes, self.comm.rank)
         self.sub = sub
@@ -206,6 +213,12 @@ class DistributedProjection(ProjectionScheme):
             lower=[-float(o) for o in offset],
             upper=[float(u) - float(o) for u, o in zip(g.size, offset)],
         )
+        if self.movers:  # their paths in the domain's frame (the core reads its grid's origin)
+            no_slip = self.solids.node_no_slip
+            local = no_slip[sub.node_global] if no_slip.size else no_slip
+            self.core.set_bodies(
+                [m.core(g) for m in self.movers], np.ascontiguousarray(local), obstacles.SUBCELLS
+            )
         # the core's loop steps this rank: its exchange and its solvers over the ranks
         self.core.use_exchange(
             self.exchange,
@@ -313,6 +326,8 @@ class DistributedProjection(ProjectionScheme):
         if self.pc_global.size:
             core.p_cell[:] = self.pc_global[self.sub.cell_global]
         core.since_volume = self.since_volume
+        if self.movers:  # the bodies where this chunk starts
+            core.time = self.time
         self._where = where
         self.exchange.start(self._distribute())
         # the arrays the core is handed; its exchange gives each step the rank's own and halo
@@ -336,6 +351,7 @@ class DistributedProjection(ProjectionScheme):
             self._report(self._owned)
         self.since_volume = float(core.since_volume)
         self.steps += done
+        self.time += covered if self.auto else done * dt
         self.last_unknowns = int(report.last_unknowns)
         if report.status != state.OK:
             self._fail(report, where(done))
@@ -359,6 +375,12 @@ class DistributedProjection(ProjectionScheme):
         return AdaptiveReport(
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
+
+    def body_values(self) -> tuple[Floats, Floats, Floats]:
+        """As ``ProjectionScheme.body_values``: every rank holds the totals (the core sums
+        the ranks' shares); the bodies move in the domain's frame on every rank."""
+        core = self.core
+        return core.body_force.copy(), core.body_torque.copy(), core.body_state.copy()
 
     def owned_particles(self) -> ParticleArrays:
         """This rank's own particles (global coordinates, with their numbers ``id``, in
@@ -393,6 +415,7 @@ class DistributedProjection(ProjectionScheme):
         """As ``ProjectionScheme.state``: a checkpoint of the whole run, readable by one
         process or any number of ranks."""
         saved = {
+            "time": np.array(self.time),
             "p_node": self.p_global.copy(),
             "last_unknowns": np.array(self.last_unknowns),
             "steps": np.array(self.steps),
@@ -415,6 +438,8 @@ class DistributedProjection(ProjectionScheme):
             np.copyto(self.q_global, saved["volume_q"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
+        if "time" in saved:  # checkpoints written before moving obstacles lack it
+            self.time = float(saved["time"])
         if "since_volume" in saved:
             self.since_volume = float(saved["since_volume"])
             self.dt_range = [float(t) for t in saved["dt_range"]]

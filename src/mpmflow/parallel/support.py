@@ -42,8 +42,18 @@ def refusals(case: Case) -> list[str]:
         out.append("inlets are not split over ranks yet: remove the [[inlets]]")
     if case.sponges:
         out.append("damping zones are not split over ranks yet: remove the [[sponges]]")
-    if any(getattr(o, "motion", None) is not None for o in case.obstacles):
-        out.append("moving obstacles are not split over ranks yet: remove obstacles.N.motion")
+    motions = [getattr(o, "motion", None) for o in case.obstacles]
+    if any(m is not None and m.type == "free" for m in motions):
+        out.append(
+            "free bodies are not split over ranks yet (their coupling to the pressure is "
+            'one system): remove obstacles.N.motion = {type = "free", ...}'
+        )
+    if any(m is not None for m in motions) and materials.is_solid(case.material):
+        out.append(
+            "a solid's tools (obstacles on a path) are not split over ranks yet (their force "
+            "reads the stress of the particles round each node, a rank's halo included): "
+            "remove obstacles.N.motion"
+        )
     if s.linear_solver in ("amg", "direct"):
         out.append(
             f'solver.linear_solver = "{s.linear_solver}" runs on one process: on several '

@@ -165,7 +165,7 @@ class ProjectionScheme:
         # obstacles moving along prescribed paths (src/core/bodies.hpp), placed at t = 0
         self.movers = moving.of_case(case)
         self.time = 0.0  # s: the flow time the core's bodies are placed at
-        _check_movers(case, grid, self.movers)
+        check_movers(case, grid, self.movers)
         if self.movers:
             self.core.set_bodies(
                 [m.core(grid) for m in self.movers],
@@ -305,6 +305,13 @@ class ProjectionScheme:
             flip_rate=float(flip),
             volume_interval=float(s.volume_correction_interval),
         )
+
+    def body_values(self) -> tuple[Floats, Floats, Floats]:
+        """The moving obstacles' force (bodies x D, N; 2D N/m), torque (bodies x 3) and state
+        (``State.body_state``: pivot, velocity, angular velocity, orientation) after the
+        last step, in the domain's frame."""
+        core = self.core
+        return core.body_force.copy(), core.body_torque.copy(), core.body_state.copy()
 
     def state(self) -> dict[str, NDArray[Any]]:
         """What the scheme carries from one step to the next beyond the particles: the nodal
@@ -510,7 +517,7 @@ class ProjectionScheme:
         raise SolverError(f"The step failed{where} with status {status.name}.")
 
 
-def _check_movers(case: Case, grid: Grid, movers: list[moving.Mover]) -> None:
+def check_movers(case: Case, grid: Grid, movers: list[moving.Mover]) -> None:
     """Refuse moving obstacles the step cannot follow: across a periodic axis, or faster
     than a cell a step at a fixed time.dt (time.dt = "auto" counts their speed)."""
     if not movers:

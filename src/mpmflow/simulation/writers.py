@@ -187,8 +187,8 @@ class Bodies(_Rows):
         return CsvAppender(folder / self.file_name, self.buffer.columns, resume, self.units)
 
     def __call__(self, sim: Simulation) -> None:
-        core = sim.scheme.core  # type: ignore[attr-defined]  # only the projection moves them
-        force, torque, state = core.body_force, core.body_torque, core.body_state.copy()
+        # only the projection moves them: each body's force, torque and state (the domain's frame)
+        force, torque, state = sim.scheme.body_values()  # type: ignore[attr-defined]
         D = self.dim
         row = {"time": sim.time}
         names = [q for q, _ in self._quantities()]
@@ -257,8 +257,7 @@ class Surfaces:
             self.frames.append((points - m.pivot, cells))
 
     def write(self, sim: Simulation) -> None:
-        core = sim.scheme.core  # type: ignore[attr-defined]  # only the projection moves them
-        force, torque, state = core.body_force, core.body_torque, core.body_state.copy()
+        force, torque, state = sim.scheme.body_values()  # type: ignore[attr-defined]
         D = sim.grid.dim
         points, cells, velocity, body = [], [], [], []
         count = 0
