@@ -617,7 +617,8 @@ void BodyTables<D>::forces(View<const double> p_node, View<double, 2> force, Vie
 
 template <int D>
 void BodyTables<D>::reactions(View<const double, 2> r, View<const bool> ocontact,
-                              View<double, 2> force, View<double, 2> torque) {
+                              View<double, 2> force, View<double, 2> torque,
+                              View<const bool> owned) {
   for (index_t i = 0; i < force.size(); ++i) force[i] = 0.0;
   for (index_t i = 0; i < torque.size(); ++i) torque[i] = 0.0;
   if (!placed_) return;
@@ -627,7 +628,7 @@ void BodyTables<D>::reactions(View<const double, 2> r, View<const bool> ocontact
   auto no_slip = ono_slip_.view(nonode_);
   for (index_t e = 0; e < nonode_; ++e) {
     const index_t i = onode(e), b = owner(i);
-    if (b < 0 || !ocontact(i)) continue;
+    if (b < 0 || !ocontact(i) || (owned.size() > 0 && !owned(i))) continue;
     double f[3] = {0.0, 0.0, 0.0}, arm[3] = {0.0, 0.0, 0.0};
     double rn = 0.0;
     for (int k = 0; k < D; ++k) rn += r(i, k) * onormal(e, k);

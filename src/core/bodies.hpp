@@ -153,8 +153,9 @@ class BodyTables {
   // each body, from r (nnodes x D, N; 2D N/m), the force each node needs beyond its
   // stress and weight to move as it does (State::to_particles): minus the sum of r over the
   // obstacle nodes in contact nearest the body (its normal component where it slips).
+  // (owned: the nodes a rank owns, whose reactions it sums; empty: every node)
   void reactions(View<const double, 2> r, View<const bool> ocontact, View<double, 2> force,
-                 View<double, 2> torque);
+                 View<double, 2> torque, View<const bool> owned = {});
   ObstacleTables<D> tables();
 
   // Free bodies (bodies.cpp). Their unheld degrees of freedom, numbered body by body

@@ -39,6 +39,10 @@ class Exchange {
   virtual index_t sum(index_t x) { return x; }
   // each value summed over the ranks, in place (the bodies' forces and torques)
   virtual void sum_values(View<double> values) {}
+  // The halo's stress (a solid's) made its owners' again after they updated it, before the
+  // step reads the stress of every particle round a node (a solid's tools). Collective over
+  // the neighbours.
+  virtual void refresh_halo() {}
   // After a step: each of the rank's particles to the rank that owns its new cell.
   // Collective over the neighbours.
   virtual void migrate() {}

@@ -336,24 +336,24 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
   return nrows_;
 }
 
+namespace {
+// the rows whose place (node or cell: rows(r)) a part owns (owned empty: every row)
+index_t owned_places(View<const bool> owned, View<const index_t> rows) {
+  if (owned.size() == 0) return rows.size();
+  index_t n = 0;
+  for (index_t r = 0; r < rows.size(); ++r) n += owned(rows(r)) ? 1 : 0;
+  return n;
+}
+}  // namespace
+
 template <int D>
 index_t State<D>::owned_rows() {
-  const auto owned = exchange_->owned_nodes();
-  if (owned.size() == 0) return nrows_;
-  auto rows = rows_.view(nrows_);
-  index_t n = 0;
-  for (index_t r = 0; r < nrows_; ++r) n += owned(rows(r)) ? 1 : 0;
-  return n;
+  return owned_places(exchange_->owned_nodes(), rows_.view(nrows_));
 }
 
 template <int D>
 index_t State<D>::owned_cell_rows() {
-  const auto owned = exchange_->owned_cells();
-  if (owned.size() == 0) return npc_;
-  auto rows = pc_rows_.view(npc_);
-  index_t n = 0;
-  for (index_t r = 0; r < npc_; ++r) n += owned(rows(r)) ? 1 : 0;
-  return n;
+  return owned_places(exchange_->owned_cells(), pc_rows_.view(npc_));
 }
 
 template <int D>
@@ -1257,7 +1257,7 @@ int State<D>::finish(const Particles<D>& P, const Options<D>& O, bool correct, R
     if (status != OK) return status;
   }
   // a rank moves its own particles, not the halo
-  report.moved += to_particles(P.head(exchange_->owned(P)), O, correct);
+  report.moved += to_particles(P, O, correct, exchange_->owned(P));
   return OK;
 }
 
@@ -1291,11 +1291,16 @@ void State<D>::correct(const Options<D>& O) {
 }
 
 template <int D>
-index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool displaced) {
-  // Only the particles' own arrays and the grid's are read here (grid_to_particles, push_out
-  // and update_stresses use no binning array: cell_, order_, start_), so P may be the first
-  // n of the particles scatter was given (a rank moves only the particles it owns); a solid's
-  // tools' reactions read the binning (stress_forces), and a solid runs in one process.
+index_t State<D>::to_particles(const Particles<D>& all, const Options<D>& O, bool displaced,
+                               index_t owned) {
+  // The first `owned` particles move (a rank's own; the rest, its halo, are its neighbours'
+  // copies). Only the particles' own arrays and the grid's are read (grid_to_particles,
+  // push_out and update_stresses use no binning array: cell_, order_, start_) but for a
+  // solid's tools' reactions, which read the stress of every particle round a node
+  // (stress_forces, through scatter's binning): on a rank the halo then takes its owners'
+  // new stress first (recomputed by the rank instead, a particle on the yield surface could
+  // return to it on the other side of rounding: the footing's force 1e-4 off at a few steps).
+  const Particles<D> P = owned < 0 ? all : all.head(std::min(owned, all.count()));
   const index_t nn = grid_.nnodes;
   PhaseClock clock(phase_seconds_);
   if (P.stress.size() > 0 && is_solid(O.model)) {
@@ -1314,12 +1319,13 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
       // g) - f_i, summed over the tool's nodes (the discrete reaction: pressure, shear and
       // the inertia of the material the tool carries; the fluids' cut-cell pressure
       // integral below would see the pressure only)
-      if (P.count() != binned_)
+      if (all.count() != binned_)
         throw std::logic_error("to_particles: a solid's tools need the particles scattered");
+      if (exchange_->shared()) exchange_->refresh_halo();
       const index_t nc = grid_.ncells;
       auto f = force_.template view<2>({nn, D});
-      stress_forces<D>(grid_, P.x, P.volume, P.stress, order_.view(P.count()), start_.view(nc + 1),
-                       f);
+      stress_forces<D>(grid_, all.x, all.volume, all.stress, order_.view(all.count()),
+                       start_.view(nc + 1), f);
       add_cell_forces<D>(grid_, pc_row_.view(nc), pc_G_.template view<3>({npc_, NC, D}),
                          p_cell_.view(nc), f);
       auto m = node_mass_.view(nn);
@@ -1329,8 +1335,14 @@ index_t State<D>::to_particles(const Particles<D>& P, const Options<D>& O, bool 
         for (int k = 0; k < D; ++k)
           f(i, k) = m(i) * ((v_new(i, k) - v_old(i, k)) / O.dt - O.gravity[k]) - f(i, k);
       });
+      // (on a rank: the nodes it owns, summed over the ranks)
       bodies_.reactions(f, ocontact_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
-                        body_torque_.template view<2>({bodies_.count(), 3}));
+                        body_torque_.template view<2>({bodies_.count(), 3}),
+                        exchange_->owned_nodes());
+      if (exchange_->shared()) {
+        exchange_->sum_values(body_force_.view(bodies_.count() * D));
+        exchange_->sum_values(body_torque_.view(bodies_.count() * 3));
+      }
     }
     // a held component's increment is 0 (its velocity is set, not accelerated: MPM's boundary
     // condition on the acceleration; exact for walls at rest or at a steady speed): the

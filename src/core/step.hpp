@@ -398,12 +398,13 @@ class State {
   // Returns the faces clamped at O.volume_dmax cells.
   index_t volume_apply(const Options<D>& O, View<const double> q);
   // Grid to particles (with the last volume correction's face displacements when displaced),
-  // push-out of obstacles, the periodic wrap; returns the particles put back inside. A fluid's
-  // reads no binning array: P may hold fewer particles than scatter was given (the first n
-  // of them: those a rank owns). A solid's stress update (solid.hpp) maps the particles'
-  // new velocities back through scatter's binning, so P must then be all of them
-  // (std::invalid_argument otherwise; solids are not split over ranks yet).
-  index_t to_particles(const Particles<D>& P, const Options<D>& O, bool displaced);
+  // push-out of obstacles, the periodic wrap, for the first `owned` of the particles scatter
+  // was given (a rank's own; -1: all); returns the particles put back inside. A solid's
+  // stress update (solid.hpp) runs on them; its tools' reactions read every particle's
+  // stress round their nodes through scatter's binning (std::logic_error when P is not what
+  // scatter binned), a rank's halo with its owners' new stress (Exchange::refresh_halo).
+  index_t to_particles(const Particles<D>& P, const Options<D>& O, bool displaced,
+                       index_t owned = -1);
 
   // the arrays Python reads (views of the state's own storage)
   View<double> p_node() { return p_node_.view(grid_.nnodes); }

@@ -14,31 +14,17 @@ from conftest import EXAMPLES
 
 from mpmflow import load_case
 from mpmflow.errors import CaseError, SolverError
-from mpmflow.schemes.projection import ProjectionScheme
 from mpmflow.simulation import Simulation
 
 pytest.importorskip("petsc4py")
 pytest.importorskip("mpi4py")
 
+from splitting import alone, split  # noqa: E402
+
 from mpmflow.parallel.comm import world  # noqa: E402
-from mpmflow.parallel.scheme import DistributedProjection  # noqa: E402
 from mpmflow.parallel.support import distributed  # noqa: E402
 
 RHO, G = 1000.0, 9.81
-
-
-def split(sim: Simulation) -> Simulation:
-    """The run's scheme over the world's ranks (on one process: one box)."""
-    if not isinstance(sim.scheme, DistributedProjection):
-        sim.scheme = DistributedProjection(sim.case, sim.grid, sim.particles)
-    return sim
-
-
-def alone(sim: Simulation) -> Simulation:
-    """The run's scheme on this process alone (the reference)."""
-    if type(sim.scheme) is not ProjectionScheme:
-        sim.scheme = ProjectionScheme(sim.case, sim.grid, sim.particles)
-    return sim
 
 
 def dam_break(transfer: str = "flip") -> Simulation:

@@ -252,6 +252,10 @@ class PythonExchange : public Exchange<D> {
     nb::gil_scoped_acquire acquire;
     exchange_.attr("sum_values")(numpy_view(values));
   }
+  void refresh_halo() override {
+    nb::gil_scoped_acquire acquire;
+    exchange_.attr("refresh_halo")();
+  }
   void migrate() override {
     nb::gil_scoped_acquire acquire;
     exchange_.attr("migrate")();

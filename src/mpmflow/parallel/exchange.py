@@ -320,6 +320,19 @@ class RankExchange:
         """Each value summed over the ranks, in place (the bodies' forces and torques)."""
         values[:] = self.comm.allreduce(values.copy())
 
+    def refresh_halo(self) -> None:
+        """The halo's stress history made its owners' again (a solid's, after the owners
+        updated it: the step's tools read every particle's round a node). The owned
+        particles have not moved since ``particles``, so the halo is the same particles in
+        the same order."""
+        m = int(self.owned["x"].shape[0])
+        names = [f for f in ("stress", "plastic_strain", "yielding") if f in self.local]
+        mine: ParticleArrays = {f: self.local[f][:m] for f in names}
+        mine["x"] = self.owned["x"]
+        ghosts = self.halo(mine)
+        for f in names:
+            self.local[f][m:] = ghosts[f]
+
     def migrate(self) -> None:
         """The owned particles, moved by the step, to the ranks that own their cells."""
         m = int(self.owned["x"].shape[0])

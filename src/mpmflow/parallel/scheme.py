@@ -50,6 +50,7 @@ from ..schemes.projection import (
     check_movers,
     most_steps,
     preset,
+    solid_history,
 )
 from .boxes import Boxes, bisect, cell_weights
 from .comm import Comm, world
@@ -138,15 +139,7 @@ class DistributedProjection(ProjectionScheme):
         self._P = P
         D = self.grid.dim
         self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
-        self.history: dict[str, Floats] = (
-            {
-                "stress": np.zeros((P.count, D, D)),
-                "plastic_strain": np.zeros(P.count),
-                "yielding": np.zeros(P.count),
-            }
-            if self.solid
-            else {}
-        )
+        self.history = solid_history(P.count, D) if self.solid else {}
         self.fields = FIELDS + (("affine",) if self.apic else ()) + tuple(self.history)
 
     def _whole(self, field: str) -> NDArray[Any]:
@@ -216,8 +209,9 @@ class DistributedProjection(ProjectionScheme):
         if self.movers:  # their paths in the domain's frame (the core reads its grid's origin)
             no_slip = self.solids.node_no_slip
             local = no_slip[sub.node_global] if no_slip.size else no_slip
+            nsub = 0 if self.solid else obstacles.SUBCELLS  # a solid's tools: the staircase
             self.core.set_bodies(
-                [m.core(g) for m in self.movers], np.ascontiguousarray(local), obstacles.SUBCELLS
+                [m.core(g) for m in self.movers], np.ascontiguousarray(local), nsub
             )
         # the core's loop steps this rank: its exchange and its solvers over the ranks
         self.core.use_exchange(

@@ -48,12 +48,6 @@ def refusals(case: Case) -> list[str]:
             "free bodies are not split over ranks yet (their coupling to the pressure is "
             'one system): remove obstacles.N.motion = {type = "free", ...}'
         )
-    if any(m is not None for m in motions) and materials.is_solid(case.material):
-        out.append(
-            "a solid's tools (obstacles on a path) are not split over ranks yet (their force "
-            "reads the stress of the particles round each node, a rank's halo included): "
-            "remove obstacles.N.motion"
-        )
     if s.linear_solver in ("amg", "direct"):
         out.append(
             f'solver.linear_solver = "{s.linear_solver}" runs on one process: on several '

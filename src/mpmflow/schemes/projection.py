@@ -115,6 +115,17 @@ def most_steps(
     return int(np.ceil(max(span * max_speed / (courant * h), span / dt_max))) + 3
 
 
+def solid_history(count: int, dim: int) -> dict[str, Floats]:
+    """A solid's history on its particles (src/core/plasticity.hpp), at the start: the
+    deviatoric stress (count x D x D, Pa; zero: bodies start unstressed), the equivalent
+    plastic strain and whether each particle yielded in the last step (count, 0 or 1)."""
+    return {
+        "stress": np.zeros((count, dim, dim)),
+        "plastic_strain": np.zeros(count),
+        "yielding": np.zeros(count),
+    }
+
+
 class Extra(TypedDict):
     """The core's optional particle arrays (None: not carried)."""
 
@@ -198,18 +209,7 @@ class ProjectionScheme:
         self._P = P
         D = self.grid.dim
         self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
-        # a solid's history (src/core/plasticity.hpp): the deviatoric stress (count x D x D,
-        # Pa; zero: bodies start unstressed), the equivalent plastic strain and whether
-        # each particle yielded in the last step (count, 0 or 1)
-        self.history: dict[str, Floats] = (
-            {
-                "stress": np.zeros((P.count, D, D)),
-                "plastic_strain": np.zeros(P.count),
-                "yielding": np.zeros(P.count),
-            }
-            if self.solid
-            else {}
-        )
+        self.history = solid_history(P.count, D) if self.solid else {}
         # with outlets, the particles' own mass and volume: the core zeroes a retired one's
         self._own = (P.mass.copy(), P.volume.copy()) if self.open else None
 
