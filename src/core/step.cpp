@@ -357,6 +357,15 @@ index_t State<D>::owned_cell_rows() {
 }
 
 template <int D>
+template <class Release>
+index_t State<D>::releases(Release&& release) {
+  if (!exchange_->shared()) return release();
+  const index_t before = owned_contacts();
+  release();
+  return exchange_->sum(before - owned_contacts());
+}
+
+template <int D>
 index_t State<D>::owned_contacts() {
   const auto owned = exchange_->owned_nodes();
   const index_t nn = grid_.nnodes;
@@ -667,15 +676,14 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
     auto mean = pc_mean_.sized(nn);
     cell_to_nodes<D>(grid_, I_.cor_slot, I_.cor_V, cell_row, rows, p_cell, View<double, 2>(),
                      View<double, 2>(), mean);
-    // (on a rank: the releases at the nodes it owns, summed over the ranks, which all solve
-    // again while any released; a node round its box sees every cell about it but at the
-    // ghost layer's outer face, where only the ghost cells' rows, not a rank's own, read it)
-    const index_t before = shared ? owned_contacts() : 0;
-    index_t released =
-        release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, mean, contact,
-                        T_.wall_bonded) +
-        release_obstacles(ob_.onode, ob_.onormal, v_star, node_row, mean, ocontact, ob_.velocity);
-    if (shared) released = exchange_->sum(before - owned_contacts());
+    // (a node round a rank's box sees every cell about it but at the ghost layer's outer
+    // face, where only the ghost cells' rows, not a rank's own, read it)
+    const index_t released = releases([&] {
+      return release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, mean,
+                             contact, T_.wall_bonded) +
+             release_obstacles(ob_.onode, ob_.onormal, v_star, node_row, mean, ocontact,
+                               ob_.velocity);
+    });
     if (released == 0) break;
     report.released += released;
   }
@@ -905,14 +913,7 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
     pressure_rhs(O);
     if (!solve(rhs, x)) return PRESSURE_NOT_CONVERGED;
     if (free && !couple_bodies(O, solve)) return PRESSURE_NOT_CONVERGED;
-    index_t released = 0;
-    if (shared) {  // the releases at the nodes each rank owns, over the ranks
-      const index_t before = owned_contacts();
-      release_walls(x);
-      released = exchange_->sum(before - owned_contacts());
-    } else {
-      released = release_walls(x);
-    }
+    const index_t released = releases([&] { return release_walls(x); });
     if (released == 0) break;
     report.released += released;
   }
@@ -1335,14 +1336,10 @@ index_t State<D>::to_particles(const Particles<D>& all, const Options<D>& O, boo
         for (int k = 0; k < D; ++k)
           f(i, k) = m(i) * ((v_new(i, k) - v_old(i, k)) / O.dt - O.gravity[k]) - f(i, k);
       });
-      // (on a rank: the nodes it owns, summed over the ranks)
+      // (on a rank: the nodes it owns, summed over the ranks below)
       bodies_.reactions(f, ocontact_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
                         body_torque_.template view<2>({bodies_.count(), 3}),
                         exchange_->owned_nodes());
-      if (exchange_->shared()) {
-        exchange_->sum_values(body_force_.view(bodies_.count() * D));
-        exchange_->sum_values(body_torque_.view(bodies_.count() * 3));
-      }
     }
     // a held component's increment is 0 (its velocity is set, not accelerated: MPM's boundary
     // condition on the acceleration; exact for walls at rest or at a steady speed): the
@@ -1367,15 +1364,13 @@ index_t State<D>::to_particles(const Particles<D>& all, const Options<D>& O, boo
       v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt, O.flip,
       View<const double>(lower_.data(), {D}), View<const double>(upper_.data(), {D}), margin_,
       faces, P.affine, Outlets{T_.outlet, P.mass, P.volume, T_.inlets.count() > 0});
-  if (bodies_.present()) {     // the bodies' force of this step, then the bodies at its end
-    if (!is_solid(O.model)) {  // a solid's: its reactions, above
-      // (on a rank: the cut cells it owns, summed over the ranks)
+  if (bodies_.present()) {   // the bodies' force of this step, then the bodies at its end
+    if (!is_solid(O.model))  // a solid's: its reactions, above (on a rank: its cut cells)
       bodies_.forces(p_node_.view(nn), body_force_.template view<2>({bodies_.count(), D}),
                      body_torque_.template view<2>({bodies_.count(), 3}), exchange_->owned_cells());
-      if (exchange_->shared()) {
-        exchange_->sum_values(body_force_.view(bodies_.count() * D));
-        exchange_->sum_values(body_torque_.view(bodies_.count() * 3));
-      }
+    if (exchange_->shared()) {  // each rank's share, summed over the ranks
+      exchange_->sum_values(body_force_.view(bodies_.count() * D));
+      exchange_->sum_values(body_torque_.view(bodies_.count() * 3));
     }
     bodies_.integrate(O.dt, time_ + O.dt);  // the free bodies' new poses
     bodies_.place(time_ + O.dt);

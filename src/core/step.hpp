@@ -524,6 +524,10 @@ class State {
   index_t owned_rows();
   index_t owned_cell_rows();  // a solid's cell-pressure rows a rank owns
   index_t owned_contacts();
+  // The walls' and obstacles' releases release() makes (it returns their count): on a rank
+  // those at the nodes it owns, summed over the ranks (every rank then solves again or not)
+  template <class Release>
+  index_t releases(Release&& release);
   // volume correction
   Buffer<double> cell_vol_, density_, vol_vals_, vol_rhs_, q_, qx_, faces_[D];
   Buffer<index_t> cell_row_, vol_cols_, vol_rows_;

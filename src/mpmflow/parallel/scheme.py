@@ -267,16 +267,16 @@ class DistributedProjection(ProjectionScheme):
         pieces = self.comm.allgather((sub.node_global[mine], self.core.p_node[mine]))
         for index, values in pieces:
             self.p_global[index] = values
-        if self.q_global.size and self.core.volume_q.size:
-            cells = sub.owned_cells
-            parts = self.comm.allgather((sub.cell_global[cells], self.core.volume_q[cells]))
-            for index, values in parts:
-                self.q_global[index] = values
-        if self.pc_global.size:
-            cells = sub.owned_cells
-            parts = self.comm.allgather((sub.cell_global[cells], self.core.p_cell[cells]))
-            for index, values in parts:
-                self.pc_global[index] = values
+        # the cells' values the next chunk starts from (the volume correction's, a solid's
+        # pressure), each from the rank owning the cell
+        for whole, local in (
+            (self.q_global, self.core.volume_q),
+            (self.pc_global, self.core.p_cell),
+        ):
+            if whole.size and local.size:
+                cells = sub.owned_cells
+                for index, values in self.comm.allgather((sub.cell_global[cells], local[cells])):
+                    whole[index] = values
 
     def _report(self, owned: ParticleArrays) -> None:
         """The load of each rank (summary.json's "mpi"): particles now, unknowns of the
@@ -369,12 +369,6 @@ class DistributedProjection(ProjectionScheme):
         return AdaptiveReport(
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
-
-    def body_values(self) -> tuple[Floats, Floats, Floats]:
-        """As ``ProjectionScheme.body_values``: every rank holds the totals (the core sums
-        the ranks' shares); the bodies move in the domain's frame on every rank."""
-        core = self.core
-        return core.body_force.copy(), core.body_torque.copy(), core.body_state.copy()
 
     def owned_particles(self) -> ParticleArrays:
         """This rank's own particles (global coordinates, with their numbers ``id``, in

@@ -309,7 +309,8 @@ class ProjectionScheme:
     def body_values(self) -> tuple[Floats, Floats, Floats]:
         """The moving obstacles' force (bodies x D, N; 2D N/m), torque (bodies x 3) and state
         (``State.body_state``: pivot, velocity, angular velocity, orientation) after the
-        last step, in the domain's frame."""
+        last step, in the domain's frame (over MPI ranks too: the core sums the ranks'
+        shares and moves the bodies in the domain's frame on every rank)."""
         core = self.core
         return core.body_force.copy(), core.body_torque.copy(), core.body_state.copy()
 
