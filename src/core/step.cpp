@@ -8,6 +8,7 @@
 
 #include "binning.hpp"
 #include "cell_pressure.hpp"
+#include "complementarity.hpp"
 #include "corrector.hpp"
 #include "cut_cells.hpp"
 #include "dense.hpp"
@@ -512,21 +513,6 @@ void State<D>::pressure_rhs(const Options<D>& O) {
 }
 
 template <int D>
-index_t State<D>::release_walls(View<const double> x) {
-  const index_t nn = grid_.nnodes;
-  auto rows = rows_.view(nrows_);
-  auto p = p_node_.view(nn);
-  for (index_t r = 0; r < nrows_; ++r) p(rows(r)) = x(r);
-  if (grid_.any_periodic) copy_images<D>(grid_, p);
-  auto v_star = v_star_.template view<2>({nn, D});
-  auto node_row = node_row_.view(nn);
-  return release_contact(T_.wall_node, T_.wall_axis, T_.wall_sign, v_star, node_row, p,
-                         contact_.template view<2>({nn, D}), T_.wall_bonded) +
-         release_obstacles(ob_.onode, ob_.onormal, v_star, node_row, p, ocontact_.view(nn),
-                           ob_.velocity);
-}
-
-template <int D>
 void State<D>::extend_pressure(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
   if (O.subcell)
@@ -550,6 +536,10 @@ bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
   auto S = body_S_.template sized<2>({nq, nq});
   auto z = body_z_.sized(nq);
   bodies_.coupling(I_.slot, node_row_.view(nn), ocontact_.view(nn), J, K);
+  auto zero = zero_.view(n);  // the contact's rows held at p = 0: no coupling there
+  for (index_t d = 0; d < nq; ++d)
+    for (index_t r = 0; r < n; ++r)
+      if (zero(r)) J(d, r) = K(d, r) = 0.0;
   for (index_t d = 0; d < nq; ++d) {
     View<double> y(&Y(d, 0), {n});
     for (index_t r = 0; r < n; ++r) y(r) = 0.0;
@@ -905,18 +895,73 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
                          false);
   };
   const bool free = bodies_.free_dofs() > 0;
-  while (true) {
+  // The contact as a complementarity problem (complementarity.hpp): p >= 0 at the rows of
+  // the nodes in contact, solved by rounds of the active set, each a solve with the held
+  // rows at p = 0; the rounds end when no row changes (the same round on every rank).
+  const index_t nn = grid_.nnodes;
+  auto node_row = node_row_.view(nn);
+  auto candidate = candidate_.sized(n);
+  auto zero = zero_.sized(n);
+  auto b = b_.sized(n);
+  auto vals0 = vals0_.template sized<2>({n, NS});
+  contact_rows(T_.wall_node, T_.wall_axis, T_.wall_bonded, contact_.template view<2>({nn, D}),
+               ob_.onode, ocontact_.view(nn), node_row, candidate);
+  for (index_t r = 0; r < n; ++r) zero(r) = false;
+  std::copy(vals.data(), vals.data() + n * NS, vals0.data());
+  const auto owned = exchange_->owned_nodes();
+  for (int round = 1;; ++round) {
     if (free) {  // the right-hand side at the free bodies' velocities before the pressure
       bodies_.reset_velocity();
       bodies_.hold(time_ + 0.5 * O.dt);
     }
     pressure_rhs(O);
+    std::copy(rhs.data(), rhs.data() + n, b.data());
+    for (index_t r = 0; r < n; ++r)
+      if (zero(r)) rhs(r) = 0.0;
     if (!solve(rhs, x)) return PRESSURE_NOT_CONVERGED;
-    if (free && !couple_bodies(O, solve)) return PRESSURE_NOT_CONVERGED;
-    const index_t released = releases([&] { return release_walls(x); });
-    if (released == 0) break;
-    report.released += released;
+    if (free) {  // w at the bodies' velocities after the pressure's impulse
+      if (!couple_bodies(O, solve)) return PRESSURE_NOT_CONVERGED;
+      pressure_rhs(O);
+      std::copy(rhs.data(), rhs.data() + n, b.data());
+    }
+    double bmax = 0.0, xmax = 0.0;  // the solve's error in x and in A x - b, about tol times
+    for (index_t r = 0; r < n; ++r) {
+      bmax = std::max(bmax, std::abs(b(r)));
+      xmax = std::max(xmax, std::abs(x(r)));
+    }
+    const double x_tolerance = O.tol * exchange_->max(xmax);  // collective: one order
+    const double w_tolerance = O.tol * exchange_->max(bmax);
+    auto next = next_.sized(n);
+    index_t changed = update_active_set(cols, vals0, x, b, candidate, rows, owned, x_tolerance,
+                                        w_tolerance, zero, next);
+    if (shared) changed = exchange_->sum(changed);
+    if (changed == 0) break;
+    if (round == MAX_CONTACT_ROUNDS) {  // reported; the last round's pressure stands
+      report.unsettled += 1;
+      break;
+    }
+    std::copy(next.data(), next.data() + n, zero.data());
+    if (shared) {  // the owners' held rows at the rows a rank holds without owning them
+      auto flag = zero_node_.template sized<2>({nn, 1});
+      for (index_t r = 0; r < n; ++r) flag(rows(r), 0) = zero(r) ? 1.0 : 0.0;
+      const View<double, 2> fields[] = {flag};
+      exchange_->fill_nodes(fields, 1);
+      for (index_t r = 0; r < n; ++r) zero(r) = flag(rows(r), 0) > 0.5;
+    }
+    hold_at_zero(cols, vals0, zero, vals);
+    if (solver_)
+      solver_->setup(cols, vals, rows);
+    else
+      pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
   }
+  auto p = p_node_.view(nn);
+  for (index_t r = 0; r < n; ++r) p(rows(r)) = zero(r) ? 0.0 : x(r);
+  if (grid_.any_periodic) copy_images<D>(grid_, p);
+  std::copy(vals0.data(), vals0.data() + n * NS, vals.data());
+  report.released += releases([&] {
+    return release_rows(T_.wall_node, T_.wall_axis, T_.wall_bonded, ob_.onode, node_row, zero,
+                        contact_.template view<2>({nn, D}), ocontact_.view(nn));
+  });
   report.max_iterations = std::max(report.max_iterations, step_iterations);
   extend_pressure(O);
   if (shared) {

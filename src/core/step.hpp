@@ -76,6 +76,9 @@ struct Report {
   index_t capped = 0;   // cells whose viscosity was held at the model's cap (per step)
   index_t clamped = 0;  // faces whose volume-correction displacement was clamped
   index_t pockets = 0;  // pressure pockets sealed from the free surface, held at 0 at their top
+  // steps whose walls' contact had not settled after MAX_CONTACT_ROUNDS rounds
+  // (complementarity.hpp): the last round's pressure stood
+  index_t unsettled = 0;
 };
 
 // The phases of a step, as timed by State (seconds summed over the steps of a run).
@@ -354,7 +357,6 @@ class State {
                      View<const double, 2> vals, View<const index_t> rows, View<const double> b,
                      View<double> y, View<double> scratch, index_t& iterations, bool cells);
   void pressure_rhs(const Options<D>& O);
-  index_t release_walls(View<const double> x);  // the solution in; returns nodes released
   void extend_pressure(const Options<D>& O);
   void warm_start();  // the last pressure at this step's unknowns into x0, p_node cleared
   // the sealed pockets of the last pressure_matrix (pockets.hpp), each held at 0 at its top
@@ -500,6 +502,11 @@ class State {
   Buffer<double> pocket_mean_;
   index_t npockets_ = 0;
   Buffer<bool> contact_, ocontact_, anchored_;
+  // the contact's complementarity (pressure_solve): the rows it constrains, those held at
+  // p = 0 and the next round's, the right-hand side, the matrix before holding, the held
+  // rows as node values (a rank's exchange)
+  Buffer<bool> candidate_, zero_, next_;
+  Buffer<double> b_, vals0_, zero_node_;
   Buffer<double> p_node_;
   // the cell pressure's rows, gradients (rows x 2^D x D), hold projectors (nn x D x D), node
   // volumes and pressure (cell_pressure.hpp); grown at a solid's first step

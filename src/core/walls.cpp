@@ -71,6 +71,42 @@ index_t release_contact(View<const index_t> node, View<const index_t> axis, View
   return released;
 }
 
+void contact_rows(View<const index_t> node, View<const index_t> axis, View<const bool> bonded,
+                  View<const bool, 2> contact, View<const index_t> onode, View<const bool> ocontact,
+                  View<const index_t> node_row, View<bool> candidate) {
+  for (index_t r = 0; r < candidate.size(); ++r) candidate(r) = false;
+  const bool any_bonded = bonded.size() > 0;
+  for (index_t e = 0; e < node.size(); ++e) {
+    const index_t i = node(e);
+    if (node_row(i) >= 0 && contact(i, axis(e)) && !(any_bonded && bonded(e)))
+      candidate(node_row(i)) = true;
+  }
+  for (index_t e = 0; e < onode.size(); ++e) {
+    const index_t i = onode(e);
+    if (node_row(i) >= 0 && ocontact(i)) candidate(node_row(i)) = true;
+  }
+}
+
+index_t release_rows(View<const index_t> node, View<const index_t> axis, View<const bool> bonded,
+                     View<const index_t> onode, View<const index_t> node_row, View<const bool> zero,
+                     View<bool, 2> contact, View<bool> ocontact) {
+  index_t released = 0;
+  const bool any_bonded = bonded.size() > 0;
+  for (index_t e = 0; e < node.size(); ++e) {
+    const index_t i = node(e), k = axis(e);
+    if (node_row(i) < 0 || !zero(node_row(i)) || (any_bonded && bonded(e))) continue;
+    released += contact(i, k) ? 1 : 0;
+    contact(i, k) = false;
+  }
+  for (index_t e = 0; e < onode.size(); ++e) {
+    const index_t i = onode(e);
+    if (node_row(i) < 0 || !zero(node_row(i))) continue;
+    released += ocontact(i) ? 1 : 0;
+    ocontact(i) = false;
+  }
+  return released;
+}
+
 void apply_obstacles(View<const index_t> onode, View<const double, 2> onormal,
                      View<const bool> no_slip, View<double, 2> v, View<const bool> ocontact,
                      View<const double> phi, View<const double, 2> held) {

@@ -49,6 +49,22 @@ index_t release_contact(View<const index_t> node, View<const index_t> axis, View
                         View<const double> p_node, View<bool, 2> contact,
                         View<const bool> bonded = {});
 
+// The pressure unknowns the contact constrains to p >= 0 (complementarity.hpp), one flag
+// per row into candidate (sized to the rows; node_row(i) the row of node i, -1: none): the
+// unknowns of the wall nodes in contact as the pressure step starts (start_contact), but
+// for the bonded pairs (bonded(e); empty: none), which hold in tension too, and of the
+// obstacle nodes in contact (ocontact, start_obstacles).
+void contact_rows(View<const index_t> node, View<const index_t> axis, View<const bool> bonded,
+                  View<const bool, 2> contact, View<const index_t> onode, View<const bool> ocontact,
+                  View<const index_t> node_row, View<bool> candidate);
+
+// After the pressure step: the wall and obstacle nodes whose row the contact held at p = 0
+// (zero(node_row(i))) let the water leave (contact and ocontact cleared there, in place;
+// the bonded pairs keep theirs). Returns how many (node, wall) pairs and obstacle nodes.
+index_t release_rows(View<const index_t> node, View<const index_t> axis, View<const bool> bonded,
+                     View<const index_t> onode, View<const index_t> node_row, View<const bool> zero,
+                     View<bool, 2> contact, View<bool> ocontact);
+
 // v_i . n_e (m/s): the velocity of node i into the solid along obstacle entry e's normal.
 inline double normal_velocity(View<const double, 2> v, index_t i, View<const double, 2> onormal,
                               index_t e) {

@@ -33,6 +33,7 @@ WHAT = {
     "viscosity held at material.max_viscosity": "cell-steps",
     "volume correction displacement clamped at half a cell per step": "face-steps",
     "water sealed from the free surface held at p = 0 at its top": "pocket-steps",
+    "walls' contact not settled in 50 rounds: the last round's pressure used": "steps",
 }
 
 

@@ -694,10 +694,6 @@ void bind_dim(nb::module_& m) {
            [](S& self, const O& opt) { return self.state->pressure_matrix(opt); })
       .def_prop_ro("pockets", [](S& self) { return self.state->pockets(); })
       .def("pressure_rhs", [](S& self, const O& opt) { self.state->pressure_rhs(opt); })
-      .def("release_walls",
-           [](S& self, Array<const double> x) {
-             return self.state->release_walls(view<const double>(x, "x"));
-           })
       .def("extend_pressure", [](S& self, const O& opt) { self.state->extend_pressure(opt); })
       .def("viscous_predictor",
            [](S& self, const O& opt, Report& report) {
@@ -835,6 +831,7 @@ void bind_step(nb::module_& m) {
       .def_rw("max_iterations", &Report::max_iterations)
       .def_rw("residual", &Report::residual)
       .def_rw("released", &Report::released)
+      .def_rw("unsettled", &Report::unsettled)
       .def_rw("moved", &Report::moved)
       .def_rw("status", &Report::status)
       .def_rw("step", &Report::step)

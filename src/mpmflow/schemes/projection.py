@@ -62,6 +62,7 @@ class StepReport:
     capped: int = 0  # cell-steps with the viscosity held at material.max_viscosity
     clamped: int = 0  # face-steps with the volume correction's displacement clamped
     pockets: int = 0  # pocket-steps: water sealed from the free surface held at 0 at its top
+    unsettled: int = 0  # steps whose walls' contact had not settled (complementarity.hpp)
 
     def merge(self, other: StepReport) -> StepReport:
         return StepReport(
@@ -76,6 +77,7 @@ class StepReport:
             self.capped + other.capped,
             self.clamped + other.clamped,
             self.pockets + other.pockets,
+            self.unsettled + other.unsettled,
         )
 
     @classmethod
@@ -93,6 +95,7 @@ class StepReport:
             int(r.capped),
             int(r.clamped),
             int(r.pockets),
+            int(r.unsettled),
         )
 
 

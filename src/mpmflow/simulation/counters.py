@@ -23,7 +23,7 @@ class Counters:
 
 class ChunkReport(Protocol):
     """What every scheme's report of a chunk holds (``Scheme.advance``); ``capped``,
-    ``clamped``, ``pockets``, ``viscous_iterations`` and ``steps`` only some (0 or the
+    ``clamped``, ``pockets``, ``unsettled``, ``viscous_iterations`` and ``steps`` only some (0 or the
     chunk's steps when absent)."""
 
     moved_inside: int
@@ -63,6 +63,12 @@ def add_report(
         "water sealed from the free surface held at p = 0 at its top",
         "pressure system",
         getattr(report, "pockets", 0),
+        time,
+    )
+    fallbacks.count(
+        "walls' contact not settled in 50 rounds: the last round's pressure used",
+        "pressure system (docs/method.md, Energy)",
+        getattr(report, "unsettled", 0),
         time,
     )
     c.solves += report.solves

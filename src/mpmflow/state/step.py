@@ -48,6 +48,7 @@ class CoreReport(Protocol):
     max_iterations: int  # the most iterations in one step
     residual: float  # the worst relative residual
     released: int
+    unsettled: int  # steps whose walls' contact had not settled (complementarity.hpp)
     moved: int
     status: int  # a ``Status``
     step: int  # the step (0-based, within the chunk) that failed or is running
@@ -241,10 +242,6 @@ class CoreState(Protocol):
         ...
 
     def pressure_rhs(self, options: CoreOptions) -> None: ...
-
-    def release_walls(self, x: Floats) -> int:
-        """The solution in; returns the wall nodes released."""
-        ...
 
     def extend_pressure(self, options: CoreOptions) -> None: ...
 
