@@ -882,10 +882,12 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   auto cols = cols_.template view<2>({n, NS});
   auto vals = vals_.template view<2>({n, NS});
   auto rows = rows_.view(n);
-  if (solver_)
-    solver_->setup(cols, vals, rows);
-  else
-    pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+  const auto setup = [&] {  // the solver for the matrix as it is in vals
+    if (solver_)
+      solver_->setup(cols, vals, rows);
+    else
+      pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+  };
   auto x = x_.view(n);
   auto rhs = rhs_.view(n);
   index_t step_iterations = 0;
@@ -906,18 +908,30 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   auto vals0 = vals0_.template sized<2>({n, NS});
   contact_rows(T_.wall_node, T_.wall_axis, T_.wall_bonded, contact_.template view<2>({nn, D}),
                ob_.onode, ocontact_.view(nn), node_row, candidate);
-  for (index_t r = 0; r < n; ++r) zero(r) = false;
   std::copy(vals.data(), vals.data() + n * NS, vals0.data());
+  // The rounds start from the rows held at the last step: a row in contact whose pressure
+  // there (x's start) is exactly 0 while the last step left a pressure (none: the first
+  // step). The held set changes little from step to step, and any start gives the same
+  // solution: this one saves rounds (the dam break at 0.008 m: 1.7 solves a step at dt = 1
+  // ms, 1.5 at 0.1 ms, against 2.2 and 3.0 from none held). It is read from what a restart
+  // restores, so a restarted run takes the same rounds.
+  double last = 0.0;
+  for (index_t r = 0; r < n; ++r) last = std::max(last, std::abs(x(r)));
+  const bool pressed = exchange_->max(last) > 0.0;
+  for (index_t r = 0; r < n; ++r) zero(r) = pressed && candidate(r) && x(r) == 0.0;
+  hold_at_zero(cols, vals0, zero, vals);
+  setup();
   const auto owned = exchange_->owned_nodes();
   for (int round = 1;; ++round) {
     if (free) {  // the right-hand side at the free bodies' velocities before the pressure
       bodies_.reset_velocity();
       bodies_.hold(time_ + 0.5 * O.dt);
     }
-    pressure_rhs(O);
-    std::copy(rhs.data(), rhs.data() + n, b.data());
-    for (index_t r = 0; r < n; ++r)
-      if (zero(r)) rhs(r) = 0.0;
+    if (round == 1 || free) {  // without free bodies the right-hand side stays
+      pressure_rhs(O);
+      std::copy(rhs.data(), rhs.data() + n, b.data());
+    }
+    for (index_t r = 0; r < n; ++r) rhs(r) = zero(r) ? 0.0 : b(r);
     if (!solve(rhs, x)) return PRESSURE_NOT_CONVERGED;
     if (free) {  // w at the bodies' velocities after the pressure's impulse
       if (!couple_bodies(O, solve)) return PRESSURE_NOT_CONVERGED;
@@ -948,11 +962,10 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
       exchange_->fill_nodes(fields, 1);
       for (index_t r = 0; r < n; ++r) zero(r) = flag(rows(r), 0) > 0.5;
     }
+    // the multigrid reads its finest level in place, and the coarse levels of the matrix
+    // the rounds started with stay a preconditioner for it; another solver sets up again
     hold_at_zero(cols, vals0, zero, vals);
-    if (solver_)
-      solver_->setup(cols, vals, rows);
-    else
-      pressure_mg_.setup(cols, vals, rows, dims, COARSEST, period);
+    if (solver_) setup();
   }
   auto p = p_node_.view(nn);
   for (index_t r = 0; r < n; ++r) p(rows(r)) = zero(r) ? 0.0 : x(r);
