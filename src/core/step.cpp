@@ -909,16 +909,11 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   contact_rows(T_.wall_node, T_.wall_axis, T_.wall_bonded, contact_.template view<2>({nn, D}),
                ob_.onode, ocontact_.view(nn), node_row, candidate);
   std::copy(vals.data(), vals.data() + n * NS, vals0.data());
-  // The rounds start from the rows held at the last step: a row in contact whose pressure
-  // there (x's start) is exactly 0 while the last step left a pressure (none: the first
-  // step). The held set changes little from step to step, and any start gives the same
-  // solution: this one saves rounds (the dam break at 0.008 m: 1.7 solves a step at dt = 1
-  // ms, 1.5 at 0.1 ms, against 2.2 and 3.0 from none held). It is read from what a restart
-  // restores, so a restarted run takes the same rounds.
-  double last = 0.0;
-  for (index_t r = 0; r < n; ++r) last = std::max(last, std::abs(x(r)));
-  const bool pressed = exchange_->max(last) > 0.0;
-  for (index_t r = 0; r < n; ++r) zero(r) = pressed && candidate(r) && x(r) == 0.0;
+  // The rounds start from the rows held at the last step: their pressure, x's start, is
+  // -0.0 (below). The held set changes little from step to step, and any start gives the
+  // same solution: this one saves rounds (the dam break at 0.008 m: 1.7 solves a step at
+  // dt = 1 ms, 1.5 at 0.1 ms, against 2.2 and 3.0 from none held).
+  for (index_t r = 0; r < n; ++r) zero(r) = candidate(r) && x(r) == 0.0 && std::signbit(x(r));
   hold_at_zero(cols, vals0, zero, vals);
   setup();
   const auto owned = exchange_->owned_nodes();
@@ -968,7 +963,10 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
     if (solver_) setup();
   }
   auto p = p_node_.view(nn);
-  for (index_t r = 0; r < n; ++r) p(rows(r)) = zero(r) ? 0.0 : x(r);
+  // a held row's pressure is -0.0: 0 in every use, its sign marking the hold for the next
+  // step's start (kept by checkpoints, the ranks' exchanges and their gathers, which copy
+  // the pressure as it is, so a restarted or split run starts its rounds alike)
+  for (index_t r = 0; r < n; ++r) p(rows(r)) = zero(r) ? -0.0 : x(r);
   if (grid_.any_periodic) copy_images<D>(grid_, p);
   std::copy(vals0.data(), vals0.data() + n * NS, vals.data());
   report.released += releases([&] {
