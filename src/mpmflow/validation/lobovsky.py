@@ -196,8 +196,10 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
                 miss="impact peaks last a few ms: the 1 ms step and the "
                 "h-wide sensor window set the simulated value; at 80 mm "
                 "the measured series has no sharp impact peak in the window "
-                "(its maximum lies at the window's end), and the run overshoots"
-                " the 1 ms mean of the run-up pressure there",
+                "(its maximum lies at the window's end), and the run "
+                + ("overshoots" if rel > 0 else "falls short of")
+                + " the 1 ms mean of the run-up pressure there: its sheet runs up the "
+                "wall at p = 0, a wall being unable to pull (docs/method.md, item 2)",
             )
         )
         sensor_lines.append(
