@@ -5,9 +5,11 @@
 // system's residual there, w = A p - b, is >= 0; p w = 0 at every such row. With A the
 // symmetric positive definite pressure matrix and the corrector the adjoint of the
 // right-hand side, the corrected velocity is then a projection onto a convex set in the
-// mass norm and cannot gain energy whatever the step; the release it replaces (a second
-// solve with the released rows' wall flux dropped) broke that adjoint and gained energy at
-// every wall impact (x15 at dt = 0.1 ms on the paper's 0.008 m mesh).
+// mass norm, which gains no energy where the rest of the step gains none (the node
+// surface: none at any step; the sub-cell surface's ghost values still gain at small
+// steps, docs/method.md). The release it replaces (a second solve with the released rows'
+// wall flux dropped) broke that adjoint and gained energy at every wall impact (x15 at dt =
+// 0.1 ms on the paper's 0.008 m mesh).
 //
 // The problem is solved by the primal-dual active set method (Hintermueller, Ito and
 // Kunisch 2002, SIAM J. Optim. 13(3) 865-888; a semismooth Newton method): solve with the
