@@ -913,8 +913,12 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   // -0.0 (below). The held set changes little from step to step, and any start gives the
   // same solution: this one saves rounds (the dam break at 0.008 m: 1.7 solves a step at
   // dt = 1 ms, 1.5 at 0.1 ms, against 2.2 and 3.0 from none held).
-  for (index_t r = 0; r < n; ++r) zero(r) = candidate(r) && x(r) == 0.0 && std::signbit(x(r));
-  hold_at_zero(cols, vals0, zero, vals);
+  bool holding = false;  // vals differs from vals0 (a row is held)
+  for (index_t r = 0; r < n; ++r) {
+    zero(r) = candidate(r) && x(r) == 0.0 && std::signbit(x(r));
+    holding = holding || zero(r);
+  }
+  if (holding) hold_at_zero(cols, vals0, zero, vals);
   setup();
   const auto owned = exchange_->owned_nodes();
   for (int round = 1;; ++round) {
@@ -960,6 +964,7 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
     // the multigrid reads its finest level in place, and the coarse levels of the matrix
     // the rounds started with stay a preconditioner for it; another solver sets up again
     hold_at_zero(cols, vals0, zero, vals);
+    holding = true;
     if (solver_) setup();
   }
   auto p = p_node_.view(nn);
@@ -968,7 +973,7 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   // the pressure as it is, so a restarted or split run starts its rounds alike)
   for (index_t r = 0; r < n; ++r) p(rows(r)) = zero(r) ? -0.0 : x(r);
   if (grid_.any_periodic) copy_images<D>(grid_, p);
-  std::copy(vals0.data(), vals0.data() + n * NS, vals.data());
+  if (holding) std::copy(vals0.data(), vals0.data() + n * NS, vals.data());
   report.released += releases([&] {
     return release_rows(T_.wall_node, T_.wall_axis, T_.wall_bonded, ob_.onode, node_row, zero,
                         contact_.template view<2>({nn, D}), ocontact_.view(nn));

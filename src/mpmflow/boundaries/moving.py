@@ -361,12 +361,16 @@ def _freedom(case: Case, k: int, shape: Shape, where: str) -> tuple[Freedom, Flo
     return freedom, pivot
 
 
+def motions(case: Case) -> list[Motion | None]:
+    """Each obstacle's ``motion``, in the order of [[obstacles]] (None: it stands still)."""
+    return [getattr(spec, "motion", None) for spec in case.obstacles]
+
+
 def of_case(case: Case) -> list[Mover]:
     """The case's moving obstacles (those with a ``motion``), in the order of [[obstacles]]."""
     D = len(case.domain.size)
     movers = []
-    for k, spec in enumerate(case.obstacles):
-        motion = getattr(spec, "motion", None)
+    for k, (spec, motion) in enumerate(zip(case.obstacles, motions(case))):
         if motion is None:
             continue
         shape = case.obstacle_shape(k)

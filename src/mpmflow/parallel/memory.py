@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import memory
+from ..boundaries import moving
 from ..errors import CaseError
 from ..geometry import bodies
 from ..geometry.lattice import lattice_indices
@@ -249,7 +250,7 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
         raise CaseError(f"--ranks {ranks}: {err}; run on fewer ranks.") from None
     apic = case.solver.transfer == "apic"
     fields = particle_fields(D, apic, is_solid(case.material))
-    ghost = ghost_layers(any(getattr(o, "motion", None) is not None for o in case.obstacles))
+    ghost = ghost_layers(any(m is not None for m in moving.motions(case)))
     whole = (fields + WHOLE_PER_PARTICLE) * N
     grid_whole = WHOLE_PER_NODE * nodes
     gather = GATHER_COPIES * fields * N

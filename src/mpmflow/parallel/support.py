@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from .. import materials
-from ..boundaries import outlets
+from ..boundaries import moving, outlets
 from ..errors import CaseError
 from ..grid import Grid
 from ..particles import Particles
@@ -42,8 +42,7 @@ def refusals(case: Case) -> list[str]:
         out.append("inlets are not split over ranks yet: remove the [[inlets]]")
     if case.sponges:
         out.append("damping zones are not split over ranks yet: remove the [[sponges]]")
-    motions = [getattr(o, "motion", None) for o in case.obstacles]
-    if any(m is not None and m.type == "free" for m in motions):
+    if any(m is not None and m.type == "free" for m in moving.motions(case)):
         out.append(
             "free bodies are not split over ranks yet (their coupling to the pressure is "
             'one system): remove obstacles.N.motion = {type = "free", ...}'
