@@ -22,13 +22,32 @@ inline double ghost_factor(double f_i, double f_g, double theta_min) {
   return 1.0 - 1.0 / t;
 }
 
-// Pressure (Pa) at the nodes that are not unknowns (node_row < 0), in place in p_node (the
-// unknowns' values set): each takes the coupling-weighted (K: the Laplacian's element
-// integrals by cell_slot) mean of the extrapolations from its unknown neighbours, the same
+// Shallow unknowns: dep(i) = t, the fraction of the edge at which the surface crosses the
+// nearest of the unknown i's edges to nodes outside (non-unknowns with less material,
+// coupling S < 0), where t < theta_c; -1 at every other node. The caller takes the shallow
+// nodes out of the unknowns: a shallow node's pressure is the linear interpolation between
+// its unknown neighbours, one edge further in, and p = 0 at the surface, t / (1 + t) times
+// their mean (exact for a linear field), which bounds every weight of the extension by
+// 1/theta_c - 1 where the ghost extrapolation's reach 1/theta_min - 1.
+template <int D>
+void demote_shallow(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
+                    View<const index_t> node_row, View<const double> node_f, double theta_c,
+                    View<double> dep);
+
+// Pressure (Pa) at the shallow nodes (dep >= 0, demote_shallow's), in place in p_node (the
+// unknowns' values set): t / (1 + t) times the coupling-weighted (K: the Laplacian's element
+// integrals by cell_slot) mean of their unknown neighbours', as the assembly weighs them.
+template <int D>
+void shallow_values(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
+                    View<const index_t> node_row, View<const double> dep, View<double> p_node);
+
+// Pressure (Pa) at the other nodes that are not unknowns (node_row < 0), in place in p_node
+// (the unknowns' values set, and the shallow nodes' with dep): each takes the coupling-weighted
+// mean of the extrapolations from its unknown (and shallow) neighbours, the same
 // extrapolations the assembly used; 0 where it has none.
 template <int D>
 void ghost_values(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
                   View<const index_t> node_row, View<const double> node_f, double theta_min,
-                  View<double> p_node);
+                  View<double> p_node, View<const double> dep = View<const double>());
 
 }  // namespace mpmflow

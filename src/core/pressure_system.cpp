@@ -10,7 +10,7 @@ template <int D>
 void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
                      View<const index_t> node_row, View<const double> node_f, bool subcell,
                      double theta_min, View<index_t, 2> cols, View<double, 2> vals,
-                     View<bool> anchored) {
+                     View<bool> anchored, View<const double> dep) {
   constexpr int NC = 1 << D;
   constexpr int NS = stencil_size(D);
   constexpr int centre = NS / 2;
@@ -31,7 +31,10 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
         const index_t j = neighbour_node<D, P>(g, i, ix, s, t);
         if (node_row(j) < 0) {
           anch = true;
-          if (subcell && sv < 0.0) S[centre] += sv * ghost_factor(node_f(i), node_f(j), theta_min);
+          if (subcell && sv < 0.0)
+            S[centre] += sv * (dep.size() > 0 && dep(j) >= 0.0
+                                   ? dep(j) / (1.0 + dep(j))
+                                   : ghost_factor(node_f(i), node_f(j), theta_min));
           S[s] = 0.0;
         }
       }
@@ -183,7 +186,8 @@ void assemble_rhs(const Grid<D>& g, View<const index_t> cell_slot, View<const do
 #define MPMFLOW_INSTANTIATE(D)                                                                     \
   template void assemble_matrix<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
                                    View<const index_t>, View<const double>, bool, double,          \
-                                   View<index_t, 2>, View<double, 2>, View<bool>);                 \
+                                   View<index_t, 2>, View<double, 2>, View<bool>,                  \
+                                   View<const double>);                                            \
   template double wall_integral<D>(const Grid<D>&, const std::array<index_t, D>&, index_t,         \
                                    View<const index_t>, View<const index_t>,                       \
                                    View<const double, 4>, View<const double, 2>,                   \

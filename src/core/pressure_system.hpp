@@ -28,7 +28,7 @@ template <int D>
 void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
                      View<const index_t> node_row, View<const double> node_f, bool subcell,
                      double theta_min, View<index_t, 2> cols, View<double, 2> vals,
-                     View<bool> anchored);
+                     View<bool> anchored, View<const double> dep = View<const double>());
 
 // Sum over the wetted wall faces through node i (coordinates ix) of int N_i (v* - u_w).n ds
 // (m^3/s in 3D, m^2/s in 2D), counting only the nodes in contact (contact[j, k]: node j

@@ -88,6 +88,7 @@ State<D>::State(const Grid<D>& grid, double cell_volume, const std::array<double
   v_c_.reserve(nn * D);
   v_new_.reserve(nn * D);
   node_f_.reserve(nn);
+  dep_t_.reserve(nn);
   enclosed_.reserve(nc);
   slot_.reserve(nc);
   surface_slot_.reserve(nc);
@@ -282,6 +283,7 @@ void State<D>::classify_nodes(const Options<D>& O) {
   auto node_row = node_row_.view(nn);
   nrows_ = mpmflow::classify_nodes<D>(grid_, I_.slot, ob_.static_slot, node_f_.view(nn), O.subcell,
                                       node_row, O.cell_pressure);
+  shallow_ = false;  // until shallow_nodes takes them out
   fill_rows();
   if (O.cell_pressure) {  // a solid's pressure per cell: its rows and their gradients
     const index_t nc = grid_.ncells;
@@ -313,6 +315,29 @@ index_t State<D>::renumber() {
 }
 
 template <int D>
+bool State<D>::shallow_nodes(const Options<D>& O) {
+  // unknowns too near the surface for a bounded extrapolation become interpolated nodes,
+  // decided by each node's owner from the owners' unknowns
+  const index_t nn = grid_.nnodes;
+  shallow_ = O.subcell && O.shallow > 0.0 && !O.cell_pressure;
+  if (!shallow_) return false;
+  auto node_row = node_row_.view(nn);
+  auto dep = dep_t_.view(nn);
+  demote_shallow<D>(grid_, I_.slot, I_.K, node_row, node_f_.view(nn), O.shallow, dep);
+  if (exchange_->shared()) {
+    const View<double, 2> fields[] = {dep_t_.template view<2>({nn, 1})};
+    exchange_->fill_nodes(fields, 1);
+  }
+  bool any = false;
+  for (index_t i = 0; i < nn; ++i)
+    if (dep(i) >= 0.0) {
+      node_row(i) = -1;
+      any = true;
+    }
+  return any;
+}
+
+template <int D>
 index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool correct) {
   scatter(P, O, correct);
   const bool shared = exchange_->shared();
@@ -330,8 +355,9 @@ index_t State<D>::predict(const Particles<D>& P, const Options<D>& O, bool corre
     }
   }
   classify(P, O);
-  if (shared) {  // the owners decide which nodes round the box are unknowns
+  if (shared) {  // the owners decide which nodes round the box are unknowns, then shallow
     exchange_->own_unknowns(node_row_.view(nn));
+    shallow_nodes(O);
     renumber();
   }
   return nrows_;
@@ -426,6 +452,8 @@ index_t State<D>::classify(const Particles<D>& P, const Options<D>& O) {
   cell_integrals(P, O);
   clock.lap(PHASE_INTEGRALS);
   classify_nodes(O);
+  // on ranks after the owners' unknowns (predict)
+  if (!exchange_->shared() && shallow_nodes(O)) renumber();
   clock.lap(PHASE_FREE_SURFACE);
   return nrows_;
 }
@@ -457,7 +485,7 @@ bool State<D>::pressure_matrix(const Options<D>& O) {
   scratch_.reserve(n);
   if (n == 0) return false;
   assemble_matrix<D>(grid_, I_.slot, I_.K, node_row, node_f_.view(nn), O.subcell, O.theta_min, cols,
-                     vals, anchored);
+                     vals, anchored, shallow(nn));
   for (index_t r = 0; r < n; ++r)
     if (anchored(r)) {
       if (O.pockets) anchor_pockets(O);
@@ -515,9 +543,16 @@ void State<D>::pressure_rhs(const Options<D>& O) {
 template <int D>
 void State<D>::extend_pressure(const Options<D>& O) {
   const index_t nn = grid_.nnodes;
-  if (O.subcell)
-    ghost_values<D>(grid_, I_.slot, I_.K, node_row_.view(nn), node_f_.view(nn), O.theta_min,
-                    p_node_.view(nn));
+  if (!O.subcell) return;
+  if (shallow_) {
+    shallow_values<D>(grid_, I_.slot, I_.K, node_row_.view(nn), shallow(nn), p_node_.view(nn));
+    if (exchange_->shared()) {  // the owners' at the halo: its ghosts extrapolate from them
+      const View<double, 2> p[] = {p_node_.template view<2>({nn, 1})};
+      exchange_->fill_nodes(p, 1);
+    }
+  }
+  ghost_values<D>(grid_, I_.slot, I_.K, node_row_.view(nn), node_f_.view(nn), O.theta_min,
+                  p_node_.view(nn), shallow(nn));
 }
 
 template <int D>

@@ -120,6 +120,9 @@ struct Options {
   // pockets across its parts itself
   bool pockets = true;
   double theta_min = 0.0;
+  // sub-cell surface: an unknown nearer the surface than this fraction of an edge is taken
+  // out of the unknowns and interpolated (ghost_pressure.hpp's demote_shallow); 0: none
+  double shallow = 0.0;
   double expansion = 0.0;
   double tol = 1e-8;
   index_t max_iterations = 500;
@@ -313,6 +316,11 @@ class State {
   // The phases, for a caller that owns a part of the domain (MPI) and for checks.
   // predict = scatter, then classify; returns the pressure unknowns.
   index_t predict(const Particles<D>& P, const Options<D>& O, bool correct);
+  // The sub-cell surface's shallow nodes (O.shallow; ghost_pressure.hpp's demote_shallow)
+  // taken out of node_row, the owners' decision on ranks; true when there is one (the caller
+  // numbers the rows again). Part of classify on one process, of predict on ranks (after
+  // the owners' unknowns).
+  bool shallow_nodes(const Options<D>& O);
   // The particles to the grid: binning (theta), node mass, volume, v_old and v* (and the
   // cells' volume for the volume correction when correct), v* extended into the obstacles,
   // the nodal fraction node_f.
@@ -494,6 +502,12 @@ class State {
 
   // work arrays (Buffers: grown, never shrunk)
   Buffer<index_t> cell_, start_, order_;
+  // the shallow nodes' surface fraction (-1: not one; ghost_pressure.hpp's demote_shallow)
+  Buffer<double> dep_t_;
+  bool shallow_ = false;
+  View<const double> shallow(index_t nn) {
+    return shallow_ ? View<const double>(dep_t_.view(nn)) : View<const double>();
+  }
   Buffer<double> theta_, node_mass_, node_mom_, node_vol_, v_old_, v_star_, v_c_, v_new_, node_f_;
   Buffer<bool> enclosed_;
   Buffer<index_t> slot_, surface_slot_, node_row_, rows_, partial_, listed_;

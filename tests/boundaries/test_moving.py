@@ -190,8 +190,10 @@ def test_a_piston_pushed_into_a_closed_tank_raises_the_level_by_its_displacement
     """A piston wall pushed 0.05 m into a tank of water 0.1 m deep and 0.4 m long (0.05 m/s
     for 1 s, ramped over 0.2 s), then held: the water is never inside the piston (its
     particles stay beyond its face), its volume is kept, so the level settles at
-    H L / (L - d); the pressure's force on the piston then returns to rho g H'^2 / 2
-    (within the sloshing left, 3%)."""
+    H L / (L - d); the pressure's force on the piston then returns to rho g H'^2 / 2. The
+    sloshing the push leaves swings that force by 5-7% at 2-3 s (a period of about 0.7 s),
+    so its mean over 2-3 s is compared, within 2% (measured 0.9% off with every node with
+    f > 1/2 an unknown, 0.1% with the shallow nodes interpolated)."""
     H, L, d, S = 0.1, 0.4, 0.05, 0.005
     case = _case(
         tmp_path,
@@ -199,7 +201,19 @@ def test_a_piston_pushed_into_a_closed_tank_raises_the_level_by_its_displacement
         end=3.0,
         **PISTON_TANK,
     )
-    sim, rows = _run(case, 0.1)
+    forces = []
+    sim = Simulation(case)
+    sim.add_writer(
+        lambda s: forces.append((s.time, s.scheme.core.body_force[0][0])),
+        TimeInterval(0.05),
+        name="force",
+    )
+    rows = []
+    sim.add_writer(
+        lambda s: rows.append((s.time, s.particles.x.copy(), s.particles.v.copy())),
+        TimeInterval(0.1),
+    )
+    sim.run()
     mover = sim.scheme.movers[0]
     for t, x, _v in rows:
         face = mover.path.at(t)[0][0] + 0.05
@@ -213,7 +227,9 @@ def test_a_piston_pushed_into_a_closed_tank_raises_the_level_by_its_displacement
     tops = [x[column == c, 1].max() + S / 2 for c in np.unique(column)]
     level = H * L / (L - d)
     assert abs(np.mean(tops) - level) < S / 2, (np.mean(tops), level)
-    assert sim.scheme.core.body_force[0][0] == pytest.approx(-RHO * G * level**2 / 2, rel=0.03)
+    f = np.array(forces)
+    settled = f[f[:, 0] >= 2.0 - 1e-9, 1]
+    assert settled.mean() == pytest.approx(-RHO * G * level**2 / 2, rel=0.02)
 
 
 def test_the_sampled_paths_follow_their_motions():

@@ -132,6 +132,17 @@ class Solver(Section):
         "free surface used in the ghost extrapolation (subcell only); keeps the system well "
         "conditioned when the surface passes very close to a node.",
     )
+    shallow_fraction: float = Field(
+        0.3,
+        ge=0,
+        lt=1,
+        description="Sub-cell surface only: a node with f > 1/2 nearer the free surface "
+        "than this fraction of its edge to the air is not a pressure unknown; its pressure is "
+        "interpolated between the unknowns behind it and p = 0 at the surface. This bounds the "
+        "ghost extrapolation's weights by 1/shallow_fraction - 1 (2.3 at the default 0.3; up "
+        "to 99 without) and keeps steps down to 0.05 ms from gaining energy (docs/method.md, "
+        "Energy). 0 keeps every such node an unknown (gains energy at steps below 0.25 ms).",
+    )
     volume_correction: float | None = Field(
         None,
         ge=0,

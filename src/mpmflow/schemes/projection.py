@@ -291,6 +291,7 @@ class ProjectionScheme:
             subcell=s.free_surface == "subcell",
             wall_flux=bool(s.wall_flux),
             theta_min=float(s.ghost_theta_min),
+            shallow=float(s.shallow_fraction),
             expansion=float(preset(s.density_correction, "density_correction")),
             tol=float(s.tolerance),
             max_iterations=int(s.max_iterations),

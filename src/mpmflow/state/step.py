@@ -89,6 +89,9 @@ class CoreOptions(Protocol):
     # pockets), for a caller owning part of the domain that decides them across the parts
     pockets: bool
     theta_min: float
+    # sub-cell surface: unknowns nearer the surface than this fraction of an edge are
+    # interpolated instead (src/core/ghost_pressure.hpp, demote_shallow)
+    shallow: float
     expansion: float
     tol: float
     max_iterations: int
