@@ -319,7 +319,7 @@ bool State<D>::shallow_nodes(const Options<D>& O) {
   // unknowns too near the surface for a bounded extrapolation become interpolated nodes,
   // decided by each node's owner from the owners' unknowns
   const index_t nn = grid_.nnodes;
-  shallow_ = O.subcell && O.shallow > 0.0 && !O.cell_pressure;
+  shallow_ = O.subcell && O.shallow > 0.0 && O.dt < O.shallow_max_dt && !O.cell_pressure;
   if (!shallow_) return false;
   auto node_row = node_row_.view(nn);
   auto dep = dep_t_.view(nn);

@@ -121,8 +121,10 @@ struct Options {
   bool pockets = true;
   double theta_min = 0.0;
   // sub-cell surface: an unknown nearer the surface than this fraction of an edge is taken
-  // out of the unknowns and interpolated (ghost_pressure.hpp's demote_shallow); 0: none
+  // out of the unknowns and interpolated (ghost_pressure.hpp's demote_shallow) at steps
+  // dt < shallow_max_dt (s; the adaptive step decides each step); shallow = 0: never
   double shallow = 0.0;
+  double shallow_max_dt = 0.0;
   double expansion = 0.0;
   double tol = 1e-8;
   index_t max_iterations = 500;

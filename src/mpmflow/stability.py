@@ -1,6 +1,7 @@
 """The explicit scheme's time-step limit: the sound speed sqrt(K / rho) crossing one cell;
-and the longest step the projection scheme's adaptive steps take for a solid, at which its
-shear waves sqrt(G / rho) are followed (``longest_projection_step``).
+the longest step the projection scheme's adaptive steps take for a solid, at which its
+shear waves sqrt(G / rho) are followed (``longest_projection_step``); and the fall Courant
+number, which says when a projection step is small for its grid (``fall_speed``).
 
 A signal travels at the sound speed c plus the flow speed |v|; an explicit step must not let
 it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explicit MPM).
@@ -9,12 +10,55 @@ it cross more than one cell: dt <= h / (c + |v|max) (the CFL condition of explic
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from . import materials
 
 if TYPE_CHECKING:  # the case's model imports this module
     from .case import Case
+
+
+# A step is small for its grid when water falling the whole tank crosses fewer cells than
+# this in one step (the fall Courant number C = sqrt(2 |g| H) dt / h): issue 39 measured the
+# sub-cell surface's ghost extrapolation gaining energy at C = 0.026 to 0.092 (0.004 to
+# 0.0114 m, dt = 1e-4 to 2.5e-4 s) and never at C = 0.18 and above.
+SMALL_FALL_COURANT = 0.1
+
+
+def fall_speed(gravity: Sequence[float], size: Sequence[float]) -> tuple[float, float]:
+    """(sqrt(2 |g| H) in m/s, H in m): the speed of water falling the domain's extent H
+    along gravity; (0, 0) without gravity."""
+    g = [float(x) for x in gravity]
+    gn = math.sqrt(sum(x * x for x in g))
+    if gn == 0.0:
+        return 0.0, 0.0
+    height = sum(abs(x) / gn * float(L) for x, L in zip(g, size))
+    return math.sqrt(2.0 * gn * height), height
+
+
+def small_step_limit(gravity: Sequence[float], size: Sequence[float], spacing: float) -> float:
+    """The step (s) below which a step is small for its grid (C < SMALL_FALL_COURANT); 0
+    without gravity (no step is then known to be small)."""
+    fall, _ = fall_speed(gravity, size)
+    return SMALL_FALL_COURANT * spacing / fall if fall > 0.0 else 0.0
+
+
+# solver.shallow_fraction = "auto": this fraction at steps small for the grid (issue 39)
+SHALLOW_FRACTION = 0.3
+
+
+def shallow_nodes(case: Case) -> tuple[float, float]:
+    """The sub-cell surface's shallow nodes (docs/method.md, item 3) as (fraction, longest
+    step in s they are used at): solver.shallow_fraction as given at every step, or for
+    "auto" SHALLOW_FRACTION at the steps small for the grid (small_step_limit) and none at
+    larger ones, where they would damp waves and the ghost extrapolation gains nothing."""
+    x = case.solver.shallow_fraction
+    if x != "auto":
+        return float(x), math.inf
+    return SHALLOW_FRACTION, small_step_limit(
+        case.physics.gravity, case.domain.size, case.grid.spacing
+    )
 
 
 def sound_speed(bulk_modulus: float, density: float) -> float:

@@ -100,6 +100,10 @@ def test_the_advice_names_the_step_for_the_grid():
     # settings already taken are not offered again
     taken = energy.advice(_sim(grows, [e0, e0], ["solver.free_surface=node", "solver.flip=0.9"]))
     assert "free_surface" not in taken and "flip" not in taken and "another time.dt" in taken
+    # the shallow nodes, when a run turned them off
+    assert "shallow_fraction" not in small
+    unbounded = energy.advice(_sim(grows, [e0, e0], ["solver.shallow_fraction=0"]))
+    assert "solver.shallow_fraction = 0.3 (the nodes nearest the surface" in unbounded
     outlet = energy.advice(_sim(grows, [e0, e0], ["domain.walls.y_min=outlet"]))
     assert "solver.volume_correction = 0" in outlet
     auto = energy.advice(_sim(grows, [e0, e0], ["time.dt=auto", "time.courant=0.05"]))

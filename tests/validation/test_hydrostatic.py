@@ -33,20 +33,24 @@ def test_column_at_rest_for_one_second(depth, tolerance):
     assert err < 100 * case.solver.tolerance
 
 
+@pytest.mark.parametrize("shallow", ["auto", 0.3])
 @pytest.mark.parametrize(
     "depth, ppc", [(0.1913, 4), (0.1926, 4), (0.1955, 4), (0.1987, 4), (0.2081, 4), (0.1938, 8)]
 )
-def test_subcell_surface_makes_one_step_exactly_hydrostatic(depth, ppc):
+def test_subcell_surface_makes_one_step_exactly_hydrostatic(depth, ppc, shallow):
     """For a flat surface at any height inside a cell, one projection step from rest gives
     the exact linear pressure and zero velocity (ghost-fluid extrapolation + wall term). The
-    surface lies 0.125, 0.25, 0.5, 0.75, 0.75 and 0.375 of a cell above the top node row:
-    the first two below solver.shallow_fraction (0.3), where that row is interpolated
-    between the row below and p = 0 at the surface instead of being unknowns."""
+    surface lies 0.125, 0.25, 0.5, 0.75, 0.75 and 0.375 of a cell above the top node row;
+    with solver.shallow_fraction = 0.3 the first two rows lie within it and are interpolated
+    between the row below and p = 0 at the surface instead of being unknowns ("auto" takes
+    no shallow nodes at this step of 1 ms: 0.24 cells of free fall a step)."""
     spacing = 0.01
     # fill to the nearest particle row below `depth`, then the true surface is there
     dp = spacing / ppc
     top = np.floor(depth / dp) * dp
-    case = make_case(body=((0, 0), (0.1, top)), spacing=spacing, ppc=ppc)
+    case = make_case(
+        body=((0, 0), (0.1, top)), spacing=spacing, ppc=ppc, solver={"shallow_fraction": shallow}
+    )
     grid = Grid.of_case(case)
     P = build_particles(case, grid)
     scheme = make_scheme(case, grid, P)
@@ -60,9 +64,9 @@ def test_subcell_surface_makes_one_step_exactly_hydrostatic(depth, ppc):
 
 
 def test_a_row_of_nodes_near_the_surface_is_interpolated_not_solved():
-    """A surface a quarter of a cell above a node row: with solver.shallow_fraction (default 0.3)
-    that row of 11 nodes is not among the unknowns, with 0 it is; the pressure is the same
-    linear field either way (test above)."""
+    """A surface a quarter of a cell above a node row: with solver.shallow_fraction = 0.3 that
+    row of 11 nodes is not among the unknowns, with 0 it is; the pressure is the same linear
+    field either way (test above)."""
     top = 0.1925  # a quarter of a cell above the node row at 0.19 m (particle rows 2.5 mm apart)
     rows = {}
     for shallow in (0.0, 0.3):

@@ -325,6 +325,7 @@ void bind_dim(nb::module_& m) {
       .def_rw("pockets", &O::pockets)
       .def_rw("theta_min", &O::theta_min)
       .def_rw("shallow", &O::shallow)
+      .def_rw("shallow_max_dt", &O::shallow_max_dt)
       .def_rw("expansion", &O::expansion)
       .def_rw("tol", &O::tol)
       .def_rw("max_iterations", &O::max_iterations)

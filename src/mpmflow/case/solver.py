@@ -132,16 +132,15 @@ class Solver(Section):
         "free surface used in the ghost extrapolation (subcell only); keeps the system well "
         "conditioned when the surface passes very close to a node.",
     )
-    shallow_fraction: float = Field(
-        0.3,
-        ge=0,
-        lt=1,
+    shallow_fraction: float | Literal["auto"] = Field(
+        "auto",
         description="Sub-cell surface only: a node with f > 1/2 nearer the free surface "
         "than this fraction of its edge to the air is not a pressure unknown; its pressure is "
         "interpolated between the unknowns behind it and p = 0 at the surface. This bounds the "
-        "ghost extrapolation's weights by 1/shallow_fraction - 1 (2.3 at the default 0.3; up "
-        "to 99 without) and keeps steps down to 0.05 ms from gaining energy (docs/method.md, "
-        "Energy). 0 keeps every such node an unknown (gains energy at steps below 0.25 ms).",
+        "ghost extrapolation's weights by 1/shallow_fraction - 1 (up to 99 without) and keeps "
+        "steps down to 0.05 ms from gaining energy, but damps standing waves over long runs "
+        '(docs/method.md, Energy). "auto": 0.3 at steps small for the grid (water falling '
+        "the tank crosses under 0.1 cells a step), 0 at larger ones; 0: never.",
     )
     volume_correction: float | None = Field(
         None,
@@ -263,6 +262,16 @@ class Solver(Section):
     )
 
     _from_preset: set[str] = PrivateAttr(default_factory=set)  # keys the preset gave
+
+    @model_validator(mode="after")
+    def _shallow_fraction(self) -> Self:
+        x = self.shallow_fraction
+        if x != "auto" and not 0.0 <= x < 1.0:
+            raise ValueError(
+                f'solver.shallow_fraction = {x:g} is not "auto" or a fraction of an edge from '
+                "0 (no shallow nodes) to below 1"
+            )
+        return self
 
     @model_validator(mode="wrap")
     @classmethod

@@ -23,7 +23,7 @@ from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
 from ..particles import Particles
-from ..stability import longest_projection_step
+from ..stability import longest_projection_step, shallow_nodes
 from ..state import CoreOptions, CoreReport
 from . import pressure, volume_correction
 
@@ -270,6 +270,7 @@ class ProjectionScheme:
         model, params = materials.parameters(m)
         padded = np.zeros(MODEL_PARAMETERS)
         padded[: len(params)] = params
+        shallow, shallow_max_dt = shallow_nodes(self.case)
         return state.step_options(
             self.grid.dim,
             dt=float(dt),
@@ -291,7 +292,8 @@ class ProjectionScheme:
             subcell=s.free_surface == "subcell",
             wall_flux=bool(s.wall_flux),
             theta_min=float(s.ghost_theta_min),
-            shallow=float(s.shallow_fraction),
+            shallow=shallow,
+            shallow_max_dt=shallow_max_dt,
             expansion=float(preset(s.density_correction, "density_correction")),
             tol=float(s.tolerance),
             max_iterations=int(s.max_iterations),

@@ -35,6 +35,7 @@ import numpy as np
 
 from .. import materials
 from ..boundaries import outlets
+from ..stability import SHALLOW_FRACTION, SMALL_FALL_COURANT, fall_speed, shallow_nodes
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -43,7 +44,6 @@ if TYPE_CHECKING:
 
 THRESHOLD = 0.005  # largest (E - E0) / E_floor(0) of a run without a notice
 FLOOR_SPEED = 1e-3  # m/s: the scale of a case with no gravity and no motion
-SMALL_COURANT = 0.1  # a step below this (free fall over the tank, cells a step) is small
 AXES = "xyz"
 
 
@@ -155,15 +155,26 @@ def so_far(sim: Simulation) -> str:
 def fixes(case: Case) -> str:
     """The settings, not taken already, that keep the projection step's energy gain down,
     as "A, B or C" ('' when none is left). Measured: issue 39, one setting at a time at
-    0.008 m, dt = 1e-4 s, the largest (KE + PE) / start 2.9-3.8 by default (chaotic) and
-    1.0000 with the node surface, at every step from 2 to 0.05 ms, since the walls'
-    contact is a complementarity problem (docs/method.md; before it: 15.1 and 1.04); a
+    0.008 m, dt = 1e-4 s, the largest (KE + PE) / start 2.9-3.8 with every node with
+    f > 1/2 an unknown (solver.shallow_fraction = 0; chaotic), 1.0006 with the shallow nodes
+    (0.3; at most 1.0037 at every step from 2 to 0.05 ms) and 1.0000 with the node surface, since the walls' contact is a complementarity problem (docs/method.md; before
+    it: 15.1 and 1.04); a
     column draining through an outlet in its floor (examples/hydrostatic.toml, y_min an
     outlet) gains 1% with the volume correction and nothing without: it holds the falling
     water back (half the free fall's displacement in the first 10 ms) while the velocities
     fall freely."""
     s = case.solver
     out = []
+    fraction, longest = shallow_nodes(case)
+    every_step = fraction >= SHALLOW_FRACTION and (
+        longest == math.inf or (case.time.dt != "auto" and case.time.dt < longest)
+    )
+    if s.free_surface != "node" and not every_step:
+        out.append(
+            f"solver.shallow_fraction = {SHALLOW_FRACTION:g} (the nodes nearest the surface "
+            "interpolated at every step, which bounds the ghost extrapolation; the default "
+            "takes them at steps small for the grid only)"
+        )
     if outlets.sides(case).any() and (s.volume_correction or 0.0) > 0.0:
         out.append(
             "solver.volume_correction = 0 (it holds back water that falls through an outlet)"
@@ -202,29 +213,26 @@ def advice(sim: Simulation) -> str:
     also = f", or {fix}" if fix else ""
     if case.time.dt == "auto":
         c = case.time.courant
-        if c < SMALL_COURANT:
+        if c < SMALL_FALL_COURANT:
             return (
                 f"time.courant = {c:g} takes many short steps, and the step gains a little "
                 f"energy at the free surface each time: try a larger time.courant{also}."
             )
         return f"Try {fix}." if fix else "Try another time.courant."
-    g = np.asarray(case.physics.gravity, dtype=float)
-    gn = float(np.linalg.norm(g))
-    if gn == 0.0:
+    fall, height = fall_speed(case.physics.gravity, [float(L) for L in sim.grid.size])
+    if fall == 0.0:
         return f"Try another time.dt{also}."
     h = sim.grid.spacing
-    height = float(np.abs(g / gn) @ np.asarray(sim.grid.size, dtype=float))
-    fall = math.sqrt(2.0 * gn * height)
     courant = fall * sim.dt / h
     where = (
         f"water falling the tank's {height:.3g} m ({fall:.3g} m/s) crosses {courant:.2g} "
         f"cells of {h:g} m in a step of time.dt = {sim.dt:g} s"
     )
-    if courant < SMALL_COURANT:
+    if courant < SMALL_FALL_COURANT:
         return (
             f"The step is likely too small for this grid: {where}, and the step gains a "
             "little energy at the free surface each time, so more steps gain more (issue "
-            f"39). Try a larger time.dt ({2 * SMALL_COURANT * h / fall:.2g} s or more) or "
+            f"39). Try a larger time.dt ({2 * SMALL_FALL_COURANT * h / fall:.2g} s or more) or "
             f'time.dt = "auto"{also}.'
         )
     if courant > 1.0:

@@ -90,8 +90,10 @@ class CoreOptions(Protocol):
     pockets: bool
     theta_min: float
     # sub-cell surface: unknowns nearer the surface than this fraction of an edge are
-    # interpolated instead (src/core/ghost_pressure.hpp, demote_shallow)
+    # interpolated instead (src/core/ghost_pressure.hpp, demote_shallow), at steps shorter
+    # than shallow_max_dt (s)
     shallow: float
+    shallow_max_dt: float
     expansion: float
     tol: float
     max_iterations: int
