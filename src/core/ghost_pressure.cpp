@@ -1,10 +1,33 @@
 #include "ghost_pressure.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "stencil.hpp"
 
 namespace mpmflow {
+
+namespace {
+// The coupling-weighted mean over the neighbours j of node i (stencil S, couplings S < 0)
+// that weight(j) admits (a finite value), of weight(j) p_node(j); 0 where none does.
+template <int D, int NS, class Weight>
+double coupling_mean(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix,
+                     const StencilTables<D>& t, const std::array<double, NS>& S,
+                     View<const double> p_node, Weight weight) {
+  constexpr int centre = NS / 2;
+  double num = 0.0, den = 0.0;
+  for (int s = 0; s < NS; ++s) {
+    const double sv = S[s];
+    if (s == centre || sv >= 0.0) continue;
+    const index_t j = neighbour_node<D>(g, i, ix, s, t);
+    const double w = weight(j);
+    if (!std::isfinite(w)) continue;
+    num -= sv * w * p_node(j);
+    den -= sv;
+  }
+  return den > 0.0 ? num / den : 0.0;
+}
+}  // namespace
 
 template <int D>
 void demote_shallow(const Grid<D>& g, View<const index_t> cell_slot, View<const double, 3> K,
@@ -38,7 +61,6 @@ void shallow_values(const Grid<D>& g, View<const index_t> cell_slot, View<const 
                     View<const index_t> node_row, View<const double> dep, View<double> p_node) {
   constexpr int NC = 1 << D;
   constexpr int NS = stencil_size(D);
-  constexpr int centre = NS / 2;
   const StencilTables<D> t = tables<D>(g);
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
     if (dep(i) < 0.0) return;
@@ -49,16 +71,9 @@ void shallow_values(const Grid<D>& g, View<const index_t> cell_slot, View<const 
       p_node(i) = 0.0;
       return;
     }
-    double num = 0.0, den = 0.0;
-    for (int s = 0; s < NS; ++s) {
-      const double sv = S[s];
-      if (s == centre || sv >= 0.0) continue;
-      const index_t j = neighbour_node<D>(g, i, ix, s, t);
-      if (node_row(j) < 0) continue;
-      num -= sv * p_node(j);
-      den -= sv;
-    }
-    p_node(i) = den > 0.0 ? dep(i) / (1.0 + dep(i)) * num / den : 0.0;
+    const double mean = coupling_mean<D, NS>(
+        g, i, ix, t, S, p_node, [&](index_t j) { return node_row(j) >= 0 ? 1.0 : NAN; });
+    p_node(i) = dep(i) / (1.0 + dep(i)) * mean;
   });
 }
 
@@ -68,7 +83,6 @@ void ghost_values(const Grid<D>& g, View<const index_t> cell_slot, View<const do
                   View<double> p_node, View<const double> dep) {
   constexpr int NC = 1 << D;
   constexpr int NS = stencil_size(D);
-  constexpr int centre = NS / 2;
   const StencilTables<D> t = tables<D>(g);
   const bool with_dep = dep.size() > 0;
   for_slabs<D>(g, 1, [&](index_t i, const std::array<index_t, D>& ix) {
@@ -83,16 +97,10 @@ void ghost_values(const Grid<D>& g, View<const index_t> cell_slot, View<const do
       p_node(i) = 0.0;
       return;
     }
-    double num = 0.0, den = 0.0;
-    for (int s = 0; s < NS; ++s) {
-      const double sv = S[s];
-      if (s == centre || sv >= 0.0) continue;
-      const index_t j = neighbour_node<D>(g, i, ix, s, t);
-      if (node_row(j) < 0 && !(with_dep && dep(j) >= 0.0)) continue;
-      num -= sv * ghost_factor(node_f(j), node_f(i), theta_min) * p_node(j);
-      den -= sv;
-    }
-    p_node(i) = den > 0.0 ? num / den : 0.0;
+    p_node(i) = coupling_mean<D, NS>(g, i, ix, t, S, p_node, [&](index_t j) {
+      const bool source = node_row(j) >= 0 || (with_dep && dep(j) >= 0.0);
+      return source ? ghost_factor(node_f(j), node_f(i), theta_min) : NAN;
+    });
   });
 }
 
