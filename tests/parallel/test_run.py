@@ -25,7 +25,11 @@ if mpi.COMM_WORLD.size > 1 or shutil.which("mpirun") is None:
     pytest.skip("starts mpirun itself: run on one process", allow_module_level=True)
 
 A = 0.114  # m
+# shallow_fraction = 0.3: the sub-cell surface's shallow nodes at every step (by default
+# only at small steps), decided by their owners and sent to the halo with their pressure
 SETTINGS = [
+    "--set",
+    "solver.shallow_fraction=0.3",
     "--set",
     "solver.volume_correction=0",
     "--set",

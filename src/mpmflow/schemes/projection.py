@@ -407,7 +407,9 @@ class ProjectionScheme:
         surface: the first step's classification and assembly, without the solve (its
         buffers are overwritten by the step). Lets a run refuse such a case before it
         starts instead of failing at step 1."""
-        O = self.options(1.0)  # the step size does not change which nodes are unknowns
+        # a long step: every node with f > 1/2 an unknown (a small step's shallow nodes only
+        # move the rows beside the air one node in, and a surface is found either way)
+        O = self.options(1.0)
         if O.cell_pressure:  # a solid's surface is natural: no level to refer to
             return
         n = self.core.predict(*self._particles(), O, False, **self._extra())
