@@ -157,12 +157,12 @@ def fixes(case: Case) -> str:
     as "A, B or C" ('' when none is left). Measured: issue 39, one setting at a time at
     0.008 m, dt = 1e-4 s, the largest (KE + PE) / start 2.9-3.8 with every node with
     f > 1/2 an unknown (solver.shallow_fraction = 0; chaotic), 1.0006 with the shallow nodes
-    (0.3; at most 1.0037 at every step from 2 to 0.05 ms) and 1.0000 with the node surface, since the walls' contact is a complementarity problem (docs/method.md; before
-    it: 15.1 and 1.04); a
-    column draining through an outlet in its floor (examples/hydrostatic.toml, y_min an
-    outlet) gains 1% with the volume correction and nothing without: it holds the falling
-    water back (half the free fall's displacement in the first 10 ms) while the velocities
-    fall freely."""
+    (0.3; at most 1.0037 at every step from 2 to 0.05 ms) and 1.0000 with the node surface,
+    since the walls' contact is a complementarity problem (docs/method.md; before it: 15.1
+    and 1.04); a column draining through an outlet in its floor (examples/hydrostatic.toml,
+    y_min an outlet) gains 1% with the volume correction and nothing without: it holds the
+    falling water back (half the free fall's displacement in the first 10 ms) while the
+    velocities fall freely."""
     s = case.solver
     out = []
     fraction, longest = shallow_nodes(case)
