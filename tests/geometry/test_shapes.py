@@ -366,6 +366,18 @@ def test_a_mesh_enclosing_no_volume_is_refused_without_a_library_warning(tmp_pat
             meshes.load_mesh(tmp_path / "point.stl", key="obstacles.0", shown="point.stl")
 
 
+def test_a_scale_past_the_floating_point_range_is_refused_without_a_numpy_warning(tmp_path):
+    """The input fuzz's find: a cube 1e38 file units across at scale = 1e300 printed NumPy's
+    "overflow encountered in multiply" before the refusal named the scale."""
+    (tmp_path / "big.stl").write_bytes(binary_stl(_cube_triangles() * 1e38))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any library warning fails the test
+        with pytest.raises(ValueError, match=r"obstacles.0.scale = 1e\+300 takes the coord"):
+            meshes.load_mesh(
+                tmp_path / "big.stl", scale=1e300, key="obstacles.0", shown="'big.stl'"
+            )
+
+
 def test_an_inside_out_mesh_is_turned_outwards(tmp_path):
     ico = trimesh.creation.icosphere(subdivisions=1)
     inverted = trimesh.Trimesh(ico.vertices, ico.faces[:, ::-1], process=False)

@@ -365,7 +365,8 @@ def load_mesh(
             f"{said} (neighbours list their shared edge in the same direction); fix the "
             "normals in your CAD tool or with trimesh.repair.fix_normals.",
         )
-    v = vertices * float(scale) + np.asarray(translate, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):  # checked next, named in the error
+        v = vertices * float(scale) + np.asarray(translate, dtype=float)
     _check_extent(key, shown, scale, vertices, v, faces)
     mesh = Mesh(v, faces)
     mesh.notes = [f"{key}.path = {shown}: {note}"] if note else []
@@ -389,7 +390,8 @@ def _check_extent(
             "flat or a single point, so it has no inside; export the closed surface of "
             "the solid.",
         )
-    scaled = vertices * float(scale)
+    with np.errstate(over="ignore", invalid="ignore"):
+        scaled = vertices * float(scale)
     if not (np.isfinite(scaled).all() and np.all(scaled.max(axis=0) > scaled.min(axis=0))):
         raise ValueError(
             f"{key}.scale = {scale:g} takes the coordinates of {shown} (up to "
