@@ -73,7 +73,7 @@ void shallow_values(const Grid<D>& g, View<const index_t> cell_slot, View<const 
     }
     const double mean = coupling_mean<D, NS>(
         g, i, ix, t, S, p_node, [&](index_t j) { return node_row(j) >= 0 ? 1.0 : NAN; });
-    p_node(i) = dep(i) / (1.0 + dep(i)) * mean;
+    p_node(i) = shallow_factor(dep(i)) * mean;
   });
 }
 

@@ -22,6 +22,11 @@ inline double ghost_factor(double f_i, double f_g, double theta_min) {
   return 1.0 - 1.0 / t;
 }
 
+// t / (1 + t) (dimensionless): a shallow node's pressure over its unknown neighbours' (one
+// edge further from the surface), the linear interpolation to p = 0 at the surface a
+// fraction t of an edge beyond it (demote_shallow below).
+inline double shallow_factor(double t) { return t / (1.0 + t); }
+
 // Shallow unknowns: dep(i) = t, the fraction of the edge at which the surface crosses the
 // nearest of the unknown i's edges to nodes outside (non-unknowns with less material,
 // coupling S < 0), where t < theta_c; -1 at every other node. The caller takes the shallow

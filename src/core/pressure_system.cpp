@@ -33,7 +33,7 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
           anch = true;
           if (subcell && sv < 0.0)
             S[centre] += sv * (dep.size() > 0 && dep(j) >= 0.0
-                                   ? dep(j) / (1.0 + dep(j))
+                                   ? shallow_factor(dep(j))
                                    : ghost_factor(node_f(i), node_f(j), theta_min));
           S[s] = 0.0;
         }
