@@ -8,8 +8,8 @@
 namespace mpmflow {
 
 template <int D>
-double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                      View<const double> pressure, View<double> work_m, View<double> work_mp) {
+void scatter_mass_pressure(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                           View<const double> pressure, View<double> work_m, View<double> work_mp) {
   constexpr int NC = Grid<D>::NC;
   std::array<double, NC> w;
   for (index_t i = 0; i < g.nnodes; ++i) {
@@ -26,6 +26,14 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
   }
   fold_images<D>(g, work_m);
   fold_images<D>(g, work_mp);
+}
+
+template <int D>
+double pressure_deviation(const Grid<D>& g, View<const double, 2> x, View<const double> pressure,
+                          View<const double> work_m, View<const double> work_mp) {
+  constexpr int NC = Grid<D>::NC;
+  std::array<double, NC> w;
+  const index_t n = x.extent(0);
   double total = 0.0;
   for (index_t p = 0; p < n; ++p) {
     const index_t base = g.weights_at(&x(p, 0), w.data());
@@ -36,6 +44,15 @@ double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const doub
     const double d = pressure(p) - smooth;
     total += d * d;
   }
+  return total;
+}
+
+template <int D>
+double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                      View<const double> pressure, View<double> work_m, View<double> work_mp) {
+  scatter_mass_pressure<D>(g, x, mass, pressure, work_m, work_mp);
+  const double total = pressure_deviation<D>(g, x, pressure, work_m, work_mp);
+  const index_t n = x.extent(0);
   return std::sqrt(total / static_cast<double>(n > 1 ? n : 1));
 }
 
@@ -228,6 +245,11 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
 #define MPMFLOW_TRANSFER(D)                                                                        \
   template double pressure_noise<D>(const Grid<D>&, View<const double, 2>, View<const double>,     \
                                     View<const double>, View<double>, View<double>);               \
+  template void scatter_mass_pressure<D>(const Grid<D>&, View<const double, 2>,                    \
+                                         View<const double>, View<const double>, View<double>,     \
+                                         View<double>);                                            \
+  template double pressure_deviation<D>(const Grid<D>&, View<const double, 2>, View<const double>, \
+                                        View<const double>, View<const double>);                   \
   template void particles_to_grid<D>(const Grid<D>&, View<const double, 2>, View<const double, 2>, \
                                      View<const double>, View<const double>, View<const index_t>,  \
                                      View<const index_t>, View<const double>, double,              \

@@ -359,6 +359,16 @@ template <int D>
 double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
                       View<const double> pressure, View<double> work_m, View<double> work_mp);
 
+// Its two halves, for particles held in parts (one per MPI rank): the particle-to-grid sums
+// of m_p and m_p p_p into work_m, work_mp (periodic images folded), which the parts add up;
+// then the sum over the particles of (p_p - smoothed)^2 from the whole sums.
+template <int D>
+void scatter_mass_pressure(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                           View<const double> pressure, View<double> work_m, View<double> work_mp);
+template <int D>
+double pressure_deviation(const Grid<D>& g, View<const double, 2> x, View<const double> pressure,
+                          View<const double> work_m, View<const double> work_mp);
+
 // Lumped nodal mass M_i = sum_p N_i(x_p) m_p (kg), momentum sum_p N_i m_p v_p, material
 // volume sum_p N_i V_p (m^3), velocity v_old_i = momentum / M_i and the predictor without
 // pressure v_star_i = v_old_i + dt g (eqs. 10-12) where M_i > 0 (both 0 elsewhere); with

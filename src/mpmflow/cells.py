@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,10 +27,16 @@ class CellBins:
 
 
 def bin_particles(
-    grid: Grid, particles: Particles, bins: CellBins | None = None, open_: Floats | None = None
+    grid: Grid,
+    particles: Particles,
+    bins: CellBins | None = None,
+    open_: Floats | None = None,
+    add: Callable[[Floats], Floats] | None = None,
 ) -> CellBins:
     """Bin the particles (reusing ``bins``' arrays when given) and compute theta per cell
-    (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.boundaries.obstacles``)."""
+    (over the fluid part of cells that obstacles cut: ``open_``, ``mpmflow.boundaries.obstacles``).
+    ``add``: for particles held in parts (one per MPI rank), the sum of an array over the
+    parts: theta is then the whole run's (the bins stay the part's own particles)."""
     n = particles.count
     if bins is None or bins.cell.shape[0] != n:
         bins = CellBins(
@@ -45,6 +52,8 @@ def bin_particles(
     state.cell_volume_fraction(
         bins.order, bins.start, particles.volume, grid.cell_volume, open_, bins.theta
     )
+    if add is not None:
+        bins.theta = add(bins.theta)
     if (open_ < 1.0).any():
         state.sliver_fractions(grid.cells, open_, bins.theta)
     return bins

@@ -11,6 +11,14 @@ from those the run started with is refused, naming the file.
 mpmflow draws no random numbers, so there is no random state to keep. Files are written
 atomically (and fsynced) and the latest ``KEEP`` are kept. Format 2 (format 1 carried every
 row written so far).
+
+A run over MPI ranks writes a checkpoint in pieces (no rank holds the whole run): each rank
+its own particles' arrays with their numbers in the run (``scheme.id``) into
+``checkpoint_NNNNNNNNN_rRRRR.npz``, then rank 0 the main file with the meta (``pieces``:
+how many; ``particles``: the run's count) and the arrays sized by the grid. The main file is
+written last, so a checkpoint whose main file exists has all its pieces; one whose piece is
+missing or damaged is a damaged checkpoint. ``read`` gives one process the whole run in its
+order, as a one-process checkpoint holds it, and a rank (``part``) its share of the pieces.
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ class FileHash(TypedDict):
 FORMAT = 2
 KEEP = 2
 _NAME = re.compile(r"^checkpoint_(\d{9})\.npz$")
+NUMBERS = "scheme.id"  # in a checkpoint's pieces: each particle's number in the run
 
 
 class CheckpointError(CaseError):
@@ -66,6 +75,12 @@ def path_for(folder: str | Path, step: int) -> Path:
     return Path(folder) / f"checkpoint_{step:09d}.npz"
 
 
+def piece_path(main: str | Path, rank: int) -> Path:
+    """The piece of rank ``rank`` of the checkpoint whose main file is ``main``."""
+    main = Path(main)
+    return main.with_name(f"{main.stem}_r{rank:04d}.npz")
+
+
 def checkpoints(folder: str | Path) -> list[Path]:
     """The checkpoint files in ``folder``, oldest first (by step)."""
     found = [
@@ -76,39 +91,72 @@ def checkpoints(folder: str | Path) -> list[Path]:
     return [p for _, p in sorted(found)]
 
 
+def _save(path: Path, arrays: Mapping[str, NDArray[np.generic]], **extra: object) -> None:
+    with atomic_path(path, durable=True) as tmp:
+        with open(tmp, "wb") as f:  # a file object: np.savez would append .npz to a name
+            # numpy's stub takes a **mapping's values for savez's allow_pickle (bool) too
+            np.savez(f, **extra, **arrays)  # type: ignore[arg-type]
+
+
+def write_piece(
+    folder: str | Path, step: int, rank: int, arrays: Mapping[str, NDArray[np.generic]]
+) -> Path:
+    """Write rank ``rank``'s piece of the checkpoint at ``step`` atomically (its particles'
+    arrays, with ``NUMBERS``); the main file (``write`` with ``pieces``) follows once
+    every rank's is written."""
+    path = piece_path(path_for(folder, step), rank)
+    _save(path, arrays)
+    return path
+
+
 def write(
     folder: str | Path,
     step: int,
     arrays: Mapping[str, NDArray[np.generic]],
     meta: Mapping[str, object],
 ) -> Path:
-    """Write one checkpoint atomically and delete all but the latest ``KEEP``; returns its
-    path."""
+    """Write one checkpoint atomically and delete all but the latest ``KEEP`` (with their
+    pieces); returns its path. A ``meta`` with ``pieces`` names a checkpoint in pieces,
+    which ``write_piece`` has written."""
     path = path_for(folder, step)
-    with atomic_path(path, durable=True) as tmp:
-        with open(tmp, "wb") as f:  # a file object: np.savez would append .npz to a name
-            # numpy's stub takes a **mapping's values for savez's allow_pickle (bool) too
-            np.savez(f, meta=np.array(json.dumps({"format": FORMAT, **meta})), **arrays)  # type: ignore[arg-type]
+    _save(path, arrays, meta=np.array(json.dumps({"format": FORMAT, **meta})))
     for old in checkpoints(folder)[:-KEEP]:
         old.unlink(missing_ok=True)
+        for piece in old.parent.glob(f"{old.stem}_r*.npz"):
+            piece.unlink(missing_ok=True)
     return path
 
 
-def read(path: str | Path) -> tuple[Arrays, Meta]:
-    """(arrays, meta) of a checkpoint file."""
+def _load(path: Path, main: Path) -> Arrays:
+    """The arrays of one .npz file (``main``: the checkpoint it belongs to, named when it
+    cannot be read)."""
     try:
         data = np.load(path, allow_pickle=False)
         if not hasattr(data, "files"):
             raise ValueError("not an .npz archive")
         with data:
-            meta = json.loads(str(data["meta"]))
-            arrays = {k: data[k] for k in data.files if k != "meta"}
+            return {k: data[k] for k in data.files}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         # an empty file gives EOFError, a truncated one BadZipFile (a crash before the data
         # reached the disk)
+        why = f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
         raise CheckpointError(
-            path, f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
+            main, why if path == main else f"its piece {path.name}: {why}"
         ) from None
+
+
+def read(path: str | Path, part: tuple[int, int] | None = None) -> tuple[Arrays, Meta]:
+    """(arrays, meta) of a checkpoint file. Of one in pieces: without ``part`` the whole
+    run's particles in their order (as a one-process checkpoint holds them, without
+    ``NUMBERS``); with ``part`` = (rank, ranks) the pieces rank, rank + ranks, ... joined,
+    with ``NUMBERS`` (the ranks part them again at their first split). A checkpoint of one
+    process is read whole either way."""
+    path = Path(path)
+    arrays = _load(path, path)
+    try:
+        meta = json.loads(str(arrays.pop("meta")))
+    except (KeyError, ValueError) as err:
+        raise CheckpointError(path, f"{type(err).__name__}: {err}") from None
     if not isinstance(meta, dict):
         raise CheckpointError(path, "its meta entry is not a JSON object")
     if meta.get("format") != FORMAT:
@@ -117,7 +165,31 @@ def read(path: str | Path) -> tuple[Arrays, Meta]:
             f"format {FORMAT}; start the run again with --overwrite instead of "
             "--restart."
         )
+    pieces = int(meta.get("pieces", 0))
+    if pieces:
+        ranks = range(pieces) if part is None else range(part[0], pieces, part[1])
+        loaded = [_load(piece_path(path, r), path) for r in ranks]
+        if not loaded:  # more ranks than pieces: none of the particles, in their shapes
+            loaded = [{k: a[:0] for k, a in _load(piece_path(path, 0), path).items()}]
+        joined = _joined(loaded, path)
+        if NUMBERS not in joined:
+            raise CheckpointError(path, f"its pieces lack {NUMBERS}")
+        if part is None:
+            numbers = joined.pop(NUMBERS)
+            order = np.argsort(numbers, kind="stable")
+            if not np.array_equal(numbers[order], np.arange(numbers.size)):
+                raise CheckpointError(path, "its pieces do not hold each particle once")
+            joined = {k: a[order] for k, a in joined.items()}
+        arrays.update(joined)
     return arrays, meta
+
+
+def _joined(pieces: list[Arrays], main: Path) -> Arrays:
+    """The pieces' arrays joined, row by row, in the pieces' order."""
+    names = set(pieces[0])
+    if any(set(p) != names for p in pieces):
+        raise CheckpointError(main, "its pieces hold different arrays")
+    return {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
 
 
 def latest(folder: str | Path) -> Path:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES, mpmflow_on_ranks
 
-from mpmflow import load_case
+from mpmflow import checkpoint, load_case
 from mpmflow.simulation import Simulation
 
 pytest.importorskip("petsc4py")
@@ -78,14 +78,37 @@ def test_four_ranks_follow_one_process(four):
     assert sum(r["counts"]["particles"] for r in per_rank["per_rank"]) == particles
 
 
+def test_no_rank_writes_the_whole_run_into_a_checkpoint(four):
+    """A checkpoint of 4 ranks is a main file of the grid's arrays and the meta, and one
+    piece a rank of its own particles, each particle in one piece."""
+    main = four / "checkpoint_000000200.npz"
+    with np.load(main) as data:
+        assert "x" not in data.files and "scheme.p_node" in data.files
+    meta = checkpoint.read(main)[1]
+    assert meta["pieces"] == 4
+    ids = []
+    for rank in range(4):
+        with np.load(checkpoint.piece_path(main, rank)) as piece:
+            assert 0 < piece["x"].shape[0] < meta["particles"]  # a part, not the run
+            ids.append(piece[checkpoint.NUMBERS])
+    every = np.sort(np.concatenate(ids))
+    assert np.array_equal(every, np.arange(meta["particles"]))
+    # the two checkpoints of the run (t = 0.1 s and its end), each with its pieces
+    assert sorted(p.name for p in four.glob("checkpoint_*.npz")) == [
+        f"checkpoint_000000{s}{r}.npz"
+        for s in ("100", "200")
+        for r in ("", *(f"_r000{k}" for k in range(4)))
+    ]
+
+
 def test_a_run_written_on_four_ranks_continues_on_two(four, tmp_path):
     again = tmp_path / "again"
     shutil.copytree(four, again)
     (again / "checkpoint_000000200.npz").unlink()  # continue from t = 0.1 s
     (again / "summary.json").unlink()
     mpirun(2, again, "--restart")
-    a = np.load(four / "checkpoint_000000200.npz")
-    b = np.load(again / "checkpoint_000000200.npz")
+    a = checkpoint.read(four / "checkpoint_000000200.npz")[0]
+    b = checkpoint.read(again / "checkpoint_000000200.npz")[0]
     assert np.abs(a["x"] - b["x"]).max() < 1e-8  # m
     assert np.array_equal(a["mass"], b["mass"])
     assert np.abs(series(four, "front") - series(again, "front")).max() < 1e-8

@@ -19,7 +19,7 @@ from mpmflow.simulation import Simulation
 pytest.importorskip("petsc4py")
 pytest.importorskip("mpi4py")
 
-from splitting import alone, split  # noqa: E402
+from splitting import alone, split, whole  # noqa: E402
 
 from mpmflow.parallel.comm import world  # noqa: E402
 from mpmflow.parallel.support import distributed  # noqa: E402
@@ -41,11 +41,12 @@ def test_the_dam_break_over_the_ranks_is_the_one_process_run(transfer):
     many = split(dam_break(transfer))
     a = one.scheme.advance(one.dt, 300)
     b = many.scheme.advance(many.dt, 300)
-    assert np.abs(many.particles.x - one.particles.x).max() < 1e-8  # m
-    assert np.abs(many.particles.v - one.particles.v).max() < 1e-6  # m/s
+    P, carried = whole(many)
+    assert np.abs(P.x - one.particles.x).max() < 1e-8  # m
+    assert np.abs(P.v - one.particles.v).max() < 1e-6  # m/s
     # every particle comes back once, with its own mass and volume
-    assert np.array_equal(many.particles.mass, one.particles.mass)
-    assert np.array_equal(many.particles.volume, one.particles.volume)
+    assert np.array_equal(P.mass, one.particles.mass)
+    assert np.array_equal(P.volume, one.particles.volume)
     # the walls let go where they do on one process (impact at 0.22 s)
     assert b.released == a.released > 0 and b.solves == a.solves
     assert b.unknowns == a.unknowns
@@ -55,7 +56,7 @@ def test_the_dam_break_over_the_ranks_is_the_one_process_run(transfer):
         # velocity differs more than the particles' (measured: 1.7e-3 1/s with BoomerAMG,
         # 4.7e-4 with GAMG); bound: the velocity across a cell it implies, C h, within ten
         # times the particles' 1e-6 m/s
-        assert np.abs(many.scheme.affine - one.scheme.affine).max() * 0.004 < 1e-5
+        assert np.abs(carried["affine"] - one.scheme.affine).max() * 0.004 < 1e-5
 
 
 def test_the_volume_correction_over_the_ranks_is_the_one_process_one():
@@ -69,8 +70,9 @@ def test_the_volume_correction_over_the_ranks_is_the_one_process_one():
     b = many.scheme.advance(many.dt, 300)
     assert a.unknowns == b.unknowns and a.released == b.released
     assert many.scheme.volume.iterations > 0
-    assert np.abs(many.particles.x - one.particles.x).max() < 1e-8  # m
-    assert np.array_equal(many.particles.volume, one.particles.volume)
+    P = whole(many)[0]
+    assert np.abs(P.x - one.particles.x).max() < 1e-8  # m
+    assert np.array_equal(P.volume, one.particles.volume)
 
 
 @pytest.mark.parametrize(
@@ -93,8 +95,9 @@ def test_a_viscous_material_over_the_ranks_is_the_one_process_run(example, steps
     b = many.scheme.advance(many.dt, steps)
     assert b.viscous_iterations > 0
     assert b.capped == a.capped  # the cells held at max_viscosity, each counted once
-    assert np.abs(many.particles.x - one.particles.x).max() < 1e-8  # m
-    assert np.abs(many.particles.v - one.particles.v).max() < 1e-6  # m/s
+    P = whole(many)[0]
+    assert np.abs(P.x - one.particles.x).max() < 1e-8  # m
+    assert np.abs(P.v - one.particles.v).max() < 1e-6  # m/s
 
 
 def at_rest(obstacle: bool) -> Simulation:
@@ -220,7 +223,43 @@ def test_steps_set_by_the_flow_are_the_one_process_steps():
         assert b.steps == a.steps > 10
         # dt = C h / the largest speed: the speeds agree to 1e-6 m/s at about 1 m/s
         assert (b.dt_min, b.dt_max) == pytest.approx((a.dt_min, a.dt_max), rel=1e-6)
-    assert np.abs(many.particles.x - one.particles.x).max() < 1e-8
+    assert np.abs(whole(many)[0].x - one.particles.x).max() < 1e-8
     corrected = split(Simulation(load_case(EXAMPLES / "dam_break.toml", over)))
     corrected.scheme.advance(0.01, 10)
     assert corrected.scheme.volume.iterations > 0  # the correction ran on its interval
+
+
+def test_no_rank_holds_the_whole_run_and_the_measures_are_the_whole_runs():
+    """After a run every rank holds its own particles only (each particle on one rank,
+    sorted by its number in the run), and the measures of a timeseries row, combined over
+    the ranks (diagnostics.parts), are those of the whole run gathered: the cells' fractions
+    (front, height, volume) exactly, the sums over particles to their rounding."""
+    from mpmflow.cells import bin_particles
+    from mpmflow.diagnostics.measures import front_and_height, pressure_noise, totals
+
+    over = ["time.end=0.2", "solver.volume_correction=0", "output.snapshots=false"]
+    sim = split(Simulation(load_case(EXAMPLES / "dam_break.toml", over)))
+    sim.run()
+    comm = world()
+    P, _ = whole(sim)
+    counts = comm.allgather(sim.particles.count)
+    assert sum(counts) == P.count == sim.count0
+    if comm.size > 1:
+        assert max(counts) < P.count
+    assert np.all(np.diff(sim.ids) > 0)
+    assert np.array_equal(P.x[sim.ids], sim.particles.x)
+    row = sim.measure()
+    bins = bin_particles(sim.grid, P)
+    front, height = front_and_height(sim.grid, bins.theta)
+    assert (row["front"], row["height"]) == (front, height)
+    assert row["max_particles_per_cell"] == int(np.diff(bins.start).max())
+    t = totals(P, sim.case.physics.gravity)
+    for name, value in [
+        ("kinetic_energy", t.kinetic),
+        ("potential_energy", t.potential),
+        ("max_speed", t.max_speed),
+        ("max_pressure", t.max_pressure),
+        ("pressure_noise", pressure_noise(sim.grid, P)),
+    ]:
+        assert row[name] == pytest.approx(value, rel=1e-12), name
+    assert sim.totals().fastest == t.fastest  # its number in the run

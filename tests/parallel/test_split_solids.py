@@ -25,7 +25,7 @@ from mpmflow.simulation import Simulation
 pytest.importorskip("petsc4py")
 pytest.importorskip("mpi4py")
 
-from splitting import alone, split  # noqa: E402
+from splitting import alone, split, whole  # noqa: E402
 
 from mpmflow.parallel.comm import world  # noqa: E402
 
@@ -37,7 +37,7 @@ def cut_through_the_material(sim: Simulation) -> bool:
     the bisection splits the particles)."""
     boxes = sim.scheme.boxes
     cuts = [int(c) * sim.grid.spacing for c in boxes.hi[:, 0] if c < boxes.cells[0]]
-    x = sim.particles.x[:, 0]
+    x = whole(sim)[0].x[:, 0]
     return any(x.min() < c < x.max() for c in cuts)
 
 
@@ -81,9 +81,10 @@ def test_a_collapsing_drucker_prager_column_over_the_ranks_is_the_one_process_ru
     if world().size > 1:
         assert cut_through_the_material(many)
     assert a.unknowns == b.unknowns  # the cells with material, each counted once
-    assert np.abs(many.particles.x - one.particles.x).max() < 1e-8  # m
-    assert np.abs(many.particles.v - one.particles.v).max() < 1e-6  # m/s
-    h1, hm = one.history, many.history
+    P, hm = whole(many)
+    assert np.abs(P.x - one.particles.x).max() < 1e-8  # m
+    assert np.abs(P.v - one.particles.v).max() < 1e-6  # m/s
+    h1 = one.history
     assert np.abs(hm["stress"] - h1["stress"]).max() < 1e-2  # Pa
     assert np.abs(h1["stress"]).max() > 100.0  # Pa: the column is loaded
     assert np.abs(hm["plastic_strain"] - h1["plastic_strain"]).max() < 1e-6
@@ -92,10 +93,10 @@ def test_a_collapsing_drucker_prager_column_over_the_ranks_is_the_one_process_ru
     assert np.abs(p_cell - one.scheme.core.p_cell).max() < 1e-6 * 2040.0 * G * 0.1
     # the split run's state continues on one process
     again = alone(bui())
-    again.particles.x[:] = many.particles.x
-    again.particles.v[:] = many.particles.v
-    again.particles.pressure[:] = many.particles.pressure
-    again.scheme.restore(many.scheme.state())
+    again.particles.x[:] = P.x
+    again.particles.v[:] = P.v
+    again.particles.pressure[:] = P.pressure
+    again.scheme.restore({**many.scheme.state(), **hm})
     one.scheme.advance(one.dt, 250)
     again.scheme.advance(again.dt, 250)
     assert np.abs(again.particles.x - one.particles.x).max() < 1e-8  # m
@@ -135,7 +136,7 @@ def test_a_footing_pushed_into_clay_across_the_rank_boundary_follows_one_process
     if world().size > 1:
         cuts = [int(c) * 0.125 for c in many.scheme.boxes.hi[:, 0] if c < 40]
         assert any(2.0 < c < 3.0 for c in cuts)  # under the footing
-    assert np.abs(many.particles.x - one.particles.x).max() < 1e-8  # m
+    assert np.abs(whole(many)[0].x - one.particles.x).max() < 1e-8  # m
     a, b = np.array(forces).T
     assert a.max() > 1e4  # N/m: the clay pushes the footing up
     assert np.abs(b - a).max() < 1e-3 * np.abs(a).max()

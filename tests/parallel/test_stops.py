@@ -21,7 +21,8 @@ from mpmflow.parallel.run import start  # noqa: E402
 def test_a_signal_on_the_last_rank_stops_every_rank_at_the_same_output(tmp_path):
     comm = world()
     case = load_case(EXAMPLES / "hydrostatic.toml", ["time.end=0.1", "output.snapshots=false"])
-    with start(case, tmp_path / "run", restart=False, overwrite=False, hints=API_HINTS) as sim:
+    out = comm.bcast(tmp_path / "run")  # one folder: every rank writes a checkpoint piece
+    with start(case, out, restart=False, overwrite=False, hints=API_HINTS) as sim:
 
         def signal_on_the_last_rank(sim):
             if comm.rank == comm.size - 1 and sim.time >= 0.03 - 1e-9:
@@ -32,6 +33,7 @@ def test_a_signal_on_the_last_rank_stops_every_rank_at_the_same_output(tmp_path)
     assert summary["status"] == "interrupted"
     times = comm.allgather(sim.time)
     assert times == [pytest.approx(0.03)] * comm.size
+    assert summary["last_checkpoint"] == "checkpoint_000000030.npz"  # each rank's piece in it
 
 
 def test_a_wall_budget_over_several_ranks_is_refused(tmp_path):

@@ -9,7 +9,7 @@ import pytest
 from conftest import EXAMPLES
 
 from mpmflow import Simulation, load_case
-from mpmflow.checkpoint import CheckpointError, checkpoints, read
+from mpmflow.checkpoint import CheckpointError, checkpoints, piece_path, read, write_piece
 from mpmflow.checkpoint import write as checkpoint_write
 from mpmflow.cli import main
 from mpmflow.errors import CaseError
@@ -357,3 +357,61 @@ def test_restart_refuses_a_moved_mesh(tmp_path):
     )
     with pytest.raises(CaseError, match=r"`obstacles\.0\.path`"):
         Simulation.resume(load_case(EXAMPLES / "dam_break_3d.toml", [*args, "time.end=0.04"]), out)
+
+
+def pieces_of(tmp_path, arrays, ranks):
+    """A checkpoint of ``arrays`` (the particles' and a grid array) written as ``ranks``
+    ranks write it: rank r holding the particles r, r + ranks, ... (a run over ranks
+    holds its box's, any subset)."""
+    n = arrays["x"].shape[0]
+    for r in range(ranks):
+        mine = np.arange(r, n, ranks)
+        own = {k: arrays[k][mine] for k in Particles.FIELDS}
+        own["scheme.id"] = mine
+        write_piece(tmp_path, 7, r, own)
+    meta = {"time": 0.5, "pieces": ranks, "particles": n}
+    return checkpoint_write(tmp_path, 7, {"scheme.p_node": arrays["scheme.p_node"]}, meta)
+
+
+def test_a_checkpoint_in_pieces_reads_back_whole_or_in_shares(tmp_path):
+    """One process reads a checkpoint of 3 ranks' pieces as a one-process checkpoint holds
+    the run (every particle in its order, no numbers); 2 ranks each read their share of the
+    pieces with the particles' numbers; a fourth rank of 4 reads none, in the right shapes."""
+    rng = np.random.default_rng(3)
+    n = 11
+    arrays = {
+        "x": rng.random((n, 2)),
+        "v": rng.random((n, 2)),
+        "pressure": rng.random(n),
+        "mass": rng.random(n),
+        "volume": rng.random(n),
+        "scheme.p_node": rng.random(20),
+    }
+    path = pieces_of(tmp_path, arrays, 3)
+    whole, meta = read(path)
+    assert meta["pieces"] == 3 and "scheme.id" not in whole
+    for name, a in arrays.items():
+        assert np.array_equal(whole[name], a)
+    shares = [read(path, (r, 2))[0] for r in range(2)]
+    ids = np.concatenate([s["scheme.id"] for s in shares])
+    assert np.array_equal(np.sort(ids), np.arange(n))
+    for s in shares:
+        assert np.array_equal(s["x"], arrays["x"][s["scheme.id"]])
+    none = read(path, (3, 4))[0]
+    assert none["x"].shape == (0, 2) and none["scheme.id"].size == 0
+
+
+def test_a_checkpoint_missing_a_piece_is_damaged_and_old_ones_go_with_their_pieces(tmp_path):
+    arrays = {k: np.ones((4, 2) if k in ("x", "v") else 4) for k in Particles.FIELDS}
+    arrays["scheme.p_node"] = np.zeros(3)
+    path = pieces_of(tmp_path, arrays, 2)
+    piece_path(path, 1).unlink()
+    with pytest.raises(CheckpointError, match="piece checkpoint_000000007_r0001.npz"):
+        read(path)
+    # a later checkpoint and one after it: the first (KEEP = 2) goes, pieces and all
+    for step in (8, 9):
+        checkpoint_write(tmp_path, step, {"x": np.zeros((1, 2))}, {"time": 1.0})
+    assert sorted(p.name for p in tmp_path.glob("*.npz")) == [
+        "checkpoint_000000008.npz",
+        "checkpoint_000000009.npz",
+    ]

@@ -106,6 +106,36 @@ void bind_transfer(nb::module_& m) {
       nb::arg("work_m").noconvert(), nb::arg("work_mp").noconvert(),
       "RMS of the particle pressure less its grid-smoothed value (Pa).");
   m.def(
+      "scatter_mass_pressure",
+      [](Array<const double> x, Array<const double> mass, Array<const double> pressure, double h,
+         std::vector<index_t> cells, Array<double> work_m, Array<double> work_mp) {
+        with_dim(cells.size(), [&](auto d) {
+          constexpr int D = decltype(d)::value;
+          scatter_mass_pressure<D>(
+              make_grid<D>(h, cells), view<const double, 2>(x, "x"),
+              view<const double>(mass, "mass"), view<const double>(pressure, "pressure"),
+              view<double>(work_m, "work_m"), view<double>(work_mp, "work_mp"));
+        });
+      },
+      nb::arg("x"), nb::arg("mass"), nb::arg("pressure"), nb::arg("h"), nb::arg("cells"),
+      nb::arg("work_m").noconvert(), nb::arg("work_mp").noconvert(),
+      "The nodal sums of m_p and m_p p_p (kg, kg Pa) of pressure_noise's smoothing.");
+  m.def(
+      "pressure_deviation",
+      [](Array<const double> x, Array<const double> pressure, double h, std::vector<index_t> cells,
+         Array<const double> work_m, Array<const double> work_mp) {
+        return with_dim(cells.size(), [&](auto d) {
+          constexpr int D = decltype(d)::value;
+          return pressure_deviation<D>(make_grid<D>(h, cells), view<const double, 2>(x, "x"),
+                                       view<const double>(pressure, "pressure"),
+                                       view<const double>(work_m, "work_m"),
+                                       view<const double>(work_mp, "work_mp"));
+        });
+      },
+      nb::arg("x"), nb::arg("pressure"), nb::arg("h"), nb::arg("cells"), nb::arg("work_m"),
+      nb::arg("work_mp"),
+      "The sum over the particles of (p_p - smoothed p)^2 (Pa^2) from the nodal sums.");
+  m.def(
       "strips",
       [](Array<const index_t> row_cum, index_t nstrips, index_t min_rows, Array<index_t> bounds) {
         if (row_cum.size() < 1) throw std::invalid_argument("row_cum: at least one entry");

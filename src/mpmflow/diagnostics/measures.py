@@ -8,7 +8,7 @@ position if the last cell is at least half full); ``front`` is the largest over 
 the vertical is z, and both run over every row (column) of cells across the width.
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -90,6 +90,9 @@ def totals(particles: Particles, gravity: Sequence[float]) -> state.Totals:
     return state.particle_totals(P.x, P.v, P.mass, P.pressure, gravity)
 
 
-def pressure_noise(grid: Grid, particles: Particles) -> float:
-    """RMS difference between particle pressure and its grid-smoothed value (Pa)."""
-    return state.pressure_noise(grid, particles.x, particles.mass, particles.pressure)
+def pressure_noise(
+    grid: Grid, particles: Particles, add: Callable[[Floats], Floats] | None = None
+) -> float:
+    """RMS difference between particle pressure and its grid-smoothed value (Pa); ``add``:
+    the sum over the parts of particles held in parts (``state.pressure_noise``)."""
+    return state.pressure_noise(grid, particles.x, particles.mass, particles.pressure, add=add)

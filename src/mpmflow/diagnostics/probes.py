@@ -78,6 +78,8 @@ if TYPE_CHECKING:
 Distance = Callable[[Floats], ArrayLike]
 # told of each fallback that acted (a key of fallbacks.WHAT)
 Note = Callable[[str], None]
+# the window's positions and pressures joined over the parts of particles held in parts
+Join = Callable[[Floats, Floats], tuple[Floats, Floats]]
 
 UNITS = {"pressure": "Pa", "level": "m"}
 ON_WALL = 1e-6  # a point within this share of the window from a wall lies on the wall
@@ -216,12 +218,15 @@ def pressure_at(
     solid_distance: Distance | None = None,
     note: Note | None = None,
     boxes: dict[str, tuple[Floats, Floats]] | None = None,
+    join: Join | None = None,
 ) -> float:
     """The pressure (Pa) a pressure probe reads (see the module docstring). ``note(what)``
     is told of each fallback that acted (a key of ``fallbacks.WHAT``). ``boxes``: the
     windows found so far, by probe name, kept by the caller for a run whose probes,
     grid and obstacles stand still (the window's move off a solid evaluates the obstacles'
-    distance: a fifth of the probes' time on SPHERIC Test 2)."""
+    distance: a fifth of the probes' time on SPHERIC Test 2). ``join``: for particles held
+    in parts (one per MPI rank), the window's positions and pressures joined over the parts
+    (``diagnostics.parts.joined``)."""
     note = note or (lambda what: None)
     side = window(probe, grid, case)
     if boxes is not None and probe.name in boxes:
@@ -231,9 +236,11 @@ def pressure_at(
         if boxes is not None:
             boxes[probe.name] = (lo, hi)
     idx, x = window_particles(grid, particles, bins, lo, hi)
-    if idx.size == 0:
-        return 0.0  # a dry sensor
     p = particles.pressure[idx]
+    if join is not None:  # particles in parts: the window's from every part
+        x, p = join(x, p)
+    if p.size == 0:
+        return 0.0  # a dry sensor
     if probe.estimate == "mean":
         return float(p.mean())
     value = _fit(x, p, probe.position, side, grid.dim)
@@ -332,11 +339,14 @@ def measure(
     solid_distance: Distance | None = None,
     fallbacks: Fallbacks | None = None,
     boxes: dict[str, tuple[Floats, Floats]] | None = None,
+    join: Join | None = None,
 ) -> dict[str, float]:
     """One row of probes.csv: {"time": t, name: value, ...}. ``bins``: the particles binned
     by cell (``cells.bin_particles``) at this state; ``solid_distance``: the obstacles' hook
     (module docstring); ``fallbacks``: a ``fallbacks.Fallbacks`` that counts the fallbacks
-    that acted; ``boxes``: the pressure probes' windows kept between calls (``pressure_at``)."""
+    that acted; ``boxes``: the pressure probes' windows kept between calls (``pressure_at``);
+    ``join``: as ``pressure_at`` takes it, for particles in parts (``bins`` then holds theta
+    summed over the parts)."""
     row = {"time": time}
     fields: dict[bool, Floats] = {}  # the volume fraction, clipped at 1 (first_drop) or not
     for probe in case.probes:
@@ -347,7 +357,7 @@ def measure(
 
         if probe.quantity == "pressure":
             row[probe.name] = pressure_at(
-                grid, particles, bins, probe, case, solid_distance, note, boxes
+                grid, particles, bins, probe, case, solid_distance, note, boxes, join
             )
         else:
             clip = probe.gauge == "first_drop"

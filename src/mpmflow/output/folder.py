@@ -43,10 +43,11 @@ LOCK_NAME = ".mpmflow.lock"
 OUTPUT_NAMES = ("timeseries.csv", "probes.csv", "summary.json", "particles.pvd")
 OUTPUT_PATTERNS = ("particles_*.vtu", "particles_*.pvtu", "checkpoint_*.npz")
 # a temporary file of output/atomic.py: ".<target name>.<random>.tmp" (a run over ranks
-# writes particles_NNNNNN.pvtu and one piece a rank, particles_NNNNNN_rRRRR.vtu)
+# writes particles_NNNNNN.pvtu and one piece a rank, particles_NNNNNN_rRRRR.vtu, and its
+# checkpoints in pieces, checkpoint_NNNNNNNNN_rRRRR.npz)
 _LEFTOVER = re.compile(
     r"^\.(timeseries\.csv|probes\.csv|summary\.json|particles\.pvd|"
-    r"particles_\d+(_r\d+)?\.vtu|particles_\d+\.pvtu|checkpoint_\d+\.npz)\..+\.tmp$"
+    r"particles_\d+(_r\d+)?\.vtu|particles_\d+\.pvtu|checkpoint_\d+(_r\d+)?\.npz)\..+\.tmp$"
 )
 
 

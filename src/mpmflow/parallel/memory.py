@@ -12,9 +12,8 @@ with the body's exact count spread evenly over it, and the estimate says so.
 Each rank's peak is the sum of these terms (bytes):
 
 - the program: Python, NumPy, SciPy, the core, mpi4py, and PETSc with hypre (measured);
-- the run's whole particle set, which every rank holds between steps (the particles are
-  gathered on every rank at each output time, so that measures, snapshots and checkpoints
-  are those of one process: docs/design/mpi.md), and each one's rank;
+- the case's whole particle set, which every rank seeds at the start and keeps until its
+  first split parts it (then each rank holds its own only: ``parallel.scheme``);
 - the whole grid's arrays every rank keeps (the nodal pressure, the cells' tables);
 - this rank's own particles and its halo (the neighbours' particles in its ghost layer):
   their copies in the step, the core's arrays, the migration's;
@@ -23,8 +22,9 @@ Each rank's peak is the sum of these terms (bytes):
 - the pressure system of its owned unknowns: the core's rows, PETSc's matrix and hypre's
   BoomerAMG hierarchy;
 - the time series kept in memory, as one process keeps them;
-- the largest passing need: the gather at an output time (every rank receives every
-  rank's particles), or on rank 0 writing a snapshot of all of them.
+- the measures at an output time: sums over the whole grid's cells and nodes, added up
+  over the ranks (``diagnostics.parts``); no rank gathers the particles (snapshots and
+  checkpoints are written in one piece a rank).
 
 The bytes per particle, node and unknown were measured with
 ``benchmarks/investigations/mpi/memory_ranks.py`` on the 3D dam break (0.004 and 0.003 m,
@@ -61,13 +61,14 @@ MB = memory.MB
 # examples and a 2D one 16, so the grid's share per particle differs; fitted on the dam
 # breaks' ranks (3D: 12 rank-runs, 2D: 4) with PETSc's bytes held at their measured value
 PROGRAM = 128 * MB  # Python, NumPy, SciPy, the core, mpi4py, PETSc and hypre loaded
-WHOLE_PER_PARTICLE = 8  # B per particle beside its fields: its rank (int64)
 WHOLE_PER_NODE = 24  # B per node of the whole grid: nodal pressure, the cells' tables
 LOCAL_COPIES = {2: 5.5, 3: 9.6}  # per owned or halo particle: step copies, core, migration
 LOCAL_PER_NODE = {2: 120, 3: 180}  # B per node of the local grid: core arrays, index tables
 PETSC_PER_UNKNOWN = {2: 400, 3: 1950}  # B: PETSc's AIJ and BoomerAMG, measured per rank
-GATHER_COPIES = 3.05  # per particle of the run at an output time: the gathered parts,
-# their unpickled arrays and the measures of the row (rank 0's snapshot comes after)
+# B per node at an output time: the measures' sums over the whole grid (theta on the cells,
+# the pressure noise's two nodal sums), each with the all-reduce's sent and received copies
+# (counted, not measured: 3 arrays x 2 copies x 8 B)
+MEASURES_PER_NODE = 48
 # the most cells per axis whose factors the split makes (8 B each): 10^8 is 800 MB
 MAX_CELLS_PER_AXIS = 10**7
 
@@ -251,9 +252,9 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
     apic = case.solver.transfer == "apic"
     fields = particle_fields(D, apic, is_solid(case.material))
     ghost = ghost_layers(any(m is not None for m in moving.motions(case)))
-    whole = (fields + WHOLE_PER_PARTICLE) * N
+    seeded_whole = fields * N
     grid_whole = WHOLE_PER_NODE * nodes
-    gather = GATHER_COPIES * fields * N
+    measures = MEASURES_PER_NODE * nodes
     local = LOCAL_COPIES[D] * fields
     per_rank = []
     for r in range(ranks):
@@ -269,14 +270,14 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
         unknowns = min(owned_nodes, memory.SPREAD * seeded)
         terms = {
             "program": float(PROGRAM),
-            "the run's particles (every rank)": whole,
+            "the case seeded whole (until the first split)": seeded_whole,
             "the whole grid's arrays": grid_whole,
             "own particles": local * own,
             "halo": local * halo,
             "local grid (box and ghost layer)": LOCAL_PER_NODE[D] * local_nodes,
             "pressure system (PETSc, hypre)": PETSC_PER_UNKNOWN[D] * unknowns,
             "time series": float(one.rows_bytes),
-            "the gather at an output time": gather,
+            "the measures at an output time": measures,
         }
         per_rank.append(RankEstimate(r, own, halo, local_nodes, unknowns, terms))
     return RanksEstimate(ranks, N, nodes, boxes, per_rank, why, min(ranks_here(), ranks))
@@ -298,8 +299,8 @@ def check(case: Case, ranks: int) -> RanksEstimate:
         f"This case needs {big.text()} on its largest rank ({big.rank} of {ranks}); the "
         f"{est.here} ranks on this machine need {memory.size(need)}, and it can give "
         f"{memory.size(budget)} ({source}), so they would be killed by the system when it "
-        f"runs out. Every rank holds the run's whole particle set, so more ranks on one "
-        f"machine need more, not less: make the case smaller (grid.spacing: memory grows "
+        f"runs out. Every rank seeds the case's whole particle set at the start, so more "
+        f"ranks on one machine need more, not less: make the case smaller (grid.spacing: memory grows "
         f"as its inverse {power}; bodies.N.particles_per_cell), start fewer ranks on each "
         "machine, or run on machines with more memory. `mpmflow run CASE --dry-run --ranks "
         "N` prints each rank's estimate without running. (MPMFLOW_MEMORY_LIMIT sets the "

@@ -1,11 +1,13 @@
 """A run started by ``mpirun -n N mpmflow run CASE``: one Simulation per rank, stepping the
 case together (``parallel.scheme``), rank 0 alone writing the run's folder.
 
-Every rank builds the same case and, between chunks, holds the same particles (gathered at
-the output times), so the Simulation's loop, measures and decisions agree on every rank;
-the other ranks run it without an output folder. A restart reads the checkpoint rank 0
-names (the folder's latest) on every rank: a checkpoint of a run on any number of ranks,
-or of one process, continues on any other number.
+Every rank builds the same case and holds its own part of the particles
+(``parallel.scheme``); the Simulation's measures combine the parts (``diagnostics.parts``),
+so its loop and decisions agree on every rank. The other ranks run it without an output
+folder, but write their pieces of the snapshots and checkpoints into it. A restart reads
+the checkpoint rank 0 names (the folder's latest) on every rank, each its share of the
+pieces: a checkpoint of a run on any number of ranks, or of one process, continues on any
+other number.
 """
 
 from __future__ import annotations
@@ -59,6 +61,7 @@ def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -
     assert sim is not None
     agree_on_stops(sim, comm)
     snapshots_in_pieces(sim, comm, out)
+    sim.checkpoint_dir = out  # every rank writes its piece of each checkpoint
     return sim
 
 

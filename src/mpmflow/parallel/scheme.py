@@ -18,11 +18,17 @@ and solves its systems with PETSc over the ranks (``pressure``, ``viscous``, ``v
    owned particles; then each particle goes to the rank that owns its new cell. The
    adaptive step's size comes from the largest speed over the ranks.
 
-Between chunks (at the output times) every rank holds the whole particle set and nodal
-pressure, gathered in the particles' original order: the Simulation's measures, probes,
-outputs and checkpoints see what a one-process run sees, and a checkpoint restarts on any
-number of ranks. The boxes are split again at a chunk's start when the particles per rank
-fall below ``BALANCE`` of their mean.
+No rank holds the whole run (issue 42, item 3). The case is seeded whole on every rank;
+the first split (``parted``: the first measure or chunk) keeps each rank's own particles,
+and from then on a rank holds its box's particles only, with their numbers in the run
+(``ids``), sorted by them: ``particles`` is this rank's part. The Simulation's measures
+combine the parts (``diagnostics.parts``); snapshots and checkpoints are written in one
+piece a rank (``parallel.snapshots``, ``simulation.checkpointer``), and a checkpoint
+restarts on any number of ranks or on one process. What every rank does hold whole is
+sized by the grid, not the particles: the nodal pressure and the cells' values a re-split
+starts from. The boxes are split again at a chunk's start when the particles per rank fall
+below ``BALANCE`` of the most loaded rank's; the particles then go to their new ranks in
+one all-to-all.
 """
 
 from __future__ import annotations
@@ -36,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import materials, state
-from ..arrays import Floats
+from ..arrays import Floats, Ints
 from ..boundaries import inlets, moving, obstacles, outlets, walls
 from ..errors import SolverError
 from ..grid import Grid
@@ -127,20 +133,58 @@ class DistributedProjection(ProjectionScheme):
         self._where: Callable[[int], str] = lambda k: ""  # the chunk's names of its steps
         self.particles = particles
 
-    # the particles: every rank holds them all between chunks
+    # the particles: the whole run's on every rank until parted, then each rank's own
     @property
     def particles(self) -> Particles:
         return self._P
 
     @particles.setter
     def particles(self, P: Particles) -> None:
-        """The whole particle set; with APIC also their affine matrices, a solid's stress
-        history (zero, as the one-process scheme starts them)."""
+        """The whole particle set (every rank's the same, as seeded); with APIC also their
+        affine matrices, a solid's stress history (zero, as the one-process scheme starts
+        them). Parted at the first split."""
         self._P = P
         D = self.grid.dim
         self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
         self.history = solid_history(P.count, D) if self.solid else {}
         self.fields = FIELDS + (("affine",) if self.apic else ()) + tuple(self.history)
+        # the numbers in the run of this rank's particles (None: the whole run, in order)
+        self.ids: Ints | None = None
+        self.total = P.count  # the whole run's particles (no inlets or outlets on ranks)
+        self.boxes = None  # a new set: split again (``restore`` may number it as a part)
+
+    def parted(self) -> Comm:
+        """The ranks, with the particles parted among them (each rank's own in
+        ``particles``, their numbers in ``ids``); collective."""
+        if self.boxes is None:
+            self._split()
+        return self.comm
+
+    def _keep(self, owned: ParticleArrays) -> None:
+        """This rank's particles from now on (``owned``: each field's rows and their
+        numbers ``id``), sorted by number. The arrays of ``particles`` are replaced in its
+        object, so that every holder (the Simulation) sees the part."""
+        order = np.argsort(owned["id"], kind="stable")
+        for f in Particles.FIELDS:
+            setattr(self._P, f, owned[f][order])
+        if self.affine is not None:
+            self.affine = owned["affine"][order]
+        for name in self.history:
+            self.history[name] = owned[name][order]
+        self.ids = owned["id"][order]
+
+    def gathered(self) -> tuple[Particles, dict[str, NDArray[Any]]]:
+        """The whole run's particles and a solid's history (with APIC also ``affine``) in
+        the run's order, on every rank: one all-gather of every particle, for tests and
+        small runs' checks; a run never calls it. Collective."""
+        self.parted()
+        owned = self._distribute()
+        parts = self.comm.allgather(owned)
+        ids = np.concatenate([p["id"] for p in parts])
+        order = np.argsort(ids, kind="stable")
+        whole = {f: np.concatenate([p[f] for p in parts])[order] for f in self.fields}
+        P = Particles(*(whole.pop(f) for f in Particles.FIELDS))
+        return P, whole
 
     def _whole(self, field: str) -> NDArray[Any]:
         """The whole set's array of a field (the particles', the affine matrices or a
@@ -167,13 +211,18 @@ class DistributedProjection(ProjectionScheme):
     # --- the split and the local state ---------------------------------------------------
     def _split(self) -> None:
         """Split the grid into boxes on the particles' places (again when the load is
-        uneven), and build this rank's local grid, tables and compiled state."""
+        uneven), build this rank's local grid, tables and compiled state, and send each
+        particle to the rank that owns its cell. Collective."""
         g = self.grid
         if self.boxes is not None:
-            self._owners()
+            loads = self.comm.allgather(self._P.count)
+            self.balance = float(min(loads) / max(max(loads), 1))
             if self.balance >= BALANCE:
                 return
-        boxes = bisect(cell_weights(self._P.x, g.spacing, g.cells), self.comm.size)
+        weights = cell_weights(self._P.x, g.spacing, g.cells)
+        if self.ids is not None:  # parted: the particles of every part
+            weights = self.comm.allreduce(weights)
+        boxes = bisect(weights, self.comm.size)
         self.boxes = replace(boxes, ghost=ghost_layers(bool(self.movers)))
         self.splits += 1
         sub = subgrid(g, self.boxes, self.comm.rank)
@@ -229,39 +278,48 @@ class DistributedProjection(ProjectionScheme):
             volume=self.volume if self.corrects else None,
             viscous=self.viscous_solve if self.viscous else None,
         )
-        self._owners()
+        self._part(self.boxes.owner_of_points(self._P.x, g.spacing))
+
+    def _part(self, owner: Ints) -> None:
+        """Each particle to its rank (``owner``) under a new split: from the whole run
+        every rank holds at the start, its own; from the parts, in one all-to-all."""
+        comm = self.comm
+        if self.ids is None:
+            mine = np.flatnonzero(owner == comm.rank)
+            kept = {f: self._whole(f)[mine] for f in self.fields}
+            kept["id"] = mine.astype(np.int64)
+        else:
+            arrays = self._distribute()
+            parts = comm.alltoall(
+                [{f: a[owner == r] for f, a in arrays.items()} for r in range(comm.size)]
+            )
+            kept = {f: np.concatenate([p[f] for p in parts]) for f in arrays}
+        self._keep(kept)
+        loads = comm.allgather(self._P.count)
+        self.balance = float(min(loads) / max(max(loads), 1))
 
     def _step_name(self) -> str:
         """The step in progress, as the chunk names it in messages."""
         return self._where(max(self.exchange.step - 1, 0))
 
-    def _owners(self) -> None:
-        """Each particle's rank under the current boxes, and the balance they give."""
-        assert self.boxes is not None
-        self._owner = self.boxes.owner_of_points(self._P.x, self.grid.spacing)
-        load = np.bincount(self._owner, minlength=self.comm.size)
-        self.balance = float(load.min() / max(load.max(), 1))
-
     def _distribute(self) -> ParticleArrays:
-        """This rank's particles (global coordinates) with their numbers (``_split`` has
-        just found each one's rank)."""
-        mine = np.flatnonzero(self._owner == self.comm.rank)
-        owned = {f: self._whole(f)[mine].copy() for f in self.fields}
-        owned["id"] = mine.astype(np.int64)
+        """This rank's particles (global coordinates) with their numbers, as the exchange
+        takes them (the part's own arrays)."""
+        assert self.ids is not None
+        owned = {f: self._whole(f) for f in self.fields}
+        owned["id"] = self.ids
         return owned
 
     def _gather(self, owned: ParticleArrays) -> None:
-        """Every rank's particles back into the whole set, in their original order, and
-        the nodal pressure of the owned nodes into the whole grid's."""
-        parts = self.comm.allgather(owned)
-        ids = np.concatenate([p["id"] for p in parts])
-        if ids.size != self._P.count or np.unique(ids).size != ids.size:
+        """This rank's particles after a chunk (the exchange's), and the nodal pressure of
+        the owned nodes into the whole grid's (and the cells' values a chunk starts from)."""
+        self._keep(owned)
+        total = self.comm.allreduce(int(self._P.count))
+        if total != self.total:
             raise SolverError(
-                f"Particles were lost or doubled between ranks: {ids.size} gathered, "
-                f"{self._P.count} in the run."
+                f"Particles were lost or doubled between ranks: {total} on the ranks, "
+                f"{self.total} in the run."
             )
-        for f in self.fields:
-            self._whole(f)[ids] = np.concatenate([p[f] for p in parts])
         sub = self.sub
         mine = sub.owned_nodes
         pieces = self.comm.allgather((sub.node_global[mine], self.core.p_node[mine]))
@@ -278,11 +336,11 @@ class DistributedProjection(ProjectionScheme):
                 for index, values in self.comm.allgather((sub.cell_global[cells], local[cells])):
                     whole[index] = values
 
-    def _report(self, owned: ParticleArrays) -> None:
+    def _report(self) -> None:
         """The load of each rank (summary.json's "mpi"): particles now, unknowns of the
         last step, seconds in steps and in PETSc so far; balance = least / most particles."""
         mine = (
-            int(owned["id"].size),
+            self._P.count,
             int(self.pressure.last_owned),
             self.step_seconds,
             self.pressure.seconds,
@@ -340,9 +398,8 @@ class DistributedProjection(ProjectionScheme):
                 done = core.advance(*arrays, O, self.steps + 1, nsteps, report)
         finally:
             self.step_seconds += time.perf_counter() - clock
-            self._owned = self.exchange.owned
-            self._gather(self._owned)
-            self._report(self._owned)
+            self._gather(self.exchange.owned)
+            self._report()
         self.since_volume = float(core.since_volume)
         self.steps += done
         self.time += covered if self.auto else done * dt
@@ -372,14 +429,9 @@ class DistributedProjection(ProjectionScheme):
 
     def owned_particles(self) -> ParticleArrays:
         """This rank's own particles (global coordinates, with their numbers ``id``, in
-        their order in the run) between chunks: those of the last chunk's end, or before
-        the first chunk those of the split's boxes (``parallel.snapshots``)."""
-        owned = getattr(self, "_owned", None)
-        if owned is None:
-            self._split()
-            owned = self._distribute()
-        order = np.argsort(owned["id"], kind="stable")
-        return {f: a[order] for f, a in owned.items()}
+        their order in the run) between chunks (``parallel.snapshots``); collective."""
+        self.parted()
+        return self._distribute()
 
     def check_free_surface(self) -> None:
         """As ``ProjectionScheme.check_free_surface``, over the ranks."""
@@ -400,8 +452,8 @@ class DistributedProjection(ProjectionScheme):
             raise pressure.singular(" at the start")
 
     def state(self) -> dict[str, NDArray[Any]]:
-        """As ``ProjectionScheme.state``: a checkpoint of the whole run, readable by one
-        process or any number of ranks."""
+        """As ``ProjectionScheme.state``, less the particles' own arrays
+        (``particle_state``): what rank 0 writes into a checkpoint's main file."""
         saved = {
             "time": np.array(self.time),
             "p_node": self.p_global.copy(),
@@ -414,10 +466,18 @@ class DistributedProjection(ProjectionScheme):
             saved["volume_q"] = self.q_global.copy()
         if self.pc_global.size:
             saved["p_cell"] = self.pc_global.copy()
+        return saved
+
+    def particle_state(self) -> dict[str, NDArray[Any]]:
+        """This rank's part of the scheme's state carried by the particles: their numbers
+        in the run (``id``), with APIC the affine matrices, a solid's history (one piece of
+        a checkpoint). Collective (the particles are parted first)."""
+        self.parted()
+        assert self.ids is not None
+        saved: dict[str, NDArray[Any]] = {"id": self.ids}
         if self.affine is not None:
-            saved["affine"] = self.affine.copy()
-        for name, a in self.history.items():
-            saved[name] = a.copy()
+            saved["affine"] = self.affine
+        saved.update(self.history)
         return saved
 
     def restore(self, saved: dict[str, NDArray[Any]]) -> None:
@@ -431,9 +491,14 @@ class DistributedProjection(ProjectionScheme):
         if "since_volume" in saved:
             self.since_volume = float(saved["since_volume"])
             self.dt_range = [float(t) for t in saved["dt_range"]]
-        if self.affine is not None:
-            np.copyto(self.affine, saved["affine"])
         if self.pc_global.size and "p_cell" in saved:
             np.copyto(self.pc_global, saved["p_cell"])
+        # the particles' own: this rank's part of a checkpoint in pieces (with their
+        # numbers), or the whole run (every rank's the same, parted at the first split)
+        if "id" in saved:
+            self.ids = np.asarray(saved["id"], dtype=np.int64)
+            self.total = int(self.comm.allreduce(int(self.ids.size)))
+        if self.affine is not None:
+            np.copyto(self.affine, saved["affine"])
         for name, a in self.history.items():
             np.copyto(a, saved[name])  # KeyError: a checkpoint of a fluid continued as a solid

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from ..diagnostics import parts
 from ..errors import CaseError, SimulationError
 from ..interrupts import StopNow
 from . import energy
@@ -79,8 +80,7 @@ def blow_up_guard(sim: Simulation) -> None:
         if n > 1
         else f" at step {first} (t = {t0 + dt:.6g} s)"
     )
-    P = sim.particles
-    if P.count == 0:
+    if sim.particle_count() == 0:
         return
     t = sim.totals()
     if t.nonfinite:
@@ -93,7 +93,8 @@ def blow_up_guard(sim: Simulation) -> None:
     fastest = t.fastest
     limit = sim.case.solver.max_speed
     if not t.max_speed <= limit:
-        xy = ", ".join(f"{c:.4g}" for c in P.x[fastest])
+        where = parts.position(sim.comm, sim.ids, sim.particles.x, fastest)
+        xy = ", ".join(f"{c:.4g}" for c in where)
         raise SimulationError(
             f"The run blew up{span}: particle {fastest} at ({xy}) m moves at "
             f"{t.max_speed:.4g} m/s, above solver.max_speed = {limit:g} m/s. The outputs "
@@ -105,7 +106,7 @@ def blow_up_guard(sim: Simulation) -> None:
 def drained(sim: Simulation) -> None:
     """Every particle has left through the outlets: the run ends here, completed, with a
     notice (nothing is left to step; no checkpoint: nothing to continue)."""
-    if sim.particles.count == 0 and sim.stopping is None:
+    if sim.particle_count() == 0 and sim.stopping is None:
         message = (
             f"every particle left through the outlets by t = {sim.time:.6g} s (step "
             f"{sim.steps}): the run ends there"
@@ -140,7 +141,7 @@ def stop_on_signal(sim: Simulation) -> None:
         f"interrupted by {signal.Signals(sim.stop_signal).name} at "
         f"t = {sim.time:.6g} s (step {sim.steps}); "
     )
-    if sim.out_dir is not None:
+    if sim.checkpoint_dir is not None:  # over ranks: on every rank, each writes its piece
         path = sim.checkpoint()
         message += f"checkpoint {path.name} written"
     else:

@@ -27,6 +27,7 @@ from ..fallbacks import Fallbacks
 from ..particles import Particles
 
 if TYPE_CHECKING:
+    from ..parallel.comm import Comm
     from .loop import Simulation
 
 # Simulation's progress callable(t, step, end)
@@ -54,14 +55,54 @@ class Checkpointer:
     """The periodic checkpoints (not at time.end: the end of the run writes its own)."""
 
     def __call__(self, sim: Simulation) -> None:
-        if sim.out_dir is not None and sim.time < sim.case.time.end:
+        if sim.checkpoint_dir is not None and sim.time < sim.case.time.end:
             write(sim)
 
 
 def write(sim: Simulation) -> Path:
-    """Write a checkpoint of the current state of ``sim`` (after its outputs)."""
-    arrays = {name: getattr(sim.particles, name) for name in Particles.FIELDS}
-    arrays.update({f"scheme.{k}": v for k, v in sim.scheme.state().items()})
+    """Write a checkpoint of the current state of ``sim`` (after its outputs). Over MPI
+    ranks (a scheme with ``particle_state``) every rank calls it: each writes its piece of
+    the particles, then rank 0 the main file (``mpmflow.checkpoint``); a rank's failure to
+    write is every rank's OSError."""
+    folder = sim.checkpoint_dir
+    if folder is None:  # (the TypeError that Path(None) gave, with its reason)
+        raise TypeError("a checkpoint needs an output folder: the Simulation has no out_dir")
+    particles = {name: getattr(sim.particles, name) for name in Particles.FIELDS}
+    arrays = {f"scheme.{k}": v for k, v in sim.scheme.state().items()}
+    in_pieces = getattr(sim.scheme, "particle_state", None)
+    if in_pieces is None:
+        sim.last_checkpoint = checkpoint.write(
+            folder, sim.steps, {**particles, **arrays}, meta(sim)
+        )
+        return sim.last_checkpoint
+    comm = sim.comm
+    own = {**particles, **{f"scheme.{k}": v for k, v in in_pieces().items()}}
+    count = sim.particle_count()
+    agreed(comm, lambda: checkpoint.write_piece(folder, sim.steps, comm.rank, own))
+    whole = {**meta(sim), "pieces": comm.size, "particles": count}
+    # the main file once every piece is written (the agreement above waits for them)
+    agreed(
+        comm, lambda: checkpoint.write(folder, sim.steps, arrays, whole) if comm.rank == 0 else None
+    )
+    sim.last_checkpoint = checkpoint.path_for(folder, sim.steps)
+    return sim.last_checkpoint
+
+
+def agreed(comm: Comm, work: Callable[[], object]) -> None:
+    """``work()`` on this rank, then an OSError on every rank when any rank's failed."""
+    error = None
+    try:
+        work()
+    except OSError as err:
+        error = f"{err}"
+    failed = [e for e in comm.allgather(error) if e is not None]
+    if failed:
+        raise OSError(failed[0])
+
+
+def meta(sim: Simulation) -> dict[str, object]:
+    """A checkpoint's meta: the run's time, schedules, counters and outputs' positions (its
+    writers' files fsynced first)."""
     for action in sim.actions:
         if action.writer and hasattr(action.func, "sync"):
             action.func.sync()
@@ -88,10 +129,7 @@ def write(sim: Simulation) -> Path:
     added = {a.name: a.schedule.state() for a in sim.actions if not a.builtin}
     if added:  # only then: the meta of a run without them is as before
         meta["schedules"] = added
-    if sim.out_dir is None:  # (the TypeError that Path(None) gave, with its reason)
-        raise TypeError("a checkpoint needs an output folder: the Simulation has no out_dir")
-    sim.last_checkpoint = checkpoint.write(sim.out_dir, sim.steps, arrays, meta)
-    return sim.last_checkpoint
+    return meta
 
 
 def resume_latest(
@@ -126,8 +164,12 @@ def resume_from(
     cls: type[Simulation], case: Case, out_dir: str | Path, path: str | Path, progress: Progress
 ) -> Simulation:
     """The run of ``out_dir`` continued from the checkpoint ``path``: a new ``cls`` (a
-    Simulation) with the checkpoint's particles, scheme state, counters and schedules."""
-    arrays, meta = checkpoint.read(path)
+    Simulation) with the checkpoint's particles, scheme state, counters and schedules. Under
+    mpirun each rank reads its share of a checkpoint in pieces (``checkpoint.read``)."""
+    from ..parallel.comm import launched_rank, launched_size
+
+    ranks = launched_size()
+    arrays, meta = checkpoint.read(path, (launched_rank(), ranks) if ranks > 1 else None)
     missing = [f"meta {k}" for k in META if k not in meta]
     missing += [f"array {k}" for k in Particles.FIELDS if k not in arrays]
     if missing:
@@ -143,11 +185,12 @@ def resume_from(
         )
     sim = cls(case, out_dir, progress)
     P = sim.particles
-    count = P.count
+    count = getattr(sim.scheme, "total", P.count)  # over ranks: the whole run's
     # with outlets (domain.walls = "outlet") the particles that left are not in it; with
-    # inlets ([[inlets]]) those that entered are
+    # inlets ([[inlets]]) those that entered are; a rank's share of pieces: some of them
     fewer = bool(outlets.sides(case).any()) and arrays["x"].shape[0] <= count
-    other = fewer or bool(case.inlets)
+    share = checkpoint.NUMBERS in arrays and meta.get("particles") == count
+    other = fewer or bool(case.inlets) or share
     for name in Particles.FIELDS:
         saved = arrays[name]
         if saved.shape[1:] != getattr(P, name).shape[1:] or not (saved.shape[0] == count or other):
@@ -159,7 +202,7 @@ def resume_from(
             np.copyto(getattr(P, name), saved)
         else:
             setattr(P, name, np.array(saved))
-    if P.count != count:
+    if P.count != count or share:
         sim.scheme.particles = P  # the scheme's arrays of the particles follow (APIC, outlets)
     try:
         sim.scheme.restore(

@@ -32,6 +32,7 @@ from threadpoolctl import threadpool_limits
 from .. import checkpoint
 from ..case import Case, revalidate
 from ..cells import CellBins, bin_particles
+from ..diagnostics import parts
 from ..diagnostics.measures import front_and_height, pressure_noise, totals, volume_measures
 from ..errors import SimulationError
 from ..fallbacks import Fallbacks
@@ -47,6 +48,8 @@ from .schedules import IterationInterval, Schedule, TimeInterval, WallTimeInterv
 from .summary import summary as _summary
 
 if TYPE_CHECKING:
+    from ..arrays import Floats, Ints
+    from ..parallel.comm import Comm
     from ..state import Totals
 
 
@@ -73,6 +76,9 @@ class Simulation:
         self.particles, self.scheme, self.notices = made.particles, made.scheme, made.notices
         self.dt = made.dt
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        # where checkpoints go: the output folder; over MPI ranks, on every rank (each
+        # writes its piece; parallel.run), where only rank 0 writes the other outputs
+        self.checkpoint_dir = self.out_dir
         self.overwrite = bool(overwrite)
         self.progress = progress
         # optional callable(sim), called after each output row
@@ -81,9 +87,10 @@ class Simulation:
         self.steps = 0
         self.counters = Counters()
         self.fallbacks = Fallbacks()  # the caps and fallbacks that acted
-        self.mass0 = float(self.particles.mass.sum())
-        self.volume0 = float(self.particles.volume.sum())
-        self.count0 = self.particles.count
+        # the whole run's (over ranks, the scheme has parted the particles by now)
+        self.mass0 = self.particle_sum("mass")
+        self.volume0 = self.particle_sum("volume")
+        self.count0 = self.particle_count()
         self.threads: ThreadGovernor | None = None  # while a run goes
         self.last_checkpoint: Path | None = None
         self.resumed_from: Path | None = None  # the checkpoint this run continues, if any
@@ -351,7 +358,7 @@ class Simulation:
         P, g = self.particles, self.grid
         # every particle left through the outlets: no largest value (nan)
         if bins is None:
-            bins, t = self._bins(), totals(P, self.case.physics.gravity)
+            bins, t = self._bins(), self._measure_totals()
         else:
             t = self.totals()
         front, height = front_and_height(g, bins.theta)
@@ -364,9 +371,9 @@ class Simulation:
             "potential_energy": t.potential,
             "max_speed": t.max_speed,
             "max_pressure": t.max_pressure,
-            "pressure_noise": pressure_noise(g, P),
+            "pressure_noise": pressure_noise(g, P, self._add()),
             **volume_measures(bins.theta, g.cell_volume, self.volume0, self._open()),
-            "max_particles_per_cell": int(np.diff(bins.start).max()),
+            "max_particles_per_cell": self.most_per_cell(bins),
             "pressure_unknowns": int(self.scheme.last_unknowns),
             "solver_iterations": int(self.counters.iterations_since_output),
         }
@@ -377,8 +384,47 @@ class Simulation:
         return solids.open if solids is not None and solids.present else None
 
     def _bins(self) -> CellBins:
-        """Particles binned by cell, theta over the cells' fluid part."""
-        return bin_particles(self.grid, self.particles, open_=self._open())
+        """Particles binned by cell, theta over the cells' fluid part (the whole run's:
+        with the particles in parts, summed over them)."""
+        return bin_particles(self.grid, self.particles, open_=self._open(), add=self._add())
+
+    # ------------------------------------------------------------------ particles in parts
+    @property
+    def comm(self) -> Comm:
+        """The ranks that hold this run's particles in parts, one part each (a run over MPI
+        ranks: ``sim.particles`` is this rank's part); one process otherwise. The measures
+        combine the parts (``diagnostics.parts``). Collective on the first call of a run
+        over ranks (the scheme parts its particles then)."""
+        parted: Callable[[], Comm] | None = getattr(self.scheme, "parted", None)
+        return parted() if parted is not None else parts.ALONE
+
+    @property
+    def ids(self) -> Ints | None:
+        """The numbers in the run of ``particles`` when they are one part of several (None:
+        the whole run, in its order)."""
+        ids: Ints | None = getattr(self.scheme, "ids", None)
+        return ids
+
+    def _add(self) -> Callable[[Floats], Floats] | None:
+        """The sum of an array over the parts (None: one part, nothing to add)."""
+        comm = self.comm
+        return None if comm.size == 1 else partial(parts.add, comm)
+
+    def particle_count(self) -> int:
+        """The particles of the whole run (collective over ranks)."""
+        return parts.count(self.comm, self.particles.count)
+
+    def particle_sum(self, field: str) -> float:
+        """The sum of a particle field (``mass``, kg; ``volume``, m^3) over the whole run."""
+        mine = float(getattr(self.particles, field).sum())
+        return float(parts.add(self.comm, np.array([mine]))[0]) if self.comm.size > 1 else mine
+
+    def most_per_cell(self, bins: CellBins) -> int:
+        """The largest number of particles in one cell (a cell's are all in one part)."""
+        return int(parts.largest(self.comm, float(np.diff(bins.start).max())))
+
+    def _measure_totals(self) -> Totals:
+        return parts.totals(self.comm, totals(self.particles, self.case.physics.gravity), self.ids)
 
     def binned(self) -> CellBins:
         """The particles binned by cell at this output time, shared by the writers."""
@@ -391,7 +437,7 @@ class Simulation:
         particles at this output time (``diagnostics.measures.totals``), shared by the
         writers and the blow-up guard."""
         if self._totals is None:
-            self._totals = totals(self.particles, self.case.physics.gravity)
+            self._totals = self._measure_totals()
         return self._totals
 
     def forget_bins(self) -> None:
@@ -489,8 +535,8 @@ class Simulation:
         stop = self._stop or Stop("", "completed", True)  # the end: to extend it later
         if (
             stop.checkpoint
-            and self.out_dir is not None
-            and self.last_checkpoint != checkpoint.path_for(self.out_dir, self.steps)
+            and self.checkpoint_dir is not None
+            and self.last_checkpoint != checkpoint.path_for(self.checkpoint_dir, self.steps)
         ):
             self.checkpoint()
         return stop.status, stop.message

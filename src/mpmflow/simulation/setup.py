@@ -145,9 +145,10 @@ def describe(sim: Simulation) -> list[str]:
         else ", no snapshots"
     )
     title = f"{case.title}: " if case.title else ""
+    count = getattr(sim.scheme, "total", sim.particles.count)  # over ranks: the whole run's
     budget, source = memory.available()
     return [
-        f"{title}{case.solver.scheme} scheme, {sim.particles.count:,} particles, {cells} "
+        f"{title}{case.solver.scheme} scheme, {count:,} particles, {cells} "
         f"cells of {g.spacing:g} m; about {steps:,} steps of {sim.dt:.3g} s to t = "
         f"{case.time.end:g} s; a row every {case.output.interval:g} s{snaps}"
         + (f", {len(case.probes)} probes" if case.probes else "")

@@ -51,9 +51,10 @@ def _ranks(sim: Simulation) -> dict[str, Any]:
 
 def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JSON
     """The summary dict of ``sim`` as it stands, with its ``status`` and ``message``."""
-    P, c, case, grid = sim.particles, sim.counters, sim.case, sim.grid
+    c, case, grid = sim.counters, sim.case, sim.grid
     bins = sim._bins()
-    mass = float(P.mass.sum())
+    mass = sim.particle_sum("mass")
+    count = sim.particle_count()
     out = sim.scheme.outflow
     into = sim.scheme.inflow
     return {
@@ -62,8 +63,8 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         "mpmflow_version": __version__,
         "time": sim.time,
         "steps": sim.steps,
-        "particles": P.count,
-        "particles_lost": sim.count0 + into.count - P.count - out.count,
+        "particles": count,
+        "particles_lost": sim.count0 + into.count - count - out.count,
         "particles_moved_inside": c.moved_inside,
         "mass_initial": sim.mass0,
         "mass_final": mass,
@@ -72,7 +73,7 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
         # particles, kg, m^3
         "outflow": {"particles": out.count, "mass": out.mass, "volume": out.volume},
         "inflow": {"particles": into.count, "mass": into.mass, "volume": into.volume},
-        "max_particles_per_cell": int(np.diff(bins.start).max()),
+        "max_particles_per_cell": sim.most_per_cell(bins),
         # the largest rise of KE + PE above its start, against the threshold (energy.py)
         "energy": energy.record(sim),
         "wall_seconds": sim.wall_seconds(),

@@ -21,6 +21,7 @@ checkpoint records of it), ``sync()`` (flush to the disk before a checkpoint) an
 from __future__ import annotations
 
 from collections.abc import Iterable
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -28,7 +29,7 @@ import numpy as np
 
 from ..arrays import Floats
 from ..boundaries import moving
-from ..diagnostics import probes
+from ..diagnostics import parts, probes
 from ..geometry.rotation import quaternion_matrix
 from ..output.snapshots import SnapshotWriter, write_surface_vtu
 from ..output.timeseries import (
@@ -122,6 +123,7 @@ class Probes(_Rows):
                 solids.distance if solids is not None and solids.solids else None,
                 sim.fallbacks,
                 self._boxes,
+                None if sim.comm.size == 1 else partial(parts.joined, sim.comm),
             )
         )
 
@@ -140,11 +142,15 @@ class CentreOfMass(_Rows):
         return CsvAppender(folder / self.file_name, columns, resume, units)
 
     def __call__(self, sim: Simulation) -> None:
-        P = sim.particles
-        if P.count == 0:  # every particle left through the outlets: no centre
+        P, comm = sim.particles, sim.comm
+        if sim.particle_count() == 0:  # every particle left through the outlets: no centre
             c = np.full(P.x.shape[1], np.nan)
-        else:
+        elif comm.size == 1:
             c = (P.mass[:, None] * P.x).sum(axis=0) / P.mass.sum()
+        else:  # particles in parts: the moments of every part
+            moments = np.append((P.mass[:, None] * P.x).sum(axis=0), P.mass.sum())
+            whole = parts.add(comm, moments)
+            c = whole[:-1] / whole[-1]
         self.append({"time": sim.time, **{f"{a}_c": float(v) for a, v in zip("xyz", c)}})
 
 

@@ -3,7 +3,7 @@ correction, binning and cut cells, and the particles' totals at an output time
 (src/core/transfer, corrector, volume_correction, binning, cut_cells, totals, strips.hpp)."""
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -150,18 +150,24 @@ def pressure_noise(
     pressure: Floats,
     work_m: Floats | None = None,
     work_mp: Floats | None = None,
+    add: Callable[[Floats], Floats] | None = None,
 ) -> float:
     """RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa);
-    ``work_m``, ``work_mp``: scratch of one value per node (allocated if not given)."""
+    ``work_m``, ``work_mp``: scratch of one value per node (allocated if not given).
+    ``add``: for particles held in parts (one per MPI rank), the sum of an array over the
+    parts; the smoothing then reads every part's particles, the RMS runs over all of them
+    and every part gets the whole run's value. Without it, one pass of the core."""
     if work_m is None:
         work_m = np.empty(grid.nnodes)
     if work_mp is None:
         work_mp = np.empty(grid.nnodes)
-    return float(
-        _core.pressure_noise(
-            x, mass, pressure, float(grid.spacing), arrays.cells(grid), work_m, work_mp
-        )
-    )
+    h, cells = float(grid.spacing), arrays.cells(grid)
+    if add is None:
+        return float(_core.pressure_noise(x, mass, pressure, h, cells, work_m, work_mp))
+    _core.scatter_mass_pressure(x, mass, pressure, h, cells, work_m, work_mp)
+    m, mp = add(work_m), add(work_mp)
+    total, n = add(np.array([_core.pressure_deviation(x, pressure, h, cells, m, mp), len(x)]))
+    return math.sqrt(total / max(n, 1.0))
 
 
 def cell_volume(grid: Grid, x: Floats, volume: Floats, out: Floats) -> None:
