@@ -263,3 +263,44 @@ def test_no_rank_holds_the_whole_run_and_the_measures_are_the_whole_runs():
     ]:
         assert row[name] == pytest.approx(value, rel=1e-12), name
     assert sim.totals().fastest == t.fastest  # its number in the run
+
+
+def test_probes_and_the_centre_of_mass_over_the_ranks_read_what_one_process_reads():
+    """Pressure probes (their windows' particles joined over the ranks, some windows across
+    the boxes' cut), level gauges (on the cells' fractions summed over the ranks) and the
+    centre of mass over 0.15 s of the dam break: one process's readings, to the pressure
+    solves' tolerance (1e-8 of their residual: 1e-6 of rho g H in the pressures)."""
+    probes = ", ".join(
+        [
+            *(
+                f"{{name='p{k}', quantity='pressure', position=[{x}, {y}]}}"
+                for k, (x, y) in enumerate([(0.0, 0.05), (0.03, 0.02), (0.057, 0.116), (0.1, 0.0)])
+            ),
+            "{name='h0', quantity='level', position=[0.05, 0.0]}",
+            "{name='h1', quantity='level', position=[0.2, 0.0], gauge='first_drop'}",
+        ]
+    )
+    over = [
+        "time.end=0.15",
+        "solver.volume_correction=0",
+        "output.snapshots=false",
+        f"probes=[{probes}]",
+        "output.centre_of_mass=true",
+    ]
+    case = load_case(EXAMPLES / "dam_break.toml", over)
+    many = split(Simulation(case))
+    many.scheme.parted()  # the first split
+    if world().size == 2:  # the first cut, across the column at y = 0.116 m: p2 on it
+        assert many.scheme.boxes.hi[0, 1] * many.grid.spacing == pytest.approx(0.116)
+    many.run()
+    one = alone(Simulation(case))
+    one.run()
+    for p in case.probes:
+        a, b = many.probe_series(p.name), one.probe_series(p.name)
+        assert a.size == b.size == 16
+        scale = RHO * G * 0.228 if p.quantity == "pressure" else 0.228
+        assert np.abs(a - b).max() <= 1e-6 * scale, p.name
+    assert np.nanmax(one.probe_series("p0")) > 0.5 * RHO * G * 0.228  # the sensors are wet
+    centres = [s.builtin_writers["centre_of_mass"].buffer for s in (many, one)]
+    for axis in ("x_c", "y_c"):
+        assert np.abs(centres[0].column(axis) - centres[1].column(axis)).max() < 1e-8  # m
