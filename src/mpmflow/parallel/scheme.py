@@ -187,8 +187,8 @@ class DistributedProjection(ProjectionScheme):
         return P, whole
 
     def _whole(self, field: str) -> NDArray[Any]:
-        """The whole set's array of a field (the particles', the affine matrices or a
-        solid's history)."""
+        """This rank's array of a field (the particles', the affine matrices or a solid's
+        history): the whole run's until parted, then its part's."""
         if field == "affine":
             assert self.affine is not None
             return self.affine

@@ -72,14 +72,14 @@ def write(sim: Simulation) -> Path:
     in_pieces = getattr(sim.scheme, "particle_state", None)
     if in_pieces is None:
         sim.last_checkpoint = checkpoint.write(
-            folder, sim.steps, {**particles, **arrays}, meta(sim)
+            folder, sim.steps, {**particles, **arrays}, meta_of(sim)
         )
         return sim.last_checkpoint
     comm = sim.comm
     own = {**particles, **{f"scheme.{k}": v for k, v in in_pieces().items()}}
     count = sim.particle_count()
     agreed(comm, lambda: checkpoint.write_piece(folder, sim.steps, comm.rank, own))
-    whole = {**meta(sim), "pieces": comm.size, "particles": count}
+    whole = {**meta_of(sim), "pieces": comm.size, "particles": count}
     # the main file once every piece is written (the agreement above waits for them)
     agreed(
         comm, lambda: checkpoint.write(folder, sim.steps, arrays, whole) if comm.rank == 0 else None
@@ -100,7 +100,7 @@ def agreed(comm: Comm, work: Callable[[], object]) -> None:
         raise OSError(failed[0])
 
 
-def meta(sim: Simulation) -> dict[str, object]:
+def meta_of(sim: Simulation) -> dict[str, object]:
     """A checkpoint's meta: the run's time, schedules, counters and outputs' positions (its
     writers' files fsynced first)."""
     for action in sim.actions:
