@@ -117,6 +117,27 @@ def test_a_run_written_on_four_ranks_continues_on_two(four, tmp_path):
     assert np.abs(series(four, "front") - series(again, "front")).max() < 1e-8
 
 
+def test_a_one_process_run_with_apic_continues_on_two_ranks(tmp_path):
+    """A one-process checkpoint (one file of the whole run) read on every rank, each
+    keeping its own particles and their affine matrices at its first split: the run's end
+    is the one-process run's, to the pressure solves' tolerance."""
+    apic = ("--set", "solver.transfer=apic")
+    one = tmp_path / "one"
+    mpirun(1, one, *apic)
+    again = tmp_path / "again"
+    shutil.copytree(one, again)
+    (again / "checkpoint_000000200.npz").unlink()  # continue from t = 0.1 s
+    (again / "summary.json").unlink()
+    mpirun(2, again, "--restart", *apic)
+    a = checkpoint.read(one / "checkpoint_000000200.npz")[0]
+    b = checkpoint.read(again / "checkpoint_000000200.npz")[1]["pieces"]
+    assert b == 2  # written on the ranks, in pieces
+    b = checkpoint.read(again / "checkpoint_000000200.npz")[0]
+    assert np.abs(a["x"] - b["x"]).max() < 1e-8  # m
+    # the affine matrices (1/s) as test_scheme bounds them: C h within 1e-5 m/s
+    assert np.abs(a["scheme.affine"] - b["scheme.affine"]).max() * 0.004 < 1e-5
+
+
 @pytest.mark.parametrize("extra", [["--restart"], []])
 def test_a_refusal_of_rank_0_alone_stops_every_rank(tmp_path, extra):
     """No checkpoint to continue from, or a folder that holds another run: rank 0 alone

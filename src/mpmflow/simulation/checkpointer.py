@@ -191,6 +191,7 @@ def resume_from(
     fewer = bool(outlets.sides(case).any()) and arrays["x"].shape[0] <= count
     share = checkpoint.NUMBERS in arrays and meta.get("particles") == count
     other = fewer or bool(case.inlets) or share
+    replaced = False  # the particles' arrays are new ones: the scheme's follow
     for name in Particles.FIELDS:
         saved = arrays[name]
         if saved.shape[1:] != getattr(P, name).shape[1:] or not (saved.shape[0] == count or other):
@@ -202,7 +203,8 @@ def resume_from(
             np.copyto(getattr(P, name), saved)
         else:
             setattr(P, name, np.array(saved))
-    if P.count != count or share:
+            replaced = True
+    if replaced or share:
         sim.scheme.particles = P  # the scheme's arrays of the particles follow (APIC, outlets)
     try:
         sim.scheme.restore(
