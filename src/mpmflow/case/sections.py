@@ -272,7 +272,8 @@ class Checkpoint(Section):
         "output time at or after each multiple (every output for an interval shorter than "
         "output.interval), at the end of the run and when it is interrupted (Ctrl-C, "
         "SIGTERM). A checkpoint (checkpoint_NNNNNNNNN.npz in the output "
-        "folder, the latest two kept) holds everything needed to continue: `mpmflow run CASE "
+        "folder, the latest two kept; on MPI ranks with one piece a rank beside it, "
+        "checkpoint_NNNNNNNNN_rRRRR.npz) holds everything needed to continue: `mpmflow run CASE "
         "--out DIR --restart` resumes from the latest and reproduces the uninterrupted run "
         "bit for bit.",
     )
