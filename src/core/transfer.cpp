@@ -47,15 +47,6 @@ double pressure_deviation(const Grid<D>& g, View<const double, 2> x, View<const 
   return total;
 }
 
-template <int D>
-double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                      View<const double> pressure, View<double> work_m, View<double> work_mp) {
-  scatter_mass_pressure<D>(g, x, mass, pressure, work_m, work_mp);
-  const double total = pressure_deviation<D>(g, x, pressure, work_m, work_mp);
-  const index_t n = x.extent(0);
-  return std::sqrt(total / static_cast<double>(n > 1 ? n : 1));
-}
-
 namespace {
 
 // Cell j at stencil slot b (0 <= b < 3^D) around cell c with coordinates cx (wrapped round
@@ -243,8 +234,6 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
 }
 
 #define MPMFLOW_TRANSFER(D)                                                                        \
-  template double pressure_noise<D>(const Grid<D>&, View<const double, 2>, View<const double>,     \
-                                    View<const double>, View<double>, View<double>);               \
   template void scatter_mass_pressure<D>(const Grid<D>&, View<const double, 2>,                    \
                                          View<const double>, View<const double>, View<double>,     \
                                          View<double>);                                            \

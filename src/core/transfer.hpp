@@ -351,17 +351,13 @@ struct GridToParticle {
   }
 };
 
-// RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa).
-// The smoothed field is the particle-to-grid sum of m_p p_p divided by the nodal mass,
-// interpolated back: a smooth pressure field is kept (up to interpolation), a checkerboard
-// is not. work_m, work_mp: scratch of one value per node.
-template <int D>
-double pressure_noise(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                      View<const double> pressure, View<double> work_m, View<double> work_mp);
-
-// Its two halves, for particles held in parts (one per MPI rank): the particle-to-grid sums
-// of m_p and m_p p_p into work_m, work_mp (periodic images folded), which the parts add up;
-// then the sum over the particles of (p_p - smoothed)^2 from the whole sums.
+// The pressure noise (state.pressure_noise: the RMS over particles of p_p minus the
+// mass-weighted grid-smoothed pressure at x_p, Pa) in two halves, so that particles held in
+// parts (one per MPI rank) add up the first's sums: the particle-to-grid sums of m_p and
+// m_p p_p into work_m, work_mp (periodic images folded); then the sum over the particles of
+// (p_p - smoothed)^2 (Pa^2) from those sums. The smoothed field is the sum of m_p p_p over
+// the nodal mass, interpolated back: a smooth pressure field is kept (up to
+// interpolation), a checkerboard is not.
 template <int D>
 void scatter_mass_pressure(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
                            View<const double> pressure, View<double> work_m, View<double> work_mp);

@@ -91,21 +91,6 @@ void bind_transfer(nb::module_& m) {
       "Grid-to-particle (FLIP/PIC, or APIC with affine (n x D x D) given; positions, "
       "pressure, wall put-back); returns how many particles were put back inside.");
   m.def(
-      "pressure_noise",
-      [](Array<const double> x, Array<const double> mass, Array<const double> pressure, double h,
-         std::vector<index_t> cells, Array<double> work_m, Array<double> work_mp) {
-        return with_dim(cells.size(), [&](auto d) {
-          constexpr int D = decltype(d)::value;
-          return pressure_noise<D>(
-              make_grid<D>(h, cells), view<const double, 2>(x, "x"),
-              view<const double>(mass, "mass"), view<const double>(pressure, "pressure"),
-              view<double>(work_m, "work_m"), view<double>(work_mp, "work_mp"));
-        });
-      },
-      nb::arg("x"), nb::arg("mass"), nb::arg("pressure"), nb::arg("h"), nb::arg("cells"),
-      nb::arg("work_m").noconvert(), nb::arg("work_mp").noconvert(),
-      "RMS of the particle pressure less its grid-smoothed value (Pa).");
-  m.def(
       "scatter_mass_pressure",
       [](Array<const double> x, Array<const double> mass, Array<const double> pressure, double h,
          std::vector<index_t> cells, Array<double> work_m, Array<double> work_mp) {

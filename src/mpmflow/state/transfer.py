@@ -156,17 +156,19 @@ def pressure_noise(
     ``work_m``, ``work_mp``: scratch of one value per node (allocated if not given).
     ``add``: for particles held in parts (one per MPI rank), the sum of an array over the
     parts; the smoothing then reads every part's particles, the RMS runs over all of them
-    and every part gets the whole run's value. Without it, one pass of the core."""
+    and every part gets the whole run's value."""
     if work_m is None:
         work_m = np.empty(grid.nnodes)
     if work_mp is None:
         work_mp = np.empty(grid.nnodes)
     h, cells = float(grid.spacing), arrays.cells(grid)
-    if add is None:
-        return float(_core.pressure_noise(x, mass, pressure, h, cells, work_m, work_mp))
     _core.scatter_mass_pressure(x, mass, pressure, h, cells, work_m, work_mp)
-    m, mp = add(work_m), add(work_mp)
-    total, n = add(np.array([_core.pressure_deviation(x, pressure, h, cells, m, mp), len(x)]))
+    if add is not None:
+        work_m, work_mp = add(work_m), add(work_mp)
+    total = float(_core.pressure_deviation(x, pressure, h, cells, work_m, work_mp))
+    n = float(len(x))
+    if add is not None:
+        total, n = (float(v) for v in add(np.array([total, n])))
     return math.sqrt(total / max(n, 1.0))
 
 
