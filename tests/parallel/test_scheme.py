@@ -304,3 +304,51 @@ def test_probes_and_the_centre_of_mass_over_the_ranks_read_what_one_process_read
     centres = [s.builtin_writers["centre_of_mass"].buffer for s in (many, one)]
     for axis in ("x_c", "y_c"):
         assert np.abs(centres[0].column(axis) - centres[1].column(axis)).max() < 1e-8  # m
+
+
+@pytest.mark.parametrize(
+    "example, over",
+    [
+        ("obstacle_2d.toml", []),  # a polygon body round two obstacles
+        ("hump.toml", []),  # a box body round an obstacle, hydrostatic
+        ("dam_break.toml", ["bodies.0.surface_amplitude=0.01"]),  # a cosine top
+        ("dam_break_3d.toml", []),
+    ],
+)
+def test_each_rank_seeds_its_own_particles_as_one_process_numbers_them(monkeypatch, example, over):
+    """parallel.seeding: every rank walks the lattice in chunks (here of 1000 points, so
+    that each body takes many) and keeps its own particles; each particle is on one rank,
+    with the number one process gives it, at the same place, with the same mass, volume
+    and velocity, and the same starting pressure to its rounding."""
+    from mpmflow.geometry.seeding import build_particles
+    from mpmflow.grid import Grid
+    from mpmflow.parallel import seeding
+
+    monkeypatch.setattr(seeding, "CHUNK", 1000)
+    case = load_case(EXAMPLES / example, over)
+    grid = Grid.of_case(case)
+    whole = build_particles(case, grid)
+    comm = world()
+    part, numbers = seeding.seed_part(case, grid, comm)
+    every = np.sort(np.concatenate(comm.allgather(numbers)))
+    assert np.array_equal(every, np.arange(whole.count))
+    assert np.all(np.diff(numbers) > 0)
+    for name in ("x", "v", "mass", "volume"):
+        assert np.array_equal(getattr(part, name), getattr(whole, name)[numbers]), name
+    scale = max(float(np.abs(whole.pressure).max()), 1.0)
+    assert np.abs(part.pressure - whole.pressure[numbers]).max() <= 1e-12 * scale
+
+
+def test_particles_left_out_are_renumbered_as_one_process_numbers_those_kept():
+    from mpmflow.parallel.seeding import renumbered
+
+    comm = world()
+    n = 40
+    mine = np.arange(comm.rank, n, comm.size)  # each rank's numbers, interleaved
+    out = np.isin(mine, [3, 4, 17, 30, 39])
+    kept = renumbered(comm, mine, out)
+    whole = np.delete(np.arange(n), [3, 4, 17, 30, 39])  # one process's, in order
+    expected = np.searchsorted(whole, mine[~out])  # the kept ones' places among them
+    assert np.array_equal(kept, expected)
+    every = np.sort(np.concatenate(comm.allgather(kept)))
+    assert np.array_equal(every, np.arange(n - 5))

@@ -192,7 +192,7 @@ def _count(body: Any, grid_spacing: float) -> int:
             j0, j1 = lattice_indices(a, b, s)
             n *= max(0, j1 - j0 + 1)
         return n
-    # cosine top: per lattice column, the rows below the surface (as seed_cosine_box keeps)
+    # cosine top: per lattice column, the rows below the surface (as seeding.body_pieces keeps)
     j0, j1 = lattice_indices(body.min[1], body.max[1] + abs(body.surface_amplitude), s)
     if nx == 0 or j1 < j0:
         return 0

@@ -2,7 +2,7 @@
 (``geometry.lattice``), clear of the obstacles, with its velocity and, where asked, its
 hydrostatic pressure; and the check that no cell starts over-packed."""
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -12,35 +12,62 @@ from ..errors import CaseError
 from ..grid import Grid
 from ..particles import Particles, subset
 from .bodies import cosine_top, is_box, seed_region, seeded
-from .lattice import lattice_in_box
+from .lattice import lattice_chunks, lattice_in_box
 from .shapes import Shape
 
 
 def build_particles(case: Any, grid: Grid) -> Particles:
     """The particles of every body of the case on this grid (``Particles``)."""
-    parts = []
+    obstacles = obstacle_shapes(case)
+    parts = [p for k in range(len(case.bodies)) for p in body_pieces(case, grid, k, obstacles)]
+    particles = Particles.concatenate(parts)
+    check_packing(case, grid, particles, [p.count for p in parts])
+    return particles
+
+
+def obstacle_shapes(case: Any) -> list[Shape]:
+    return [case.obstacle_shape(k) for k in range(len(case.obstacles))]
+
+
+def body_pieces(
+    case: Any, grid: Grid, k: int, obstacles: Sequence[Shape], chunk: int | None = None
+) -> Iterator[Particles]:
+    """The particles of body ``k`` in their order in the run: one piece (``chunk`` None),
+    or pieces from about ``chunk`` lattice points each (``lattice.lattice_chunks``: a pass
+    over a case that no process holds whole, ``parallel.seeding``). A box's particles fill
+    [min, max) (below a cosine top), any other shape's its bounding box's lattice points it
+    contains; clear of the obstacles; with the body's velocity and, where asked, its
+    hydrostatic pressure."""
+    body = case.bodies[k]
+    spacing = grid.spacing / body.particles_per_cell
     rho = case.material.density
     down = np.asarray(case.physics.gravity, dtype=float)
-    obstacles = [case.obstacle_shape(k) for k in range(len(case.obstacles))]
-    for k, body in enumerate(case.bodies):
-        spacing = grid.spacing / body.particles_per_cell
-        if not is_box(body):
-            part = seed_shape(body, case.body_shape(k), spacing, rho, obstacles)
-            if body.initial_pressure == "hydrostatic":
+    shape = None if is_box(body) else case.body_shape(k)
+    lo, hi = seed_region(body, shape, spacing)
+    if chunk is None:
+        points: Iterable[np.ndarray] = [lattice_in_box(lo, hi, spacing)]
+    else:
+        points = lattice_chunks(lo, hi, spacing, chunk)
+    hydrostatic = body.initial_pressure == "hydrostatic"
+    for x in points:
+        if shape is not None:
+            part = seed_points(
+                x[seeded(body, shape, x, spacing, obstacles)], spacing, rho, body.velocity
+            )
+            if hydrostatic:
                 g = np.linalg.norm(down)
                 up = -down / g if g > 0 else np.zeros_like(down)
-                top = case.body_shape(k).support(up)
+                top = shape.support(up)
                 part.pressure[:] = rho * g * (top - part.x @ up)
-            parts.append(part)
+            yield part
             continue
+        part = seed_points(x, spacing, rho, body.velocity)
         amplitude = body.surface_amplitude
-        if amplitude == 0.0:
-            part = seed_box(body.min, body.max, spacing, rho, body.velocity)
-        else:
-            part = seed_cosine_box(body, spacing, rho)
+        if amplitude != 0.0:  # a cosine top: the particles below the surface
+            part = subset(part, part.x[:, 1] < cosine_top(body, part.x[:, 0]))
         if obstacles:
             part = subset(part, seeded(body, None, part.x, spacing, obstacles))
-        if body.initial_pressure == "hydrostatic":
+        if hydrostatic:
             if amplitude == 0.0:
                 corners = np.array(np.meshgrid(*zip(body.min, body.max))).reshape(len(down), -1).T
                 top = corners[np.argmax(corners @ -down)]
@@ -48,26 +75,19 @@ def build_particles(case: Any, grid: Grid) -> Particles:
             else:
                 depth = cosine_top(body, part.x[:, 0]) - part.x[:, 1]
                 part.pressure[:] = rho * np.linalg.norm(down) * depth
-        parts.append(part)
-    particles = Particles.concatenate(parts)
-    check_packing(case, grid, particles, [p.count for p in parts])
-    return particles
+        yield part
 
 
-def seed_shape(
-    body: Any, shape: Shape, spacing: float, density: float, obstacles: Sequence[Shape] = ()
+def seed_points(
+    x: np.ndarray, spacing: float, density: float, velocity: Sequence[float]
 ) -> Particles:
-    """Particles filling a body of any shape: the lattice points of its bounding box that
-    it contains and no obstacle does (``bodies.seeded``), each with the volume
-    spacing**dim (m^3, m^2 in 2D) and mass density * volume (kg)."""
-    lo, hi = seed_region(body, shape, spacing)
-    x = lattice_in_box(lo, hi, spacing)
-    x = x[seeded(body, shape, x, spacing, obstacles)]
+    """Particles at the lattice points x (n x D); each carries the volume spacing**dim (m^3,
+    m^2 in 2D) and mass density * volume (kg)."""
     n, dim = x.shape
     vol = np.full(n, spacing**dim)
     return Particles(
         x=x,
-        v=np.tile(np.asarray(body.velocity, dtype=float), (n, 1)),
+        v=np.tile(np.asarray(velocity, dtype=float), (n, 1)),
         pressure=np.zeros(n),
         mass=vol * density,
         volume=vol,
@@ -119,21 +139,4 @@ def seed_box(
     velocity: Sequence[float],
 ) -> Particles:
     """Particles filling a box; each carries the volume spacing**dim and mass density*volume."""
-    x = lattice_in_box(lo, hi, spacing)
-    n, dim = x.shape
-    vol = np.full(n, spacing**dim)
-    return Particles(
-        x=x,
-        v=np.tile(np.asarray(velocity, dtype=float), (n, 1)),
-        pressure=np.zeros(n),
-        mass=vol * density,
-        volume=vol,
-    )
-
-
-def seed_cosine_box(body: Any, spacing: float, density: float) -> Particles:
-    """A box body with a cosine top: seeded up to max[1] + |A|, keeping the particles below
-    the cosine surface (``bodies.cosine_top``)."""
-    top = [body.max[0], body.max[1] + abs(body.surface_amplitude)]
-    part = seed_box(body.min, top, spacing, density, body.velocity)
-    return subset(part, part.x[:, 1] < cosine_top(body, part.x[:, 0]))
+    return seed_points(lattice_in_box(lo, hi, spacing), spacing, density, velocity)

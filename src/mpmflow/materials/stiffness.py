@@ -18,7 +18,7 @@ are off by about 1.5 S (measured on a 0.1 m block at S = 0.06, 0.25 and 1: 8%, 3
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -36,16 +36,32 @@ ERROR_PER_S = 1.5  # relative error of the creep speed per unit of S (measured, 
 SPLIT_SPEED = 0.6  # the split's creep speed, in units of |g| dt (measured, see above)
 
 
-def depth(particles: Particles, gravity: ArrayLike) -> float:
+def depth(particles: Particles, gravity: ArrayLike, comm: Any = None) -> float:
     """The material's extent (m) along gravity: the particles' spread along g plus one
-    particle's size (their volume's D-th root)."""
+    particle's size (their volume's D-th root). ``comm``: the MPI ranks whose parts the
+    particles are (``parallel.comm``), None for the whole run."""
     g = np.asarray(gravity, dtype=float)
     norm = float(np.linalg.norm(g))
+    if comm is not None and comm.size > 1:
+        along = particles.x @ (g / norm) if norm else np.zeros(particles.count)
+        mine = (
+            float(along.max()) if along.size else -np.inf,
+            float(-along.min()) if along.size else -np.inf,
+            float(particles.volume.sum()),
+            particles.count,
+        )
+        every = comm.allgather(mine)
+        n = sum(e[3] for e in every)
+        if norm == 0.0 or n == 0:
+            return 0.0
+        spread = float(max(e[0] for e in every) + max(e[1] for e in every))
+        size: float = (sum(e[2] for e in every) / n) ** (1.0 / particles.x.shape[1])
+        return spread + size
     if norm == 0.0 or particles.count == 0:
         return 0.0
     along = particles.x @ (g / norm)
     # (float ** float is typed Any: a negative base would give a complex; volumes are > 0)
-    size: float = float(np.mean(particles.volume)) ** (1.0 / particles.x.shape[1])
+    size = float(np.mean(particles.volume)) ** (1.0 / particles.x.shape[1])
     return float(along.max() - along.min()) + size
 
 
@@ -59,10 +75,10 @@ def stiffest(m: Material) -> tuple[float, str | None]:
     return 0.0, None
 
 
-def check(case: Case, particles: Particles, dt: float) -> list[str]:
+def check(case: Case, particles: Particles, dt: float, comm: Any = None) -> list[str]:
     """The notices of a viscous case (list of strings); raises ValueError with the message
     for a Newtonian material too stiff for time step ``dt`` (s). ``particles``: the
-    particles at the start."""
+    particles at the start (over MPI ranks this rank's part, ``comm`` the ranks)."""
     m = case.material
     eta, key = stiffest(m)
     h = case.grid.spacing
@@ -75,7 +91,7 @@ def check(case: Case, particles: Particles, dt: float) -> list[str]:
             f"{key} (1e5 Pa s is a usual cap for yield-stress and granular materials)"
         )
     g = float(np.linalg.norm(case.physics.gravity))
-    H = depth(particles, case.physics.gravity)
+    H = depth(particles, case.physics.gravity, comm)
     if key is None or g == 0.0 or H == 0.0:
         return []
     S = eta * dt / (m.density * H * H)

@@ -12,8 +12,9 @@ with the body's exact count spread evenly over it, and the estimate says so.
 Each rank's peak is the sum of these terms (bytes):
 
 - the program: Python, NumPy, SciPy, the core, mpi4py, and PETSc with hypre (measured);
-- the case's whole particle set, which every rank seeds at the start and keeps until its
-  first split parts it (then each rank holds its own only: ``parallel.scheme``);
+- the seeding (``parallel.seeding``): a chunk of the bodies' lattice (``lattice.CHUNK``
+  points, or the whole run's when it is smaller) and the cells' counts that the ranks'
+  split comes from; no rank holds the whole run;
 - the whole grid's arrays every rank keeps (the nodal pressure, the cells' tables);
 - this rank's own particles and its halo (the neighbours' particles in its ghost layer):
   their copies in the step, the core's arrays, the migration's;
@@ -44,7 +45,7 @@ from .. import memory
 from ..boundaries import moving
 from ..errors import CaseError
 from ..geometry import bodies
-from ..geometry.lattice import lattice_indices
+from ..geometry.lattice import CHUNK, lattice_indices
 from ..grid import Grid
 from ..materials import is_solid
 from .boxes import Boxes, Factors, bisect_separable, box_weight
@@ -69,6 +70,9 @@ PETSC_PER_UNKNOWN = {2: 400, 3: 1950}  # B: PETSc's AIJ and BoomerAMG, measured 
 # the pressure noise's two nodal sums), each with the all-reduce's sent and received copies
 # (counted, not measured: 3 arrays x 2 copies x 8 B)
 MEASURES_PER_NODE = 48
+# B per cell while seeding: the cells' counts, one chunk's and their running sum (int64),
+# with the sum's new array (counted)
+SEEDING_PER_CELL = 24
 # the most cells per axis whose factors the split makes (8 B each): 10^8 is 800 MB
 MAX_CELLS_PER_AXIS = 10**7
 
@@ -252,7 +256,7 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
     apic = case.solver.transfer == "apic"
     fields = particle_fields(D, apic, is_solid(case.material))
     ghost = ghost_layers(any(m is not None for m in moving.motions(case)))
-    seeded_whole = fields * N
+    seeding = min(N, float(CHUNK)) * fields + SEEDING_PER_CELL * math.prod(cells)
     grid_whole = WHOLE_PER_NODE * nodes
     measures = MEASURES_PER_NODE * nodes
     local = LOCAL_COPIES[D] * fields
@@ -270,7 +274,7 @@ def estimate(case: Case, ranks: int) -> RanksEstimate:
         unknowns = min(owned_nodes, memory.SPREAD * seeded)
         terms = {
             "program": float(PROGRAM),
-            "the case seeded whole (until the first split)": seeded_whole,
+            "seeding (a chunk of the lattice)": seeding,
             "the whole grid's arrays": grid_whole,
             "own particles": local * own,
             "halo": local * halo,
@@ -299,8 +303,8 @@ def check(case: Case, ranks: int) -> RanksEstimate:
         f"This case needs {big.text()} on its largest rank ({big.rank} of {ranks}); the "
         f"{est.here} ranks on this machine need {memory.size(need)}, and it can give "
         f"{memory.size(budget)} ({source}), so they would be killed by the system when it "
-        f"runs out. Every rank seeds the case's whole particle set at the start, so more "
-        f"ranks on one machine need more, not less: make the case smaller (grid.spacing: memory grows "
+        f"runs out. Every rank holds the whole grid's arrays, so more ranks on one machine "
+        f"need more, not less: make the case smaller (grid.spacing: memory grows "
         f"as its inverse {power}; bodies.N.particles_per_cell), start fewer ranks on each "
         "machine, or run on machines with more memory. `mpmflow run CASE --dry-run --ranks "
         "N` prints each rank's estimate without running. (MPMFLOW_MEMORY_LIMIT sets the "

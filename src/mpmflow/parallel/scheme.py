@@ -18,10 +18,11 @@ and solves its systems with PETSc over the ranks (``pressure``, ``viscous``, ``v
    owned particles; then each particle goes to the rank that owns its new cell. The
    adaptive step's size comes from the largest speed over the ranks.
 
-No rank holds the whole run (issue 42, item 3). The case is seeded whole on every rank;
-the first split (``parted``: the first measure or chunk) keeps each rank's own particles,
-and from then on a rank holds its box's particles only, with their numbers in the run
-(``ids``), sorted by them: ``particles`` is this rank's part. The Simulation's measures
+No rank holds the whole run (issue 42, item 3). Each rank seeds its own particles only
+(``parallel.seeding``, with their numbers in the run: ``adopt``); given the whole run
+instead (a one-process checkpoint, a test), the first split (``parted``: the first measure
+or chunk) keeps each rank's own. From then on a rank holds its box's particles only, with
+their numbers (``ids``), sorted by them: ``particles`` is this rank's part. The Simulation's measures
 combine the parts (``diagnostics.parts``); snapshots and checkpoints are written in one
 piece a rank (``parallel.snapshots``, ``simulation.checkpointer``), and a checkpoint
 restarts on any number of ranks or on one process. What every rank does hold whole is
@@ -152,6 +153,13 @@ class DistributedProjection(ProjectionScheme):
         self.ids: Ints | None = None
         self.total = P.count  # the whole run's particles (no inlets or outlets on ranks)
         self.boxes = None  # a new set: split again (``restore`` may number it as a part)
+
+    def adopt(self, ids: Ints) -> None:
+        """The particles (``particles``) are this rank's part already, numbered ``ids`` in
+        the run (``parallel.seeding``: seeded without the whole run); collective."""
+        self.ids = np.asarray(ids, dtype=np.int64)
+        self.total = int(self.comm.allreduce(int(self.ids.size)))
+        self.boxes = None
 
     def parted(self) -> Comm:
         """The ranks, with the particles parted among them (each rank's own in
@@ -496,8 +504,7 @@ class DistributedProjection(ProjectionScheme):
         # the particles' own: this rank's part of a checkpoint in pieces (with their
         # numbers), or the whole run (every rank's the same, parted at the first split)
         if "id" in saved:
-            self.ids = np.asarray(saved["id"], dtype=np.int64)
-            self.total = int(self.comm.allreduce(int(self.ids.size)))
+            self.adopt(saved["id"])
         if self.affine is not None:
             np.copyto(self.affine, saved["affine"])
         for name, a in self.history.items():

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 from .. import checkpoint, memory
 from ..boundaries import obstacles
 from ..case import Case
+from ..diagnostics import parts
 from ..errors import CaseError, SolverError
 from ..geometry import mass
 from ..geometry.seeding import build_particles
@@ -73,29 +74,48 @@ def build(case: Case) -> Setup:
     # the content of the files the case reads, as this run reads them (checkpoints keep
     # it, and a restart with other files is refused)
     files = checkpoint.file_hashes(case)
+    from ..parallel.comm import launched_size
+
     grid = Grid.of_case(case)
-    particles = build_particles(case, grid)
-    if particles.count == 0:
+    comm, numbers = parts.ALONE, None  # one process: the whole run, in its order
+    if launched_size() > 1:  # each rank seeds its own particles only (parallel.seeding)
+        from ..parallel.comm import world
+        from ..parallel.seeding import seed_part
+
+        comm = world()
+        particles, numbers = seed_part(case, grid, comm)
+    else:
+        particles = build_particles(case, grid)
+    if parts.count(comm, particles.count) == 0:
         raise CaseError(
             "The bodies hold no particles: every body is thinner than one "
             "particle spacing (grid.spacing / bodies.N.particles_per_cell). "
             "Enlarge the bodies or raise particles_per_cell."
         )
     scheme = make_scheme(case, grid, particles)
+    if numbers is not None:
+        scheme.adopt(numbers)  # type: ignore[attr-defined]
     solids = getattr(scheme, "solids", None)
     if solids is not None:
         inside = obstacles.in_solid_cells(solids, grid, particles.x)
-        if inside.all():
+        left_out = parts.count(comm, int(inside.sum()))
+        if left_out == parts.count(comm, particles.count):
             raise CaseError(
                 "Every particle lies in the solid the grid sees: the bodies fill only the "
                 "space that obstacles touching the walls close off on this grid. "
                 f"Refine grid.spacing (now {case.grid.spacing:g} m) or move the bodies."
             )
-        if inside.any():
+        if left_out:
+            if numbers is not None:  # the numbers in the run of those kept
+                from ..parallel.seeding import renumbered
+
+                numbers = renumbered(comm, numbers, inside)
             particles = subset(particles, ~inside)
             scheme.particles = particles
+            if numbers is not None:
+                scheme.adopt(numbers)  # type: ignore[attr-defined]
             notices.append(
-                f"{int(inside.sum())} particle{'s' if inside.sum() > 1 else ''} seeded "
+                f"{left_out} particle{'s' if left_out > 1 else ''} seeded "
                 "round an obstacle lie in the solid the grid sees, which differs from the "
                 "obstacle's shape within a cell of its face (where an obstacle touches two or "
                 "three walls the corner between it and the walls is closed within the first "
@@ -116,7 +136,7 @@ def build(case: Case) -> Setup:
             ) from None
     dt = time_step(case)
     try:  # a viscous material too stiff for the time step: refused, or told
-        notices += stiffness.check(case, particles, dt)
+        notices += stiffness.check(case, particles, dt, comm)
     except ValueError as err:
         raise CaseError(str(err)) from None
     # what reading the mesh files had to decide (a binary STL's wrong triangle count)
