@@ -8,10 +8,13 @@ Collective calls take and return NumPy arrays or Python numbers, as mpi4py's do.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from functools import cache
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
-from ..errors import CaseError
+from ..errors import CaseError, MpmflowError
+
+T = TypeVar("T")
 
 # the world size as the launchers of Open MPI, MPICH (Hydra) and Slurm give it
 _SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "SLURM_NTASKS")
@@ -75,6 +78,39 @@ class Single:
 
     def Barrier(self) -> None:
         return None
+
+
+def agreed(
+    comm: Comm,
+    work: Callable[[], T],
+    root_only: bool = False,
+    errors: tuple[type[Exception], ...] = (MpmflowError,),
+) -> T:
+    """``work()`` on every rank (``root_only``: its result is rank 0's, sent to all), and
+    an error of ``errors`` (a refusal, MpmflowError, by default) on any rank raised on
+    every rank, as the first rank that met it gives it (a rank that met one raises its
+    own): a rank that stopped alone would leave the others waiting in their next
+    collective call for ever."""
+    result, error = None, None
+    try:
+        result = work()
+    except errors as err:
+        error = err
+    said = None if error is None else (type(error), str(error))
+    if root_only:
+        said, result = comm.bcast((said, result), root=0)
+        told = [said]
+    else:
+        told = comm.allgather(said)
+    if error is not None:
+        raise error
+    first = next((t for t in told if t is not None), None)
+    if first is not None:  # another rank's, as that rank gives it
+        kind, text = first
+        other = kind.__new__(kind)
+        Exception.__init__(other, text)
+        raise other
+    return result  # type: ignore[return-value]
 
 
 def launched_size() -> int:

@@ -15,17 +15,14 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import TypeVar
 
 from .. import checkpoint
 from ..case import Case
 from ..errors import MpmflowError
 from ..output.folder import Hints
 from ..simulation import Simulation, checkpointer
-from .comm import Comm, world
+from .comm import Comm, agreed, world
 from .snapshots import RankSnapshots
-
-T = TypeVar("T")
 
 
 def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -> Simulation:
@@ -63,32 +60,6 @@ def start(case: Case, out: Path, restart: bool, overwrite: bool, hints: Hints) -
     snapshots_in_pieces(sim, comm, out)
     sim.checkpoint_dir = out  # every rank writes its piece of each checkpoint
     return sim
-
-
-def agreed(comm: Comm, work: Callable[[], T], root_only: bool = False) -> T:
-    """``work()`` on every rank (``root_only``: its result is rank 0's, sent to all), and
-    a refusal (MpmflowError) on any rank raised on every rank: a rank that stopped alone
-    would leave the others waiting in their next collective call for ever."""
-    result, error = None, None
-    try:
-        result = work()
-    except MpmflowError as err:
-        error = err
-    said = None if error is None else (type(error), str(error))
-    if root_only:
-        said, result = comm.bcast((said, result), root=0)
-        told = [said]
-    else:
-        told = comm.allgather(said)
-    if error is not None:
-        raise error
-    first = next((t for t in told if t is not None), None)
-    if first is not None:  # another rank's refusal, as that rank gives it
-        kind, text = first
-        other = kind.__new__(kind)
-        Exception.__init__(other, text)
-        raise other
-    return result  # type: ignore[return-value]
 
 
 def snapshots_in_pieces(sim: Simulation, comm: Comm, out: Path) -> None:

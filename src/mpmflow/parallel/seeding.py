@@ -16,13 +16,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..arrays import Ints
-from ..errors import CaseError
 from ..geometry.lattice import CHUNK
 from ..geometry.seeding import body_pieces, check_packing, obstacle_shapes
 from ..grid import Grid
 from ..particles import Particles, subset
 from .boxes import bisect, cell_weights
-from .comm import Comm
+from .comm import Comm, agreed
 
 if TYPE_CHECKING:
     from ..case import Case
@@ -56,14 +55,7 @@ def seed_part(case: Case, grid: Grid, comm: Comm) -> tuple[Particles, Ints]:
             count += int(mine.sum())
         counts.append(count)
     part = Particles.concatenate(kept)
-    error = None
-    try:
-        check_packing(case, grid, part, counts)
-    except CaseError as err:
-        error = str(err)
-    told = [e for e in comm.allgather(error) if e is not None]
-    if told:
-        raise CaseError(told[0])
+    agreed(comm, lambda: check_packing(case, grid, part, counts))
     return part, np.concatenate(numbers)
 
 

@@ -27,7 +27,6 @@ from ..fallbacks import Fallbacks
 from ..particles import Particles
 
 if TYPE_CHECKING:
-    from ..parallel.comm import Comm
     from .loop import Simulation
 
 # Simulation's progress callable(t, step, end)
@@ -75,29 +74,23 @@ def write(sim: Simulation) -> Path:
             folder, sim.steps, {**particles, **arrays}, meta_of(sim)
         )
         return sim.last_checkpoint
+    from ..parallel.comm import agreed
+
     comm = sim.comm
     own = {**particles, **{f"scheme.{k}": v for k, v in in_pieces().items()}}
     count = sim.particle_count()
-    agreed(comm, lambda: checkpoint.write_piece(folder, sim.steps, comm.rank, own))
+    agreed(
+        comm, lambda: checkpoint.write_piece(folder, sim.steps, comm.rank, own), errors=(OSError,)
+    )
     whole = {**meta_of(sim), "pieces": comm.size, "particles": count}
     # the main file once every piece is written (the agreement above waits for them)
     agreed(
-        comm, lambda: checkpoint.write(folder, sim.steps, arrays, whole) if comm.rank == 0 else None
+        comm,
+        lambda: checkpoint.write(folder, sim.steps, arrays, whole) if comm.rank == 0 else None,
+        errors=(OSError,),
     )
     sim.last_checkpoint = checkpoint.path_for(folder, sim.steps)
     return sim.last_checkpoint
-
-
-def agreed(comm: Comm, work: Callable[[], object]) -> None:
-    """``work()`` on this rank, then an OSError on every rank when any rank's failed."""
-    error = None
-    try:
-        work()
-    except OSError as err:
-        error = f"{err}"
-    failed = [e for e in comm.allgather(error) if e is not None]
-    if failed:
-        raise OSError(failed[0])
 
 
 def meta_of(sim: Simulation) -> dict[str, object]:
