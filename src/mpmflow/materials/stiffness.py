@@ -42,27 +42,22 @@ def depth(particles: Particles, gravity: ArrayLike, comm: Any = None) -> float:
     particles are (``parallel.comm``), None for the whole run."""
     g = np.asarray(gravity, dtype=float)
     norm = float(np.linalg.norm(g))
-    if comm is not None and comm.size > 1:
-        along = particles.x @ (g / norm) if norm else np.zeros(particles.count)
-        mine = (
-            float(along.max()) if along.size else -np.inf,
-            float(-along.min()) if along.size else -np.inf,
-            float(particles.volume.sum()),
-            particles.count,
-        )
-        every = comm.allgather(mine)
-        n = sum(e[3] for e in every)
-        if norm == 0.0 or n == 0:
-            return 0.0
-        spread = float(max(e[0] for e in every) + max(e[1] for e in every))
-        size: float = (sum(e[2] for e in every) / n) ** (1.0 / particles.x.shape[1])
-        return spread + size
-    if norm == 0.0 or particles.count == 0:
+    along = particles.x @ (g / norm) if norm else np.zeros(particles.count)
+    # (the largest along g, the largest against it, the volume, the count) of each part
+    mine = (
+        float(along.max()) if along.size else -np.inf,
+        float(-along.min()) if along.size else -np.inf,
+        float(particles.volume.sum()),
+        particles.count,
+    )
+    every = [mine] if comm is None or comm.size == 1 else comm.allgather(mine)
+    n = sum(e[3] for e in every)
+    if norm == 0.0 or n == 0:
         return 0.0
-    along = particles.x @ (g / norm)
+    spread = float(max(e[0] for e in every) + max(e[1] for e in every))
     # (float ** float is typed Any: a negative base would give a complex; volumes are > 0)
-    size = float(np.mean(particles.volume)) ** (1.0 / particles.x.shape[1])
-    return float(along.max() - along.min()) + size
+    size: float = (sum(e[2] for e in every) / n) ** (1.0 / particles.x.shape[1])
+    return spread + size
 
 
 def stiffest(m: Material) -> tuple[float, str | None]:
