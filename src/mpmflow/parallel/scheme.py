@@ -223,8 +223,7 @@ class DistributedProjection(ProjectionScheme):
         particle to the rank that owns its cell. Collective."""
         g = self.grid
         if self.boxes is not None:
-            loads = self.comm.allgather(self._P.count)
-            self.balance = float(min(loads) / max(max(loads), 1))
+            self._weigh()
             if self.balance >= BALANCE:
                 return
         weights = cell_weights(self._P.x, g.spacing, g.cells)
@@ -303,7 +302,11 @@ class DistributedProjection(ProjectionScheme):
             )
             kept = {f: np.concatenate([p[f] for p in parts]) for f in arrays}
         self._keep(kept)
-        loads = comm.allgather(self._P.count)
+        self._weigh()
+
+    def _weigh(self) -> None:
+        """The balance of the parts: the fewest particles on a rank over the most."""
+        loads = self.comm.allgather(self._P.count)
         self.balance = float(min(loads) / max(max(loads), 1))
 
     def _step_name(self) -> str:
