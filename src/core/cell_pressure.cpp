@@ -1,6 +1,7 @@
 #include "cell_pressure.hpp"
 
 #include <array>
+#include <cmath>
 
 #include "dense.hpp"
 #include "parallel.hpp"
@@ -180,6 +181,99 @@ void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> 
   });
 }
 
+namespace {
+
+// f(axis, side (-1 or 1), neighbour's row (-1: none), drained) for each face of row r's
+// cell through which the pore water may flow: to a cell in the system (its row) or to a
+// drained one (no material, open); not through a wall or to a closed cell
+template <int D, class F>
+void darcy_faces(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                 View<const double> open, index_t r, F&& f) {
+  std::array<index_t, D> cx;
+  g.cell_coords(rows(r), cx.data());
+  for (int k = 0; k < D; ++k)
+    for (int side = -1; side <= 1; side += 2) {
+      const index_t j = g.wrap_cell(k, cx[k] + side);
+      if (j < 0) continue;  // a wall
+      index_t c2 = 0;
+      for (int m = 0; m < D; ++m) c2 += (m == k ? j : cx[m]) * g.cs[m];
+      const index_t r2 = cell_row(c2);
+      if (r2 >= 0)
+        f(k, side, r2, false);
+      else if (open.size() == 0 || open(c2) > 0.0)
+        f(k, side, index_t(-1), true);
+    }
+}
+
+}  // namespace
+
+template <int D>
+void darcy_matrix(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                  View<const double> open, double coef, View<index_t, 2> cols,
+                  View<double, 2> vals) {
+  constexpr int NS = stencil_size(D);
+  if (coef == 0.0) return;
+  const double tau = coef * int_power(g.h, D - 2);  // coef h^(D-1) / h
+  parallel_for(rows.size(), [&](index_t r) {
+    darcy_faces<D>(g, cell_row, rows, open, r, [&](int k, int side, index_t r2, bool drained) {
+      if (drained) {
+        vals(r, NS / 2) += 2.0 * tau;
+        return;
+      }
+      int stride = 1;
+      for (int m = 0; m < k; ++m) stride *= 3;
+      const int slot = NS / 2 + side * stride;
+      cols(r, slot) = r2;
+      vals(r, slot) -= tau;
+      vals(r, NS / 2) += tau;
+    });
+  });
+}
+
+template <int D>
+void darcy_gravity(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                   View<const double> open, double coef, double rho_w,
+                   const std::array<double, D>& gravity, View<double> rhs) {
+  if (coef == 0.0) return;
+  const double face = coef * rho_w * int_power(g.h, D - 1);
+  parallel_for(rows.size(), [&](index_t r) {
+    double sum = 0.0;
+    darcy_faces<D>(g, cell_row, rows, open, r,
+                   [&](int k, int side, index_t, bool) { sum += side * gravity[k]; });
+    rhs(r) -= face * sum;
+  });
+}
+
+template <int D>
+void darcy_apply(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                 View<const double> open, double coef, View<const double> y, View<double> out) {
+  if (coef == 0.0) return;
+  const double tau = coef * int_power(g.h, D - 2);
+  parallel_for(rows.size(), [&](index_t r) {
+    double sum = 0.0;
+    darcy_faces<D>(g, cell_row, rows, open, r, [&](int, int, index_t r2, bool drained) {
+      sum += drained ? 2.0 * y(r) : y(r) - y(r2);
+    });
+    out(r) += tau * sum;
+  });
+}
+
+template <int D>
+void darcy_magnitude(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                     View<const double> open, double coef, double rho_w,
+                     const std::array<double, D>& gravity, View<const double> y, View<double> out) {
+  if (coef == 0.0) return;
+  const double tau = int_power(g.h, D - 2), face = rho_w * int_power(g.h, D - 1);
+  parallel_for(rows.size(), [&](index_t r) {
+    double sum = 0.0;
+    darcy_faces<D>(g, cell_row, rows, open, r, [&](int k, int side, index_t r2, bool drained) {
+      const double dp = drained ? 2.0 * y(r) : y(r) - y(r2);
+      sum += std::abs(tau * dp + face * side * gravity[k]);
+    });
+    out(r) += coef * sum;
+  });
+}
+
 template <int D>
 void add_cell_forces(const Grid<D>& g, View<const index_t> cell_row, View<const double, 3> G,
                      View<const double> p_cell, View<double, 2> f) {
@@ -320,6 +414,16 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
                                   View<const double>, View<index_t, 2>, View<double, 2>);          \
   template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,            \
                             View<const double, 2>, double, View<double>);                          \
+  template void darcy_matrix<D>(const Grid<D>&, View<const index_t>, View<const index_t>,          \
+                                View<const double>, double, View<index_t, 2>, View<double, 2>);    \
+  template void darcy_gravity<D>(const Grid<D>&, View<const index_t>, View<const index_t>,         \
+                                 View<const double>, double, double, const std::array<double, D>&, \
+                                 View<double>);                                                    \
+  template void darcy_apply<D>(const Grid<D>&, View<const index_t>, View<const index_t>,           \
+                               View<const double>, double, View<const double>, View<double>);      \
+  template void darcy_magnitude<D>(                                                                \
+      const Grid<D>&, View<const index_t>, View<const index_t>, View<const double>, double,        \
+      double, const std::array<double, D>&, View<const double>, View<double>);                     \
   template void add_cell_forces<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
                                    View<const double>, View<double, 2>);                           \
   template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,       \

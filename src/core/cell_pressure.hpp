@@ -31,6 +31,8 @@
 // linearly to the nodes and averaged there (cell_to_nodes), which filters it.
 #pragma once
 
+#include <array>
+
 #include "grid.hpp"
 #include "view.hpp"
 
@@ -84,6 +86,41 @@ void assemble_cells(const Grid<D>& g, View<const index_t> cell_row, View<const i
 template <int D>
 void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> G,
               View<const double, 2> v, double rho_over_dt, View<double> rhs);
+
+// A saturated soil's pore water flowing through its skeleton by Darcy's law (plasticity.hpp,
+// POROELASTIC; docs/method.md, "Saturated soil"): the cell pressure is the pore pressure, and
+// each cell's constraint is the mixture's volume balance,
+//   int_cell div v dV + sum_faces q_cc' = 0,
+//   q_cc' = mobility h^(D-1) ((p_c - p_c') / h + rho_w g . e_cc')  (m^D/s, out of c into c'),
+// the two-point flux across each face (e_cc' the unit normal from c to c'), with the
+// skeleton's velocity v. A face to a cell without material (not in the system, open) is
+// drained: p = 0 at the face, half a cell away, so the flux has 2 p_c / h there; a face on a
+// wall or to a cell an obstacle closes (open(c') == 0) lets nothing through. With the
+// projection's rows multiplied by rho / dt, the flux's matrix joins the Poisson operator
+// (darcy_matrix: coef = rho / dt x mobility, on the face neighbours' slots of the 3^D
+// stencil) and its gravity part the right-hand side (darcy_gravity: rhs_r -= coef rho_w
+// h^(D-1) sum_faces g . e_cc'); darcy_apply adds coef x (the flux's matrix) y to out, for
+// the coupled solve's operator, and darcy_magnitude the sizes of the flows. The matrix is symmetric
+// positive semi-definite, so the projection stays so; mobility = 0 adds nothing. Hydrostatic water
+// in the pores (p_c - p_c' = rho_w g . (x_c' - x_c)) is a zero flux exactly. open: each cell's open
+// fraction (empty: no obstacles).
+template <int D>
+void darcy_matrix(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                  View<const double> open, double coef, View<index_t, 2> cols,
+                  View<double, 2> vals);
+template <int D>
+void darcy_gravity(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                   View<const double> open, double coef, double rho_w,
+                   const std::array<double, D>& gravity, View<double> rhs);
+template <int D>
+void darcy_apply(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                 View<const double> open, double coef, View<const double> y, View<double> out);
+// out_r += coef sum_faces |q_cc'| / mobility at the pressure y (gravity included): the size
+// of each cell's pore flow, a scale for a solve's tolerance (its flows do not cancel)
+template <int D>
+void darcy_magnitude(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
+                     View<const double> open, double coef, double rho_w,
+                     const std::array<double, D>& gravity, View<const double> y, View<double> out);
 
 // f_i += sum_c g_ci p_c (N; 2D N/m): the cells' pressure as the nodes' force (nnodes x D).
 template <int D>

@@ -22,6 +22,15 @@
 //                   ones, so sqrt(J2) = (sigma_1 - sigma_3)/2 and p = (sigma_1 + sigma_3)/2.
 // The equivalent plastic strain grows by (sqrt(J2') - k) / (sqrt(3) G) on a return
 // (sqrt(2/3 e_p:e_p) of the plastic strain increment e_p = (s' - s) / (2 G)).
+//
+// POROELASTIC, a saturated soil's skeleton (docs/method.md, "Saturated soil"): the stress
+// carried is the effective stress sigma' (volumetric part included), linear elastic with the
+// drained skeleton's Lame constants:
+//   sigma' <- sigma' + dt (2 G D + lambda tr(D) I + W sigma' - sigma' W)
+// (plane strain in 2D: the in-plane components), no yield. The pore pressure is the
+// projection's, whose constraint is the mixture's volume balance with Darcy's flow of the
+// pore water (cell_pressure.hpp: darcy_*), so the skeleton's volume changes only as the
+// water drains.
 #pragma once
 
 #include <algorithm>
@@ -37,11 +46,21 @@ namespace mpmflow {
 //   VON_MISES:      [shear_modulus, undrained_strength, strength_gradient, strength_datum]
 //   DRUCKER_PRAGER: [shear_modulus, sin(friction_angle), cohesion cos(friction_angle),
 //                    tension_cutoff]
+//   POROELASTIC:    [shear_modulus, lame (Pa: the drained skeleton's lambda), mobility
+//                    (m^2/(Pa s): the hydraulic conductivity over the water's unit weight at
+//                    standard gravity, k / (rho_w g_n)), water_density (kg/m^3)]
 constexpr int ELASTIC = 4;
 constexpr int VON_MISES = 5;
 constexpr int DRUCKER_PRAGER = 6;
+constexpr int POROELASTIC = 7;
 
-MPMFLOW_HD inline bool is_solid(int model) { return model >= ELASTIC && model <= DRUCKER_PRAGER; }
+MPMFLOW_HD inline bool is_solid(int model) { return model >= ELASTIC && model <= POROELASTIC; }
+
+// a saturated soil: its pore water flows through the skeleton (Darcy), with this mobility
+// (m^2/(Pa s); 0: none, every other material)
+MPMFLOW_HD inline double pore_mobility(int model, const double* par) {
+  return model == POROELASTIC ? par[2] : 0.0;
+}
 
 // The strength k (Pa) at pressure p (Pa) and height y (m); +inf: no yield.
 MPMFLOW_HD inline double strength(int model, const double* par, double p, double y) {
@@ -61,6 +80,26 @@ MPMFLOW_HD inline double update_stress(int model, const double* par, const doubl
                                        double p, double y, double* s) {
   const double G = par[0];
   double d[D * D], w[D * D], t[D * D];
+  if (model == POROELASTIC) {  // the effective stress, its volumetric part included
+    const double lame = par[1];
+    double trace = 0.0;
+    for (int k = 0; k < D; ++k) trace += L[k * D + k];
+    for (int k = 0; k < D; ++k)
+      for (int j = 0; j < D; ++j) {
+        d[k * D + j] =
+            0.5 * (L[k * D + j] + L[j * D + k]) + (k == j ? 0.5 * lame / G * trace : 0.0);
+        w[k * D + j] = 0.5 * (L[k * D + j] - L[j * D + k]);
+      }
+    for (int k = 0; k < D; ++k)
+      for (int j = 0; j < D; ++j) {
+        double spin = 0.0;
+        for (int m = 0; m < D; ++m)
+          spin += w[k * D + m] * s[m * D + j] - s[k * D + m] * w[m * D + j];
+        t[k * D + j] = s[k * D + j] + dt * (2.0 * G * d[k * D + j] + spin);
+      }
+    for (int i = 0; i < D * D; ++i) s[i] = t[i];
+    return 0.0;
+  }
   double trace = 0.0;
   for (int k = 0; k < D; ++k) trace += L[k * D + k];
   for (int k = 0; k < D; ++k)

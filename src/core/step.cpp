@@ -426,6 +426,13 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
     internal_forces<D>(grid_, P.x, P.volume, P.stress, order_.view(P.count()), start_.view(nc + 1),
                        node_mass_.view(nn), O.dt, force_.template sized<2>({nn, D}), v_star);
   }
+  if (T_.load.size() > 0) {  // the surface loads (boundaries/loads.py)
+    auto mass = node_mass_.view(nn);
+    parallel_for(nn, [&](index_t i) {
+      if (mass(i) > 0.0)
+        for (int k = 0; k < D; ++k) v_star(i, k) += O.dt * T_.load(i, k) / mass(i);
+    });
+  }
   if (obstacles_) extend_velocity<D>(grid_, ob_.onode, node_mass_.view(nn), v_old, v_star);
   clock.lap(PHASE_P2G);
   // with moving obstacles, a node beside one whose cells all hold material is inside it
@@ -678,17 +685,23 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
     if (grid_.periodic[k]) period[k] = grid_.cells[k];
   }
   auto v = v_c_.template view<2>({nn, D});
+  // a saturated soil: its pore water's flow between the cells joins each cell's constraint
+  const double darcy = O.rho / O.dt * pore_mobility(O.model, O.model_params.data());
+  if (shared && darcy > 0.0)  // (mpmflow.parallel.support refuses it by name)
+    throw std::logic_error("State: a saturated soil's pore flow runs in one process");
   index_t step_iterations = 0;
   while (true) {
     cell_hold();
     assemble_cells<D>(grid_, cell_row, rows, G, pc_P_.template view<3>({nn, D, D}), vol, cols,
                       vals);
+    darcy_matrix<D>(grid_, cell_row, rows, ob_.open, darcy, cols, vals);
     std::copy(v_star.data(), v_star.data() + nn * D, v.data());
     apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v, contact,
                 T_.wall_velocity);
     apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v, ocontact, View<const double>(),
                     ob_.velocity);
     cell_rhs<D>(grid_, rows, G, v, O.rho / O.dt, rhs);
+    darcy_gravity<D>(grid_, cell_row, rows, ob_.open, darcy, O.model_params[3], O.gravity, rhs);
     if (solver_)
       solver_->setup(cols, vals, rows);
     else
@@ -772,7 +785,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   auto cols = cols_.template view<2>({n, NS});
   auto vals = vals_.template view<2>({n, NS});
   auto scratch = scratch_.sized(n);
-  auto p_cell = p_cell_.view(nc);   // the split step's pressure: the first guess
+  auto p_cell = p_cell_.view(nc);    // the split step's pressure: the first guess
   auto field = cp_field_.sized(nc);  // a cell-indexed vector for correct_cells
   const double dt_rho = O.dt / O.rho, rho_dt = O.rho / O.dt;
   const double cell_volume = std::pow(grid_.h, D);
@@ -801,7 +814,12 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   // fraction: the elastic solve's own weight)
   index_t step_iterations = 0;
   auto weight = eta_weight_.view(nc);
-  const double per_volume = O.dt / (O.rho * cell_volume);
+  // (a saturated soil's skeleton resists a change of volume with 2 G + lambda where an
+  // incompressible solid's shear has 2 G: the weight grows by 1 + lambda / (2 G))
+  const double bulk = O.model == POROELASTIC ? 0.5 * O.model_params[1] / O.model_params[0] : 0.0;
+  const double per_volume = O.dt / (O.rho * cell_volume) * (1.0 + bulk);
+  // a saturated soil's pore flow (cell_pressure.hpp: darcy_*)
+  const double darcy = rho_dt * pore_mobility(O.model, O.model_params.data());
   auto precondition = [&](View<const double> res, View<double> out) {
     for (index_t k = 0; k < n; ++k) out(k) = 0.0;
     if (!counted_solve(O, report, cols, vals, rows, res, out, scratch, step_iterations, true))
@@ -814,21 +832,34 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
     for (index_t k = 0; k < n; ++k) sum += a(k) * b(k);
     return sum;
   };
-  // the scale: the size of the divergence's terms in v* (a sum of magnitudes, which does
-  // not vanish where v* is divergence-free already, as in simple shear)
-  double scale2 = 0.0;
-  for (index_t k = 0; k < n; ++k) {
-    const index_t first = grid_.cell_first_node(rows(k));
-    double t = 0.0;
-    for (int a = 0; a < NC; ++a)
-      for (int m = 0; m < D; ++m) t += std::abs(G(k, a, m) * v0(first + grid_.corner[a], m));
-    scale2 += rho_dt * rho_dt * t * t;
-  }
-  const double scale = scale2 > 0.0 ? std::sqrt(scale2) : 1.0;
+  // the scale: the size of the divergence's terms in v (a sum of magnitudes, which does
+  // not vanish where v is divergence-free already, as in simple shear), v* for a solid; for
+  // a saturated soil, those of the elastic velocity at the first pressure with the size of
+  // its pore flows: as it consolidates at steps long for its inertia, v* is the load's
+  // acceleration over the step, orders of magnitude above the velocity the pressure leaves
+  auto terms = [&](View<const double, 2> v, View<const double> y) {
+    auto t = q;  // (q: free until the iterations)
+    for (index_t k = 0; k < n; ++k) {
+      const index_t first = grid_.cell_first_node(rows(k));
+      double sum = 0.0;
+      for (int a = 0; a < NC; ++a)
+        for (int m = 0; m < D; ++m) sum += std::abs(G(k, a, m) * v(first + grid_.corner[a], m));
+      t(k) = sum;
+    }
+    darcy_magnitude<D>(grid_, cell_row, rows, ob_.open, darcy / rho_dt, O.model_params[3],
+                       O.gravity, y, t);
+    double scale2 = 0.0;
+    for (index_t k = 0; k < n; ++k) scale2 += rho_dt * rho_dt * t(k) * t(k);
+    return scale2 > 0.0 ? std::sqrt(scale2) : 1.0;
+  };
   for (index_t k = 0; k < n; ++k) pr(k) = p_cell(rows(k));
+  double scale = darcy > 0.0 ? 0.0 : terms(v0, pr);
   set_base(pr, true);
   if (!elastic_velocity(O, report, x)) return VISCOUS_NOT_CONVERGED;
   cell_rhs<D>(grid_, rows, G, x, rho_dt, r);  // the residual: x's divergence
+  darcy_gravity<D>(grid_, cell_row, rows, ob_.open, darcy, O.model_params[3], O.gravity, r);
+  darcy_apply<D>(grid_, cell_row, rows, ob_.open, -darcy, pr, r);  // and the pores' outflow
+  if (darcy > 0.0) scale = terms(x, pr);
   const double tol = 1e2 * O.tol * scale;
   index_t it = 0;
   double rz = 0.0;
@@ -854,11 +885,13 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
     }
     rz = dot(r, z);
     for (index_t k = 0; k < n; ++k) zold(k) = z(k);
-    // q = S d = -(rho / dt) C x_lin(d), x_lin the elastic velocity of the base -dt/rho V^-1 P G^T d
+    // q = S d = -(rho / dt) C x_lin(d) + (rho / dt) T d, x_lin the elastic velocity of the
+    // base -dt/rho V^-1 P G^T d, T the pores' flow (a saturated soil; else 0)
     set_base(d, false);
     if (!elastic_velocity(O, report, dx)) return VISCOUS_NOT_CONVERGED;
     cell_rhs<D>(grid_, rows, G, dx, rho_dt, q);
     for (index_t k = 0; k < n; ++k) q(k) = -q(k);
+    darcy_apply<D>(grid_, cell_row, rows, ob_.open, darcy, d, q);
     const double dq = dot(d, q);
     // S is positive definite: only rounding (or a fault) gets here
     if (!(dq > 0.0)) return not_converged();
@@ -1105,8 +1138,10 @@ index_t State<D>::viscous_system(const Options<D>& O) {
   auto vals = vvals_.template sized<3>({D, n, NS});
   auto rhs = vrhs_.sized(n);
   auto node = vnode_.sized(n);
+  // a saturated soil's skeleton: its bulk stiffness lambda dt beside the shear's G dt
+  const double grad_div = O.model == POROELASTIC ? O.model_params[1] / O.model_params[0] : 0.0;
   mpmflow::assemble<D>(grid_, T_.viscous_T, eta_weight_.view(nc), node_mass_.view(nn), O.dt, vu,
-                       vrow, voff, cols, vals, rhs, node);
+                       vrow, voff, cols, vals, rhs, node, grad_div);
   auto x = vx_.sized(n);
   for (index_t i = 0; i < nn; ++i)
     for (int k = 0; k < D; ++k)

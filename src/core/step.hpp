@@ -180,6 +180,9 @@ struct GridTables {
   Inlets<D> inlets;
   // damping zones: each node's rate (1/s; empty: none; sponges.hpp)
   View<const double> damping;
+  // surface loads: each node's share of the tractions on the loaded faces (nnodes x D, N;
+  // 2D N/m; empty: none), added to the predictor as v*_i += dt f_i / M_i where M_i > 0
+  View<const double, 2> load;
 };
 
 // The step's schedule, written once for every loop that takes steps (State::advance and

@@ -23,7 +23,7 @@ void node_rows(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix,
                const std::array<double, (1 << D) * (1 << D)>& Kg, View<const double> weight,
                View<const double> node_mass, double dt, View<const double, 2> u,
                View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
-               View<double, 3> vals, View<double> rhs, View<index_t> node) {
+               View<double, 3> vals, View<double> rhs, View<index_t> node, double grad_div) {
   constexpr int NC = 1 << D;
   constexpr int NS = stencil_size(D);
   constexpr int centre = NS / 2;
@@ -42,7 +42,7 @@ void node_rows(const Grid<D>& g, index_t i, const std::array<index_t, D>& ix,
       for (int bb = 0; bb < NC; ++bb) {
         const int s = st.slot[a][bb];
         for (int m = 0; m < D; ++m) {
-          double val = T(a, bb, m, k);
+          double val = T(a, bb, m, k) + grad_div * T(a, bb, k, m);
           if (m == k) val += Kg[a * NC + bb];
           S[m * NS + s] += w * val;
         }
@@ -223,7 +223,7 @@ template <int D>
 void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weight,
               View<const double> node_mass, double dt, View<const double, 2> u,
               View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
-              View<double, 3> vals, View<double> rhs, View<index_t> node) {
+              View<double, 3> vals, View<double> rhs, View<index_t> node, double grad_div) {
   constexpr int NC = 1 << D;
   const StencilTables<D> st = tables<D>(g);
   std::array<double, NC * NC> Kg{};
@@ -235,7 +235,8 @@ void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weig
     std::array<index_t, D> ix;
     g.node_coords(i, ix.data());
     if (g.is_image(ix.data())) return;  // an image's rows are its master's
-    node_rows<D>(g, i, ix, st, T, Kg, weight, node_mass, dt, u, row, off, cols, vals, rhs, node);
+    node_rows<D>(g, i, ix, st, T, Kg, weight, node_mass, dt, u, row, off, cols, vals, rhs, node,
+                 grad_div);
   });
 }
 
@@ -352,7 +353,7 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
   template void assemble<D>(const Grid<D>&, View<const double, 4>, View<const double>,            \
                             View<const double>, double, View<const double, 2>,                    \
                             View<const index_t, 2>, View<const index_t>, View<index_t, 3>,        \
-                            View<double, 3>, View<double>, View<index_t>);                        \
+                            View<double, 3>, View<double>, View<index_t>, double);                \
   template SolveResult solve<D>(const Grid<D>&, View<const index_t, 3>, View<const double, 3>,    \
                                 View<const index_t>, View<const index_t>, View<const double>,     \
                                 View<double>, double, index_t, int, std::array<Multigrid<D>, D>&, \

@@ -80,11 +80,13 @@ index_t number_unknowns(View<const double> node_mass, View<const index_t> wall_n
 // (D x n x 3^D, kg/s) the couplings of row r to component m (columns numbered within
 // component m, -1 empty), rhs (n, kg m/s^2) = M/dt u with the held values moved to it, and
 // node(r) the node of row r. T from gauss_gradients, weight from cell_viscosity (Pa s), dt (s).
+// grad_div: a compressible elastic skeleton's lambda / G (plasticity.hpp, POROELASTIC), whose
+// stiffness weight x grad_div int div(u) div(w) joins the deviatoric one (0: none).
 template <int D>
 void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weight,
               View<const double> node_mass, double dt, View<const double, 2> u,
               View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
-              View<double, 3> vals, View<double> rhs, View<index_t> node);
+              View<double, 3> vals, View<double> rhs, View<index_t> node, double grad_div = 0.0);
 
 // y = A x block by block (the Numba _apply); tmp: scratch of n values.
 void apply_blocks(View<const index_t, 3> cols, View<const double, 3> vals, View<const index_t> off,

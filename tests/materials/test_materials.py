@@ -511,5 +511,6 @@ def test_each_materials_code_is_the_compiled_rheologys():
         "elastic": state.ELASTIC,
         "von_mises": state.VON_MISES,
         "drucker_prager": state.DRUCKER_PRAGER,
+        "poroelastic": state.POROELASTIC,
     }
     assert {name: m.MODEL for name, m in materials.MATERIALS.items()} == core

@@ -16,6 +16,7 @@ void bind_solid(nb::module_& m) {
   m.attr("ELASTIC") = ELASTIC;
   m.attr("VON_MISES") = VON_MISES;
   m.attr("DRUCKER_PRAGER") = DRUCKER_PRAGER;
+  m.attr("POROELASTIC") = POROELASTIC;
   m.def(
       "update_stress",
       [](int model, Array<const double> par, Array<const double> L, double dt, double p, double y,

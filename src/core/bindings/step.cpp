@@ -356,7 +356,7 @@ void bind_dim(nb::module_& m) {
              std::vector<bool> outlet, nb::object wall_bonded, nb::object wall_velocity,
              nb::object inlet_axis, nb::object inlet_direction, nb::object inlet_speed,
              nb::object inlet_first, nb::object inlet_layer, nb::object inlet_spacing,
-             nb::object inlet_mass, nb::object inlet_volume, nb::object damping) {
+             nb::object inlet_mass, nb::object inlet_volume, nb::object damping, nb::object load) {
             new (self) S();
             auto& keep = self->keep;
             GridTables<D> T;
@@ -391,6 +391,9 @@ void bind_dim(nb::module_& m) {
             T.damping = table<double, 1>(damping, "damping", keep);
             if (T.damping.size() > 0 && T.damping.size() != nn)
               throw std::invalid_argument("State: damping needs one rate per node (or none)");
+            T.load = table<double, 2>(load, "load", keep);
+            if (T.load.size() > 0 && (T.load.extent(0) != nn || T.load.extent(1) != D))
+              throw std::invalid_argument("State: load needs nnodes x D forces (or none)");
             T.wall_velocity = table<double, 2>(wall_velocity, "wall_velocity", keep);
             if (T.wall_velocity.size() > 0 &&
                 (T.wall_velocity.extent(0) != nn || T.wall_velocity.extent(1) != D))

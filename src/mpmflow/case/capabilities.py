@@ -12,10 +12,11 @@ FEATURES = {
     "periodic": "periodic axes (domain.periodic)",
     "apic": 'APIC transfers (solver.transfer = "apic"; it transfers by FLIP/PIC only)',
     "outlets": 'outlets (domain.walls = "outlet")',
-    "solids": 'solids (material.model = "elastic", "von_mises" or "drucker_prager")',
+    "solids": 'solids (material.model = "elastic", "von_mises", "drucker_prager" or "poroelastic")',
     "bonded": 'bonded walls (domain.walls = "bonded")',
     "inlets": "inlets ([[inlets]])",
     "sponges": "damping zones ([[sponges]])",
+    "loads": "surface loads ([[loads]])",
 }
 
 # solver.scheme -> the FEATURES it supports
@@ -31,6 +32,7 @@ SUPPORTS: dict[str, frozenset[str]] = {
             "bonded",
             "inlets",
             "sponges",
+            "loads",
         }
     ),
     "explicit": frozenset(),

@@ -82,7 +82,7 @@ def _parse_value(text: str) -> Any:
 
 # lists of tables an override may replace whole, e.g. {"probes": [{"name": ..., ...}]} or
 # --set 'probes=[{name = "p1", quantity = "pressure", position = [0.42, 0.01]}]'
-LIST_KEYS = ("bodies", "obstacles", "probes", "inlets", "sponges")
+LIST_KEYS = ("bodies", "obstacles", "probes", "inlets", "sponges", "loads")
 
 
 def _generic(dotted: str) -> str:

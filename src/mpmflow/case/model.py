@@ -18,6 +18,8 @@ from . import capabilities, probe_data
 from .domain import Domain
 from .inlets import Inlet
 from .inlets import problem as inlet_problem
+from .loads import Load
+from .loads import problem as load_problem
 from .sections import (
     MAX_PRESSURE,
     MAX_STEPS,
@@ -91,6 +93,13 @@ class Case(Section):
         "relaxed towards rest, so that waves and what a body radiates leave instead of "
         "reflecting from the walls. The projection scheme only, one process.",
     )
+    loads: list[Load] = Field(
+        [],
+        description="Surface loads ([[loads]] tables: loads.N.axis, at, lower, upper, "
+        "traction): a traction (Pa) on a face of the material at a plane of the grid's nodes, "
+        "as a consolidation test's load on a column's top. The projection scheme only, one "
+        "process.",
+    )
     execution: Execution = Execution()
 
     _base_dir: Path | None = PrivateAttr(None)  # the case file's folder
@@ -146,6 +155,7 @@ class Case(Section):
             ),
             "inlets": (bool(self.inlets), "remove the [[inlets]]"),
             "sponges": (bool(self.sponges), "remove the [[sponges]]"),
+            "loads": (bool(self.loads), "remove the [[loads]]"),
         }
         name = self.solver.scheme
         for feature, (uses, instead) in used.items():
@@ -304,7 +314,9 @@ class Case(Section):
             self._base_dir = Path(info.context["base_dir"])
         size = self.domain.size
         self._same_dimension()
-        message = self._unsupported() or inlet_problem(self) or sponge_problem(self)
+        message = (
+            self._unsupported() or inlet_problem(self) or sponge_problem(self) or load_problem(self)
+        )
         if message:
             raise ValueError(message)
         if self.domain.uniform_walls() is None:
@@ -457,8 +469,10 @@ class Case(Section):
                     f"time.safety_factor = {self.time.safety_factor:g} of it), or lower "
                     "material.bulk_modulus"
                 )
-        if self.time.dt != "auto" and materials.coupled_step(
-            self.material, self.grid.spacing, self.time.dt
+        saturated = self.material.model in materials.SATURATED
+        if (self.time.dt == "auto" and saturated) or (
+            self.time.dt != "auto"
+            and materials.coupled_step(self.material, self.grid.spacing, self.time.dt)
         ):
             # past the solid's step the elastic solve and the projection are solved as one
             # system (State::coupled_solve), with the walls and the tools (obstacles on a
@@ -469,7 +483,7 @@ class Case(Section):
             # nor with plastic flow: each step's return to the yield surface acts on the
             # whole long increment after the solve (no plastic tangent in it), and a
             # footing on Tresca clay bore 2 s_u at 2.5 times the step against 5 s_u at it
-            plastic = self.material.model != "elastic"
+            plastic = self.material.model in materials.PLASTIC
             held = [
                 name
                 for name, on in (
@@ -479,6 +493,13 @@ class Case(Section):
                 )
                 if on
             ]
+            if held and saturated:
+                raise ValueError(
+                    f"material.model = {self.material.model!r}: a saturated soil takes the "
+                    "elastic solve and the projection as one system at every step, which takes "
+                    f'no {" or ".join(held)} yet (docs/method.md, "Saturated soil"): remove '
+                    "them"
+                )
             if held:
                 solid_step = materials.shear_wave_step(self.material, self.grid.spacing)
                 c = (self.material.shear_modulus / self.material.density) ** 0.5

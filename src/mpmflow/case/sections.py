@@ -59,10 +59,14 @@ class Material(Section):
         'with a stress history on its particles: "elastic" (shear_modulus), "von_mises" '
         "(undrained clay: shear_modulus, undrained_strength, strength_gradient, "
         'strength_datum) or "drucker_prager" (frictional soil matched to Mohr-Coulomb in '
-        "plane strain: shear_modulus, friction_angle, cohesion, tension_cutoff). Each takes "
+        "plane strain: shear_modulus, friction_angle, cohesion, tension_cutoff); or a "
+        'saturated soil, "poroelastic" (a linear elastic skeleton with pore water flowing '
+        "through it by Darcy's law: shear_modulus, poisson_ratio, permeability, "
+        'water_density; docs/method.md, "Saturated soil"). Each takes '
         "only its own parameters; the viscous stress is solved implicitly (docs/method.md, "
         '"Viscous materials"), and so is a solid\'s elastic step (docs/method.md, '
-        '"Solids"); every material is incompressible.',
+        '"Solids"); every material is incompressible (a saturated soil\'s grains and water '
+        "are: it changes its volume only as its water drains).",
     )
     density: float = Field(
         1000.0,
@@ -156,6 +160,26 @@ class Material(Section):
         0.0,
         description='Tension (Pa) model = "drucker_prager" bears before it parts: where the '
         "pressure is below -tension_cutoff the soil carries no deviatoric stress.",
+    )
+    poisson_ratio: float = Field(
+        0.3,
+        description='Poisson\'s ratio nu of the drained skeleton of model = "poroelastic" '
+        "(0 to 0.5, 0.5 excluded; soils 0.2-0.35): with shear_modulus it gives the "
+        "skeleton's bulk stiffness, lambda = 2 G nu / (1 - 2 nu), and its constrained "
+        "modulus lambda + 2 G, which sets the consolidation coefficient c_v = k (lambda + "
+        "2 G) / (water_density g_n).",
+    )
+    permeability: float = Field(
+        1e-6,
+        description='Hydraulic conductivity k (m/s) of model = "poroelastic" (Darcy\'s law: '
+        "the water's flux relative to the skeleton is -k / (water_density g_n) (grad p - "
+        "water_density g), g_n = 9.80665 m/s^2 whatever physics.gravity; clay 1e-9, silt "
+        "1e-7, sand 1e-4). The step does not depend on it.",
+    )
+    water_density: float = Field(
+        1000.0,
+        description='Density (kg/m^3) of the pore water of model = "poroelastic"; '
+        "material.density is then the saturated soil's (grains and water).",
     )
     bulk_modulus: float = Field(
         2.2e9,

@@ -23,7 +23,16 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from ..arrays import Floats
-from . import drucker_prager, elastic, herschel_bulkley, mu_i, newtonian, von_mises, water
+from . import (
+    drucker_prager,
+    elastic,
+    herschel_bulkley,
+    mu_i,
+    newtonian,
+    poroelastic,
+    von_mises,
+    water,
+)
 
 if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
     from ..case.sections import Material
@@ -49,9 +58,15 @@ _MODULES: tuple[Model, ...] = (
     elastic,
     von_mises,
     drucker_prager,
+    poroelastic,
 )
 # the solids: a stress history on the particles (src/core/plasticity.hpp), no viscous solve
-SOLIDS = frozenset({elastic.NAME, von_mises.NAME, drucker_prager.NAME})
+SOLIDS = frozenset({elastic.NAME, von_mises.NAME, drucker_prager.NAME, poroelastic.NAME})
+# a saturated soil: its pore water flows through the skeleton (Darcy), the pore pressure the
+# projection's (src/core/cell_pressure.hpp, darcy_*)
+SATURATED = frozenset({poroelastic.NAME})
+# the solids that yield (a return to their strength each step)
+PLASTIC = frozenset({von_mises.NAME, drucker_prager.NAME})
 MATERIALS: dict[str, Model] = {m.NAME: m for m in _MODULES}
 COMMON = ("model", "density", "bulk_modulus")
 
@@ -117,5 +132,8 @@ def shear_wave_step(m: Material, spacing: float) -> float:
 
 def coupled_step(m: Material, spacing: float, dt: float) -> bool:
     """Whether steps of dt (s) on cells of side ``spacing`` (m) take a solid's coupled step
-    (the elastic solve and the projection as one system: past ``shear_wave_step``)."""
+    (the elastic solve and the projection as one system: past ``shear_wave_step``), and
+    every step of a saturated soil, whose consolidation takes steps far past it."""
+    if m.model in SATURATED:
+        return True
     return dt > shear_wave_step(m, spacing) * (1 + 1e-9)

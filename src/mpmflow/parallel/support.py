@@ -42,6 +42,14 @@ def refusals(case: Case) -> list[str]:
         out.append("inlets are not split over ranks yet: remove the [[inlets]]")
     if case.sponges:
         out.append("damping zones are not split over ranks yet: remove the [[sponges]]")
+    if case.loads:
+        out.append("surface loads are not split over ranks yet: remove the [[loads]]")
+    if case.material.model in materials.SATURATED:
+        out.append(
+            f"a saturated soil (material.model = {case.material.model!r}) takes the coupled "
+            "elastic-pressure solve at every step and its pore flow between the cells, which "
+            "are not split over ranks yet: run it on one process"
+        )
     if any(m is not None and m.type == "free" for m in moving.motions(case)):
         out.append(
             "free bodies are not split over ranks yet (their coupling to the pressure is "

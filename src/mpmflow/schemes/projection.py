@@ -17,7 +17,7 @@ from typing_extensions import Self
 
 from .. import materials, state
 from ..arrays import Floats
-from ..boundaries import inlets, moving, obstacles, outlets, sponges, walls
+from ..boundaries import inlets, loads, moving, obstacles, outlets, sponges, walls
 from ..case import capabilities
 from ..errors import CaseError, SolverError
 from ..grid import Grid
@@ -175,6 +175,7 @@ class ProjectionScheme:
             held=self.inlets.held if self.inlets.present else None,
             inlets=self.inlets.core() if self.inlets.present else None,
             damping=sponges.rates(case, grid),
+            load=loads.nodal(case, grid),
         )
         # obstacles moving along prescribed paths (src/core/bodies.hpp), placed at t = 0
         self.movers = moving.of_case(case)

@@ -449,6 +449,7 @@ def step_state(
     held: Floats | None = None,
     inlets: Sequence[Floats | Ints] | None = None,
     damping: Floats | None = None,
+    load: Floats | None = None,
 ) -> CoreState:
     """The compiled step's state for a grid (``mpmflow.grid.Grid``): ``walls`` = (node,
     axis, sign, no_slip) of the domain walls (``wall_pairs`` and a flag per pair), ``solids`` the obstacles' tables
@@ -464,7 +465,8 @@ def step_state(
     is held to where its wall holds the material (an inlet's inflow); ``inlets`` the inlets'
     tables (axis, direction, speed, first, layer, spacing, mass, volume:
     ``boundaries.inlets.Tables.core``; None: none); ``damping`` each node's damping rate
-    (1/s, ``boundaries.sponges.rates``; None: no damping zone).
+    (1/s, ``boundaries.sponges.rates``; None: no damping zone); ``load`` each node's share of
+    the surface loads (nnodes x D, N; 2D N/m; ``boundaries.loads.nodal``; None: none).
     The state keeps its own work arrays from step to step."""
     D = grid.dim
     cls: Callable[..., CoreState] = _core.State2 if D == 2 else _core.State3
@@ -501,6 +503,7 @@ def step_state(
         arrays.floats(np.zeros((0, D)) if held is None else held),
         *_inlet_tables(D, inlets),
         arrays.floats(np.zeros(0) if damping is None else damping),
+        arrays.floats(np.zeros((0, D)) if load is None else load),
     )
 
 

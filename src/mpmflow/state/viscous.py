@@ -22,6 +22,7 @@ MU_I: int = _core.MU_I
 ELASTIC: int = _core.ELASTIC
 VON_MISES: int = _core.VON_MISES
 DRUCKER_PRAGER: int = _core.DRUCKER_PRAGER
+POROELASTIC: int = _core.POROELASTIC
 update_stress = _core.update_stress
 
 
