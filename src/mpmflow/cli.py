@@ -95,6 +95,7 @@ VALIDATION_CASES = (
     "heave_cylinder",
     "wave_maker",
     "archimedes",
+    "terzaghi",
 )
 
 

@@ -29,6 +29,7 @@ from . import (
     lobovsky,
     long_run,
     materials,
+    saturated,
     sloshing,
     solids,
     spheric,
@@ -69,6 +70,7 @@ CASES: dict[str, CaseRun] = {
     "heave_cylinder": bodies.run,
     "wave_maker": bodies.run_wave_maker,
     "archimedes": bodies.run_archimedes,
+    "terzaghi": saturated.run_terzaghi,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
 EXAMPLE_FILES = {
@@ -93,6 +95,7 @@ EXAMPLE_FILES = {
     "heave_cylinder": ("heave_cylinder.toml",),
     "wave_maker": ("wave_maker.toml",),
     "archimedes": ("floating_box.toml", "heave_cylinder.toml"),
+    "terzaghi": ("terzaghi.toml",),
 }  # the examples/ files each runs
 
 
