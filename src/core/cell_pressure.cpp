@@ -183,14 +183,22 @@ void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> 
 
 namespace {
 
-// f(axis, side (-1 or 1), neighbour's row (-1: none), drained) for each face of row r's
-// cell through which the pore water may flow: to a cell in the system (its row) or to a
-// drained one (no material, open); not through a wall or to a closed cell
+// f(axis, side (-1 or 1), neighbour's row (-1: none), wp, wg) for each face of row r's cell
+// through which pore water flows, wp and wg the weights of its pressure difference and of
+// its gravity term (cell_pressure.hpp): between two cells of soil (1, 1); between soil and
+// free water (2, 2: the water's half of the path has no resistance, its pressure
+// hydrostatic to the face); from soil to a cell without material (drained: the neighbour's
+// row -1, p = 0 at the face; 2, 1). Not through a wall, into a cell an obstacle closes,
+// between two cells of free water (its own velocity carries it) or from free water to an
+// empty cell. water: each cell's share of free water (empty: none; half or more: the free
+// water's cell).
 template <int D, class F>
 void darcy_faces(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                 View<const double> open, index_t r, F&& f) {
+                 View<const double> open, View<const double> water, index_t r, F&& f) {
   std::array<index_t, D> cx;
-  g.cell_coords(rows(r), cx.data());
+  const index_t c = rows(r);
+  g.cell_coords(c, cx.data());
+  const bool wet = water.size() > 0 && water(c) >= 0.5;
   for (int k = 0; k < D; ++k)
     for (int side = -1; side <= 1; side += 2) {
       const index_t j = g.wrap_cell(k, cx[k] + side);
@@ -198,10 +206,14 @@ void darcy_faces(const Grid<D>& g, View<const index_t> cell_row, View<const inde
       index_t c2 = 0;
       for (int m = 0; m < D; ++m) c2 += (m == k ? j : cx[m]) * g.cs[m];
       const index_t r2 = cell_row(c2);
-      if (r2 >= 0)
-        f(k, side, r2, false);
-      else if (open.size() == 0 || open(c2) > 0.0)
-        f(k, side, index_t(-1), true);
+      if (r2 >= 0) {
+        const bool wet2 = water.size() > 0 && water(c2) >= 0.5;
+        if (wet && wet2) continue;
+        const double w = wet == wet2 ? 1.0 : 2.0;
+        f(k, side, r2, w, w);
+      } else if (!wet && (open.size() == 0 || open(c2) > 0.0)) {
+        f(k, side, index_t(-1), 2.0, 1.0);
+      }
     }
 }
 
@@ -209,50 +221,50 @@ void darcy_faces(const Grid<D>& g, View<const index_t> cell_row, View<const inde
 
 template <int D>
 void darcy_matrix(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                  View<const double> open, double coef, View<index_t, 2> cols,
-                  View<double, 2> vals) {
+                  View<const double> open, View<const double> water, double coef,
+                  View<index_t, 2> cols, View<double, 2> vals) {
   constexpr int NS = stencil_size(D);
   if (coef == 0.0) return;
   const double tau = coef * int_power(g.h, D - 2);  // coef h^(D-1) / h
   parallel_for(rows.size(), [&](index_t r) {
-    darcy_faces<D>(g, cell_row, rows, open, r, [&](int k, int side, index_t r2, bool drained) {
-      if (drained) {
-        vals(r, NS / 2) += 2.0 * tau;
-        return;
-      }
-      int stride = 1;
-      for (int m = 0; m < k; ++m) stride *= 3;
-      const int slot = NS / 2 + side * stride;
-      cols(r, slot) = r2;
-      vals(r, slot) -= tau;
-      vals(r, NS / 2) += tau;
-    });
+    darcy_faces<D>(g, cell_row, rows, open, water, r,
+                   [&](int k, int side, index_t r2, double wp, double) {
+                     vals(r, NS / 2) += wp * tau;
+                     if (r2 < 0) return;
+                     int stride = 1;
+                     for (int m = 0; m < k; ++m) stride *= 3;
+                     const int slot = NS / 2 + side * stride;
+                     cols(r, slot) = r2;
+                     vals(r, slot) -= wp * tau;
+                   });
   });
 }
 
 template <int D>
 void darcy_gravity(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                   View<const double> open, double coef, double rho_w,
+                   View<const double> open, View<const double> water, double coef, double rho_w,
                    const std::array<double, D>& gravity, View<double> rhs) {
   if (coef == 0.0) return;
   const double face = coef * rho_w * int_power(g.h, D - 1);
   parallel_for(rows.size(), [&](index_t r) {
     double sum = 0.0;
-    darcy_faces<D>(g, cell_row, rows, open, r,
-                   [&](int k, int side, index_t, bool) { sum += side * gravity[k]; });
+    darcy_faces<D>(
+        g, cell_row, rows, open, water, r,
+        [&](int k, int side, index_t, double, double wg) { sum += wg * side * gravity[k]; });
     rhs(r) -= face * sum;
   });
 }
 
 template <int D>
 void darcy_apply(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                 View<const double> open, double coef, View<const double> y, View<double> out) {
+                 View<const double> open, View<const double> water, double coef,
+                 View<const double> y, View<double> out) {
   if (coef == 0.0) return;
   const double tau = coef * int_power(g.h, D - 2);
   parallel_for(rows.size(), [&](index_t r) {
     double sum = 0.0;
-    darcy_faces<D>(g, cell_row, rows, open, r, [&](int, int, index_t r2, bool drained) {
-      sum += drained ? 2.0 * y(r) : y(r) - y(r2);
+    darcy_faces<D>(g, cell_row, rows, open, water, r, [&](int, int, index_t r2, double wp, double) {
+      sum += wp * (r2 < 0 ? y(r) : y(r) - y(r2));
     });
     out(r) += tau * sum;
   });
@@ -260,16 +272,17 @@ void darcy_apply(const Grid<D>& g, View<const index_t> cell_row, View<const inde
 
 template <int D>
 void darcy_magnitude(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                     View<const double> open, double coef, double rho_w,
+                     View<const double> open, View<const double> water, double coef, double rho_w,
                      const std::array<double, D>& gravity, View<const double> y, View<double> out) {
   if (coef == 0.0) return;
   const double tau = int_power(g.h, D - 2), face = rho_w * int_power(g.h, D - 1);
   parallel_for(rows.size(), [&](index_t r) {
     double sum = 0.0;
-    darcy_faces<D>(g, cell_row, rows, open, r, [&](int k, int side, index_t r2, bool drained) {
-      const double dp = drained ? 2.0 * y(r) : y(r) - y(r2);
-      sum += std::abs(tau * dp + face * side * gravity[k]);
-    });
+    darcy_faces<D>(g, cell_row, rows, open, water, r,
+                   [&](int k, int side, index_t r2, double wp, double wg) {
+                     const double dp = r2 < 0 ? y(r) : y(r) - y(r2);
+                     sum += std::abs(wp * tau * dp + wg * face * side * gravity[k]);
+                   });
     out(r) += coef * sum;
   });
 }
@@ -415,15 +428,18 @@ void cell_to_nodes(const Grid<D>& g, View<const index_t> cell_slot, View<const d
   template void cell_rhs<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,            \
                             View<const double, 2>, double, View<double>);                          \
   template void darcy_matrix<D>(const Grid<D>&, View<const index_t>, View<const index_t>,          \
-                                View<const double>, double, View<index_t, 2>, View<double, 2>);    \
+                                View<const double>, View<const double>, double, View<index_t, 2>,  \
+                                View<double, 2>);                                                  \
   template void darcy_gravity<D>(const Grid<D>&, View<const index_t>, View<const index_t>,         \
-                                 View<const double>, double, double, const std::array<double, D>&, \
-                                 View<double>);                                                    \
+                                 View<const double>, View<const double>, double, double,           \
+                                 const std::array<double, D>&, View<double>);                      \
   template void darcy_apply<D>(const Grid<D>&, View<const index_t>, View<const index_t>,           \
-                               View<const double>, double, View<const double>, View<double>);      \
-  template void darcy_magnitude<D>(                                                                \
-      const Grid<D>&, View<const index_t>, View<const index_t>, View<const double>, double,        \
-      double, const std::array<double, D>&, View<const double>, View<double>);                     \
+                               View<const double>, View<const double>, double, View<const double>, \
+                               View<double>);                                                      \
+  template void darcy_magnitude<D>(const Grid<D>&, View<const index_t>, View<const index_t>,       \
+                                   View<const double>, View<const double>, double, double,         \
+                                   const std::array<double, D>&, View<const double>,               \
+                                   View<double>);                                                  \
   template void add_cell_forces<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,     \
                                    View<const double>, View<double, 2>);                           \
   template void correct_cells<D>(const Grid<D>&, View<const index_t>, View<const double, 3>,       \

@@ -106,20 +106,21 @@ void cell_rhs(const Grid<D>& g, View<const index_t> rows, View<const double, 3> 
 // fraction (empty: no obstacles).
 template <int D>
 void darcy_matrix(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                  View<const double> open, double coef, View<index_t, 2> cols,
-                  View<double, 2> vals);
+                  View<const double> open, View<const double> water, double coef,
+                  View<index_t, 2> cols, View<double, 2> vals);
 template <int D>
 void darcy_gravity(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                   View<const double> open, double coef, double rho_w,
+                   View<const double> open, View<const double> water, double coef, double rho_w,
                    const std::array<double, D>& gravity, View<double> rhs);
 template <int D>
 void darcy_apply(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                 View<const double> open, double coef, View<const double> y, View<double> out);
+                 View<const double> open, View<const double> water, double coef,
+                 View<const double> y, View<double> out);
 // out_r += coef sum_faces |q_cc'| / mobility at the pressure y (gravity included): the size
 // of each cell's pore flow, a scale for a solve's tolerance (its flows do not cancel)
 template <int D>
 void darcy_magnitude(const Grid<D>& g, View<const index_t> cell_row, View<const index_t> rows,
-                     View<const double> open, double coef, double rho_w,
+                     View<const double> open, View<const double> water, double coef, double rho_w,
                      const std::array<double, D>& gravity, View<const double> y, View<double> out);
 
 // f_i += sum_c g_ci p_c (N; 2D N/m): the cells' pressure as the nodes' force (nnodes x D).

@@ -62,6 +62,13 @@ MPMFLOW_HD inline double pore_mobility(int model, const double* par) {
   return model == POROELASTIC ? par[2] : 0.0;
 }
 
+// A saturated soil's free water (the reservoir above a seabed): its particles carry the
+// water's density (mass / volume = water_density; the mixture's is above it, which the
+// material's check holds), no skeleton and no stress.
+MPMFLOW_HD inline bool free_water(int model, const double* par, double mass, double volume) {
+  return model == POROELASTIC && mass <= par[3] * volume * (1.0 + 1e-9);
+}
+
 // The strength k (Pa) at pressure p (Pa) and height y (m); +inf: no yield.
 MPMFLOW_HD inline double strength(int model, const double* par, double p, double y) {
   if (model == VON_MISES) return par[1] + par[2] * std::max(0.0, par[3] - y);

@@ -46,6 +46,22 @@ void yielded_share(const Grid<D>& g, View<const double> mass, View<const double>
 }
 
 template <int D>
+void water_share(const Grid<D>& g, View<const double> mass, View<const double> volume,
+                 double water_density, View<const index_t> order, View<const index_t> start,
+                 View<double> share) {
+  const double par[4] = {0.0, 0.0, 0.0, water_density};
+  parallel_for(g.ncells, [&](index_t c) {
+    double m = 0.0, w = 0.0;
+    for (index_t s = start(c); s < start(c + 1); ++s) {
+      const index_t p = order(s);
+      m += mass(p);
+      if (free_water(POROELASTIC, par, mass(p), volume(p))) w += mass(p);
+    }
+    share(c) = m > 0.0 ? w / m : 0.0;
+  });
+}
+
+template <int D>
 void stress_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
                    View<const double, 3> stress, View<const index_t> order,
                    View<const index_t> start, View<double, 2> acc) {
@@ -86,14 +102,15 @@ void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const doubl
 
 template <int D>
 index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                        View<const double, 2> v_grid, View<const double> p_node, double dt,
-                        int model, View<const double> par, View<double, 3> stress,
-                        View<double> plastic_strain, View<double> yielding) {
+                        View<const double> volume, View<const double, 2> v_grid,
+                        View<const double> p_node, double dt, int model, View<const double> par,
+                        View<double, 3> stress, View<double> plastic_strain,
+                        View<double> yielding) {
   constexpr int NC = Grid<D>::NC;
   return reduce_chunks<index_t>(x.extent(0), [&](index_t lo, index_t hi) {
     index_t yielded = 0;
     for (index_t p = lo; p < hi; ++p) {
-      if (mass(p) == 0.0) continue;
+      if (mass(p) == 0.0 || free_water(model, par.data(), mass(p), volume(p))) continue;
       double w[NC], frac[D], L[D * D] = {}, s[D * D];
       const index_t base = g.weights_at(&x(p, 0), w);
       g.locate(&x(p, 0), frac);
@@ -122,6 +139,8 @@ index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const do
 #define MPMFLOW_SOLID(D)                                                                          \
   template void yielded_share<D>(const Grid<D>&, View<const double>, View<const double>,          \
                                  View<const index_t>, View<const index_t>, View<double>);         \
+  template void water_share<D>(const Grid<D>&, View<const double>, View<const double>, double,    \
+                               View<const index_t>, View<const index_t>, View<double>);           \
   template void stress_forces<D>(const Grid<D>&, View<const double, 2>, View<const double>,       \
                                  View<const double, 3>, View<const index_t>, View<const index_t>, \
                                  View<double, 2>);                                                \
@@ -130,9 +149,9 @@ index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const do
                                    View<const index_t>, View<const double>, double,               \
                                    View<double, 2>, View<double, 2>);                             \
   template index_t update_stresses<D>(const Grid<D>&, View<const double, 2>, View<const double>,  \
-                                      View<const double, 2>, View<const double>, double, int,     \
-                                      View<const double>, View<double, 3>, View<double>,          \
-                                      View<double>);
+                                      View<const double>, View<const double, 2>,                  \
+                                      View<const double>, double, int, View<const double>,        \
+                                      View<double, 3>, View<double>, View<double>);
 MPMFLOW_SOLID(2)
 MPMFLOW_SOLID(3)
 #undef MPMFLOW_SOLID

@@ -43,16 +43,26 @@ template <int D>
 void yielded_share(const Grid<D>& g, View<const double> mass, View<const double> yielding,
                    View<const index_t> order, View<const index_t> start, View<double> share);
 
+// A saturated soil's cells: each one's share (by mass) of free water (plasticity.hpp,
+// free_water; 0 to 1, 0 in cells without particles). The elastic solve takes the skeleton's
+// share of a cell's stiffness, and a cell with at least half of it free water is the free
+// water's in the pore flow (cell_pressure.hpp, darcy_*). Particles binned.
+template <int D>
+void water_share(const Grid<D>& g, View<const double> mass, View<const double> volume,
+                 double water_density, View<const index_t> order, View<const index_t> start,
+                 View<double> share);
+
 // The stress of the first n particles (n = x.extent(0)) over a step dt (s): the velocity
 // gradient of v_grid (nn x D, m/s: the corrected grid velocity) and the pressure p_node (Pa)
 // interpolated at x_p (the positions at the step's start), then update_stress (plasticity.hpp)
 // with the material model and its parameters par. plastic_strain (n) accumulates the equivalent
 // plastic strain; yielding (n) is set to 1 where the particle yielded in this step, else 0.
-// Particles of mass 0 (retired through an outlet) are skipped. Returns how many yielded.
+// Particles of mass 0 (retired through an outlet) are skipped, and a saturated soil's free
+// water (plasticity.hpp: free_water; volume, m^3) keeps no stress. Returns how many yielded.
 template <int D>
 index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                        View<const double, 2> v_grid, View<const double> p_node, double dt,
-                        int model, View<const double> par, View<double, 3> stress,
-                        View<double> plastic_strain, View<double> yielding);
+                        View<const double> volume, View<const double, 2> v_grid,
+                        View<const double> p_node, double dt, int model, View<const double> par,
+                        View<double, 3> stress, View<double> plastic_strain, View<double> yielding);
 
 }  // namespace mpmflow

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -423,6 +424,9 @@ void State<D>::scatter(const Particles<D>& P, const Options<D>& O, bool correct)
   if (solid_scattered_) {  // a solid: its cells' yielded share, its old stress's force
     yielded_share<D>(grid_, P.mass, P.yielding, order_.view(P.count()), start_.view(nc + 1),
                      cell_yield_.sized(nc));
+    if (O.model == POROELASTIC)  // a saturated soil's cells: their share of free water
+      water_share<D>(grid_, P.mass, P.volume, O.model_params[3], order_.view(P.count()),
+                     start_.view(nc + 1), cell_water_.sized(nc));
     internal_forces<D>(grid_, P.x, P.volume, P.stress, order_.view(P.count()), start_.view(nc + 1),
                        node_mass_.view(nn), O.dt, force_.template sized<2>({nn, D}), v_star);
   }
@@ -645,6 +649,12 @@ void State<D>::cell_hold() {
 }
 
 template <int D>
+View<const double> State<D>::water_cells(const Options<D>& O) {
+  if (O.model != POROELASTIC || !solid_scattered_) return {};
+  return cell_water_.view(grid_.ncells);
+}
+
+template <int D>
 int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
   // on a rank: its local cells' rows (its own and the ghost layer's, whose particles the halo
   // brings), solved over the ranks by its solver, which numbers the rows each rank owns and
@@ -694,14 +704,15 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
     cell_hold();
     assemble_cells<D>(grid_, cell_row, rows, G, pc_P_.template view<3>({nn, D, D}), vol, cols,
                       vals);
-    darcy_matrix<D>(grid_, cell_row, rows, ob_.open, darcy, cols, vals);
+    darcy_matrix<D>(grid_, cell_row, rows, ob_.open, water_cells(O), darcy, cols, vals);
     std::copy(v_star.data(), v_star.data() + nn * D, v.data());
     apply_walls(T_.wall_node, T_.wall_axis, T_.wall_sign, T_.wall_no_slip, v, contact,
                 T_.wall_velocity);
     apply_obstacles(ob_.onode, ob_.onormal, ob_.ono_slip, v, ocontact, View<const double>(),
                     ob_.velocity);
     cell_rhs<D>(grid_, rows, G, v, O.rho / O.dt, rhs);
-    darcy_gravity<D>(grid_, cell_row, rows, ob_.open, darcy, O.model_params[3], O.gravity, rhs);
+    darcy_gravity<D>(grid_, cell_row, rows, ob_.open, water_cells(O), darcy, O.model_params[3],
+                     O.gravity, rhs);
     if (solver_)
       solver_->setup(cols, vals, rows);
     else
@@ -837,7 +848,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
   // a saturated soil, those of the elastic velocity at the first pressure with the size of
   // its pore flows: as it consolidates at steps long for its inertia, v* is the load's
   // acceleration over the step, orders of magnitude above the velocity the pressure leaves
-  auto terms = [&](View<const double, 2> v, View<const double> y) {
+  auto terms = [&](View<const double, 2> v, View<const double> y, bool flows) {
     auto t = q;  // (q: free until the iterations)
     for (index_t k = 0; k < n; ++k) {
       const index_t first = grid_.cell_first_node(rows(k));
@@ -846,21 +857,33 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
         for (int m = 0; m < D; ++m) sum += std::abs(G(k, a, m) * v(first + grid_.corner[a], m));
       t(k) = sum;
     }
-    darcy_magnitude<D>(grid_, cell_row, rows, ob_.open, darcy / rho_dt, O.model_params[3],
-                       O.gravity, y, t);
+    if (flows)
+      darcy_magnitude<D>(grid_, cell_row, rows, ob_.open, water_cells(O), darcy / rho_dt,
+                         O.model_params[3], O.gravity, y, t);
     double scale2 = 0.0;
     for (index_t k = 0; k < n; ++k) scale2 += rho_dt * rho_dt * t(k) * t(k);
     return scale2 > 0.0 ? std::sqrt(scale2) : 1.0;
   };
   for (index_t k = 0; k < n; ++k) pr(k) = p_cell(rows(k));
-  double scale = darcy > 0.0 ? 0.0 : terms(v0, pr);
+  double scale = darcy > 0.0 ? 0.0 : terms(v0, pr, false);
+  // (a saturated soil: the residual cannot fall below the rounding of the elastic velocity
+  // of v* without pressure, which free water at rest at a long step leaves at eps g dt)
+  double floor = 0.0;
+  if (darcy > 0.0) {
+    for (index_t k = 0; k < n; ++k) z(k) = 0.0;
+    set_base(z, true);
+    if (!elastic_velocity(O, report, x)) return VISCOUS_NOT_CONVERGED;
+    floor = 1e2 * std::numeric_limits<double>::epsilon() * terms(x, z, false);
+  }
   set_base(pr, true);
   if (!elastic_velocity(O, report, x)) return VISCOUS_NOT_CONVERGED;
   cell_rhs<D>(grid_, rows, G, x, rho_dt, r);  // the residual: x's divergence
-  darcy_gravity<D>(grid_, cell_row, rows, ob_.open, darcy, O.model_params[3], O.gravity, r);
-  darcy_apply<D>(grid_, cell_row, rows, ob_.open, -darcy, pr, r);  // and the pores' outflow
-  if (darcy > 0.0) scale = terms(x, pr);
-  const double tol = 1e2 * O.tol * scale;
+  darcy_gravity<D>(grid_, cell_row, rows, ob_.open, water_cells(O), darcy, O.model_params[3],
+                   O.gravity, r);
+  darcy_apply<D>(grid_, cell_row, rows, ob_.open, water_cells(O), -darcy, pr,
+                 r);  // and the pores' outflow
+  if (darcy > 0.0) scale = terms(x, pr, true);
+  const double tol = std::max(1e2 * O.tol * scale, floor);
   index_t it = 0;
   double rz = 0.0;
   // not converged: the report names the cell of the largest divergence left
@@ -891,7 +914,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
     if (!elastic_velocity(O, report, dx)) return VISCOUS_NOT_CONVERGED;
     cell_rhs<D>(grid_, rows, G, dx, rho_dt, q);
     for (index_t k = 0; k < n; ++k) q(k) = -q(k);
-    darcy_apply<D>(grid_, cell_row, rows, ob_.open, darcy, d, q);
+    darcy_apply<D>(grid_, cell_row, rows, ob_.open, water_cells(O), darcy, d, q);
     const double dq = dot(d, q);
     // S is positive definite: only rounding (or a fault) gets here
     if (!(dq > 0.0)) return not_converged();
@@ -1090,6 +1113,10 @@ void State<D>::viscous_start(const Options<D>& O, Report& report) {
     auto share = cell_yield_.view(nc);
     auto weight = eta_weight_.view(nc);
     for (index_t c = 0; c < nc; ++c) weight(c) *= 1.0 - share(c);
+    if (O.model == POROELASTIC) {  // a saturated soil's free water has no skeleton
+      auto water = cell_water_.view(nc);
+      for (index_t c = 0; c < nc; ++c) weight(c) *= 1.0 - water(c);
+    }
   }
   {
     const double cap = viscosity_cap(O.model, View<const double>(O.model_params.data(), {8}));
@@ -1441,9 +1468,10 @@ index_t State<D>::to_particles(const Particles<D>& all, const Options<D>& O, boo
     // back to the grid first (modified USL) were smoother than the motion, so the stress
     // fell behind the strain: a cantilever damped by PIC transfers came to rest 34% deeper
     // than its static deflection at h = H / 4, and within 1% of it from this velocity
-    update_stresses<D>(grid_, P.x, P.mass, v_new_.template view<2>({nn, D}), p_node_.view(nn), O.dt,
-                       O.model, View<const double>(O.model_params.data(), {8}), P.stress,
-                       P.plastic_strain, P.yielding);
+    update_stresses<D>(grid_, P.x, P.mass, P.volume, v_new_.template view<2>({nn, D}),
+                       p_node_.view(nn), O.dt, O.model,
+                       View<const double>(O.model_params.data(), {8}), P.stress, P.plastic_strain,
+                       P.yielding);
     if (bodies_.present()) {
       // the material's force on its tools: at each node a tool holds, the force the node
       // needs beyond its stress's (the deviatoric stress just updated, the cells' pressure)

@@ -572,6 +572,9 @@ class State {
   Buffer<double> force_;   // a solid's internal forces (solid.hpp; sized on its first step)
   // a solid's cells' share of particles that yielded in the last step (solid.hpp)
   Buffer<double> cell_yield_;
+  Buffer<double> cell_water_;  // a saturated soil's: each cell's share of free water
+  // the cells' shares of free water of a saturated soil's last scatter (empty: none)
+  View<const double> water_cells(const Options<D>& O);
   bool solid_scattered_ = false;  // the last scatter's particles carry a solid's stress
   bool held_still_ = false;       // viscous_system holds its held components at 0 (coupled_solve)
   bool rate_from_new_ = false;

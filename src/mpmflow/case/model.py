@@ -133,6 +133,28 @@ class Case(Section):
             )
         return self._shapes[key]
 
+    def _free_water_problem(self) -> str | None:
+        """Free water (bodies.N.free_water) is a saturated soil's; a geostatic start needs
+        gravity down the last axis."""
+        saturated = self.material.model in materials.SATURATED
+        for k, body in enumerate(self.bodies):
+            if body.free_water and not saturated:
+                return (
+                    f"bodies.{k}.free_water = true is the free water beside a saturated soil "
+                    f'(material.model = "poroelastic"), not of material.model = '
+                    f"{self.material.model!r}: remove it (the whole case's material is "
+                    "the body's)"
+                )
+        if saturated and self.material.initial_stress == "geostatic":
+            g = self.physics.gravity
+            if any(c != 0.0 for c in g[:-1]) or not g[-1] < 0.0:
+                return (
+                    'material.initial_stress = "geostatic" needs physics.gravity down the '
+                    f"last axis (its other components 0), not {g}: the skeleton's weight "
+                    'is taken along it; or give material.initial_stress = "zero"'
+                )
+        return None
+
     def _unsupported(self) -> str | None:
         """The message for a feature the case uses that its scheme does not support (each
         scheme's, ``capabilities.SUPPORTS``); None when there is none."""
@@ -315,7 +337,11 @@ class Case(Section):
         size = self.domain.size
         self._same_dimension()
         message = (
-            self._unsupported() or inlet_problem(self) or sponge_problem(self) or load_problem(self)
+            self._unsupported()
+            or inlet_problem(self)
+            or sponge_problem(self)
+            or load_problem(self)
+            or self._free_water_problem()
         )
         if message:
             raise ValueError(message)

@@ -176,6 +176,14 @@ class Material(Section):
         "water_density g), g_n = 9.80665 m/s^2 whatever physics.gravity; clay 1e-9, silt "
         "1e-7, sand 1e-4). The step does not depend on it.",
     )
+    initial_stress: Literal["zero", "geostatic"] = Field(
+        "zero",
+        description='The effective stress model = "poroelastic" starts from: "zero", or '
+        '"geostatic", the skeleton carrying its buoyant weight at rest: sigma\'_v = -(density '
+        "- water_density) |g| d, d the depth below the soil's top in the particle's column "
+        "(gravity along the last axis), and sigma'_h = nu / (1 - nu) sigma'_v (the confined "
+        "elastic skeleton's K0). A bed under still water then starts, and stays, at rest.",
+    )
     water_density: float = Field(
         1000.0,
         description='Density (kg/m^3) of the pore water of model = "poroelastic"; '

@@ -190,6 +190,13 @@ class _BodyFields(Section):
         "which spares it the acoustic transient of a column released without pressure; the "
         "projection scheme computes the pressure anew in its first step.",
     )
+    free_water: bool = Field(
+        False,
+        description="true = the body is free water beside a saturated soil (material.model = "
+        '"poroelastic"): particles of material.water_density with no skeleton, the '
+        "reservoir above a seabed; water flows between it and the soil's pores by Darcy's "
+        "law across their common faces. false: the saturated soil (or the material).",
+    )
 
 
 class Box(_BodyFields, _BoxShape):

@@ -40,7 +40,8 @@ def body_pieces(
     hydrostatic pressure."""
     body = case.bodies[k]
     spacing = grid.spacing / body.particles_per_cell
-    rho = case.material.density
+    # a saturated soil's free water (bodies.N.free_water): the water's density
+    rho = case.material.water_density if body.free_water else case.material.density
     down = np.asarray(case.physics.gravity, dtype=float)
     shape = None if is_box(body) else case.body_shape(k)
     lo, hi = seed_region(body, shape, spacing)

@@ -14,13 +14,22 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import numpy as np
+
+from ..arrays import Floats
 from . import elastic
 
 if TYPE_CHECKING:  # the case's schema lists the materials (case.sections imports this package)
     from ..case.sections import Material
 
 NAME = "poroelastic"
-KEYS: tuple[str, ...] = ("shear_modulus", "poisson_ratio", "permeability", "water_density")
+KEYS: tuple[str, ...] = (
+    "shear_modulus",
+    "poisson_ratio",
+    "permeability",
+    "water_density",
+    "initial_stress",
+)
 MODEL = 7  # src/core/plasticity.hpp's POROELASTIC (tests/materials check it against the core)
 # standard gravity (m/s^2): a hydraulic conductivity k (m/s) is the water's mobility times its
 # unit weight there, whatever the case's gravity (a weightless consolidation test has none)
@@ -72,3 +81,44 @@ def check(m: Material) -> None:
 
 def parameters(m: Material) -> list[float]:
     return [m.shear_modulus, lame(m), mobility(m), m.water_density]
+
+
+def free_water(m: Material, mass: Floats, volume: Floats) -> np.ndarray:
+    """Which particles are free water: those of the water's density (src/core/plasticity.hpp,
+    free_water; the mixture is denser, which ``check`` holds)."""
+    return np.asarray(mass <= m.water_density * volume * (1 + 1e-9))
+
+
+def geostatic_stress(
+    m: Material, x: Floats, mass: Floats, volume: Floats, gravity: Floats
+) -> Floats:
+    """The effective stress (count x D x D, Pa) of the skeleton at rest under its buoyant
+    weight (``initial_stress = "geostatic"``): sigma'_v = -(density - water_density) |g| d
+    along the last axis, d the depth below the soil's top in the particle's column (the
+    highest soil particle's centre plus half a particle spacing, spacing = volume^(1/D)),
+    sigma'_h = nu / (1 - nu) sigma'_v on the other axes; zero in free water. Gravity must
+    point down the last axis (ValueError)."""
+    n, D = x.shape
+    g = np.asarray(gravity, dtype=float)
+    if np.any(g[:-1] != 0.0) or not g[-1] < 0.0:
+        raise ValueError(
+            'material.initial_stress = "geostatic" needs physics.gravity down the last axis '
+            f"(its other components 0), not {list(g)}"
+        )
+    stress = np.zeros((n, D, D))
+    soil = ~free_water(m, mass, volume)
+    if not soil.any():
+        return stress
+    spacing = volume[soil] ** (1.0 / D)
+    key = np.round(x[soil, :-1] / (0.5 * spacing.min())).astype(np.int64)
+    _, column = np.unique(key, axis=0, return_inverse=True)
+    column = column.ravel()
+    top = np.full(column.max() + 1, -np.inf)
+    np.maximum.at(top, column, x[soil, -1] + 0.5 * spacing)
+    depth = top[column] - x[soil, -1]
+    vertical = -(m.density - m.water_density) * -g[-1] * depth
+    k0 = m.poisson_ratio / (1.0 - m.poisson_ratio)
+    for k in range(D - 1):
+        stress[soil, k, k] = k0 * vertical
+    stress[soil, D - 1, D - 1] = vertical
+    return stress

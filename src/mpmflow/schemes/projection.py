@@ -22,6 +22,7 @@ from ..case import capabilities
 from ..errors import CaseError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
+from ..materials import poroelastic
 from ..particles import Particles
 from ..stability import longest_projection_step, shallow_nodes
 from ..state import CoreOptions, CoreReport
@@ -214,6 +215,11 @@ class ProjectionScheme:
         D = self.grid.dim
         self.affine: Floats | None = np.zeros((P.count, D, D)) if self.apic else None
         self.history = solid_history(P.count, D) if self.solid else {}
+        m = self.case.material
+        if m.model in materials.SATURATED and m.initial_stress == "geostatic":
+            self.history["stress"][:] = poroelastic.geostatic_stress(
+                m, P.x, P.mass, P.volume, np.asarray(self.case.physics.gravity, dtype=float)
+            )
         # with outlets, the particles' own mass and volume: the core zeroes a retired one's
         self._own = (P.mass.copy(), P.volume.copy()) if self.open else None
 

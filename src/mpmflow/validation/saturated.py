@@ -1,4 +1,5 @@
-"""Saturated soil (issue 46): Terzaghi's one-dimensional consolidation.
+"""Saturated soil (issue 46): Terzaghi's one-dimensional consolidation, and still water
+over a saturated bed.
 
 The column of examples/terzaghi.toml: H = 1 m of saturated soil (density 2000 kg/m^3, a
 drained skeleton of G = 3.75 MPa and nu = 0.2, so a constrained modulus M = lambda + 2 G =
@@ -290,5 +291,84 @@ def run_terzaghi(out: Path, quick: bool = False, context: Context | None = None)
             ],
             k_lines,
         )
+    )
+    return res
+
+
+TOL_REST = 1e-6
+WHY_REST = (
+    "the issue's: still water over a saturated bed stays at rest, its pore pressure "
+    "hydrostatic to 1e-6 rho_w g H"
+)
+WHY_SPEED = "a column at rest stays at rest (the soil issue's 1e-6 m/s for an elastic column)"
+
+
+def still_bed(sets: list[str] | None = None) -> dict[str, Any]:
+    """Run examples/seabed.toml (with ``sets``); returns the largest |p - rho_w g (H_w -
+    y0)| / (rho_w g H_w) and particle speed over the outputs after the first step, and the
+    run."""
+    sim = Simulation(load_case(EXAMPLES / "seabed.toml", sets or []))
+    m = sim.case.material
+    g = abs(sim.case.physics.gravity[-1])
+    water = poroelastic.free_water(m, sim.particles.mass, sim.particles.volume)
+    # the water's surface: its highest particles' top (half a particle spacing above them)
+    P = sim.particles
+    D = P.x.shape[1]
+    level = float(np.max(P.x[water, -1] + 0.5 * P.volume[water] ** (1.0 / D)))
+    y0 = sim.particles.x[:, -1].copy()
+    assert water.any()
+    worst = {"pressure": 0.0, "speed": 0.0}
+
+    def record(s: Simulation) -> None:
+        if s.time <= 0.0:  # (the pressure is the first step's)
+            return
+        p = s.particles.pressure
+        err = np.max(np.abs(p - m.water_density * g * (level - y0))) / (m.water_density * g * level)
+        worst["pressure"] = max(worst["pressure"], float(err))
+        worst["speed"] = max(worst["speed"], float(np.max(np.linalg.norm(s.particles.v, axis=1))))
+
+    sim.on_output = record
+    sim.run()
+    return {**worst, "sim": sim}
+
+
+def run_seabed(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
+    res = CaseResult("seabed", "Still water over a saturated bed")
+    sets = ["time.end=2.0"] if quick else []
+    r = still_bed(sets)
+    sim = r["sim"]
+    res.rows.append(
+        Row(
+            "seabed",
+            "pore pressure at rest",
+            "max |p - rho_w g (H_w - y)| / (rho_w g H_w) over the particles and outputs",
+            r["pressure"],
+            TOL_REST,
+            WHY_REST,
+            miss="the water and the bed do not rest: their pressure drifts off hydrostatic",
+        )
+    )
+    res.rows.append(
+        Row(
+            "seabed",
+            "particles at rest",
+            "largest particle speed over the outputs (m/s)",
+            r["speed"],
+            TOL_REST,
+            WHY_SPEED,
+            unit="m/s",
+            miss="the water or the bed moves",
+        )
+    )
+    res.text = (
+        "examples/seabed.toml: 0.4 m of still water (bodies.1.free_water) over a 0.4 m bed "
+        "of saturated soil (density 2000 kg/m^3, G = 3.75 MPa, nu = 0.2, k = 1e-5 m/s), its "
+        'skeleton starting with its buoyant weight (material.initial_stress = "geostatic"), '
+        f"h = {sim.case.grid.spacing:g} m, dt = {sim.case.time.dt:g} s, "
+        f"{sim.steps} steps ({sim.time:g} s). The pore pressure must stay hydrostatic from "
+        "the water's surface through the bed and every particle at rest: the water's "
+        "pressure continues into the bed's pores through their common faces (Darcy's flow "
+        "at twice the soil's coefficient there), and still pore water is a zero flux "
+        'exactly (docs/method.md, "Saturated soil").'
     )
     return res
