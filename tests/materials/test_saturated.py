@@ -102,3 +102,31 @@ def test_free_water_and_a_geostatic_start_are_checked():
     water = poroelastic.free_water(case.material, sim.particles.mass, sim.particles.volume)
     assert water.sum() == sim.particles.count // 2  # the upper body, as many as the bed
     assert np.all(sim.particles.x[water, 1] > 0.4)
+
+
+def test_a_saturated_soils_snapshots_and_checkpoints(tmp_path):
+    """The snapshot names the stress "effective_stress" (its volumetric part included: the
+    bed's geostatic sigma'_yy is -(rho - rho_w) g d), the pressure is the pore pressure; a
+    run resumed from a checkpoint keeps the skeleton's stress (not the geostatic start again)
+    and ends where an uninterrupted run ends, bit for bit (Terzaghi's column, loaded)."""
+    import shutil
+
+    import meshio
+
+    sets = ["time.end=20.0", "output.snapshots=true", "output.snapshot_interval=20.0"]
+    sets += ["checkpoint.interval=8.0", "physics.gravity=[0.0, -9.81]"]
+    sets += ['material.initial_stress="geostatic"']
+    whole = Simulation(load_case(EXAMPLES / "terzaghi.toml", sets), out_dir=tmp_path / "whole")
+    whole.run()
+    mesh = meshio.read(sorted((tmp_path / "whole").glob("particles_*.vtu"))[-1])
+    stress = mesh.point_data["effective_stress"].reshape(-1, 3, 3)
+    assert np.array_equal(stress[:, :2, :2], whole.history["stress"])
+    assert stress[:, 1, 1].min() < -0.9 * (2000.0 - 1000.0) * 9.81 * 1.0  # the base's weight
+    out = tmp_path / "parts"
+    shutil.copytree(tmp_path / "whole", out)
+    checkpoint = sorted(out.glob("checkpoint_*.npz"))[0]
+    rest = Simulation.resume(load_case(EXAMPLES / "terzaghi.toml", sets), out, checkpoint)
+    rest.run()
+    assert np.array_equal(rest.history["stress"], whole.history["stress"])
+    assert np.array_equal(rest.particles.x, whole.particles.x)
+    assert np.array_equal(rest.particles.pressure, whole.particles.pressure)

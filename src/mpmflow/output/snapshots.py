@@ -102,7 +102,11 @@ class SnapshotWriter:
         write_text(self.index, text + FOOTER)
 
     def write(
-        self, time: float, particles: Particles, history: dict[str, np.ndarray] | None = None
+        self,
+        time: float,
+        particles: Particles,
+        history: dict[str, np.ndarray] | None = None,
+        stress_name: str = "deviatoric_stress",
     ) -> str:
         """A snapshot of the particles; ``history``: a solid's (``write_vtu``)."""
         name = f"{self.stem}_{len(self.entries):06d}.vtu"
@@ -113,6 +117,7 @@ class SnapshotWriter:
             particles.pressure,
             particles.mass,
             history=history,
+            stress_name=stress_name,
         )
         self.add(time, name)
         return name
@@ -145,6 +150,7 @@ def write_vtu(
     mass: np.ndarray,
     ids: np.ndarray | None = None,
     history: dict[str, np.ndarray] | None = None,
+    stress_name: str = "deviatoric_stress",
 ) -> None:
     """Particles as a VTU file (atomically): points (z = 0 in 2D), velocity (m/s),
     pressure (Pa), mass (kg), and with ``ids`` each particle's number in the run (a piece of
@@ -152,7 +158,9 @@ def write_vtu(
     ``history`` (``ProjectionScheme.history``) also its deviatoric stress (Pa) as a 3 x 3
     tensor (9 components, row by row; in 2D the plane-strain tensor, whose out-of-plane
     entries are 0), the equivalent plastic strain and the yielding flag (1 where the particle
-    yielded in the last step, else 0)."""
+    yielded in the last step, else 0); ``stress_name`` names the stress: a saturated soil's
+    is its effective stress ("effective_stress", volumetric part included; its pressure is
+    the pore pressure)."""
     n, dim = x.shape
     points = np.zeros((n, 3))
     points[:, :dim] = x
@@ -164,7 +172,7 @@ def write_vtu(
     if history:
         stress = np.zeros((n, 3, 3))
         stress[:, :dim, :dim] = history["stress"]
-        data["deviatoric_stress"] = stress.reshape(n, 9)
+        data[stress_name] = stress.reshape(n, 9)
         data["plastic_strain"] = history["plastic_strain"].copy()
         data["yielding"] = history["yielding"].copy()
     mesh = meshio.Mesh(

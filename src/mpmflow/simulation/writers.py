@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import materials
 from ..arrays import Floats
 from ..boundaries import moving
 from ..diagnostics import parts, probes
@@ -233,7 +234,10 @@ class Snapshots:
         if self.file is not None:
             # a solid's stress history (empty for a fluid)
             history = getattr(sim.scheme, "history", {})
-            self.file.write(sim.time, sim.particles, history)
+            # a saturated soil's stress is the effective stress, its pressure the pore pressure
+            saturated = sim.case.material.model in materials.SATURATED
+            name = "effective_stress" if saturated else "deviatoric_stress"
+            self.file.write(sim.time, sim.particles, history, name)
         if self.surfaces is not None:
             self.surfaces.write(sim)
 
