@@ -122,3 +122,39 @@ def geostatic_stress(
         stress[soil, k, k] = k0 * vertical
     stress[soil, D - 1, D - 1] = vertical
     return stress
+
+
+def darcy_flux(
+    m: Material,
+    spacing: float,
+    cells: tuple[int, ...],
+    p_node: Floats,
+    x: Floats,
+    mass: Floats,
+    volume: Floats,
+    gravity: Floats,
+) -> Floats:
+    """The pore water's flux relative to the skeleton at each particle (count x D, m/s):
+    Darcy's q = n (v_w - v) = -k / (rho_w g_n) (grad p - rho_w g), grad p the multilinear
+    gradient of the nodal pore pressure (``p_node``, Pa, the nodes in flat order, x fastest)
+    at the particle; 0 in free water, which moves with its own velocity."""
+    n, D = x.shape
+    h = float(spacing)
+    nodes = [c + 1 for c in cells]
+    stride = np.cumprod([1, *nodes[:-1]])
+    s = x / h
+    base = np.clip(np.floor(s).astype(np.int64), 0, np.asarray(cells) - 1)
+    frac = s - base
+    grad = np.zeros((n, D))
+    for corner in range(2**D):
+        bits = [(corner >> k) & 1 for k in range(D)]
+        p = p_node[(base + np.asarray(bits)) @ stride]
+        for j in range(D):
+            w = np.full(n, (1.0 if bits[j] else -1.0) / h)
+            for k in range(D):
+                if k != j:
+                    w *= frac[:, k] if bits[k] else 1.0 - frac[:, k]
+            grad[:, j] += w * p
+    q = -mobility(m) * (grad - m.water_density * np.asarray(gravity, dtype=float))
+    q[free_water(m, mass, volume)] = 0.0
+    return q

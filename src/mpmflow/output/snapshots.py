@@ -107,8 +107,9 @@ class SnapshotWriter:
         particles: Particles,
         history: dict[str, np.ndarray] | None = None,
         stress_name: str = "deviatoric_stress",
+        extra: dict[str, np.ndarray] | None = None,
     ) -> str:
-        """A snapshot of the particles; ``history``: a solid's (``write_vtu``)."""
+        """A snapshot of the particles; ``history``, ``extra``: ``write_vtu``'s."""
         name = f"{self.stem}_{len(self.entries):06d}.vtu"
         write_vtu(
             self.folder / name,
@@ -118,6 +119,7 @@ class SnapshotWriter:
             particles.mass,
             history=history,
             stress_name=stress_name,
+            extra=extra,
         )
         self.add(time, name)
         return name
@@ -151,6 +153,7 @@ def write_vtu(
     ids: np.ndarray | None = None,
     history: dict[str, np.ndarray] | None = None,
     stress_name: str = "deviatoric_stress",
+    extra: dict[str, np.ndarray] | None = None,
 ) -> None:
     """Particles as a VTU file (atomically): points (z = 0 in 2D), velocity (m/s),
     pressure (Pa), mass (kg), and with ``ids`` each particle's number in the run (a piece of
@@ -160,7 +163,8 @@ def write_vtu(
     entries are 0), the equivalent plastic strain and the yielding flag (1 where the particle
     yielded in the last step, else 0); ``stress_name`` names the stress: a saturated soil's
     is its effective stress ("effective_stress", volumetric part included; its pressure is
-    the pore pressure)."""
+    the pore pressure). ``extra``: more point data by name (a saturated soil's Darcy flux,
+    count x D, m/s, written as 3 components)."""
     n, dim = x.shape
     points = np.zeros((n, 3))
     points[:, :dim] = x
@@ -175,6 +179,12 @@ def write_vtu(
         data[stress_name] = stress.reshape(n, 9)
         data["plastic_strain"] = history["plastic_strain"].copy()
         data["yielding"] = history["yielding"].copy()
+    for name, values in (extra or {}).items():
+        if values.ndim == 2:  # vectors: 3 components (z = 0 in 2D)
+            padded = np.zeros((n, 3))
+            padded[:, : values.shape[1]] = values
+            values = padded
+        data[name] = values
     mesh = meshio.Mesh(
         points, [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))], point_data=data
     )
