@@ -44,3 +44,17 @@ def test_bad_loads_are_refused():
     with pytest.raises(CaseError, match="not an axis of a 2D domain"):
         load('{axis="z", at=1.0, lower=[0.0], upper=[0.2], traction=[0.0, -1.0]}')
     assert any("surface loads" in p for p in refusals(load_case(EXAMPLES / "terzaghi.toml")))
+
+
+def test_a_load_off_the_material_stops_the_run():
+    """A load on a node plane the material does not reach (here above the column's top, a
+    cell beyond it) would act on nothing: the run stops and names where, rather than run
+    unloaded."""
+    from mpmflow import Simulation
+    from mpmflow.errors import SimulationError
+
+    table = '{axis="y", at=1.1, lower=[0.0], upper=[0.2], traction=[0.0, -1e4]}'
+    sets = [f"loads=[{table}]", "time.end=0.4", "output.interval=0.2"]
+    sim = Simulation(load_case(EXAMPLES / "terzaghi.toml", sets))
+    with pytest.raises(SimulationError, match="acts on a node without material"):
+        sim.run()

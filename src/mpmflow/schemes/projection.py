@@ -19,7 +19,7 @@ from .. import materials, state
 from ..arrays import Floats
 from ..boundaries import inlets, loads, moving, obstacles, outlets, sponges, walls
 from ..case import capabilities
-from ..errors import CaseError, SolverError
+from ..errors import CaseError, SimulationError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
 from ..materials import poroelastic
@@ -163,6 +163,7 @@ class ProjectionScheme:
             else np.zeros((0, 0, 0, 0))
         )
         self.walls = walls.of_case(case, grid, self.inlets.openings)
+        self._load = loads.nodal(case, grid)  # surface loads: each node's force (None: none)
         self.core = state.step_state(
             grid,
             self.walls.as_tuple(),
@@ -176,7 +177,7 @@ class ProjectionScheme:
             held=self.inlets.held if self.inlets.present else None,
             inlets=self.inlets.core() if self.inlets.present else None,
             damping=sponges.rates(case, grid),
-            load=loads.nodal(case, grid),
+            load=self._load,
         )
         # obstacles moving along prescribed paths (src/core/bodies.hpp), placed at t = 0
         self.movers = moving.of_case(case)
@@ -451,6 +452,7 @@ class ProjectionScheme:
         self.last_unknowns = int(report.last_unknowns)
         if done < nsteps:
             self._fail(report, where(done))
+        self._check_loads(where(done))
         return StepReport.of(report)
 
     def _adaptive(
@@ -488,10 +490,29 @@ class ProjectionScheme:
                 "allows for. Raise solver.max_speed if such speeds are real, or use a fixed "
                 "time.dt."
             )
+        self._check_loads(where(done))
         r = StepReport.of(report)
         return AdaptiveReport(
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
+
+    def _check_loads(self, where: str) -> None:
+        """SimulationError where a surface load's node holds no material after the last
+        step: the load would act on nothing there (the face has moved off its node plane)."""
+        if self._load is None:
+            return
+        loaded = np.any(self._load != 0.0, axis=1)
+        lost = loaded & (self.core.node_mass <= 0.0)
+        if lost.any():
+            x = self.grid.node_coordinates()[np.argmax(lost)]
+            at = ", ".join(f"{c:.4g}" for c in x)
+            raise SimulationError(
+                f"A surface load{where} acts on a node without material, at ({at}) m: the "
+                "loaded face has moved off the node plane of loads.N.at (a settlement or "
+                "a heave past a cell), so the load would no longer reach the material. "
+                "Give a finer grid.spacing than the face's motion, or a load that stays on "
+                "the material."
+            )
 
     def _fail(self, report: CoreReport, where: str) -> NoReturn:
         status = state.Status(int(report.status))
