@@ -941,8 +941,112 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
 }
 
 template <int D>
+void State<D>::set_plate(int axis, int side, double force) {
+  if (axis < 0 || axis >= D || (side != -1 && side != 1))
+    throw std::invalid_argument("State::set_plate: an axis of the grid and a side of -1 or 1");
+  const index_t nn = grid_.nnodes, npairs = T_.wall_node.size();
+  plate_ = Plate{true, axis, force, 0.0, {}};
+  for (index_t e = 0; e < npairs; ++e)
+    if (T_.wall_axis(e) == axis && T_.wall_sign(e) * side > 0.0) plate_.pairs.push_back(e);
+  if (plate_.pairs.empty())
+    throw std::invalid_argument("State::set_plate: no wall on that side (an outlet, or periodic)");
+  auto held = plate_held_.sized(nn * D);
+  for (index_t j = 0; j < nn * D; ++j)
+    held[j] = T_.wall_velocity.size() > 0 ? T_.wall_velocity.data()[j] : 0.0;
+  auto bonded = plate_bonded_.sized(npairs);
+  for (index_t e = 0; e < npairs; ++e) bonded[e] = T_.wall_bonded.size() > 0 && T_.wall_bonded(e);
+  for (index_t e : plate_.pairs) bonded[e] = true;
+  T_.wall_velocity = View<const double, 2>(held.data(), {nn, D});
+  T_.wall_bonded = View<const bool>(bonded.data(), {npairs});
+}
+
+template <int D>
+void State<D>::set_plate_velocity(double v) {
+  plate_.velocity = v;
+  if (plate_.on) hold_plate(v);  // the walls' held velocity too: the next predictor's
+}
+
+template <int D>
+void State<D>::hold_plate(double velocity) {
+  double* held = plate_held_.view(grid_.nnodes * D).data();
+  for (index_t e : plate_.pairs) held[T_.wall_node(e) * D + plate_.axis] = velocity;
+}
+
+template <int D>
+double State<D>::plate_reaction(const Options<D>& O) {
+  // the force the plate's holds take: M_i / dt (x_i - v0_i) + (K x)_i - (the cells' pressure
+  // force)_i along its axis at each of its nodes, x the coupled solve's velocity
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  auto x = cp_x_.template view<2>({nn, D});
+  auto v0 = cp_v0_.template view<2>({nn, D});
+  auto mass = node_mass_.view(nn);
+  auto f = pl_f_.template sized<2>({nn, D});
+  for (index_t j = 0; j < nn * D; ++j) f.data()[j] = 0.0;
+  add_cell_forces<D>(grid_, pc_row_.view(nc), pc_G_.template view<3>({npc_, NC, D}),
+                     p_cell_.view(nc), f);
+  const double grad_div = O.model == POROELASTIC ? O.model_params[1] / O.model_params[0] : 0.0;
+  const int k = plate_.axis;
+  double reaction = 0.0;
+  for (index_t e : plate_.pairs) {
+    const index_t i = T_.wall_node(e);
+    if (!(mass(i) > 0.0)) continue;
+    reaction += mass(i) / O.dt * (x(i, k) - v0(i, k)) +
+                operator_force<D>(grid_, T_.viscous_T, eta_weight_.view(nc), grad_div,
+                                  View<const double, 2>(x.data(), {nn, D}), i, k) -
+                f(i, k);
+  }
+  return reaction;
+}
+
+template <int D>
+int State<D>::plate_solve(const Options<D>& O, Report& report) {
+  // the coupled solve is affine in the plate's velocity (the contacts fixed by the split
+  // step): solved at two velocities, the two solutions combined at the one whose reaction
+  // is the plate's force
+  const index_t nn = grid_.nnodes, nc = grid_.ncells;
+  const double va = plate_.velocity;
+  hold_plate(va);
+  int status = cell_pressure_solve(O, report);
+  if (status == OK) status = coupled_solve(O, report);
+  if (status != OK) return status;
+  const double ra = plate_reaction(O);
+  auto p_a = pl_p_.sized(nc), v_a = pl_v_.sized(nn * D), n_a = pl_n_.sized(nn);
+  auto p_cell = p_cell_.view(nc), p_node = p_node_.view(nn);
+  auto v_star = v_star_.view(nn * D);
+  std::copy(p_cell.data(), p_cell.data() + nc, p_a.data());
+  std::copy(v_star.data(), v_star.data() + nn * D, v_a.data());
+  std::copy(p_node.data(), p_node.data() + nn, n_a.data());
+  // the second velocity: the step's velocity change the force would give the plate's mass
+  double mass = 0.0;
+  for (index_t e : plate_.pairs) mass += node_mass_.view(nn)(T_.wall_node(e));
+  double dv = std::abs(va);
+  if (dv == 0.0 && mass > 0.0) dv = std::abs(plate_.force - ra) * O.dt / mass;
+  if (dv == 0.0) dv = 1.0;
+  hold_plate(va + dv);
+  status = coupled_solve(O, report);
+  if (status != OK) return status;
+  const double rb = plate_reaction(O);
+  if (!(std::abs(rb - ra) > 0.0))
+    throw std::runtime_error(
+        "State: the plate's reaction does not change with its velocity "
+        "(no material under it)");
+  const double w = (plate_.force - ra) / (rb - ra);
+  for (index_t c = 0; c < nc; ++c) p_cell(c) = p_a(c) + w * (p_cell(c) - p_a(c));
+  for (index_t j = 0; j < nn * D; ++j) v_star(j) = v_a(j) + w * (v_star(j) - v_a(j));
+  for (index_t i = 0; i < nn; ++i) p_node(i) = n_a(i) + w * (p_node(i) - n_a(i));
+  plate_.velocity = va + w * dv;
+  hold_plate(plate_.velocity);
+  return OK;
+}
+
+template <int D>
 int State<D>::pressure_solve(const Options<D>& O, Report& report) {
   if (O.cell_pressure) {
+    if (plate_.on) {
+      if (!(O.coupled && O.viscous))
+        throw std::logic_error("State: a plate takes a saturated soil's coupled step");
+      return plate_solve(O, report);
+    }
     const int status = cell_pressure_solve(O, report);
     return status == OK && O.coupled && O.viscous ? coupled_solve(O, report) : status;
   }

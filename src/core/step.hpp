@@ -288,6 +288,16 @@ class State {
   // (empty: none is); nsub, the cut cells' sub-cells per axis. Places them at time().
   void set_bodies(std::vector<Body<D>> bodies, View<const bool> fixed_no_slip, index_t nsub);
   // The flow time (s), which every step advances by its dt; setting it places the bodies.
+  // A rigid, frictionless, impermeable plate on the walls of one side of the domain (axis;
+  // side -1: its lower side, +1: its upper), pressed on the material with a total force
+  // (N; 2D N/m; along the axis, positive along it: the plate's force on the material): its
+  // walls' pairs hold the material in tension too (bonded) at the normal velocity of the
+  // plate, the one velocity at which the material's reaction on them meets the force
+  // (plate_solve). A saturated soil's coupled step only (Mandel's problem). Allocates.
+  void set_plate(int axis, int side, double force);
+  // the plate's velocity along its axis (m/s; settable, as a checkpoint restores it)
+  double plate_velocity() const { return plate_.velocity; }
+  void set_plate_velocity(double v);
   void set_time(double t);
   double time() const { return time_; }
   // the pressure's force (N, 2D: N/m) and torque (N m; 2D: N m/m, about z) on each body in
@@ -573,6 +583,20 @@ class State {
   // a solid's cells' share of particles that yielded in the last step (solid.hpp)
   Buffer<double> cell_yield_;
   Buffer<double> cell_water_;  // a saturated soil's: each cell's share of free water
+  struct Plate {
+    bool on = false;
+    int axis = 0;
+    double force = 0.0, velocity = 0.0;
+    std::vector<index_t> pairs;  // its walls' pairs
+  };
+  Plate plate_;
+  // the walls' held velocities and bonds with the plate's (the tables' own where none)
+  Buffer<double> plate_held_;
+  Buffer<bool> plate_bonded_;
+  Buffer<double> pl_p_, pl_v_, pl_n_, pl_f_;  // plate_solve's first solution; pressure forces
+  void hold_plate(double velocity);
+  double plate_reaction(const Options<D>& O);
+  int plate_solve(const Options<D>& O, Report& report);
   // the cells' shares of free water of a saturated soil's last scatter (empty: none)
   View<const double> water_cells(const Options<D>& O);
   bool solid_scattered_ = false;  // the last scatter's particles carry a solid's stress

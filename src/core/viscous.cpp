@@ -240,6 +240,31 @@ void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weig
   });
 }
 
+template <int D>
+double operator_force(const Grid<D>& g, View<const double, 4> T, View<const double> weight,
+                      double grad_div, View<const double, 2> x, index_t i, int k) {
+  constexpr int NC = 1 << D;
+  std::array<index_t, D> ix;
+  g.node_coords(i, ix.data());
+  double f = 0.0;
+  for (int b = 0; b < NC; ++b) {
+    const NodeCell cell = node_cell<D>(g, ix, b);
+    if (cell.c < 0 || weight(cell.c) == 0.0) continue;
+    const int a = cell.a;
+    for (int bb = 0; bb < NC; ++bb) {
+      const index_t j = cell.first + g.corner[bb];
+      double kg = 0.0;
+      for (int m = 0; m < D; ++m) kg += T(a, bb, m, m);
+      for (int m = 0; m < D; ++m) {
+        double val = T(a, bb, m, k) + grad_div * T(a, bb, k, m);
+        if (m == k) val += kg;
+        f += weight(cell.c) * val * x(j, m);
+      }
+    }
+  }
+  return f;
+}
+
 void apply_blocks(View<const index_t, 3> cols, View<const double, 3> vals, View<const index_t> off,
                   View<const double> x, View<double> y, View<double> tmp) {
   const index_t D = cols.extent(0);
@@ -354,6 +379,8 @@ SolveResult solve(const Grid<D>& g, View<const index_t, 3> cols, View<const doub
                             View<const double>, double, View<const double, 2>,                    \
                             View<const index_t, 2>, View<const index_t>, View<index_t, 3>,        \
                             View<double, 3>, View<double>, View<index_t>, double);                \
+  template double operator_force<D>(const Grid<D>&, View<const double, 4>, View<const double>,    \
+                                    double, View<const double, 2>, index_t, int);                 \
   template SolveResult solve<D>(const Grid<D>&, View<const index_t, 3>, View<const double, 3>,    \
                                 View<const index_t>, View<const index_t>, View<const double>,     \
                                 View<double>, double, index_t, int, std::array<Multigrid<D>, D>&, \

@@ -88,6 +88,13 @@ void assemble(const Grid<D>& g, View<const double, 4> T, View<const double> weig
               View<const index_t, 2> row, View<const index_t> off, View<index_t, 3> cols,
               View<double, 3> vals, View<double> rhs, View<index_t> node, double grad_div = 0.0);
 
+// The elastic (viscous) operator's force at node i along axis k for the nodal velocity x
+// (nn x D): (K x)_(i,k), the row of assemble's system without its mass term, at any node
+// (a held one's too: the force its hold takes). Arguments as assemble's.
+template <int D>
+double operator_force(const Grid<D>& g, View<const double, 4> T, View<const double> weight,
+                      double grad_div, View<const double, 2> x, index_t i, int k);
+
 // y = A x block by block (the Numba _apply); tmp: scratch of n values.
 void apply_blocks(View<const index_t, 3> cols, View<const double, 3> vals, View<const index_t> off,
                   View<const double> x, View<double> y, View<double> tmp);

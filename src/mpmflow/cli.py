@@ -96,6 +96,7 @@ VALIDATION_CASES = (
     "wave_maker",
     "archimedes",
     "terzaghi",
+    "mandel",
     "seabed",
 )
 

@@ -773,6 +773,18 @@ void bind_dim(nb::module_& m) {
                      const auto& t = self.state->phase_seconds();
                      return std::vector<double>(t.begin(), t.end());
                    })
+      .def(
+          "set_plate",
+          [](S& self, int axis, int side, double force) {
+            self.state->set_plate(axis, side, force);
+          },
+          nb::arg("axis"), nb::arg("side"), nb::arg("force"),
+          "A rigid frictionless impermeable plate on the walls of one side (side -1: lower, "
+          "+1: upper), pressed on the material with a total force (N; 2D N/m; along the axis).")
+      .def_prop_rw(
+          "plate_velocity", [](S& self) { return self.state->plate_velocity(); },
+          [](S& self, double v) { self.state->set_plate_velocity(v); },
+          "The plate's velocity along its axis (m/s).")
       .def_prop_ro("p_node", &state_view<D, &State<D>::p_node>)
       .def_prop_ro("p_cell", &state_view<D, &State<D>::p_cell>)
       .def_prop_ro("v_new", &state_view<D, &State<D>::v_new>)

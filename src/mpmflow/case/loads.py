@@ -1,6 +1,8 @@
 """The case's [[loads]] tables: tractions on faces of the material (SI units: m, Pa), a
 consolidation test's surface load. Each load acts on the grid's nodes of one node plane, each
-node taking the traction times its share of the face (boundaries/loads.py)."""
+node taking the traction times its share of the face (boundaries/loads.py). And the
+[plate]: a rigid plate on a wall pressed on a saturated soil with a given force (Mandel's
+problem; src/core/step.hpp, State::set_plate)."""
 
 from __future__ import annotations
 
@@ -43,6 +45,52 @@ class Load(Section):
         "applied in full from the first step (a sudden load).",
         examples=[[0.0, -1e4]],
     )
+
+
+SIDES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
+
+
+class Plate(Section):
+    side: Literal["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"] = Field(
+        description="The wall the plate lies on: the material there is held to the plate's "
+        "one velocity along the side's axis (its other components free: frictionless), and no "
+        "water flows through it (impermeable).",
+        examples=["y_max"],
+    )
+    force: float = Field(
+        description="The plate's total force on the material along the side's axis (N; "
+        "2D: N per m of depth), positive along the axis: a plate on y_max pressing down "
+        "with 20 kN/m is -2e4. Applied in full from the first step, held constant; the "
+        "plate's velocity is whatever makes the material's reaction meet it each step.",
+        examples=[-2e4],
+    )
+
+
+def plate_problem(case: Case) -> str | None:
+    """What is wrong with the case's plate (None: nothing or no plate)."""
+    plate = case.plate
+    if plate is None:
+        return None
+    from .. import materials  # (the materials' names and sets: no compiled core)
+
+    D = len(case.domain.size)
+    k = SIDES.index(plate.side) // 2
+    if k >= D:
+        return f'plate.side = "{plate.side}" is not a side of a {D}D domain'
+    if case.material.model not in materials.SATURATED:
+        return (
+            f'plate: a rigid plate presses a saturated soil (material.model = "poroelastic"), '
+            f"not material.model = {case.material.model!r}; remove the [plate], or use "
+            "[[loads]] for a traction"
+        )
+    periodic = case.domain.periodic or [False] * D
+    if periodic[k]:
+        return f'plate.side = "{plate.side}": that axis is periodic and has no walls'
+    if case.domain.outlet_sides()[SIDES.index(plate.side)]:
+        return f'plate.side = "{plate.side}" is an outlet; the plate needs a wall there'
+    if not math.isfinite(plate.force):
+        return "plate.force must be finite (N; 2D N/m)"
+    return None
 
 
 def problem(case: Case) -> str | None:

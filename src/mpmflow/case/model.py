@@ -18,7 +18,7 @@ from . import capabilities, probe_data
 from .domain import Domain
 from .inlets import Inlet
 from .inlets import problem as inlet_problem
-from .loads import Load
+from .loads import Load, Plate, plate_problem
 from .loads import problem as load_problem
 from .sections import (
     MAX_PRESSURE,
@@ -99,6 +99,12 @@ class Case(Section):
         "traction): a traction (Pa) on a face of the material at a plane of the grid's nodes, "
         "as a consolidation test's load on a column's top. The projection scheme only, one "
         "process.",
+    )
+    plate: Plate | None = Field(
+        None,
+        description="A rigid plate on a wall ([plate]: plate.side, force): frictionless and "
+        "impermeable, pressed on a saturated soil with a constant total force, its velocity "
+        "what makes the soil's reaction meet the force (Mandel's problem). One process.",
     )
     execution: Execution = Execution()
 
@@ -341,6 +347,7 @@ class Case(Section):
             or inlet_problem(self)
             or sponge_problem(self)
             or load_problem(self)
+            or plate_problem(self)
             or self._free_water_problem()
         )
         if message:

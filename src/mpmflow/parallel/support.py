@@ -42,6 +42,8 @@ def refusals(case: Case) -> list[str]:
         out.append("inlets are not split over ranks yet: remove the [[inlets]]")
     if case.sponges:
         out.append("damping zones are not split over ranks yet: remove the [[sponges]]")
+    if case.plate is not None:
+        out.append("a plate is not split over ranks yet: remove the [plate]")
     if case.loads:
         out.append("surface loads are not split over ranks yet: remove the [[loads]]")
     if case.material.model in materials.SATURATED:

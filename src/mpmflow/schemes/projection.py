@@ -19,6 +19,7 @@ from .. import materials, state
 from ..arrays import Floats
 from ..boundaries import inlets, loads, moving, obstacles, outlets, sponges, walls
 from ..case import capabilities
+from ..case.loads import SIDES
 from ..errors import CaseError, SimulationError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
@@ -179,6 +180,9 @@ class ProjectionScheme:
             damping=sponges.rates(case, grid),
             load=self._load,
         )
+        if case.plate is not None:  # a rigid plate pressed on a saturated soil
+            side = SIDES.index(case.plate.side)
+            self.core.set_plate(side // 2, 1 if side % 2 else -1, float(case.plate.force))
         # obstacles moving along prescribed paths (src/core/bodies.hpp), placed at t = 0
         self.movers = moving.of_case(case)
         self.time = 0.0  # s: the flow time the core's bodies are placed at
@@ -343,6 +347,8 @@ class ProjectionScheme:
         }
         if materials.is_solid(self.case.material):  # a solid's pressure is the cells'
             saved["p_cell"] = self.core.p_cell.copy()
+        if self.case.plate is not None:  # the plate's velocity, the next step's first guess
+            saved["plate_velocity"] = np.array(self.core.plate_velocity)
         if self.movers:  # the free bodies' poses and velocities
             saved["body_state"] = self.core.body_state.copy()
         q = self.core.volume_q
@@ -364,6 +370,8 @@ class ProjectionScheme:
         np.copyto(self.core.p_node, saved["p_node"])
         if "p_cell" in saved:  # a solid's cell pressure (checkpoints before it carry none)
             np.copyto(self.core.p_cell, saved["p_cell"])
+        if self.case.plate is not None:
+            self.core.plate_velocity = float(saved["plate_velocity"])
         self.last_unknowns = int(saved["last_unknowns"])
         self.steps = int(saved["steps"])
         if "since_volume" in saved:  # checkpoints written before adaptive steps lack them

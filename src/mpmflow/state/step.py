@@ -122,12 +122,15 @@ class CoreState(Protocol):
     inlet_travel: Floats  # where each inlet row's next particle is (m; src/core/inlets.hpp)
     inlet_next: int  # the first particle of the inlets' pool not emitted yet
     time: float  # the flow time (s); setting it places the moving obstacles
+    plate_velocity: float  # a plate's velocity along its axis (m/s; State::set_plate)
     body_force: Floats  # (bodies, D) the material's force on each moving obstacle (N; 2D N/m)
     body_torque: Floats  # (bodies, 3) its torque about the pivot (N m; 2D N m/m)
     # (bodies, 13) pivot, velocity, angular velocity, orientation quaternion (settable)
     body_state: Floats
 
     def set_inlet_pool(self, first: int, end: int) -> None: ...
+
+    def set_plate(self, axis: int, side: int, force: float) -> None: ...
 
     def set_bodies(self, bodies: list[dict[str, Any]], fixed_no_slip: Bools, nsub: int) -> None: ...
 

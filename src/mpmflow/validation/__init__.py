@@ -71,6 +71,7 @@ CASES: dict[str, CaseRun] = {
     "wave_maker": bodies.run_wave_maker,
     "archimedes": bodies.run_archimedes,
     "terzaghi": saturated.run_terzaghi,
+    "mandel": saturated.run_mandel,
     "seabed": saturated.run_seabed,
 }
 NEEDS = {"volume": ("sloshing", "dam_break")}
@@ -97,6 +98,7 @@ EXAMPLE_FILES = {
     "wave_maker": ("wave_maker.toml",),
     "archimedes": ("floating_box.toml", "heave_cylinder.toml"),
     "terzaghi": ("terzaghi.toml",),
+    "mandel": ("mandel.toml",),
     "seabed": ("seabed.toml",),
 }  # the examples/ files each runs
 
