@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Literal
 
 from pydantic import Field
 
+from .. import materials
 from .sections import Section
 
 if TYPE_CHECKING:
@@ -71,8 +72,6 @@ def plate_problem(case: Case) -> str | None:
     plate = case.plate
     if plate is None:
         return None
-    from .. import materials  # (the materials' names and sets: no compiled core)
-
     D = len(case.domain.size)
     k = SIDES.index(plate.side) // 2
     if k >= D:
