@@ -16,7 +16,7 @@ def test_the_pore_pressure_dissipates_at_terzaghis_rate():
     """The column at H / 10 (steps of 0.002 in T_v): its degree of consolidation within the
     issue's 2% of Terzaghi's series over 0.01 <= T_v <= 2, its isochrones within 3% of the
     load (measured: 0.0117 and 0.017; the validation report's finest mesh: 0.0012, 0.0022)."""
-    r = saturated.consolidation(0.1, 1e-5, 0.002)
+    r = saturated.consolidation(0.1, 1e-5, 0.002, EXAMPLES)
     assert r["sim"].steps == 1000
     assert saturated.u_error(r) <= 0.02
     assert set(r["iso"]) == set(saturated.ISOCHRONES)
@@ -29,7 +29,7 @@ def test_the_step_does_not_depend_on_the_permeability():
     the second (saturated.explicit_step)."""
     errors = []
     for k in (1e-3, 1e-9):
-        r = saturated.consolidation(0.1, k, 0.002)
+        r = saturated.consolidation(0.1, k, 0.002, EXAMPLES)
         assert r["sim"].steps == 1000
         errors.append(saturated.u_error(r))
     assert max(errors) <= 0.02
@@ -86,7 +86,7 @@ def test_still_water_over_a_saturated_bed_stays_at_rest():
     starts with its buoyant weight; the pore pressure stays hydrostatic from the water's
     surface through the bed to the issue's 1e-6 rho_w g H, every particle slower than
     1e-6 m/s (measured 4e-13 and 2e-13 over the example's 20 s)."""
-    r = saturated.still_bed(["time.end=2.0"])
+    r = saturated.still_bed(["time.end=2.0"], EXAMPLES)
     assert r["sim"].steps == 200
     assert r["pressure"] <= 1e-6
     assert r["speed"] <= 1e-6
@@ -202,7 +202,7 @@ def test_mandels_slab_under_a_rigid_plate():
     pressure within the issue's 5% of p0 of Mandel's solution over 0.01 <= T <= 1 (measured
     0.0055), and its Mandel-Cryer rise above p0 within a tenth of Mandel's (measured 0.1033
     against 0.1066): the plate's one velocity meets its force each step."""
-    r = saturated.mandel(0.1)
+    r = saturated.mandel(0.1, EXAMPLES)
     assert r["sim"].steps == 400
     sel = r["tv"] >= 0.01
     assert np.max(np.abs(r["p"][sel] - r["ref"][sel])) <= 0.05

@@ -86,13 +86,15 @@ def series_consolidation(tv: float) -> float:
     return float(1 - np.sum(2 / M**2 * np.exp(-(M**2) * tv)))
 
 
-def consolidation(h: float, k: float = 1e-3, dtv: float = DTV) -> dict[str, Any]:
+def consolidation(
+    h: float, k: float = 1e-3, dtv: float = DTV, examples: Path = EXAMPLES
+) -> dict[str, Any]:
     """Run the column at spacing h (m) and permeability k (m/s) to T_v = 2 in steps of
     dtv in T_v (a divisor of 0.01); returns the times in T_v, U at each output (every 0.01
     in T_v), the largest isochrone error at each of ISOCHRONES (in q), the run, its c_v and
-    step (s)."""
+    step (s). ``examples``: the folder of terzaghi.toml (a source checkout's examples/)."""
     base = [f"grid.spacing={h}", f"material.permeability={k}"]
-    case = load_case(EXAMPLES / "terzaghi.toml", base)
+    case = load_case(examples / "terzaghi.toml", base)
     cv = poroelastic.consolidation_coefficient(case.material)
     dt = dtv * H**2 / cv
     every = round(0.01 / dtv)  # outputs 0.01 apart in T_v
@@ -101,7 +103,7 @@ def consolidation(h: float, k: float = 1e-3, dtv: float = DTV) -> dict[str, Any]
         f"time.end={T_END * H**2 / cv!r}",
         f"output.interval={every * dt!r}",
     ]
-    sim = Simulation(load_case(EXAMPLES / "terzaghi.toml", sets))
+    sim = Simulation(load_case(examples / "terzaghi.toml", sets))
     z = (H - sim.particles.x[:, 1].copy()) / H
     tvs: list[float] = []
     us: list[float] = []
@@ -304,11 +306,11 @@ WHY_REST = (
 WHY_SPEED = "a column at rest stays at rest (the soil issue's 1e-6 m/s for an elastic column)"
 
 
-def still_bed(sets: list[str] | None = None) -> dict[str, Any]:
+def still_bed(sets: list[str] | None = None, examples: Path = EXAMPLES) -> dict[str, Any]:
     """Run examples/seabed.toml (with ``sets``); returns the largest |p - rho_w g (H_w -
     y0)| / (rho_w g H_w) and particle speed over the outputs after the first step, and the
     run."""
-    sim = Simulation(load_case(EXAMPLES / "seabed.toml", sets or []))
+    sim = Simulation(load_case(examples / "seabed.toml", sets or []))
     m = sim.case.material
     g = abs(sim.case.physics.gravity[-1])
     water = poroelastic.free_water(m, sim.particles.mass, sim.particles.volume)
@@ -421,15 +423,15 @@ def mandel_pressure(x_over_a: float, tv: float, nu: float) -> float:
     return float(2 * np.sum(terms * np.exp(-(r**2) * tv)))
 
 
-def mandel(h: float) -> dict[str, Any]:
+def mandel(h: float, examples: Path = EXAMPLES) -> dict[str, Any]:
     """Run examples/mandel.toml at spacing h (every step an output); returns T, the centre
     column's mean pore pressure over p0 and Mandel's there, and the run."""
-    case = load_case(EXAMPLES / "mandel.toml", [f"grid.spacing={h}"])
+    case = load_case(examples / "mandel.toml", [f"grid.spacing={h}"])
     m = case.material
     cv = poroelastic.consolidation_coefficient(m)
     sim = Simulation(
         load_case(
-            EXAMPLES / "mandel.toml", [f"grid.spacing={h}", f"output.interval={case.time.dt}"]
+            examples / "mandel.toml", [f"grid.spacing={h}", f"output.interval={case.time.dt}"]
         )
     )
     x0 = sim.particles.x[:, 0].copy()
