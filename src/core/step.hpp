@@ -551,6 +551,11 @@ class State {
   Buffer<index_t> cols_;
   Buffer<double> vals_, rhs_, x_, scratch_;
   Multigrid<D> pressure_mg_;
+  // a saturated soil's coupled solve: the preconditioner's second part, the skeleton's
+  // stiffness and the pore flow as one operator on the cells (coupled_solve)
+  Multigrid<D> pore_mg_;
+  Buffer<index_t> pore_cols_;
+  Buffer<double> pore_vals_, pore_z_;
   LinearSolver* solver_ = nullptr;
   LinearSolver* volume_solver_ = nullptr;
   ViscousSolver* viscous_solver_ = nullptr;
