@@ -649,6 +649,16 @@ void State<D>::cell_hold() {
 }
 
 template <int D>
+typename State<D>::MgShape State<D>::mg_shape(bool nodes) const {
+  MgShape shape;
+  for (int k = 0; k < D; ++k) {
+    shape.dims[k] = grid_.cells[k] + (nodes ? 1 : 0);
+    if (grid_.periodic[k]) shape.period[k] = grid_.cells[k];
+  }
+  return shape;
+}
+
+template <int D>
 View<const double> State<D>::water_cells(const Options<D>& O) {
   if (O.model != POROELASTIC || !solid_scattered_) return {};
   return cell_water_.view(grid_.ncells);
@@ -689,11 +699,7 @@ int State<D>::cell_pressure_solve(const Options<D>& O, Report& report) {
   auto x = x_.sized(n);
   auto scratch = scratch_.sized(n);
   for (index_t r = 0; r < n; ++r) x(r) = p_cell(rows(r));  // the last step's, to start from
-  std::array<index_t, D> dims{}, period{};
-  for (int k = 0; k < D; ++k) {
-    dims[k] = grid_.cells[k];
-    if (grid_.periodic[k]) period[k] = grid_.cells[k];
-  }
+  const auto [dims, period] = mg_shape(false);
   auto v = v_c_.template view<2>({nn, D});
   // a saturated soil: its pore water's flow between the cells joins each cell's constraint
   const double darcy = O.rho / O.dt * pore_mobility(O.model, O.model_params.data());
@@ -883,11 +889,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report) {
         pv(k, NS / 2) = 1.0;
       }
     }
-    std::array<index_t, D> dims{}, period{};
-    for (int k = 0; k < D; ++k) {
-      dims[k] = grid_.cells[k];
-      if (grid_.periodic[k]) period[k] = grid_.cells[k];
-    }
+    const auto [dims, period] = mg_shape(false);
     pore_mg_.setup(pc, pv, rows, dims, COARSEST, period);
   }
   auto precondition = [&](View<const double> res, View<double> out) {
@@ -1136,11 +1138,7 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
     return OK;
   }
   if (!anchored) return SINGULAR;
-  std::array<index_t, D> dims{}, period{};
-  for (int k = 0; k < D; ++k) {
-    dims[k] = grid_.cells[k] + 1;
-    if (grid_.periodic[k]) period[k] = grid_.cells[k];
-  }
+  const auto [dims, period] = mg_shape(true);
   auto cols = cols_.template view<2>({n, NS});
   auto vals = vals_.template view<2>({n, NS});
   auto rows = rows_.view(n);
@@ -1552,11 +1550,7 @@ int State<D>::volume_correction(const Options<D>& O, Report& report) {
     auto rhs = vol_rhs_.view(n);
     auto Q = q_.view(nc);
     for (index_t r = 0; r < n; ++r) q(r) = Q(rows(r));  // the last correction's solution
-    std::array<index_t, D> dims{}, period{};
-    for (int k = 0; k < D; ++k) {
-      dims[k] = grid_.cells[k];
-      if (grid_.periodic[k]) period[k] = grid_.cells[k];
-    }
+    const auto [dims, period] = mg_shape(false);
     SolveResult res;
     if (volume_solver_) {
       volume_solver_->setup(cols, vals, rows);

@@ -604,6 +604,12 @@ class State {
   int plate_solve(const Options<D>& O, Report& report);
   // the cells' shares of free water of a saturated soil's last scatter (empty: none)
   View<const double> water_cells(const Options<D>& O);
+  // The multigrid's shape of the cell grid (nodes false: a point a cell) or of the node grid
+  // (a point a node): the points along each axis, and each periodic axis's period (0: none)
+  struct MgShape {
+    std::array<index_t, D> dims{}, period{};
+  };
+  MgShape mg_shape(bool nodes) const;
   bool solid_scattered_ = false;  // the last scatter's particles carry a solid's stress
   bool held_still_ = false;       // viscous_system holds its held components at 0 (coupled_solve)
   bool rate_from_new_ = false;
