@@ -13,6 +13,7 @@ from ..geometry import bodies, placement
 from ..geometry.shapes import DIM_OF, Shape
 from ..geometry.specs import from_spec
 from ..grid import Grid
+from ..materials import poroelastic
 from ..stability import case_stable_time_step, initial_speed, sound_speed, time_step
 from . import capabilities, probe_data
 from .domain import Domain
@@ -152,13 +153,7 @@ class Case(Section):
                     "the body's)"
                 )
         if saturated and self.material.initial_stress == "geostatic":
-            g = self.physics.gravity
-            if any(c != 0.0 for c in g[:-1]) or not g[-1] < 0.0:
-                return (
-                    'material.initial_stress = "geostatic" needs physics.gravity down the '
-                    f"last axis (its other components 0), not {g}: the skeleton's weight "
-                    'is taken along it; or give material.initial_stress = "zero"'
-                )
+            return poroelastic.geostatic_problem(self.physics.gravity)
         return None
 
     def _unsupported(self) -> str | None:

@@ -12,6 +12,7 @@ modulus of the water."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -89,6 +90,18 @@ def free_water(m: Material, mass: Floats, volume: Floats) -> np.ndarray:
     return np.asarray(mass <= m.water_density * volume * (1 + 1e-9))
 
 
+def geostatic_problem(gravity: Sequence[float]) -> str | None:
+    """Why a geostatic start cannot be taken under this gravity (None: it can): the
+    skeleton's weight is taken down the last axis."""
+    if any(c != 0.0 for c in gravity[:-1]) or not gravity[-1] < 0.0:
+        return (
+            'material.initial_stress = "geostatic" needs physics.gravity down the last axis '
+            f"(its other components 0), not {list(gravity)}: the skeleton's weight is taken "
+            'along it; or give material.initial_stress = "zero"'
+        )
+    return None
+
+
 def geostatic_stress(
     m: Material, x: Floats, mass: Floats, volume: Floats, gravity: Floats
 ) -> Floats:
@@ -97,14 +110,12 @@ def geostatic_stress(
     along the last axis, d the depth below the soil's top in the particle's column (the
     highest soil particle's centre plus half a particle spacing, spacing = volume^(1/D)),
     sigma'_h = nu / (1 - nu) sigma'_v on the other axes; zero in free water. Gravity must
-    point down the last axis (ValueError)."""
+    point down the last axis (ValueError: ``geostatic_problem``)."""
     n, D = x.shape
     g = np.asarray(gravity, dtype=float)
-    if np.any(g[:-1] != 0.0) or not g[-1] < 0.0:
-        raise ValueError(
-            'material.initial_stress = "geostatic" needs physics.gravity down the last axis '
-            f"(its other components 0), not {list(g)}"
-        )
+    problem = geostatic_problem(list(g))
+    if problem:
+        raise ValueError(problem)
     stress = np.zeros((n, D, D))
     soil = ~free_water(m, mass, volume)
     if not soil.any():

@@ -165,6 +165,8 @@ class ProjectionScheme:
         )
         self.walls = walls.of_case(case, grid, self.inlets.openings)
         self._load = loads.nodal(case, grid)  # surface loads: each node's force (None: none)
+        # the nodes a load acts on (None: none)
+        self._loaded = None if self._load is None else np.any(self._load != 0.0, axis=1)
         self.core = state.step_state(
             grid,
             self.walls.as_tuple(),
@@ -504,13 +506,29 @@ class ProjectionScheme:
             **vars(r), steps=done, dt_min=float(report.dt_min), dt_max=float(report.dt_max)
         )
 
+    def darcy_flux(self) -> Floats:
+        """A saturated soil's pore water flux relative to the skeleton at the particles
+        (count x D, m/s; ``poroelastic.darcy_flux``) from the last step's nodal pore
+        pressure."""
+        P, g = self._P, self.grid
+        gravity = np.asarray(self.case.physics.gravity, dtype=float)
+        return poroelastic.darcy_flux(
+            self.case.material,
+            g.spacing,
+            tuple(g.cells),
+            self.core.p_node,
+            P.x,
+            P.mass,
+            P.volume,
+            gravity,
+        )
+
     def _check_loads(self, where: str) -> None:
         """SimulationError where a surface load's node holds no material after the last
         step: the load would act on nothing there (the face has moved off its node plane)."""
-        if self._load is None:
+        if self._loaded is None:
             return
-        loaded = np.any(self._load != 0.0, axis=1)
-        lost = loaded & (self.core.node_mass <= 0.0)
+        lost = self._loaded & (self.core.node_mass <= 0.0)
         if lost.any():
             x = self.grid.node_coordinates()[np.argmax(lost)]
             at = ", ".join(f"{c:.4g}" for c in x)

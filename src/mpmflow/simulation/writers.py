@@ -32,7 +32,6 @@ from ..arrays import Floats
 from ..boundaries import moving
 from ..diagnostics import parts, probes
 from ..geometry.rotation import quaternion_matrix
-from ..materials import poroelastic
 from ..output.snapshots import SnapshotWriter, write_surface_vtu
 from ..output.timeseries import (
     COLUMNS,
@@ -238,21 +237,9 @@ class Snapshots:
             # a saturated soil's stress is the effective stress, its pressure the pore pressure
             saturated = sim.case.material.model in materials.SATURATED
             name = "effective_stress" if saturated else "deviatoric_stress"
-            extra = None
-            if saturated:  # the pore water's flux relative to the skeleton (Darcy)
-                P = sim.particles
-                extra = {
-                    "darcy_flux": poroelastic.darcy_flux(
-                        sim.case.material,
-                        sim.grid.spacing,
-                        tuple(sim.grid.cells),
-                        sim.scheme.state()["p_node"],
-                        P.x,
-                        P.mass,
-                        P.volume,
-                        np.asarray(sim.case.physics.gravity, dtype=float),
-                    )
-                }
+            # and the pore water's flux relative to the skeleton (Darcy): the scheme's
+            flux = getattr(sim.scheme, "darcy_flux", None) if saturated else None
+            extra = {"darcy_flux": flux()} if flux is not None else None
             self.file.write(sim.time, sim.particles, history, name, extra)
         if self.surfaces is not None:
             self.surfaces.write(sim)
