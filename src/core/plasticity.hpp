@@ -87,31 +87,16 @@ MPMFLOW_HD inline double update_stress(int model, const double* par, const doubl
                                        double p, double y, double* s) {
   const double G = par[0];
   double d[D * D], w[D * D], t[D * D];
-  if (model == POROELASTIC) {  // the effective stress, its volumetric part included
-    const double lame = par[1];
-    double trace = 0.0;
-    for (int k = 0; k < D; ++k) trace += L[k * D + k];
-    for (int k = 0; k < D; ++k)
-      for (int j = 0; j < D; ++j) {
-        d[k * D + j] =
-            0.5 * (L[k * D + j] + L[j * D + k]) + (k == j ? 0.5 * lame / G * trace : 0.0);
-        w[k * D + j] = 0.5 * (L[k * D + j] - L[j * D + k]);
-      }
-    for (int k = 0; k < D; ++k)
-      for (int j = 0; j < D; ++j) {
-        double spin = 0.0;
-        for (int m = 0; m < D; ++m)
-          spin += w[k * D + m] * s[m * D + j] - s[k * D + m] * w[m * D + j];
-        t[k * D + j] = s[k * D + j] + dt * (2.0 * G * d[k * D + j] + spin);
-      }
-    for (int i = 0; i < D * D; ++i) s[i] = t[i];
-    return 0.0;
-  }
+  // the strain rate's part that enters the stress: its deviator for an incompressible solid;
+  // for a saturated soil's skeleton the whole of it with lambda tr(D) I (its effective stress
+  // carries its volumetric part: 2 G (D + lambda / (2 G) tr(D) I))
+  const bool poro = model == POROELASTIC;
   double trace = 0.0;
   for (int k = 0; k < D; ++k) trace += L[k * D + k];
+  const double shift = poro ? -0.5 * par[1] / G * trace : trace / D;
   for (int k = 0; k < D; ++k)
     for (int j = 0; j < D; ++j) {
-      d[k * D + j] = 0.5 * (L[k * D + j] + L[j * D + k]) - (k == j ? trace / D : 0.0);
+      d[k * D + j] = 0.5 * (L[k * D + j] + L[j * D + k]) - (k == j ? shift : 0.0);
       w[k * D + j] = 0.5 * (L[k * D + j] - L[j * D + k]);
     }
   for (int k = 0; k < D; ++k)
@@ -120,6 +105,10 @@ MPMFLOW_HD inline double update_stress(int model, const double* par, const doubl
       for (int m = 0; m < D; ++m) spin += w[k * D + m] * s[m * D + j] - s[k * D + m] * w[m * D + j];
       t[k * D + j] = s[k * D + j] + dt * (2.0 * G * d[k * D + j] + spin);
     }
+  if (poro) {  // elastic: no yield
+    for (int i = 0; i < D * D; ++i) s[i] = t[i];
+    return 0.0;
+  }
   // the trace the products leave by rounding, removed so that s stays deviatoric
   double drift = 0.0;
   for (int k = 0; k < D; ++k) drift += t[k * D + k];
