@@ -28,6 +28,7 @@ at h = 2.5 cm whatever k.
 """
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -87,13 +88,15 @@ def series_consolidation(tv: float) -> float:
 
 
 def consolidation(
-    h: float, k: float = 1e-3, dtv: float = DTV, examples: Path = EXAMPLES
+    h: float, k: float = 1e-3, dtv: float = DTV, examples: Path = EXAMPLES, more: Sequence[str] = ()
 ) -> dict[str, Any]:
     """Run the column at spacing h (m) and permeability k (m/s) to T_v = 2 in steps of
     dtv in T_v (a divisor of 0.01); returns the times in T_v, U at each output (every 0.01
     in T_v), the largest isochrone error at each of ISOCHRONES (in q), the run, its c_v and
-    step (s). ``examples``: the folder of terzaghi.toml (a source checkout's examples/)."""
-    base = [f"grid.spacing={h}", f"material.permeability={k}"]
+    step (s). ``examples``: the folder of terzaghi.toml (a source checkout's examples/);
+    ``more``: settings beside those (a 3D column: its domain, body, load and gravity; the
+    column's height along the last axis)."""
+    base = [*more, f"grid.spacing={h}", f"material.permeability={k}"]
     case = load_case(examples / "terzaghi.toml", base)
     cv = poroelastic.consolidation_coefficient(case.material)
     dt = dtv * H**2 / cv
@@ -104,7 +107,7 @@ def consolidation(
         f"output.interval={every * dt!r}",
     ]
     sim = Simulation(load_case(examples / "terzaghi.toml", sets))
-    z = (H - sim.particles.x[:, 1].copy()) / H
+    z = (H - sim.particles.x[:, -1].copy()) / H
     tvs: list[float] = []
     us: list[float] = []
     iso: dict[float, float] = {}
