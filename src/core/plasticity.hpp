@@ -56,6 +56,11 @@ constexpr int POROELASTIC = 7;
 
 MPMFLOW_HD inline bool is_solid(int model) { return model >= ELASTIC && model <= POROELASTIC; }
 
+// a material that yields (a strength k below +inf)
+MPMFLOW_HD inline bool is_plastic(int model) {
+  return model == VON_MISES || model == DRUCKER_PRAGER;
+}
+
 // a saturated soil: its pore water flows through the skeleton (Darcy), with this mobility
 // (m^2/(Pa s); 0: none, every other material)
 MPMFLOW_HD inline double pore_mobility(int model, const double* par) {
@@ -79,14 +84,14 @@ MPMFLOW_HD inline double strength(int model, const double* par, double p, double
   return HUGE_VAL;
 }
 
-// One step of the stress s (D x D, row-major, in place) under velocity gradient L (D x D,
-// L[k * D + j] = dv_k/dx_j) over dt (s), at pressure p (Pa) and height y (m). Returns the
-// equivalent plastic strain increment: > 0 where the material yielded.
+// The trial stress t (D x D, row-major) of one step of the stress s under velocity gradient
+// L (D x D, L[k * D + j] = dv_k/dx_j) over dt (s): the elastic increment and the Jaumann spin
+// (above), before any return; a solid's deviatoric t is kept traceless against rounding.
 template <int D>
-MPMFLOW_HD inline double update_stress(int model, const double* par, const double* L, double dt,
-                                       double p, double y, double* s) {
+MPMFLOW_HD inline void trial_stress(int model, const double* par, const double* L, double dt,
+                                    const double* s, double* t) {
   const double G = par[0];
-  double d[D * D], w[D * D], t[D * D];
+  double d[D * D], w[D * D];
   // the strain rate's part that enters the stress: its deviator for an incompressible solid;
   // for a saturated soil's skeleton the whole of it with lambda tr(D) I (its effective stress
   // carries its volumetric part: 2 G (D + lambda / (2 G) tr(D) I))
@@ -105,25 +110,42 @@ MPMFLOW_HD inline double update_stress(int model, const double* par, const doubl
       for (int m = 0; m < D; ++m) spin += w[k * D + m] * s[m * D + j] - s[k * D + m] * w[m * D + j];
       t[k * D + j] = s[k * D + j] + dt * (2.0 * G * d[k * D + j] + spin);
     }
-  if (poro) {  // elastic: no yield
-    for (int i = 0; i < D * D; ++i) s[i] = t[i];
-    return 0.0;
-  }
+  if (poro) return;
   // the trace the products leave by rounding, removed so that s stays deviatoric
   double drift = 0.0;
   for (int k = 0; k < D; ++k) drift += t[k * D + k];
   for (int k = 0; k < D; ++k) t[k * D + k] -= drift / D;
+}
+
+// The radial return of a trial stress t at pressure p (Pa) and height y (m): sqrt(J2(t)) and
+// the strength k (Pa; +inf: no yield, as a saturated soil's skeleton), and the factor that
+// returns t onto the yield surface, k / sqrt(J2) where sqrt(J2) exceeds k (0 where k = 0),
+// else 1.
+struct Return {
+  double q, k, factor;
+};
+
+template <int D>
+MPMFLOW_HD inline Return radial_return(int model, const double* par, const double* t, double p,
+                                       double y) {
   double j2 = 0.0;
   for (int i = 0; i < D * D; ++i) j2 += 0.5 * t[i] * t[i];
   const double q = std::sqrt(j2);
   const double k = strength(model, par, p, y);
-  double scale = 1.0, plastic = 0.0;
-  if (q > k) {
-    scale = q > 0.0 ? k / q : 0.0;
-    plastic = (q - k) / (std::sqrt(3.0) * G);
-  }
-  for (int i = 0; i < D * D; ++i) s[i] = t[i] * scale;
-  return plastic;
+  return {q, k, q > k ? (q > 0.0 ? k / q : 0.0) : 1.0};
+}
+
+// One step of the stress s (D x D, row-major, in place) under velocity gradient L over dt
+// (s), at pressure p (Pa) and height y (m): the trial stress and its return. Returns the
+// equivalent plastic strain increment: > 0 where the material yielded.
+template <int D>
+MPMFLOW_HD inline double update_stress(int model, const double* par, const double* L, double dt,
+                                       double p, double y, double* s) {
+  double t[D * D];
+  trial_stress<D>(model, par, L, dt, s, t);
+  const Return r = radial_return<D>(model, par, t, p, y);
+  for (int i = 0; i < D * D; ++i) s[i] = t[i] * r.factor;
+  return r.q > r.k ? (r.q - r.k) / (std::sqrt(3.0) * par[0]) : 0.0;
 }
 
 }  // namespace mpmflow

@@ -9,11 +9,13 @@
 namespace mpmflow {
 
 // f (nn x D, N; 2D N/m): f_i = -sum_p V_p s_p grad N_i(x_p), the nodes' force of the particles'
-// deviatoric stress s_p (n x D x D, Pa), summed as internal_forces sums it (below).
+// deviatoric stress s_p (n x D x D, Pa), summed as internal_forces sums it (below); with
+// scale (n; empty: 1), of the stresses scale_p s_p (the coupled step's secant: return_factors).
 template <int D>
 void stress_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
                    View<const double, 3> stress, View<const index_t> order,
-                   View<const index_t> start, View<double, 2> f);
+                   View<const index_t> start, View<double, 2> f,
+                   View<const double> scale = View<const double>());
 
 // The predictor's internal force of the particles' deviatoric stress s_p (n x D x D, Pa):
 // f_i = -sum_p V_p s_p grad N_i(x_p) (N), added to the predictor as the nodes' acceleration:
@@ -33,15 +35,17 @@ template <int D>
 void internal_forces(const Grid<D>& g, View<const double, 2> x, View<const double> volume,
                      View<const double, 3> stress, View<const index_t> order,
                      View<const index_t> start, View<const double> node_mass, double dt,
-                     View<double, 2> acc, View<double, 2> v_star);
+                     View<double, 2> acc, View<double, 2> v_star,
+                     View<const double> scale = View<const double>());
 
-// Each cell's share (by mass) of its particles that yielded in the last step (0 to 1; 0 in
-// cells without particles): the implicit elastic predictor leaves a yielded cell's elastic
-// stiffness out (src/core/step.cpp, viscous_start), since a perfectly plastic material's
-// stress does not grow along its flow. Particles binned (binning.hpp).
+// Each cell's mean (by mass) of a value on its particles (0 in cells without particles):
+// the share of particles that yielded in the last step, whose elastic stiffness the implicit
+// elastic predictor leaves out (src/core/step.cpp, viscous_start), since a perfectly plastic
+// material's stress does not grow along its flow; the coupled step's mean return factor
+// (return_factors). Particles binned (binning.hpp).
 template <int D>
-void yielded_share(const Grid<D>& g, View<const double> mass, View<const double> yielding,
-                   View<const index_t> order, View<const index_t> start, View<double> share);
+void cell_mean(const Grid<D>& g, View<const double> mass, View<const double> value,
+               View<const index_t> order, View<const index_t> start, View<double> mean);
 
 // A saturated soil's cells: each one's share (by mass) of free water (plasticity.hpp,
 // free_water; 0 to 1, 0 in cells without particles). The elastic solve takes the skeleton's
@@ -64,5 +68,21 @@ index_t update_stresses(const Grid<D>& g, View<const double, 2> x, View<const do
                         View<const double> volume, View<const double, 2> v_grid,
                         View<const double> p_node, double dt, int model, View<const double> par,
                         View<double, 3> stress, View<double> plastic_strain, View<double> yielding);
+
+// The coupled step's plastic secant (src/core/step.cpp, plastic_solve): for each of the
+// first n particles (n = x.extent(0)), the factor of the radial return (plasticity.hpp,
+// radial_return) of the trial stress that the velocity v_grid (nn x D, m/s) and the pressure
+// p_node (Pa) would give its stress (n x D x D, Pa) over dt (s), as update_stresses would
+// take it: 1 where it stays elastic, k / sqrt(J2) where it yields. The stress after the step
+// is then factor (s + dt (2 G dev D + spin)). Particles of mass 0 take 1. factor holds the
+// last iterate's on entry. Returns the largest change of a particle's stress this makes,
+// |factor change| sqrt(J2(trial)), over the largest sqrt(J2) of the returned stresses (0
+// where no particle is stressed): a particle near no strength (a frictional soil's surface,
+// at p near 0) may swing its factor from 0 to 1 from one iterate to the next, and move its
+// stress by nothing that matters.
+template <int D>
+double return_factors(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
+                      View<const double, 2> v_grid, View<const double> p_node, double dt, int model,
+                      View<const double> par, View<const double, 3> stress, View<double> factor);
 
 }  // namespace mpmflow

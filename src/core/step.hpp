@@ -48,7 +48,9 @@ enum Status : int {
   PRESSURE_NOT_CONVERGED = 2,
   VOLUME_NOT_CONVERGED = 3,
   VISCOUS_NOT_CONVERGED = 4,
-  INTERRUPTED = 5  // the caller's check between steps asked to stop (a signal)
+  INTERRUPTED = 5,  // the caller's check between steps asked to stop (a signal)
+  // the coupled step's plastic iterations (State::plastic_solve) did not settle
+  PLASTIC_NOT_CONVERGED = 6
 };
 enum SurfaceQuadrature : int { GAUSS = 0, DIVERGENCE = 1, CONSISTENT = 2 };
 
@@ -79,6 +81,8 @@ struct Report {
   // steps whose walls' contact had not settled after MAX_CONTACT_ROUNDS rounds
   // (complementarity.hpp): the last round's pressure stood
   index_t unsettled = 0;
+  // the coupled step's plastic iterations (State::plastic_solve), each one more coupled solve
+  index_t plastic_iterations = 0;
 };
 
 // The phases of a step, as timed by State (seconds summed over the steps of a run).
@@ -366,7 +370,21 @@ class State {
   // corrected velocity is then x(p), and the stress (to_particles) follows it: the
   // incompressible backward-Euler step, stable at any dt. The walls and tools hold what the
   // split step's contacts hold, at their velocities.
-  int coupled_solve(const Options<D>& O, Report& report);
+  // loosen: its tolerance times this (plastic_solve's iterates far from their fixed point)
+  int coupled_solve(const Options<D>& O, Report& report, double loosen = 1.0);
+  // the relative residual of the Poisson solve in coupled_solve's preconditioner
+  static constexpr double PRECONDITIONER_TOL = 1e-2;
+  // O.coupled with a plastic material (plasticity.hpp, is_plastic): after the coupled solve,
+  // Picard iterations on the particles' return factors (solid.hpp, return_factors), each a
+  // coupled solve with the old stress's force and the cells' elastic weights scaled by them,
+  // until no particle's stress moves by more than PLASTIC_TOL of the largest: the step's
+  // stress is then the radial return of the velocity it gives (docs/method.md, "Solids").
+  // Each solve to PLASTIC_LOOSEN of the last move where that is above its own tolerance.
+  // PLASTIC_NOT_CONVERGED after PLASTIC_ITERATIONS.
+  int plastic_solve(const Particles<D>& P, const Options<D>& O, Report& report);
+  static constexpr double PLASTIC_TOL = 1e-3;
+  static constexpr double PLASTIC_LOOSEN = 1e-2;
+  static constexpr index_t PLASTIC_ITERATIONS = 100;
   // the elastic solve's velocity (nn x D) from the base velocity in v_c_ (the viscous
   // system assembled from it, solved, the fixed components as given); false: not converged
   bool elastic_velocity(const Options<D>& O, Report& report, View<double, 2> out);
@@ -378,7 +396,8 @@ class State {
   // report; false: it did not converge (the report names the worst row's node)
   bool counted_solve(const Options<D>& O, Report& report, View<const index_t, 2> cols,
                      View<const double, 2> vals, View<const index_t> rows, View<const double> b,
-                     View<double> y, View<double> scratch, index_t& iterations, bool cells);
+                     View<double> y, View<double> scratch, index_t& iterations, bool cells,
+                     double tol = 0.0);  // tol: the relative residual (0: O.tol)
   void pressure_rhs(const Options<D>& O);
   void extend_pressure(const Options<D>& O);
   void warm_start();  // the last pressure at this step's unknowns into x0, p_node cleared
@@ -588,6 +607,10 @@ class State {
   // a solid's cells' share of particles that yielded in the last step (solid.hpp)
   Buffer<double> cell_yield_;
   Buffer<double> cell_water_;  // a saturated soil's: each cell's share of free water
+  // plastic_solve's: the particles' return factors, the cells' mean of them, the cells' whole
+  // elastic weight, v* before the elastic increment with the whole old stress's force, the
+  // scaled stress's force
+  Buffer<double> ps_factor_, ps_mean_, ps_weight_, ps_v0_, ps_f_;
   struct Plate {
     bool on = false;
     int axis = 0;

@@ -849,6 +849,7 @@ void bind_step(nb::module_& m) {
       .def_rw("residual", &Report::residual)
       .def_rw("released", &Report::released)
       .def_rw("unsettled", &Report::unsettled)
+      .def_rw("plastic_iterations", &Report::plastic_iterations)
       .def_rw("moved", &Report::moved)
       .def_rw("status", &Report::status)
       .def_rw("step", &Report::step)
@@ -871,6 +872,7 @@ void bind_step(nb::module_& m) {
   m.attr("VOLUME_NOT_CONVERGED") = static_cast<int>(VOLUME_NOT_CONVERGED);
   m.attr("VISCOUS_NOT_CONVERGED") = static_cast<int>(VISCOUS_NOT_CONVERGED);
   m.attr("INTERRUPTED") = static_cast<int>(INTERRUPTED);
+  m.attr("PLASTIC_NOT_CONVERGED") = static_cast<int>(PLASTIC_NOT_CONVERGED);
   m.attr("GAUSS") = static_cast<int>(GAUSS);
   m.attr("DIVERGENCE") = static_cast<int>(DIVERGENCE);
   m.attr("CONSISTENT") = static_cast<int>(CONSISTENT);

@@ -65,8 +65,8 @@ SOLIDS = frozenset({elastic.NAME, von_mises.NAME, drucker_prager.NAME, poroelast
 # a saturated soil: its pore water flows through the skeleton (Darcy), the pore pressure the
 # projection's (src/core/cell_pressure.hpp, darcy_*)
 SATURATED = frozenset({poroelastic.NAME})
-# the solids that yield (a return to their strength each step)
-PLASTIC = frozenset({von_mises.NAME, drucker_prager.NAME})
+# the solids whose strength reads the pressure (a frictional soil)
+FRICTIONAL = frozenset({drucker_prager.NAME})
 MATERIALS: dict[str, Model] = {m.NAME: m for m in _MODULES}
 COMMON = ("model", "density", "bulk_modulus")
 

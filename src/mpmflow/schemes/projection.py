@@ -65,6 +65,8 @@ class StepReport:
     clamped: int = 0  # face-steps with the volume correction's displacement clamped
     pockets: int = 0  # pocket-steps: water sealed from the free surface held at 0 at its top
     unsettled: int = 0  # steps whose walls' contact had not settled (complementarity.hpp)
+    # the coupled step's plastic iterations, each one more coupled solve (State::plastic_solve)
+    plastic_iterations: int = 0
 
     def merge(self, other: StepReport) -> StepReport:
         return StepReport(
@@ -80,6 +82,7 @@ class StepReport:
             self.clamped + other.clamped,
             self.pockets + other.pockets,
             self.unsettled + other.unsettled,
+            self.plastic_iterations + other.plastic_iterations,
         )
 
     @classmethod
@@ -98,6 +101,7 @@ class StepReport:
             int(r.clamped),
             int(r.pockets),
             int(r.unsettled),
+            int(r.plastic_iterations),
         )
 
 
@@ -576,6 +580,14 @@ class ProjectionScheme:
                     else ""
                 )
                 + "."
+            )
+        if status is state.Status.PLASTIC_NOT_CONVERGED:
+            raise SolverError(
+                f"The coupled step's plastic iterations did not settle{where}: a particle's "
+                f"return factor still changed by {residual:.3e} after {iterations} "
+                'iterations, each a coupled solve (docs/method.md, "Solids"). The step '
+                "is far past the shear wave's crossing of a cell for this flow: try a smaller "
+                'time.dt (time.dt = "auto" takes the solid\'s own step).'
             )
         raise SolverError(f"The step failed{where} with status {status.name}.")
 

@@ -19,11 +19,13 @@ class Counters:
     released: int = 0
     worst_residual: float = 0.0
     viscous_iterations: int = 0
+    plastic_iterations: int = 0  # the coupled step's (State::plastic_solve)
 
 
 class ChunkReport(Protocol):
     """What every scheme's report of a chunk holds (``Scheme.advance``); ``capped``,
-    ``clamped``, ``pockets``, ``unsettled``, ``viscous_iterations`` and ``steps`` only some
+    ``clamped``, ``pockets``, ``unsettled``, ``viscous_iterations``, ``plastic_iterations`` and
+    ``steps`` only some
     (0 or the chunk's steps when absent)."""
 
     moved_inside: int
@@ -79,3 +81,4 @@ def add_report(
     c.released += report.released
     c.worst_residual = max(c.worst_residual, report.residual)
     c.viscous_iterations += getattr(report, "viscous_iterations", 0)
+    c.plastic_iterations += getattr(report, "plastic_iterations", 0)

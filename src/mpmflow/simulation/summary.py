@@ -98,7 +98,12 @@ def summary(sim: Simulation, status: str, message: str) -> dict[str, Any]:  # JS
             "wall_nodes_released": c.released,
         },
         "viscous_solver": (
-            {"iterations": c.viscous_iterations, "model": case.material.model}
+            {
+                "iterations": c.viscous_iterations,
+                "model": case.material.model,
+                # the coupled step's plastic iterations, each one more coupled solve
+                "plastic_iterations": c.plastic_iterations,
+            }
             if case.material.model != "water"
             else None
         ),

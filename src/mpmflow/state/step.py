@@ -25,6 +25,8 @@ class Status(enum.IntEnum):
     VOLUME_NOT_CONVERGED = _core.VOLUME_NOT_CONVERGED
     VISCOUS_NOT_CONVERGED = _core.VISCOUS_NOT_CONVERGED
     INTERRUPTED = _core.INTERRUPTED  # a signal asked the chunk to stop between steps
+    # the coupled step's plastic iterations did not settle (State::plastic_solve)
+    PLASTIC_NOT_CONVERGED = _core.PLASTIC_NOT_CONVERGED
 
 
 OK = Status.OK
@@ -49,6 +51,7 @@ class CoreReport(Protocol):
     residual: float  # the worst relative residual
     released: int
     unsettled: int  # steps whose walls' contact had not settled (complementarity.hpp)
+    plastic_iterations: int  # the coupled step's plastic iterations (State::plastic_solve)
     moved: int
     status: int  # a ``Status``
     step: int  # the step (0-based, within the chunk) that failed or is running
