@@ -113,32 +113,8 @@ def _slide(h, dt, dim=2):
     """The clay layer of ``_layer`` (s_u = 100 Pa: its base yields and it slides) at a fixed
     step dt (s): the top row's mean downslope acceleration (m/s^2) from 0.2 to 0.3 s, and
     the run's plastic iterations (State::plastic_solve; 0 at the split step)."""
-    H, th = 0.05, math.radians(20.0)
-    g = [9.81 * math.sin(th), -9.81 * math.cos(th)]
-    if dim == 3:
-        g = [g[0], 0.0, g[1]]
-    across = [4 * h] if dim == 3 else []
-    along, top = (4 * h, 0.06) if dim == 3 else (8 * h, 0.1)
-    sets = [
-        f"domain.size={[along, *across, top]}",
-        f"domain.walls={{{'xyz'[dim - 1]}_min='bonded'}}",
-        f"domain.periodic={str([True] * (dim - 1) + [False]).lower()}",
-        f"grid.spacing={h}",
-        f"bodies.0.min={[0.0] * dim}",
-        f"bodies.0.max={[along, *across, H]}",
-        "bodies.0.particles_per_cell=2",
-        "material.model='von_mises'",
-        "material.density=2000.0",
-        "material.shear_modulus=1e5",
-        "material.undrained_strength=100.0",
-        f"physics.gravity={g}",
-        f"time.dt={dt}",
-        "time.end=0.3",
-        "output.snapshots=false",
-    ]
-    example = HYDRO if dim == 2 else "examples/hydrostatic_3d.toml"
-    sim = Simulation(load_case(ROOT / example, sets))
-    top = sim.particles.x[:, dim - 1] > H - h
+    sim = Simulation(_layer_case(h, "von_mises", 0.3, 100.0, dim, dt, interval=0.01))
+    top = sim.particles.x[:, dim - 1] > 0.05 - h
     r = sim.scheme.advance(dt, round(0.2 / dt))
     u0 = sim.particles.v[top, 0].mean()
     r = r.merge(sim.scheme.advance(dt, round(0.1 / dt)))
@@ -325,11 +301,12 @@ def test_drucker_prager_reads_the_pressure_and_parts_in_tension(D):
     assert np.all(s == 0.0) and plastic > 0.0  # below the cut-off: parted
 
 
-def _layer(h, model, end, strength=None, dim=2):
+def _layer_case(h, model, end, strength=None, dim=2, dt="auto", interval=0.001):
     """An elastic (or clay) layer H = 0.05 m deep, bonded to the floor of a periodic strip
     8 cells wide and 0.1 m tall (in 3D a periodic column of 4 x 4 cells, 0.06 m tall),
-    under gravity tilted by 20 degrees along x (an infinite slope), G = 1e5 Pa, rho = 2000 kg/m^3. Returns the simulation and the top's
-    mean downslope velocity every 0.2 ms."""
+    under gravity tilted by 20 degrees along x (an infinite slope), G = 1e5 Pa, rho = 2000
+    kg/m^3, steps of dt (s, or "auto"), to ``end`` (s), an output every ``interval`` (s):
+    the case."""
     H, th = 0.05, math.radians(20.0)
     g = [9.81 * math.sin(th), -9.81 * math.cos(th)]
     if dim == 3:
@@ -348,16 +325,22 @@ def _layer(h, model, end, strength=None, dim=2):
         "material.density=2000.0",
         "material.shear_modulus=1e5",
         f"physics.gravity={g}",
-        "time.dt='auto'",
+        f"time.dt={dt!r}",
         f"time.end={end}",
-        "output.interval=0.001",
+        f"output.interval={interval}",
         "output.snapshots=false",
     ]
     if strength is not None:
         sets.append(f"material.undrained_strength={strength}")
     example = HYDRO if dim == 2 else "examples/hydrostatic_3d.toml"
-    sim = Simulation(load_case(ROOT / example, sets))
-    top = sim.particles.x[:, dim - 1] > H - h
+    return load_case(ROOT / example, sets)
+
+
+def _layer(h, model, end, strength=None, dim=2):
+    """The layer of ``_layer_case`` at time.dt = "auto": the simulation and the top's mean
+    downslope velocity every 0.2 ms."""
+    sim = Simulation(_layer_case(h, model, end, strength, dim))
+    top = sim.particles.x[:, dim - 1] > 0.05 - h
     u = []
     for _ in range(round(end / 2e-4)):
         sim.scheme.advance(2e-4, 1)
