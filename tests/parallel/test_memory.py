@@ -93,7 +93,7 @@ def test_each_term_is_its_formula():
             "local grid (box and ghost layer)": per_rank.LOCAL_PER_NODE[3] * mine.local_nodes,
             "pressure system (PETSc, hypre)": per_rank.PETSC_PER_UNKNOWN[3] * mine.unknowns,
             "time series": one.rows_bytes,
-            "the measures at an output time": 48 * grid.nnodes,
+            "the measures at an output time": 24 * grid.nnodes,
         }
         assert mine.terms == pytest.approx(expected, rel=1e-12)
         assert mine.total == pytest.approx(sum(expected.values()), rel=1e-12)

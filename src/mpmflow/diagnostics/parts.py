@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arrays import Floats, Ints
-from ..parallel.comm import Comm, Single
+from ..parallel.comm import Comm, Single, sum_in_place
 from ..state import Totals
 
 ALONE: Comm = Single()  # one process: the whole run in one part
@@ -31,10 +31,12 @@ def count(comm: Comm, n: int) -> int:
 
 
 def add(comm: Comm, values: NDArray[Any]) -> NDArray[Any]:
-    """``values`` (an array) summed entry by entry over the ranks."""
+    """``values`` (an array) summed entry by entry over the ranks: in place where it is
+    contiguous (the callers replace their array by the sum), into a contiguous copy
+    otherwise."""
     if comm.size == 1:
         return values
-    total: NDArray[Any] = comm.allreduce(np.ascontiguousarray(values))
+    total: NDArray[Any] = sum_in_place(comm, np.ascontiguousarray(values))
     return total
 
 

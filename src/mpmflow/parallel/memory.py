@@ -67,9 +67,10 @@ LOCAL_COPIES = {2: 5.5, 3: 9.6}  # per owned or halo particle: step copies, core
 LOCAL_PER_NODE = {2: 120, 3: 180}  # B per node of the local grid: core arrays, index tables
 PETSC_PER_UNKNOWN = {2: 400, 3: 1950}  # B: PETSc's AIJ and BoomerAMG, measured per rank
 # B per node at an output time: the measures' sums over the whole grid (theta on the cells,
-# the pressure noise's two nodal sums), each with the all-reduce's sent and received copies
-# (counted, not measured: 3 arrays x 2 copies x 8 B)
-MEASURES_PER_NODE = 48
+# the pressure noise's two nodal sums), each summed over the ranks in place (counted: 3
+# arrays x 8 B; mpi4py's pickled all-reduce, before, held 3 to 4 times each array at its
+# peak on 2 and 4 ranks, measured with tracemalloc)
+MEASURES_PER_NODE = 24
 # B per cell while seeding: the cells' counts, one chunk's and their running sum (int64),
 # with the sum's new array (counted)
 SEEDING_PER_CELL = 24
