@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .boxes import Boxes, cells_of
-from .comm import Comm
+from .comm import Comm, sum_in_place
 from .subgrid import Subgrid, extended
 
 ParticleArrays = dict[str, NDArray[Any]]
@@ -318,7 +318,10 @@ class RankExchange:
 
     def sum_values(self, values: NDArray[np.float64]) -> None:
         """Each value summed over the ranks, in place (the bodies' forces and torques)."""
-        values[:] = self.comm.allreduce(values.copy())
+        if values.flags.c_contiguous:
+            sum_in_place(self.comm, values)
+        else:
+            values[:] = sum_in_place(self.comm, values.copy())
 
     def refresh_halo(self) -> None:
         """The halo's stress history made its owners' again (a solid's, after the owners

@@ -60,7 +60,7 @@ from ..schemes.projection import (
     solid_history,
 )
 from .boxes import Boxes, bisect, cell_weights
-from .comm import Comm, world
+from .comm import Comm, sum_in_place, world
 from .exchange import ParticleArrays, RankExchange
 from .pressure import DistributedPressure
 from .subgrid import ghost_layers, neighbours, restrict_obstacles, restrict_walls, subgrid
@@ -227,8 +227,8 @@ class DistributedProjection(ProjectionScheme):
             if self.balance >= BALANCE:
                 return
         weights = cell_weights(self._P.x, g.spacing, g.cells)
-        if self.ids is not None:  # parted: the particles of every part
-            weights = self.comm.allreduce(weights)
+        if self.ids is not None:  # parted: the particles of every part (summed in place)
+            weights = sum_in_place(self.comm, weights)
         boxes = bisect(weights, self.comm.size)
         self.boxes = replace(boxes, ghost=ghost_layers(bool(self.movers)))
         self.splits += 1
