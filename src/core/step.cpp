@@ -907,7 +907,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report, double loosen) 
     }
     // (the Poisson solve to PRECONDITIONER_TOL: the CG is flexible, and a solve to the
     // solver's tolerance cost the footing of examples/footing.toml at 2.5 times the shear
-    // wave's step 3.7 times the multigrid's iterations for the same load to 1e-5)
+    // wave's step 3.6 times the multigrid's iterations for the same load to 1e-5)
     if (!counted_solve(O, report, cols, vals, rows, res, out, scratch, step_iterations, true,
                        std::max(O.tol, PRECONDITIONER_TOL)))
       return false;
