@@ -584,10 +584,10 @@ class ProjectionScheme:
         if status is state.Status.PLASTIC_NOT_CONVERGED:
             raise SolverError(
                 f"The coupled step's plastic iterations did not settle{where}: a particle's "
-                f"return factor still changed by {residual:.3e} after {iterations} "
-                'iterations, each a coupled solve (docs/method.md, "Solids"). The step '
-                "is far past the shear wave's crossing of a cell for this flow: try a smaller "
-                'time.dt (time.dt = "auto" takes the solid\'s own step).'
+                f"stress still moved by {residual:.3e} of the largest (the tolerance 1e-3) "
+                f'after {iterations} iterations, each a coupled solve (docs/method.md, "Solids"). '
+                "The step is too far past the shear wave's crossing of a cell for this flow: "
+                'try a smaller time.dt (time.dt = "auto" takes the solid\'s own step).'
             )
         raise SolverError(f"The step failed{where} with status {status.name}.")
 

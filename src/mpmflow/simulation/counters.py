@@ -24,9 +24,8 @@ class Counters:
 
 class ChunkReport(Protocol):
     """What every scheme's report of a chunk holds (``Scheme.advance``); ``capped``,
-    ``clamped``, ``pockets``, ``unsettled``, ``viscous_iterations``, ``plastic_iterations`` and
-    ``steps`` only some
-    (0 or the chunk's steps when absent)."""
+    ``clamped``, ``pockets``, ``unsettled``, ``viscous_iterations``, ``plastic_iterations``
+    and ``steps`` only some (0 or the chunk's steps when absent)."""
 
     moved_inside: int
     solves: int
