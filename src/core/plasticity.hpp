@@ -67,6 +67,12 @@ MPMFLOW_HD inline double pore_mobility(int model, const double* par) {
   return model == POROELASTIC ? par[2] : 0.0;
 }
 
+// a saturated soil's skeleton: its lambda / G, the elastic solve's grad-div weight beside the
+// shear's (its bulk stiffness lambda dt beside G dt; 0: none, every other material)
+MPMFLOW_HD inline double grad_div_ratio(int model, const double* par) {
+  return model == POROELASTIC ? par[1] / par[0] : 0.0;
+}
+
 // A saturated soil's free water (the reservoir above a seabed): its particles carry the
 // water's density (mass / volume = water_density; the mixture's is above it, which the
 // material's check holds), no skeleton and no stress.

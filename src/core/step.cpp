@@ -836,7 +836,7 @@ int State<D>::coupled_solve(const Options<D>& O, Report& report, double loosen) 
   auto weight = eta_weight_.view(nc);
   // (a saturated soil's skeleton resists a change of volume with 2 G + lambda where an
   // incompressible solid's shear has 2 G: the weight grows by 1 + lambda / (2 G))
-  const double bulk = O.model == POROELASTIC ? 0.5 * O.model_params[1] / O.model_params[0] : 0.0;
+  const double bulk = 0.5 * grad_div_ratio(O.model, O.model_params.data());
   const double per_volume = O.dt / (O.rho * cell_volume) * (1.0 + bulk);
   // a saturated soil's pore flow (cell_pressure.hpp: darcy_*)
   const double darcy = rho_dt * pore_mobility(O.model, O.model_params.data());
@@ -1032,7 +1032,10 @@ int State<D>::plastic_solve(const Particles<D>& P, const Options<D>& O, Report& 
   for (index_t p = 0; p < np; ++p) factor(p) = 1.0;
   auto x = cp_x_.template view<2>({nn, D});
   auto v0 = cp_v0_.template view<2>({nn, D});
-  auto keep = ps_v0_.template view<2>({nn, D});
+  // v* before the elastic increment with the whole old stress's force (the coupled solve
+  // reads cp_v0_ and leaves it; the iterations below rewrite it)
+  auto keep = ps_v0_.template sized<2>({nn, D});
+  std::copy(v0.data(), v0.data() + nn * D, keep.data());
   auto force = force_.template view<2>({nn, D});
   auto scaled = ps_f_.template sized<2>({nn, D});
   auto mass = node_mass_.view(nn);
@@ -1119,7 +1122,7 @@ double State<D>::plate_reaction(const Options<D>& O) {
   for (index_t j = 0; j < nn * D; ++j) f.data()[j] = 0.0;
   add_cell_forces<D>(grid_, pc_row_.view(nc), pc_G_.template view<3>({npc_, NC, D}),
                      p_cell_.view(nc), f);
-  const double grad_div = O.model == POROELASTIC ? O.model_params[1] / O.model_params[0] : 0.0;
+  const double grad_div = grad_div_ratio(O.model, O.model_params.data());
   const int k = plate_.axis;
   double reaction = 0.0;
   for (index_t e : plate_.pairs) {
@@ -1404,8 +1407,8 @@ index_t State<D>::viscous_system(const Options<D>& O) {
   auto vals = vvals_.template sized<3>({D, n, NS});
   auto rhs = vrhs_.sized(n);
   auto node = vnode_.sized(n);
-  // a saturated soil's skeleton: its bulk stiffness lambda dt beside the shear's G dt
-  const double grad_div = O.model == POROELASTIC ? O.model_params[1] / O.model_params[0] : 0.0;
+  // a saturated soil's skeleton: its bulk stiffness beside the shear's (plasticity.hpp)
+  const double grad_div = grad_div_ratio(O.model, O.model_params.data());
   mpmflow::assemble<D>(grid_, T_.viscous_T, eta_weight_.view(nc), node_mass_.view(nn), O.dt, vu,
                        vrow, voff, cols, vals, rhs, node, grad_div);
   auto x = vx_.sized(n);
@@ -1440,10 +1443,6 @@ int State<D>::viscous_predictor(const Options<D>& O, Report& report) {
     auto v_star = v_star_.template view<2>({nn, D});
     auto v0 = cp_v0_.template sized<2>({nn, D});
     std::copy(v_star.data(), v_star.data() + nn * D, v0.data());
-    if (is_plastic(O.model)) {  // and for plastic_solve's secant
-      auto keep = ps_v0_.sized(nn * D);
-      std::copy(v_star.data(), v_star.data() + nn * D, keep.data());
-    }
   }
   if (exchange_->shared()) {
     // the corrector at the nodes on a rank's edge reaches past its cells: the owners' values
