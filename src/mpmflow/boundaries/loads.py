@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..arrays import Floats
-from ..case.loads import AXES
+from ..case.domain import AXES
 from ..grid import Grid
 
 if TYPE_CHECKING:

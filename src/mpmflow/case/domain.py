@@ -2,7 +2,7 @@
 side) and its periodic axes (SI units: m)."""
 
 import difflib
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 from typing_extensions import Self
@@ -13,6 +13,9 @@ WALL_CONDITIONS = ("slip", "no_slip", "bonded", "outlet")
 Condition = Literal["slip", "no_slip", "bonded", "outlet"]
 AXES = "xyz"
 SIDES = ("min", "max")  # the lower wall (at 0) and the upper (at domain.size)
+# one side of the domain by name, in the order of Domain.outlet_sides
+Side = Literal["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"]
+SIDE_NAMES: tuple[str, ...] = get_args(Side)
 
 
 def wall_keys(dim: int) -> list[str]:

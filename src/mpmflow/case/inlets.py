@@ -4,7 +4,7 @@ and the rules between an inlet and the rest of the case."""
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Annotated, Literal
+from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -12,13 +12,11 @@ from typing_extensions import Self
 
 from .. import materials
 from ..arrays import Floats
-from .domain import AXES
+from .domain import AXES, Side
 from .sections import Section
 
 if TYPE_CHECKING:
     from .model import Case
-
-Side = Literal["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"]
 
 
 class Inlet(Section):

@@ -12,12 +12,11 @@ from typing import TYPE_CHECKING, Literal
 from pydantic import Field
 
 from .. import materials
+from .domain import AXES, SIDE_NAMES, Side
 from .sections import Section
 
 if TYPE_CHECKING:
     from .model import Case
-
-AXES = ("x", "y", "z")
 
 
 class Load(Section):
@@ -48,11 +47,8 @@ class Load(Section):
     )
 
 
-SIDES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
-
-
 class Plate(Section):
-    side: Literal["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"] = Field(
+    side: Side = Field(
         description="The wall the plate lies on: the material there is held to the plate's "
         "one velocity along the side's axis (its other components free: frictionless), and no "
         "water flows through it (impermeable).",
@@ -73,7 +69,7 @@ def plate_problem(case: Case) -> str | None:
     if plate is None:
         return None
     D = len(case.domain.size)
-    k = SIDES.index(plate.side) // 2
+    k = SIDE_NAMES.index(plate.side) // 2
     if k >= D:
         return f'plate.side = "{plate.side}" is not a side of a {D}D domain'
     if case.material.model not in materials.SATURATED:
@@ -85,7 +81,7 @@ def plate_problem(case: Case) -> str | None:
     periodic = case.domain.periodic or [False] * D
     if periodic[k]:
         return f'plate.side = "{plate.side}": that axis is periodic and has no walls'
-    if case.domain.outlet_sides()[SIDES.index(plate.side)]:
+    if case.domain.outlet_sides()[SIDE_NAMES.index(plate.side)]:
         return f'plate.side = "{plate.side}" is an outlet; the plate needs a wall there'
     if not math.isfinite(plate.force):
         return "plate.force must be finite (N; 2D N/m)"

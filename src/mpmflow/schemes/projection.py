@@ -19,7 +19,7 @@ from .. import materials, state
 from ..arrays import Floats
 from ..boundaries import inlets, loads, moving, obstacles, outlets, sponges, walls
 from ..case import capabilities
-from ..case.loads import SIDES
+from ..case.domain import SIDE_NAMES
 from ..errors import CaseError, SimulationError, SolverError
 from ..grid import Grid
 from ..linalg.solvers import SMOOTHING_SWEEPS
@@ -187,7 +187,7 @@ class ProjectionScheme:
             load=self._load,
         )
         if case.plate is not None:  # a rigid plate pressed on a saturated soil
-            side = SIDES.index(case.plate.side)
+            side = SIDE_NAMES.index(case.plate.side)
             self.core.set_plate(side // 2, 1 if side % 2 else -1, float(case.plate.force))
         # obstacles moving along prescribed paths (src/core/bodies.hpp), placed at t = 0
         self.movers = moving.of_case(case)
