@@ -321,7 +321,23 @@ bool BodyTables<D>::staircase_node(const std::array<index_t, D>& ix, index_t i, 
   size = std::sqrt(size);
   if (!(size > 0.0)) return false;  // a flat phi: no direction to hold
   for (int k = 0; k < D; ++k) normal[k] /= size;
-  return true;
+  const index_t owner = owner_.view(g_.nnodes)(i);
+  // in the body, or nearest a fixed obstacle (which does not move: held within REACH cells
+  // of it all round)
+  if (phi(i) <= 0.0 || owner < 0) return true;
+  // outside a tool: held only ahead of a face that advances into the material, within
+  // REACH cells along the tool's motion there (beside the face or behind it, not at all)
+  double x[D], v[D];
+  for (int k = 0; k < D; ++k) x[k] = at(ix[k], k);
+  poses_[owner].velocity_at(x, v);
+  double speed = 0.0, into = 0.0;
+  for (int k = 0; k < D; ++k) {
+    speed += v[k] * v[k];
+    into += v[k] * normal[k];
+  }
+  speed = std::sqrt(speed);
+  const double ahead = speed > 0.0 ? -into / speed : 0.0;
+  return phi(i) < REACH * g_.h * ahead;
 }
 
 template <int D>

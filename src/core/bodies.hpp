@@ -115,13 +115,17 @@ class BodyTables {
  public:
   static constexpr int NC = 1 << D;
   static constexpr double FAR = 1e30;  // phi where no obstacle is near
-  // The staircase (nsub 0, a solid's tools) holds the nodes closer than REACH cells to the
-  // body's surface or in it: within a cell outside, so that the row of nodes just ahead of
-  // the face moves with it, and the material between is carried along. Holding only the
-  // nodes in the body (phi <= 0), the particles its face overtook between rows of nodes
-  // bunched into a sliver in front of it that chattered: a footing's pressure fell from 5.1
-  // to 3.9 s_u, by +-5 s_u from one step to the next, while its face crossed the last third
-  // of a cell (docs/method.md, "Solids").
+  // The staircase (nsub 0, a solid's tools) holds the nodes in the body or on its surface
+  // and, ahead of a face that advances into the material, the nodes closer than REACH cells
+  // along the body's motion there (phi < REACH h times the cosine between the motion and
+  // the face's outward normal): the row of nodes just ahead of the face moves with it, and
+  // the material between is carried along. Holding only the nodes in the body (phi <= 0),
+  // the particles its face overtook between rows of nodes bunched into a sliver in front of
+  // it that chattered: a footing's pressure fell from 5.1 to 3.9 s_u, by +-5 s_u from one
+  // step to the next, while its face crossed the last third of a cell. Holding the nodes
+  // within a cell beside its faces too widened the body by up to a cell each side: a strip
+  // footing at B / 15, its edge midway between two nodes, bore 1.156 times Prandtl's load,
+  // 1.037 this way (docs/method.md, "Solids").
   static constexpr double REACH = 1.0;
   // fixed: the fixed obstacles' tables (phi empty: none); fixed_no_slip: per node, whether
   // its nearest fixed obstacle is no-slip (empty: none is); nsub: the cut cells' sub-cells
@@ -217,9 +221,9 @@ class BodyTables {
   // about z; held rotations' rows and columns 0)
   std::array<std::array<double, 3>, 3> inverse_inertia(const Body<D>& b) const;
   void restore();
-  // the staircase (nsub 0): whether node ix (index i) of the box holds the material, phi <
-  // REACH h at a corner of a cell that is not solid, and its normal into the solid (-grad
-  // phi, D)
+  // the staircase (nsub 0): whether node ix (index i) of the box holds the material (a
+  // corner of a cell that is not solid, in the body or ahead of its advancing face: REACH),
+  // and its normal into the solid (-grad phi, D)
   bool staircase_node(const std::array<index_t, D>& ix, index_t i, double* normal);
   // the cell of which node ix is corner a (-1: outside the grid)
   index_t corner_cell(const std::array<index_t, D>& ix, int a) const;
