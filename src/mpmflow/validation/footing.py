@@ -32,7 +32,8 @@ footing's capacity on Tresca clay about 5% below Skempton's shape factor of 1.2 
 Prandtl's, N_c = 0.95 x 1.2 x (2 + pi) = 5.86 (the rough circle's exact value is 6.05,
 Cox et al. 1961). The clay here is von Mises, sqrt(J2) <= s_u: Tresca's in plane strain,
 weaker off it (in triaxial compression (sigma_1 - sigma_3) / 2 <= 0.87 s_u), so its
-capacity lies at or below Tresca's: a load above N_c s_u is an error of the mesh.
+capacity lies at or below Tresca's: a load above N_c s_u is an error of the mesh (or of
+the reference's "about 5%").
 """
 
 import math
