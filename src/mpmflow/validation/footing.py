@@ -77,19 +77,37 @@ class Footing:
     spacings: tuple[float, ...]  # each puts the footing's edge midway between two nodes
     label: str  # the reference's name in the table's header
     named: str  # and in a sentence
+    formula: str  # and in the row's error measure (times s_u)
+    which: str  # the row's quantity after "limit pressure"
+    why: str  # the row's tolerance, why
+    about: int  # the docstring's paragraph on it, before its tables (0: none)
 
 
 STRIP = Footing(
-    "footing.toml", 2, PRANDTL, 0.5 * B, (B / 15, B / 31, B / 63), "Prandtl", "Prandtl's load"
+    example="footing.toml",
+    dim=2,
+    reference=PRANDTL,
+    area=0.5 * B,
+    spacings=(B / 15, B / 31, B / 63),
+    label="Prandtl",
+    named="Prandtl's load",
+    formula="(2 + pi)",
+    which="",
+    why=WHY,
+    about=0,  # the strip's paragraph opens the section
 )
 SQUARE = Footing(
-    "footing_3d.toml",
-    3,
-    NC_SQUARE,
-    0.25 * B * B,
-    (B / 7, B / 9, B / 11),
-    "N_c",
-    "Gourvenec et al.'s N_c s_u",
+    example="footing_3d.toml",
+    dim=3,
+    reference=NC_SQUARE,
+    area=0.25 * B * B,
+    spacings=(B / 7, B / 9, B / 11),
+    label="N_c",
+    named="Gourvenec et al.'s N_c s_u",
+    formula="N_c",
+    which=", square footing (3D)",
+    why=WHY_3D,
+    about=2,
 )
 
 
@@ -227,24 +245,22 @@ def run_footing(out: Path, quick: bool = False, context: Context | None = None) 
     for footing in (STRIP,) if quick else (STRIP, SQUARE):
         spacings = footing.spacings[:1] if quick else footing.spacings
         lines, curves, limits = _series(out, footing, spacings)
-        strip = footing.dim == 2
         res.rows.append(
             Row(
                 "prandtl_footing",
-                f"limit pressure{'' if strip else ', square footing (3D)'}, "
-                f"h = B / {B / spacings[-1]:.0f}",
-                f"|mean q over s = 0.02-0.03 B / ({'(2 + pi)' if strip else 'N_c'} s_u) - 1|",
+                f"limit pressure{footing.which}, h = B / {B / spacings[-1]:.0f}",
+                f"|mean q over s = 0.02-0.03 B / ({footing.formula} s_u) - 1|",
                 abs(limits[-1] / footing.reference - 1),
                 TOL,
-                WHY if strip else WHY_3D,
+                footing.why,
                 miss=(
                     "the error falls with h (its order in the text): the mesh is coarse "
                     'for the footing\'s edge, where the clay is held: docs/method.md, "Solids"'
                 ),
             )
         )
-        if not strip:
-            text.append(__doc__.split("\n\n")[2])
+        if footing.about:
+            text.append(__doc__.split("\n\n")[footing.about])
         text.append(_section(footing, spacings, lines, curves, limits))
     res.text = "\n\n".join(text)
     return res
