@@ -78,13 +78,15 @@ echo "check_wheel: mpmflow run examples/hydrostatic.toml to 0.05 s"
 # the fast tier from the repository's tests/ (conftest.py's helpers, examples/ and docs/ beside
 # them); pytest's console script puts no repository folder on sys.path but tests/ (prepend
 # mode, for conftest), so every `import mpmflow` resolves to the environment.
-# Left out: the tests that run `mpmflow validate` or its cases. The validation reads the case
-# files in examples/ beside the package (mpmflow/validation/common.py: a source checkout);
-# installed from a wheel it refuses with exit 2 and says so, which is the design, not a fault
-# of the wheel
+# Left out: the tests that run `mpmflow validate` or its cases, or read its data. The
+# validation reads the case files in examples/ and the data in data/validation/ beside the
+# package (mpmflow/validation/common.py: a source checkout); installed from a wheel it refuses
+# with exit 2 and says so, which is the design, not a fault of the wheel
 checkout_only=(
     tests/validation/test_channel_flows.py::test_bingham_plug_width_and_speed_within_tolerance
     tests/validation/test_granular_3d.py::test_the_quarter_column_case_sits_on_the_symmetry_planes
+    tests/validation/test_granular_references.py::test_bui_measured_line_and_deposit
+    tests/validation/test_granular_references.py::test_contact_dynamics_runouts_as_the_data_readme_states
     tests/validation/test_validation.py::test_validate_refuses_a_readme_it_did_not_write
     tests/validation/test_validation.py::test_validate_runs_a_case_from_the_command_line
 )

@@ -199,6 +199,18 @@ def test_channel_flow_rows_the_quick_meshes_decide(quick):
         assert (out / png).stat().st_size > 1000
 
 
+@pytest.mark.slow
+def test_frictional_column_fails_where_the_experiment_did(quick):
+    """Bui et al.'s column at 5 mm: the failure line meets the floor within the report's
+    10% of the measured place (4.5% at this mesh)."""
+    _, rows, _ = quick
+    assert row(rows, "bui_collapse", "failure line's foot").status == "pass"
+    for q in ("run-out", "failure line's angle", "at rest"):
+        assert np.isfinite(row(rows, "bui_collapse", q).value)
+    for a in ("0.5", "1.42"):
+        assert np.isfinite(row(rows, "granular_collapse_cd", f"run-out, a = {a},").value)
+
+
 def test_the_cli_names_every_validation_case():
     from mpmflow.cli import VALIDATION_CASES
 
