@@ -25,7 +25,7 @@ nodes (B / 16, 32, 64) it was B + h wide: 1.082, 1.030 and 1.023 of Prandtl's lo
 In 3D (examples/footing_3d.toml) a square footing B x B, its quarter beside the planes x =
 0 and y = 0, on the same clay 3 B from the centre each way and 2 B deep (a box 4 B wide
 and 3 B deep bore the same load to 0.1%), 27 particles a cell, its edges midway between
-planes of nodes (h = B / 7, B / 9, B / 11); q = F / (B^2 / 4). No exact solution exists
+planes of nodes (h = B / 9, B / 11, B / 13); q = F / (B^2 / 4). No exact solution exists
 for a square footing; Gourvenec, Randolph & Kingsnorth (2006, Int. J. Geomech. 6(3) 147,
 finite elements calibrated against the exact strip and circle) find a rough square
 footing's capacity on Tresca clay about 5% below Skempton's shape factor of 1.2 on
@@ -101,7 +101,7 @@ SQUARE = Footing(
     dim=3,
     reference=NC_SQUARE,
     area=0.25 * B * B,
-    spacings=(B / 7, B / 9, B / 11),
+    spacings=(B / 9, B / 11, B / 13),
     label="N_c",
     named="Gourvenec et al.'s N_c s_u",
     formula="N_c",
