@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from .common import ROOT, CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
+from .materials import deposit_profile
 from .types import Context, FloatArray
 
 D = 0.005  # m: the contact dynamics' mean grain diameter
@@ -141,10 +142,6 @@ def _run(column: Column, cells: float, coulomb: bool = False) -> Collapse:
     if x[:, 0].max() > 2 * half - 1.5 * h or x[:, 0].min() < 1.5 * h:
         raise RuntimeError(f"the a = {column.a} column reached the tank's side wall")
     spacing = h / sim.case.bodies[0].particles_per_cell
-    d = np.abs(x[:, 0] - half)
-    k = (d / spacing).astype(int)
-    top = np.zeros(int(k.max()) + 1)
-    np.maximum.at(top, k, x[:, 1] + 0.5 * spacing)
     return Collapse(
         column=column,
         cells=cells,
@@ -154,7 +151,7 @@ def _run(column: Column, cells: float, coulomb: bool = False) -> Collapse:
         particles=sim.particles.count,
         steps=sim.steps,
         wall=float(sim.summary["wall_seconds"]),
-        surface=((np.arange(top.size, dtype=np.float64) + 0.5) * spacing, top),
+        surface=deposit_profile(x, half, spacing),
     )
 
 
