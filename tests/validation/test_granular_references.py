@@ -53,5 +53,5 @@ def test_mu_i_column_runs_out_short_of_the_grains():
     contact dynamics': so is mpmflow's at a = 0.5 (12.5 cells across L0, 2 s), by less than
     the report's 15% plus the coarse mesh's (the shortfall halves from 12.5 to 25 cells)."""
     column = granular_cd.COLUMNS[0]
-    r = granular_cd._run(column, 12.5)
+    r = granular_cd.collapse(column, 12.5)
     assert 0.75 < r.runout / granular_cd.contact_runout(column) < 1.0

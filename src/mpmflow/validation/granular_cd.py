@@ -116,7 +116,7 @@ class Collapse:
     surface: tuple[FloatArray, FloatArray]  # the deposit's top from the axis
 
 
-def _run(column: Column, cells: float, coulomb: bool = False) -> Collapse:
+def collapse(column: Column, cells: float, coulomb: bool = False) -> Collapse:
     """The column at ``cells`` across L0: the mu(I) continuum, or (``coulomb``) the
     Mohr-Coulomb solid of examples/bui_column.toml at mu_s's friction angle."""
     L0, H0 = column.L0, column.H0
@@ -172,8 +172,8 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
     )
     meshes = CELLS_QUICK if quick else CELLS
     columns = COLUMNS[:2] if quick else COLUMNS
-    runs = [_run(c, cells) for c in columns for cells in meshes]
-    coulomb = [] if quick else [_run(c, CELLS[0], coulomb=True) for c in columns]
+    runs = [collapse(c, cells) for c in columns for cells in meshes]
+    coulomb = [] if quick else [collapse(c, CELLS[0], coulomb=True) for c in columns]
     for column in columns:
         r = [x for x in runs if x.column is column][-1]
         ref = contact_runout(column)
