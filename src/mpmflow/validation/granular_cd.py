@@ -12,7 +12,8 @@ continuum's own (the deposit does not depend on the density). The column is the 
 dynamics' (half-widths L0 = 60.75, 46.5 and 22.0 d; heights 30.5, 65.6 and 137.7 d) in the
 middle of a tank that its deposit does not reach, spreading both ways; the run-out is
 (L_f - L0) / L0 with L_f the mean of the two fronts' outermost particles, read at t
-sqrt(g / H0) = 8 + 0.6 sqrt(g / H0) (the contact dynamics stop by about 5). The paper found
+sqrt(g / H0) = 8 + 0.6 sqrt(g / H0) (the contact dynamics stop by about 5, if their
+profiles are at 0, 1, 2, ..., as they appear to be: the times are not stated). The paper found
 its continuum's final run-out systematically short of the contact dynamics'.
 
 The transfer is the default FLIP (0.99), at 12.5 and 25 cells across L0, the row at 25:
