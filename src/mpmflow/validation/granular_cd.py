@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .common import ROOT, CaseResult, Row, fmt, markdown_table, pyplot, run_example, save
-from .materials import deposit_profile
+from .materials import column_in_tank, deposit_profile, front_reach, reached_side_wall
 from .types import Context, FloatArray
 
 D = 0.005  # m: the contact dynamics' mean grain diameter
@@ -125,29 +125,21 @@ def collapse(column: Column, cells: float, coulomb: bool = False) -> Collapse:
     half = L0 * (1 + 1.3 * reference) + 0.05  # the deposit stays clear of the walls
     h = L0 / cells
     end = 0.6 + 8 * math.sqrt(H0 / 9.81)
-    place = [
-        f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
-        f"grid.spacing={h!r}",
-        f"bodies.0.min=[{half - L0:.4f}, 0.0]",
-        f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
-        f"time.end={end:.3f}",
-        f"output.interval={end:.3f}",
-    ]
+    place = [*column_in_tank(L0, H0, half, h), f"time.end={end:.3f}", f"output.interval={end:.3f}"]
     if coulomb:
         sim = run_example("bui_column.toml", [*place, *coulomb_material(H0)])
     else:
         dt = min(5e-4, 0.35 * h / math.sqrt(2 * 9.81 * H0))
         sim = run_example("granular_collapse.toml", [*place, f"time.dt={dt:.4g}", *RHEOLOGY])
     x = sim.particles.x
-    reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))
-    if x[:, 0].max() > 2 * half - 1.5 * h or x[:, 0].min() < 1.5 * h:
+    if reached_side_wall(x, half, h):
         raise RuntimeError(f"the a = {column.a} column reached the tank's side wall")
     spacing = h / sim.case.bodies[0].particles_per_cell
     return Collapse(
         column=column,
         cells=cells,
         model="Mohr-Coulomb" if coulomb else "mu(I)",
-        runout=(reach - L0) / L0,
+        runout=(front_reach(x, half) - L0) / L0,
         speed=float(np.linalg.norm(sim.particles.v, axis=1).max()),
         particles=sim.particles.count,
         steps=sim.steps,

@@ -194,14 +194,33 @@ class Collapse:
         H0, half, h, dt = self.H0, self.half, self.h, self.dt
         end = self.end if self.end is not None else 0.6 + 6 * math.sqrt(H0 / G)
         return [
-            f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
-            f"grid.spacing={h}",
-            f"bodies.0.min=[{half - L0:.4f}, 0.0]",
-            f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
+            *column_in_tank(L0, H0, half, h),
             f"time.dt={dt:.4g}",
             f"time.end={end:.3f}",
             f"output.interval={self.interval}",
         ]
+
+
+def column_in_tank(L0: float, H0: float, half: float, h: float) -> list[str]:
+    """The overrides that put a column of half-width L0 and height H0 (m) on the floor in
+    the middle of a tank of half-width ``half``, 1.15 H0 + 2 h high, at spacing h."""
+    return [
+        f"domain.size=[{2 * half:.4f}, {H0 * 1.15 + 2 * h:.4f}]",
+        f"grid.spacing={h!r}",
+        f"bodies.0.min=[{half - L0:.4f}, 0.0]",
+        f"bodies.0.max=[{half + L0:.4f}, {H0:.4f}]",
+    ]
+
+
+def front_reach(x: FloatArray, half: float) -> float:
+    """The mean distance of the two fronts' outermost particles from the axis at x = half
+    (m; x the particles' positions)."""
+    return 0.5 * float((x[:, 0].max() - half) + (half - x[:, 0].min()))
+
+
+def reached_side_wall(x: FloatArray, half: float, h: float) -> bool:
+    """Whether a particle came within 1.5 cells of the side walls of a tank 2 half wide."""
+    return bool(x[:, 0].max() > 2 * half - 1.5 * h or x[:, 0].min() < 1.5 * h)
 
 
 def _collapse(a: float, quick: bool, width: float = 1.6) -> Measures:
@@ -214,13 +233,12 @@ def _collapse(a: float, quick: bool, width: float = 1.6) -> Measures:
     fronts: list[tuple[float, float]] = []  # (t, mean reach of the two fronts, m)
 
     def front(sim: Simulation) -> None:
-        x = sim.particles.x[:, 0]
-        fronts.append((sim.time, 0.5 * ((x.max() - half) + (half - x.min()))))
+        fronts.append((sim.time, front_reach(sim.particles.x, half)))
 
     sim = run_example("granular_collapse.toml", c.overrides(), front)
     x = sim.particles.x
-    reach = 0.5 * ((x[:, 0].max() - half) + (half - x[:, 0].min()))
-    walled = bool(x[:, 0].max() > 2 * half - 1.5 * h or x[:, 0].min() < 1.5 * h)
+    reach = front_reach(x, half)
+    walled = reached_side_wall(x, half, h)
     spacing = h / sim.case.bodies[0].particles_per_cell
     # the flow's duration: from the release to the last output at which the front was
     # still more than a particle spacing short of where it ends
