@@ -32,6 +32,7 @@ L0 and the solid's own step (half a cell's shear-wave crossing).
 
 import math
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -94,6 +95,7 @@ def profiles(column: Column) -> list[FloatArray]:
     return [data[data[:, 0] == k][:, 1:] * D for k in range(int(data[:, 0].max()) + 1)]
 
 
+@cache  # read once a column: the runs, the rows and the table each ask for it
 def contact_runout(column: Column) -> float:
     """The contact dynamics' final run-out (L_f - L0) / L0: the mean of the last profile's
     two outermost points (h = 0) from the axis."""
