@@ -3,6 +3,7 @@
 # environment where no compiler is reachable, then the hydrostatic example and the fast test
 # tier run against the installed package, not src/.
 #   scripts/check_wheel.sh [python3] [wheel]      (make test-wheel builds the wheel first)
+# The tier runs on $TEST_WORKERS processes (pytest-xdist; default 2), a test file to each.
 # No compiler: the commands run with nothing from the environment but HOME, pip's settings
 # and proxies; PATH holds only the new environment's bin/, CC and CXX are /bin/false, and
 # pip takes binary wheels only (--only-binary :all:), so nothing can be built on the way.
@@ -11,6 +12,7 @@ cd "$(dirname "$0")/.."
 ROOT=$PWD
 PYTHON=${1:-python3}
 WHEEL=${2:-}
+WORKERS=${TEST_WORKERS:-2}
 if [ -z "$WHEEL" ]; then
     shopt -s nullglob
     wheels=(dist/mpmflow-*-manylinux*.whl)
@@ -96,5 +98,5 @@ if [ -n "${NPY_DISABLE_CPU_FEATURES:-}${OPENBLAS_CORETYPE:-}" ]; then
     "${bare[@]}" "$VENV/bin/python" scripts/kernels.py check
 fi
 echo "check_wheel: the fast tier against the installed wheel (${#checkout_only[@]} tests of a source checkout left out)"
-"${bare[@]}" "$VENV/bin/pytest" -p no:cacheprovider -m "not slow" -q \
+"${bare[@]}" "$VENV/bin/pytest" -p no:cacheprovider -n "$WORKERS" --dist loadfile -m "not slow" -q \
     "${checkout_only[@]/#/--deselect=}"

@@ -222,7 +222,9 @@ def _parser() -> argparse.ArgumentParser:
     )
     v.add_argument("--out", "-o", metavar="DIR", required=True, help="report folder")
     v.add_argument(
-        "--quick", action="store_true", help="the small versions the test suite runs (about 20 s)"
+        "--quick",
+        action="store_true",
+        help="the small versions the test suite runs (about 3 minutes on 2 cores)",
     )
     v.add_argument(
         "--case",
