@@ -45,6 +45,10 @@ void apply(View<const index_t, 2> cols, View<const double, 2> vals, View<const d
       matvec_rows<9>(cols, vals, x, b, y, lo, hi, subtract);
     else if (ns == 27)
       matvec_rows<27>(cols, vals, x, b, y, lo, hi, subtract);
+    else if (ns == 5)  // the stars of star_slots
+      matvec_rows<5>(cols, vals, x, b, y, lo, hi, subtract);
+    else if (ns == 7)
+      matvec_rows<7>(cols, vals, x, b, y, lo, hi, subtract);
     else
       matvec_rows<0>(cols, vals, x, b, y, lo, hi, subtract);
   });
@@ -57,8 +61,9 @@ void gs_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const
   for (index_t k = lo; k < hi; ++k) gs_row<NS>(cols, vals, b, x, rows(k), nullptr, 0);
 }
 
-// One 2^D-colour Gauss-Seidel sweep, colours in order (forward) or in reverse.
-template <int D>
+// One 2^D-colour Gauss-Seidel sweep, colours in order (forward) or in reverse; NS: the
+// slots of a row of cols (3^D, or the star's 2D + 1).
+template <int D, int NS>
 void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
                   View<double> x, View<const index_t> rows,
                   const std::array<index_t, (1 << D) + 1>& cstart, bool forward) {
@@ -69,9 +74,7 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
     for_each_range(
         hi - lo,
-        [&](index_t, index_t a, index_t z) {
-          gs_rows<stencil_size(D)>(cols, vals, b, x, rows, lo + a, lo + z);
-        },
+        [&](index_t, index_t a, index_t z) { gs_rows<NS>(cols, vals, b, x, rows, lo + a, lo + z); },
         n);
   }
 }
@@ -79,17 +82,28 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
 // The first forward sweep from x = 0 (no fill needed): a row of colour c reads only its
 // neighbours of colours before c (updated in this sweep; first_sweep_slots); the others
 // still hold 0, and subtracting v 0 leaves the sum as it was, so skipping them gives the
-// values of a sweep after x = 0.
-template <int D>
+// values of a sweep after x = 0. NS as gauss_seidel's: on the star's slots, those of
+// first_sweep_slots the star holds, as indices into it (in the same ascending order).
+template <int D, int NS>
 void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
                         View<const double> b, View<double> x, View<const index_t> rows,
                         const std::array<index_t, (1 << D) + 1>& cstart) {
   constexpr int NCOL = 1 << D;
-  constexpr int NS = stencil_size(D);
+  constexpr int FULL = stencil_size(D);
+  static_assert(NS == FULL || NS == 2 * D + 1, "a row of 3^D slots or of the star's");
   const index_t n = cols.extent(0);
   for (int colour = 0; colour < NCOL; ++colour) {
-    int slots[NS];
-    const int nslots = first_sweep_slots<D>(colour, slots);
+    int full[FULL], slots[FULL];
+    const int nfull = first_sweep_slots<D>(colour, full);
+    int nslots = 0;
+    if constexpr (NS == FULL) {
+      for (int u = 0; u < nfull; ++u) slots[nslots++] = full[u];
+    } else {
+      constexpr auto star = star_slots<D>();
+      for (int t = 0; t < NS; ++t)
+        for (int u = 0; u < nfull; ++u)
+          if (full[u] == star[t]) slots[nslots++] = t;
+    }
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
     for_each_range(
         hi - lo,
@@ -283,6 +297,7 @@ void Multigrid<D>::setup(View<const index_t, 2> cols, View<const double, 2> vals
   for (index_t l = 0; l < nlev_; ++l) {
     Level& lv = level_[l];
     colour_rows(lv);
+    compact(lv);
     lv.r = lv.r_store.sized(lv.n);
     if (l > 0) {
       lv.b = lv.b_store.sized(lv.n);
@@ -534,28 +549,74 @@ void Multigrid<D>::cholesky_solve(View<const double> b, View<double> x) {
 }
 
 template <int D>
+void Multigrid<D>::compact(Level& lv) {
+  constexpr auto star = star_slots<D>();
+  constexpr int NK = 2 * D + 1;
+  lv.kcols = {};
+  lv.kvals = {};
+  const index_t n = lv.n;
+  if (n == 0) return;
+  bool in_star[NS] = {};
+  for (int s : star) in_star[s] = true;
+  const auto off = [&](index_t lo, index_t hi) {  // a row in [lo, hi) fills a slot off it
+    for (index_t r = lo; r < hi; ++r)
+      for (int s = 0; s < NS; ++s)
+        if (!in_star[s] && lv.cols(r, s) >= 0) return index_t(1);
+    return index_t(0);
+  };
+  // most operators (the pressure's, the coarse levels') fill a corner slot in their first
+  // row: only a star's operator is scanned whole
+  if (off(0, 1) || reduce_chunks<index_t>(n, off) > 0) return;
+  auto kc = lv.kcols_store.template sized<2>({n, NK});
+  auto kv = lv.kvals_store.template sized<2>({n, NK});
+  for_each_range(n, [&](index_t, index_t lo, index_t hi) {
+    for (index_t r = lo; r < hi; ++r)
+      for (int t = 0; t < NK; ++t) {
+        kc(r, t) = lv.cols(r, star[t]);
+        kv(r, t) = lv.vals(r, star[t]);
+      }
+  });
+  lv.kcols = kc;
+  lv.kvals = kv;
+}
+
+template <int D>
 void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
   if (nlev_ == 0) throw std::logic_error("multigrid: vcycle before setup");
   auto bl = [&](index_t l) -> View<const double> { return l == 0 ? b : level_[l].b; };
   auto xl = [&](index_t l) -> View<double> { return l == 0 ? x : level_[l].x; };
+  // a level's sweeps on its compact form where it has one (the same values)
+  const auto first = [&](const Level& lv, View<double> xv, View<const double> bv) {
+    if (lv.kcols.size() > 0)
+      gauss_seidel_first<D, 2 * D + 1>(lv.kcols, lv.kvals, bv, xv, lv.rows, lv.cstart);
+    else
+      gauss_seidel_first<D, NS>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart);
+  };
+  const auto sweep = [&](const Level& lv, View<double> xv, View<const double> bv, bool fwd) {
+    if (lv.kcols.size() > 0)
+      gauss_seidel<D, 2 * D + 1>(lv.kcols, lv.kvals, bv, xv, lv.rows, lv.cstart, fwd);
+    else
+      gauss_seidel<D, NS>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart, fwd);
+  };
   for (index_t l = 0; l + 1 < nlev_; ++l) {
     Level& lv = level_[l];
     const View<double> xv = xl(l);
     if (sweeps > 0)
-      gauss_seidel_first<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart);
+      first(lv, xv, bl(l));
     else
       fill(xv, 0.0);
-    for (int s = 1; s < sweeps; ++s)
-      gauss_seidel<D>(lv.cols, lv.vals, bl(l), xv, lv.rows, lv.cstart, true);
-    residual(lv.cols, lv.vals, xv, bl(l), lv.r);
+    for (int s = 1; s < sweeps; ++s) sweep(lv, xv, bl(l), true);
+    if (lv.kcols.size() > 0)
+      residual(lv.kcols, lv.kvals, xv, bl(l), lv.r);
+    else
+      residual(lv.cols, lv.vals, xv, bl(l), lv.r);
     restrict_to<NP>(lv.pcols, lv.pw, lv.r, level_[l + 1].b);
   }
   cholesky_solve(bl(nlev_ - 1), xl(nlev_ - 1));
   for (index_t l = nlev_ - 2; l >= 0; --l) {
     Level& lv = level_[l];
     prolong_add<NP>(lv.pcols, lv.pw, level_[l + 1].x, xl(l));
-    for (int s = 0; s < sweeps; ++s)
-      gauss_seidel<D>(lv.cols, lv.vals, bl(l), xl(l), lv.rows, lv.cstart, false);
+    for (int s = 0; s < sweeps; ++s) sweep(lv, xl(l), bl(l), false);
   }
 }
 
@@ -574,10 +635,19 @@ SolveResult Multigrid<D>::pcg(View<const double> rhs, View<double> x, double tol
     const Level& f;
     int sweeps;
     double dot(View<const double> a, View<const double> b) { return mpmflow::dot(a, b); }
+    bool star = f.kcols.size() > 0;  // the finest level's compact form (the same values)
     void residual(View<const double> x, View<const double> b, View<double> r) {
-      mpmflow::residual(f.cols, f.vals, x, b, r);
+      if (star)
+        mpmflow::residual(f.kcols, f.kvals, x, b, r);
+      else
+        mpmflow::residual(f.cols, f.vals, x, b, r);
     }
-    void matvec(View<const double> p, View<double> q) { mpmflow::matvec(f.cols, f.vals, p, q); }
+    void matvec(View<const double> p, View<double> q) {
+      if (star)
+        mpmflow::matvec(f.kcols, f.kvals, p, q);
+      else
+        mpmflow::matvec(f.cols, f.vals, p, q);
+    }
     void vcycle(View<const double> r, View<double> z) { mg.vcycle(r, z, sweeps); }
     void fill(View<double> v, double value) { mpmflow::fill(v, value); }
     void copy(View<const double> from, View<double> to) { mpmflow::copy(from, to); }

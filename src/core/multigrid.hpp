@@ -114,6 +114,23 @@ MPMFLOW_HD inline void cholesky_solve_dense(const double* L, index_t n, View<con
   }
 }
 
+// The slots of the (2D + 1)-point star among a row's 3^D (the diagonal and its 2D face
+// neighbours), ascending: a level whose rows fill no other slot (the volume correction's
+// Laplacian on the cells) is also held in this compact form, which its iterations read
+// (the same sums in the same order, on 2D + 1 slots a row instead of 3^D).
+template <int D>
+constexpr std::array<int, 2 * D + 1> star_slots() {
+  std::array<int, 2 * D + 1> s{};
+  const int centre = stencil_size(D) / 2;
+  int p3 = 1;
+  for (int k = 0; k < D; ++k, p3 *= 3) {
+    s[D - 1 - k] = centre - p3;
+    s[D + 1 + k] = centre + p3;
+  }
+  s[D] = centre;
+  return s;
+}
+
 // The off-diagonal slots a row of colour ``colour`` reads in the first sweep from x = 0:
 // those of colours before it (the neighbour at slot s has colour colour ^ odd(s), odd(s)
 // the axes along which the offset of slot s is odd). Returns how many (into slots).
@@ -239,15 +256,20 @@ class Multigrid {
     std::array<index_t, NP + 1> cstart{};  // colour k: rows[cstart[k]:cstart[k + 1]]
     View<const index_t, 2> cols;
     View<const double, 2> vals;
+    // the operator on the star's slots only (star_slots), when no row fills another: the
+    // iterations read these (n x (2D + 1)); empty otherwise
+    View<const index_t, 2> kcols;
+    View<const double, 2> kvals;
     View<const index_t> node;
     View<index_t> rows;
     View<index_t, 2> coord;  // n x D: the grid coordinates of node(r)
     View<index_t, 2> pcols;  // n x NP, columns on the next level (-1: none; entries first)
     View<double, 2> pw;      // n x NP
     View<double> b, x, r;    // right-hand side, solution, residual (level 0: b, x given)
-    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store;
-    Buffer<double> vals_store, pw_store, b_store, x_store, r_store;
+    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store, kcols_store;
+    Buffer<double> vals_store, pw_store, b_store, x_store, r_store, kvals_store;
   };
+  void compact(Level& lv);       // lv.kcols, lv.kvals when its rows fill the star's slots only
   void coarse_level(index_t l);  // level l + 1's unknowns and P of level l
   void galerkin(index_t l);      // level l + 1's operator P^T A P
   void coordinates(Level& lv);   // lv.coord from lv.node (the only divisions of a setup)

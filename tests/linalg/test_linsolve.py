@@ -109,3 +109,65 @@ def test_large_multigrid_solve_is_right_and_independent_of_threads():
     np.testing.assert_allclose(answers[0], exact, rtol=0, atol=1e-8 * np.abs(exact).max())
     for x in answers[1:]:
         assert np.array_equal(x, answers[0])
+
+
+def star_laplacian(dims, mask):
+    """The (2D + 1)-point Laplacian on the masked points of a grid (Dirichlet outside) in the
+    multigrid's ELL form, 3^D slots a row, the neighbour at offset d in slot sum (d_k + 1) 3^k:
+    the volume correction's operator on the cells."""
+    D = len(dims)
+    node = np.flatnonzero(mask.ravel(order="F"))  # axis 0 fastest
+    row = -np.ones(mask.size, dtype=np.int64)
+    row[node] = np.arange(node.size)
+    coords = np.stack(np.unravel_index(node, dims, order="F"), axis=1)
+    cols = -np.ones((node.size, 3**D), dtype=np.int64)
+    vals = np.zeros((node.size, 3**D))
+    centre = 3**D // 2
+    cols[:, centre], vals[:, centre] = np.arange(node.size), 2.0 * D
+    for k in range(D):
+        for d in (-1, 1):
+            c = coords.copy()
+            c[:, k] += d
+            inside = (c[:, k] >= 0) & (c[:, k] < dims[k])
+            j = np.full(node.size, -1)
+            j[inside] = row[np.ravel_multi_index(c[inside].T, dims, order="F")]
+            held = j >= 0
+            cols[held, centre + d * 3**k], vals[held, centre + d * 3**k] = j[held], -1.0
+    return cols, vals, node
+
+
+@pytest.mark.parametrize("dims", [(130, 70), (30, 26, 22)], ids=["2D", "3D"])
+def test_a_star_operator_iterates_on_its_star_with_the_same_bits(dims):
+    """The multigrid keeps a (2D + 1)-point operator on its 2D + 1 slots as well
+    (src/core/multigrid.hpp, star_slots) and iterates on those: the same sums in the same
+    order as on the 3^D slots. The same operator with a corner slot filled by a zero entry
+    (which changes no sum) is iterated on the 3^D slots: both must give the same bits, on
+    a grid large enough for the threaded row loops."""
+    from mpmflow import state
+    from mpmflow.state.pressure import multigrid
+
+    grids = np.meshgrid(*[np.linspace(-1, 1, n) for n in dims], indexing="ij")
+    mask = sum(g**2 for g in grids) < 0.9
+    cols, vals, node = star_laplacian(dims, mask)
+    assert node.size > state.PARALLEL_ROWS
+    full_cols = cols.copy()
+    full_cols[:, 0] = np.arange(node.size)  # slot 0 (offset -1 on every axis): 0 * x_r
+    b = np.random.default_rng(5).normal(size=node.size)
+    answers = []
+    for c in (cols, full_cols):
+        x = np.zeros(node.size)
+        iterations, residual = multigrid(c, vals, node, dims).pcg(b, x, 1e-10, 100, 1)
+        assert residual <= 1e-10 and 0 < iterations <= 30
+        answers.append((iterations, x))
+    assert answers[0][0] == answers[1][0]
+    assert np.array_equal(answers[0][1], answers[1][1])
+    exact = spla.spsolve(sp_csr(cols, vals).tocsc(), b)
+    np.testing.assert_allclose(answers[0][1], exact, rtol=0, atol=1e-8 * np.abs(exact).max())
+
+
+def sp_csr(cols, vals):
+    import scipy.sparse as sp
+
+    r, s = np.nonzero(cols >= 0)
+    n = cols.shape[0]
+    return sp.csr_matrix((vals[r, s], (r, cols[r, s])), shape=(n, n))
