@@ -115,17 +115,22 @@ void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
   }
 }
 
-// r_c = P^T r_f (serial: the sums in the order of the fine rows).
-template <int NP>
-void restrict_to(View<const index_t, 2> pcols, View<const double, 2> pw, View<const double> rf,
-                 View<double> rc) {
-  for (index_t i = 0; i < rc.size(); ++i) rc(i) = 0.0;
-  const index_t n = pcols.extent(0);
-  for (index_t r = 0; r < n; ++r)
-    for (int a = 0; a < NP; ++a) {
-      const index_t c = pcols(r, a);
-      if (c >= 0) rc(c) += pw(r, a) * rf(r);
-    }
+// r_c = P^T r_f from P's transpose (Level::tstart, trow, tw): each coarse row sums its fine
+// rows' terms in their order, from 0 (the bits of the serial scatter over the fine rows,
+// on any number of threads).
+void restrict_to(View<const index_t> tstart, View<const index_t> trow, View<const double> tw,
+                 View<const double> rf, View<double> rc) {
+  const index_t nc = rc.size();
+  for_each_range(
+      nc,
+      [&](index_t, index_t lo, index_t hi) {
+        for (index_t I = lo; I < hi; ++I) {
+          double acc = 0.0;
+          for (index_t k = tstart(I); k < tstart(I + 1); ++k) acc += tw(k) * rf(trow(k));
+          rc(I) = acc;
+        }
+      },
+      rf.size());
 }
 
 // x_f += P e_c (rows independent: in parallel on large levels, the same bits).
@@ -411,6 +416,26 @@ void Multigrid<D>::coarse_level(index_t l) {
       }
     }
   }
+  // P's transpose: a counting sort of P's entries by coarse row, the fine rows ascending
+  f.tstart = f.tstart_store.sized(nc + 1);
+  for (index_t I = 0; I <= nc; ++I) f.tstart(I) = 0;
+  index_t nnz = 0;
+  for (index_t r = 0; r < n; ++r)
+    for (int a = 0; a < NP && f.pcols(r, a) >= 0; ++a) {
+      ++f.tstart(f.pcols(r, a) + 1);
+      ++nnz;
+    }
+  for (index_t I = 0; I < nc; ++I) f.tstart(I + 1) += f.tstart(I);
+  f.trow = f.trow_store.sized(nnz);
+  f.tw = f.tw_store.sized(nnz);
+  View<index_t> fill_at = crow_store_.sized(nc);  // crow is spent: the next free slot
+  for (index_t I = 0; I < nc; ++I) fill_at(I) = f.tstart(I);
+  for (index_t r = 0; r < n; ++r)
+    for (int a = 0; a < NP && f.pcols(r, a) >= 0; ++a) {
+      const index_t k = fill_at(f.pcols(r, a))++;
+      f.trow(k) = r;
+      f.tw(k) = f.pw(r, a);
+    }
   coordinates(c);
   View<index_t> chash = ccoord_store_.sized(nc);
   for (index_t I = 0; I < nc; ++I) {
@@ -610,7 +635,7 @@ void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
       residual(lv.kcols, lv.kvals, xv, bl(l), lv.r);
     else
       residual(lv.cols, lv.vals, xv, bl(l), lv.r);
-    restrict_to<NP>(lv.pcols, lv.pw, lv.r, level_[l + 1].b);
+    restrict_to(lv.tstart, lv.trow, lv.tw, lv.r, level_[l + 1].b);
   }
   cholesky_solve(bl(nlev_ - 1), xl(nlev_ - 1));
   for (index_t l = nlev_ - 2; l >= 0; --l) {

@@ -265,9 +265,15 @@ class Multigrid {
     View<index_t, 2> coord;  // n x D: the grid coordinates of node(r)
     View<index_t, 2> pcols;  // n x NP, columns on the next level (-1: none; entries first)
     View<double, 2> pw;      // n x NP
-    View<double> b, x, r;    // right-hand side, solution, residual (level 0: b, x given)
-    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store, kcols_store;
-    Buffer<double> vals_store, pw_store, b_store, x_store, r_store, kvals_store;
+    // P's transpose by coarse row I: its fine rows trow[tstart[I]:tstart[I + 1]], ascending,
+    // and their weights tw (the restriction's sums, each coarse row's on its own, in the
+    // order of the fine rows)
+    View<index_t> tstart, trow;
+    View<double> tw;
+    View<double> b, x, r;  // right-hand side, solution, residual (level 0: b, x given)
+    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store, kcols_store,
+        tstart_store, trow_store;
+    Buffer<double> vals_store, pw_store, b_store, x_store, r_store, kvals_store, tw_store;
   };
   void compact(Level& lv);       // lv.kcols, lv.kvals when its rows fill the star's slots only
   void coarse_level(index_t l);  // level l + 1's unknowns and P of level l
