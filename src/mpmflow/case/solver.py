@@ -163,6 +163,17 @@ class Solver(Section):
         "second step halves that with the same volume, dam-break accuracy and sloshing "
         "energy (docs/method.md).",
     )
+    volume_correction_tolerance: float = Field(
+        1e-8,
+        gt=0,
+        lt=1,
+        description="Relative residual the volume correction's linear solve must reach "
+        "(the run stops if it does not). It moves particles by a fraction of a volume "
+        "error, which the next correction takes up again, so it can be looser than the "
+        "pressure's: on the 3D dam break at 0.004 m, 24 multigrid iterations a correction "
+        "at 1e-8, 15 at 1e-4, the front and height at 0.1 s the same to 1 mm. At 1e-2 a "
+        "run's flow depends on the solver (docs/notes/benchmarks-diary.md).",
+    )
     density_correction: float | None = Field(
         None,
         ge=0,

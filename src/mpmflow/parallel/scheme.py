@@ -105,7 +105,9 @@ class DistributedProjection(ProjectionScheme):
         self.time = 0.0  # s: the flow time the bodies are placed at
         check_movers(case, grid, self.movers)
         self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
-        self.volume = DistributedVolume(self.comm, s.tolerance, s.petsc_preconditioner)
+        self.volume = DistributedVolume(
+            self.comm, s.volume_correction_tolerance, s.petsc_preconditioner
+        )
         self.steps = 0
         self.last_unknowns = 0
         self.auto = case.time.dt == "auto"  # steps set by the flow (``_span``)

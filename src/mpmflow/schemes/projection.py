@@ -318,7 +318,7 @@ class ProjectionScheme:
             sweeps=SMOOTHING_SWEEPS,
             volume_rate=float(volume_rate),
             volume_every=int(every),
-            volume_tol=float(s.tolerance),
+            volume_tol=float(s.volume_correction_tolerance),
             volume_max_iterations=volume_correction.MAX_ITERATIONS,
             volume_dmax=volume_correction.MAX_DISPLACEMENT,
             viscous=self.viscous,

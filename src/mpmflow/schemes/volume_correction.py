@@ -17,10 +17,11 @@ volume conserving liquids"):
    less than half full) the density reads low because part of its kernel lies in air, so only
    an excess counts there: the surface is never pulled inward by its own thinness, and the
    interior's gaps are closed by drawing the surface down. It is solved to
-   ``solver.tolerance``, as the pressure is: at a looser 1e-2 the run depended on the
-   solver (one process moved the 2D dam break's front by 0.0026 a between 1e-2 and 1e-4,
-   and a run over MPI ranks, solved by PETSc, the 3D column's height by a cell), at 1e-8 it
-   does not, for about three more multigrid iterations a step (docs/notes/benchmarks-diary.md);
+   ``solver.volume_correction_tolerance``, by default the pressure's 1e-8: at 1e-2 the run
+   depended on the solver (one process moved the 2D dam break's front by 0.0026 a between
+   1e-2 and 1e-4, and a run over MPI ranks, solved by PETSc, the 3D column's height by a
+   cell), at 1e-8 it does not, for about three more multigrid iterations a step in 2D
+   (docs/notes/benchmarks-diary.md; in 3D at 0.004 m, 24 a correction against 15 at 1e-4);
 3. the displacement d = -beta h grad q on the cell faces (0 on walls, so nothing is pushed
    into a wall), interpolated to each particle from its own faces and added to the particle's
    position in the grid-to-particle step (src/core/transfer).
@@ -44,6 +45,8 @@ MAX_DISPLACEMENT = 0.5  # cells per step, a safety bound (Kugelstadt et al.)
 def not_converged(where: str, residual: float, iterations: int, cells: int) -> SolverError:
     return SolverError(
         f"The volume correction's solve did not converge{where}: relative residual "
-        f"{residual:.3e} after {iterations} iterations on {cells} cells. Try a smaller "
-        "time.dt, or switch the correction off with solver.volume_correction = 0."
+        f"{residual:.3e} after {iterations} iterations on {cells} cells "
+        "(solver.volume_correction_tolerance). Try a smaller time.dt, a looser "
+        "solver.volume_correction_tolerance, or switch the correction off with "
+        "solver.volume_correction = 0."
     )
