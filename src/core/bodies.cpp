@@ -939,7 +939,8 @@ index_t BodyTables<D>::contact(double t, double dt) {
       for (int k = 0; k < D; ++k) {
         if (g_.periodic[k]) continue;
         double n[D] = {};
-        const double below = -x[k], above = x[k] - g_.cells[k] * g_.h;
+        // the domain's walls (on a rank, not its grid's edges: x is in the domain's frame)
+        const double below = -x[k], above = x[k] - domain_[k] * g_.h;
         if (below > -reach) {
           n[k] = 1.0;
           add(x, n, below, -1);
@@ -949,12 +950,16 @@ index_t BodyTables<D>::contact(double t, double dt) {
           add(x, n, above, -1);
         }
       }
-      bool inside = true;
-      for (int k = 0; k < D; ++k) inside = inside && x[k] >= 0.0 && x[k] <= g_.cells[k] * g_.h;
+      bool inside = true;  // on this grid (a rank's: its origin_ cells from the domain's)
+      std::array<double, D> local;
+      for (int k = 0; k < D; ++k) {
+        local[k] = x[k] - static_cast<double>(origin_[k]) * g_.h;
+        inside = inside && local[k] >= 0.0 && local[k] <= g_.cells[k] * g_.h;
+      }
       if (inside && fixed_.phi.size() > 0) {  // a fixed obstacle: phi interpolated, its gradient
         double grad[D];
-        const double px =
-            interpolate_phi<D>(g_, fixed_.phi, View<const double, 2>(x.data(), {1, D}), 0, grad);
+        const double px = interpolate_phi<D>(g_, fixed_.phi,
+                                             View<const double, 2>(local.data(), {1, D}), 0, grad);
         double gn = 0.0;
         for (int k = 0; k < D; ++k) gn += grad[k] * grad[k];
         gn = std::sqrt(gn);

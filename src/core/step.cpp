@@ -591,17 +591,32 @@ bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
     for (index_t r = 0; r < n; ++r) y(r) = 0.0;
     if (!solve(View<const double>(&J(d, 0), {n}), y)) return false;
   }
-  bodies_.mass_matrix(S);
   auto x = x_.view(n);
+  // K's products over the rows: on several ranks each rank's owned rows, then summed over
+  // the ranks (the solves gave Y and x at every row a rank holds), so that every rank
+  // moves the bodies alike
+  const bool shared = exchange_->shared();
+  const auto owned = exchange_->owned_nodes();
+  auto rows = rows_.view(n);
+  const auto mine = [&](index_t r) { return owned.size() == 0 || owned(rows(r)); };
+  auto KY = body_KY_.sized(nq * nq + nq);  // K Y (nq x nq), then K p0 (nq)
   for (index_t i = 0; i < nq; ++i) {
     for (index_t j = 0; j < nq; ++j) {
       double v = 0.0;
-      for (index_t r = 0; r < n; ++r) v += K(i, r) * Y(j, r);
-      S(i, j) = S(i, j) / O.rho + v;
+      for (index_t r = 0; r < n; ++r)
+        if (mine(r)) v += K(i, r) * Y(j, r);
+      KY(i * nq + j) = v;
     }
     double kp = 0.0;
-    for (index_t r = 0; r < n; ++r) kp += K(i, r) * x(r);
-    z(i) = kp;
+    for (index_t r = 0; r < n; ++r)
+      if (mine(r)) kp += K(i, r) * x(r);
+    KY(nq * nq + i) = kp;
+  }
+  if (shared) exchange_->sum_values(KY);
+  bodies_.mass_matrix(S);
+  for (index_t i = 0; i < nq; ++i) {
+    for (index_t j = 0; j < nq; ++j) S(i, j) = S(i, j) / O.rho + KY(i * nq + j);
+    z(i) = KY(nq * nq + i);
   }
   // z = S^-1 K p0 (S = M / rho + K Y is positive definite: a zero pivot is not a coupling)
   if (!solve_dense(nq, S.data(), z.data()))
@@ -611,9 +626,12 @@ bool State<D>::couple_bodies(const Options<D>& O, Solve& solve) {
   // the pressure's impulse on the bodies, dt K p, and their velocities after it
   for (index_t d = 0; d < nq; ++d) {
     double kp = 0.0;
-    for (index_t r = 0; r < n; ++r) kp += K(d, r) * x(r);
-    z(d) = O.dt * kp;
+    for (index_t r = 0; r < n; ++r)
+      if (mine(r)) kp += K(d, r) * x(r);
+    z(d) = kp;
   }
+  if (shared) exchange_->sum_values(z);
+  for (index_t d = 0; d < nq; ++d) z(d) *= O.dt;
   bodies_.apply_impulse(z);
   bodies_.hold(time_ + 0.5 * O.dt);
   return true;

@@ -527,7 +527,8 @@ class State {
   double time_ = 0.0;                        // s: the flow time (moves the bodies)
   Buffer<double> body_force_, body_torque_;  // the last step's pressure force on each body
   Buffer<double> body_state_;                // body_state's rows
-  Buffer<double> body_J_, body_K_, body_Y_, body_S_, body_z_;  // couple_bodies' arrays
+  // couple_bodies' arrays
+  Buffer<double> body_J_, body_K_, body_Y_, body_S_, body_z_, body_KY_;
   template <class Solve>
   bool couple_bodies(const Options<D>& O, Solve& solve);
   index_t nrows_ = 0;

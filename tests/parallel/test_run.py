@@ -152,3 +152,46 @@ def test_a_refusal_of_rank_0_alone_stops_every_rank(tmp_path, extra):
     assert done.returncode == 2, done.stderr[-2000:]
     said = "holds no checkpoint" if extra else "already holds the results of a run"
     assert said in done.stderr and "Traceback" not in done.stderr
+
+
+FLOAT = [
+    "--set",
+    "domain.size=[0.2, 0.15]",
+    "--set",
+    "bodies.0.max=[0.2, 0.1]",
+    "--set",
+    "bodies.0.around_obstacles=true",
+    "--set",
+    "obstacles=[{type='box', min=[0.08, 0.085], max=[0.12, 0.125], "
+    "motion={type='free', density=500.0}}]",
+    "--set",
+    "time.end=0.2",
+    "--set",
+    "checkpoint.interval=0.1",
+    "--set",
+    "output.snapshots=false",
+]
+
+
+def test_a_floating_body_written_on_two_ranks_continues_on_one(tmp_path):
+    """A free box (tests/parallel/test_split_bodies.py) run on 2 ranks, and continued on one
+    process from the checkpoint at 0.1 s: its body state (pose, velocity) is in the
+    checkpoint, and the continued run ends where the 2 ranks' does, to the solves'
+    tolerance (the body's height 1e-8 m, the particles' places 1e-8 m)."""
+    case = EXAMPLES / "hydrostatic.toml"
+    two = tmp_path / "two"
+    done = mpmflow_on_ranks(2, "run", case, "--out", two, "-q", *FLOAT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    again = tmp_path / "again"
+    shutil.copytree(two, again)
+    last = max(p.name for p in again.glob("checkpoint_*.npz") if "_r" not in p.name)  # the end
+    for f in again.glob(last.replace(".npz", "*")):
+        f.unlink()
+    (again / "summary.json").unlink()
+    done = mpmflow_on_ranks(1, "run", case, "--out", again, "-q", "--restart", *FLOAT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    a = checkpoint.read(two / last)[0]
+    b = checkpoint.read(again / last)[0]
+    assert a["scheme.body_state"][0, 1] < 0.105 - 1e-3  # m: the box sank from its start
+    assert np.abs(a["scheme.body_state"] - b["scheme.body_state"]).max() < 1e-8
+    assert np.abs(a["x"] - b["x"]).max() < 1e-8  # m

@@ -65,22 +65,67 @@ def test_a_box_towed_across_the_rank_boundary_follows_one_process():
     assert np.allclose(many.scheme.body_values()[2][0, :2], [0.1, 0.05], atol=1e-12)
 
 
-def test_free_bodies_are_refused_on_ranks_by_name_and_paths_are_not():
-    """A free body's coupling is one system with the pressure, not split; a path is, for a
-    fluid and for a solid's tools (tests/parallel/test_split_solids.py)."""
+FREE = (
+    "obstacles=[{type='box', min=[0.08, 0.085], max=[0.12, 0.125], "
+    "motion={type='free', density=500.0}}]"
+)
+
+
+def floating() -> Simulation:
+    """The same tank with a free box of density 500 kg/m^3 released 5 mm above the draft its
+    weight gives (half its 4 cm), straddling the tank's middle: the boxes' first cut."""
+    over = [
+        "domain.size=[0.2, 0.15]",
+        "bodies.0.max=[0.2, 0.1]",
+        "bodies.0.around_obstacles=true",
+        "output.snapshots=false",
+        "time.end=0.3",
+        FREE,
+    ]
+    return Simulation(load_case(EXAMPLES / "hydrostatic.toml", over))
+
+
+def test_a_free_body_across_the_rank_boundary_follows_one_process():
+    """A free body's coupling to the pressure (State::couple_bodies: nq more solves and an
+    nq x nq system) sums its products over the rows each rank owns, so every rank moves the
+    body alike; its state goes from chunk to chunk (each split builds a new core). After 150
+    steps it follows one process to the solves' tolerance, as the towed box does."""
+    one = alone(floating())
+    many = split(floating())
+    heave = []
+    for _ in range(15):
+        one.scheme.advance(one.dt, 10)
+        many.scheme.advance(many.dt, 10)
+        a, b = one.scheme.body_values()[2], many.scheme.body_values()[2]
+        heave.append((a[0, 1], b[0, 1]))  # the pivot's height (m)
+        assert np.array_equal(b, world().bcast(b))  # the same body on every rank
+    if world().size > 1:  # the box straddles a cut
+        cuts = {int(c) * 0.01 for c in many.scheme.boxes.hi[:, 0] if c < 20}
+        assert any(0.08 < c < 0.12 for c in cuts)
+    a, b = np.array(heave).T
+    assert a[0] - a.min() > 1e-3  # m: it sank towards its draft
+    assert np.abs(b - a).max() < 1e-8  # m
+    P = whole(many)[0]
+    assert np.abs(P.x - one.particles.x).max() < 1e-8  # m
+    assert np.abs(P.v - one.particles.v).max() < 1e-6  # m/s
+
+
+def test_paths_and_free_bodies_are_not_refused_on_ranks():
+    """A path is split over ranks for a fluid and for a solid's tools
+    (tests/parallel/test_split_solids.py), and so is a free body; a free body beside a
+    fixed obstacle is refused by name (its contact is decided on each rank's grid)."""
     base = ["domain.size=[0.2, 0.15]", "bodies.0.max=[0.2, 0.1]", "bodies.0.around_obstacles=true"]
-    free = (
-        "obstacles=[{type='box', min=[0.08, 0.08], max=[0.12, 0.12], "
-        "motion={type='free', density=500.0}}]"
-    )
-    case = load_case(EXAMPLES / "hydrostatic.toml", [*base, free])
-    assert "free bodies are not split over ranks" in " ".join(refusals(case))
+    case = load_case(EXAMPLES / "hydrostatic.toml", [*base, FREE])
+    assert refusals(case) == []
+    fixed = FREE[:-1] + ", {type='box', min=[0.0, 0.0], max=[0.02, 0.02]}]"
+    case = load_case(EXAMPLES / "hydrostatic.toml", [*base, fixed])
+    assert "free bodies beside fixed obstacles" in " ".join(refusals(case))
+    with pytest.raises(CaseError, match="free bodies beside fixed obstacles"):
+        from mpmflow.parallel.support import distributed
+
+        distributed(case, None, None)  # type: ignore[arg-type]
     solid = ["material.model='elastic'", "material.shear_modulus=1e4"]
     case = load_case(EXAMPLES / "hydrostatic.toml", [*base, *solid, TOW])
     assert refusals(case) == []
     case = load_case(EXAMPLES / "hydrostatic.toml", [*base, TOW])
     assert refusals(case) == []
-    with pytest.raises(CaseError, match="free bodies"):
-        from mpmflow.parallel.support import distributed
-
-        distributed(load_case(EXAMPLES / "hydrostatic.toml", [*base, free]), None, None)  # type: ignore[arg-type]

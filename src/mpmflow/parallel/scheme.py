@@ -103,6 +103,9 @@ class DistributedProjection(ProjectionScheme):
         # obstacles on prescribed paths: each rank places them on its own grid
         self.movers = moving.of_case(case)
         self.time = 0.0  # s: the flow time the bodies are placed at
+        # the free bodies' state (State.body_state) where the last chunk ended: each split
+        # builds a new core, whose bodies start where the case places them
+        self.body_state: Floats | None = None
         check_movers(case, grid, self.movers)
         self.corrects = bool(preset(s.volume_correction, "volume_correction") > 0)
         self.volume = DistributedVolume(
@@ -393,6 +396,8 @@ class DistributedProjection(ProjectionScheme):
         core.since_volume = self.since_volume
         if self.movers:  # the bodies where this chunk starts
             core.time = self.time
+            if self.body_state is not None:  # the free bodies' poses and velocities
+                core.body_state = self.body_state
         self._where = where
         self.exchange.start(self._distribute())
         # the arrays the core is handed; its exchange gives each step the rank's own and halo
@@ -414,6 +419,8 @@ class DistributedProjection(ProjectionScheme):
             self._gather(self.exchange.owned)
             self._report()
         self.since_volume = float(core.since_volume)
+        if self.movers:  # the same on every rank (the core sums the ranks' shares)
+            self.body_state = core.body_state.copy()
         self.steps += done
         self.time += covered if self.auto else done * dt
         self.last_unknowns = int(report.last_unknowns)
@@ -479,6 +486,10 @@ class DistributedProjection(ProjectionScheme):
             saved["volume_q"] = self.q_global.copy()
         if self.pc_global.size:
             saved["p_cell"] = self.pc_global.copy()
+        if self.movers:  # the free bodies' poses and velocities, as one process writes them
+            saved["body_state"] = (
+                self.body_state if self.body_state is not None else self.core.body_state
+            ).copy()
         return saved
 
     def particle_state(self) -> dict[str, NDArray[Any]]:
@@ -506,6 +517,8 @@ class DistributedProjection(ProjectionScheme):
             self.dt_range = [float(t) for t in saved["dt_range"]]
         if self.pc_global.size and "p_cell" in saved:
             np.copyto(self.pc_global, saved["p_cell"])
+        if self.movers:
+            self.body_state = np.ascontiguousarray(saved["body_state"], dtype=float)
         # the particles' own: this rank's part of a checkpoint in pieces (with their
         # numbers), or the whole run (every rank's the same, parted at the first split)
         if "id" in saved:
