@@ -25,20 +25,18 @@ if mpi.COMM_WORLD.size > 1 or shutil.which("mpirun") is None:
     pytest.skip("starts mpirun itself: run on one process", allow_module_level=True)
 
 A = 0.114  # m
+
+
+def sets(*settings: str) -> list[str]:
+    """``--set KEY=VALUE`` for each setting."""
+    return [word for setting in settings for word in ("--set", setting)]
+
+
+# two chunks of 0.1 s, a checkpoint at each end
+TIMES = ("time.end=0.2", "checkpoint.interval=0.1", "output.snapshots=false")
 # shallow_fraction = 0.3: the sub-cell surface's shallow nodes at every step (by default
 # only at small steps), decided by their owners and sent to the halo with their pressure
-SETTINGS = [
-    "--set",
-    "solver.shallow_fraction=0.3",
-    "--set",
-    "solver.volume_correction=0",
-    "--set",
-    "time.end=0.2",
-    "--set",
-    "checkpoint.interval=0.1",
-    "--set",
-    "output.snapshots=false",
-]
+SETTINGS = sets("solver.shallow_fraction=0.3", "solver.volume_correction=0", *TIMES)
 
 
 def mpirun(ranks: int, out: Path, *extra: str) -> None:
@@ -154,23 +152,15 @@ def test_a_refusal_of_rank_0_alone_stops_every_rank(tmp_path, extra):
     assert said in done.stderr and "Traceback" not in done.stderr
 
 
-FLOAT = [
-    "--set",
+# a free box in water 0.1 m deep, straddling the ranks' cut (tests/parallel/test_split_bodies.py)
+FLOAT = sets(
     "domain.size=[0.2, 0.15]",
-    "--set",
     "bodies.0.max=[0.2, 0.1]",
-    "--set",
     "bodies.0.around_obstacles=true",
-    "--set",
     "obstacles=[{type='box', min=[0.08, 0.085], max=[0.12, 0.125], "
     "motion={type='free', density=500.0}}]",
-    "--set",
-    "time.end=0.2",
-    "--set",
-    "checkpoint.interval=0.1",
-    "--set",
-    "output.snapshots=false",
-]
+    *TIMES,
+)
 
 
 def test_a_floating_body_written_on_two_ranks_continues_on_one(tmp_path):

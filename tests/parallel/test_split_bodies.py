@@ -29,18 +29,19 @@ from mpmflow.parallel.support import refusals  # noqa: E402
 TOW = "obstacles=[{type='box', min=[0.055, 0.035], max=[0.085, 0.065], motion={type='velocity', velocity=[0.2, 0.0], rate=1.0}}]"  # noqa: E501
 
 
-def towed() -> Simulation:
-    """Water 0.1 m deep in a tank 0.2 m wide, a 3 x 3 cm box towed through it at 0.2 m/s
-    from x = 0.055 m: the boxes' first cut, across x at the tank's middle, lies in its way."""
-    over = [
-        "domain.size=[0.2, 0.15]",
-        "bodies.0.max=[0.2, 0.1]",
-        "bodies.0.around_obstacles=true",
-        "output.snapshots=false",
-        "time.end=0.3",
-        TOW,
-    ]
+# water 0.1 m deep in a tank 0.2 m wide, around the obstacles
+TANK = ["domain.size=[0.2, 0.15]", "bodies.0.max=[0.2, 0.1]", "bodies.0.around_obstacles=true"]
+
+
+def tank(obstacles: str) -> Simulation:
+    over = [*TANK, "output.snapshots=false", "time.end=0.3", obstacles]
     return Simulation(load_case(EXAMPLES / "hydrostatic.toml", over))
+
+
+def towed() -> Simulation:
+    """The tank with a 3 x 3 cm box towed through it at 0.2 m/s from x = 0.055 m: the boxes'
+    first cut, across x at the tank's middle, lies in its way."""
+    return tank(TOW)
 
 
 def test_a_box_towed_across_the_rank_boundary_follows_one_process():
@@ -74,15 +75,7 @@ FREE = (
 def floating() -> Simulation:
     """The same tank with a free box of density 500 kg/m^3 released 5 mm above the draft its
     weight gives (half its 4 cm), straddling the tank's middle: the boxes' first cut."""
-    over = [
-        "domain.size=[0.2, 0.15]",
-        "bodies.0.max=[0.2, 0.1]",
-        "bodies.0.around_obstacles=true",
-        "output.snapshots=false",
-        "time.end=0.3",
-        FREE,
-    ]
-    return Simulation(load_case(EXAMPLES / "hydrostatic.toml", over))
+    return tank(FREE)
 
 
 def test_a_free_body_across_the_rank_boundary_follows_one_process():
@@ -114,7 +107,7 @@ def test_paths_and_free_bodies_are_not_refused_on_ranks():
     """A path is split over ranks for a fluid and for a solid's tools
     (tests/parallel/test_split_solids.py), and so is a free body; a free body beside a
     fixed obstacle is refused by name (its contact is decided on each rank's grid)."""
-    base = ["domain.size=[0.2, 0.15]", "bodies.0.max=[0.2, 0.1]", "bodies.0.around_obstacles=true"]
+    base = TANK
     case = load_case(EXAMPLES / "hydrostatic.toml", [*base, FREE])
     assert refusals(case) == []
     fixed = FREE[:-1] + ", {type='box', min=[0.0, 0.0], max=[0.02, 0.02]}]"
