@@ -19,9 +19,10 @@ void coords_of(index_t i, const std::array<index_t, D>& dims, std::array<index_t
   }
 }
 
-// y = A x (subtract: y = b - A x) for rows lo to hi - 1; NS slots a row (0: cols' width).
-template <int NS>
-void matvec_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
+// y = A x (subtract: y = b - A x) for rows lo to hi - 1; NS slots a row (0: cols' width);
+// I: the columns' type.
+template <int NS, class I>
+void matvec_rows(View<const I, 2> cols, View<const double, 2> vals, View<const double> x,
                  const double* b, View<double> y, index_t lo, index_t hi, bool subtract) {
   const index_t ns = NS > 0 ? NS : cols.extent(1);
   for (index_t r = lo; r < hi; ++r) {
@@ -29,42 +30,43 @@ void matvec_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<c
       y(r) = subtract ? b[r] : 0.0;
       continue;
     }
-    const double acc = ell_row_product<NS>(cols, vals, x, r, ns);
+    const double acc = ell_row_product<NS, I>(cols, vals, x, r, ns);
     y(r) = subtract ? b[r] - acc : acc;
   }
 }
 
 // y = A x or b - A x over all rows, by CHUNKS chunks on all threads when n >= PARALLEL_ROWS.
-void apply(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
-           const double* b, View<double> y, bool subtract) {
+template <class I>
+void apply(View<const I, 2> cols, View<const double, 2> vals, View<const double> x, const double* b,
+           View<double> y, bool subtract) {
   static_assert(PARALLEL_ROWS == SERIAL_BELOW, "for_each_chunk's cut-off is the levels'");
   const index_t n = cols.extent(0);
   const index_t ns = cols.extent(1);
   for_each_range(n, [&](index_t, index_t lo, index_t hi) {
     if (ns == 9)
-      matvec_rows<9>(cols, vals, x, b, y, lo, hi, subtract);
+      matvec_rows<9, I>(cols, vals, x, b, y, lo, hi, subtract);
     else if (ns == 27)
-      matvec_rows<27>(cols, vals, x, b, y, lo, hi, subtract);
+      matvec_rows<27, I>(cols, vals, x, b, y, lo, hi, subtract);
     else if (ns == 5)  // the stars of star_slots
-      matvec_rows<5>(cols, vals, x, b, y, lo, hi, subtract);
+      matvec_rows<5, I>(cols, vals, x, b, y, lo, hi, subtract);
     else if (ns == 7)
-      matvec_rows<7>(cols, vals, x, b, y, lo, hi, subtract);
+      matvec_rows<7, I>(cols, vals, x, b, y, lo, hi, subtract);
     else
-      matvec_rows<0>(cols, vals, x, b, y, lo, hi, subtract);
+      matvec_rows<0, I>(cols, vals, x, b, y, lo, hi, subtract);
   });
 }
 
 // Gauss-Seidel update of rows[lo:hi] (one colour: the rows do not couple).
-template <int NS>
-void gs_rows(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
+template <int NS, class I>
+void gs_rows(View<const I, 2> cols, View<const double, 2> vals, View<const double> b,
              View<double> x, View<const index_t> rows, index_t lo, index_t hi) {
-  for (index_t k = lo; k < hi; ++k) gs_row<NS>(cols, vals, b, x, rows(k), nullptr, 0);
+  for (index_t k = lo; k < hi; ++k) gs_row<NS, I>(cols, vals, b, x, rows(k), nullptr, 0);
 }
 
 // One 2^D-colour Gauss-Seidel sweep, colours in order (forward) or in reverse; NS: the
 // slots of a row of cols (3^D, or the star's 2D + 1).
-template <int D, int NS>
-void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> b,
+template <int D, int NS, class I>
+void gauss_seidel(View<const I, 2> cols, View<const double, 2> vals, View<const double> b,
                   View<double> x, View<const index_t> rows,
                   const std::array<index_t, (1 << D) + 1>& cstart, bool forward) {
   constexpr int NCOL = 1 << D;
@@ -74,7 +76,9 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
     const index_t lo = cstart[colour], hi = cstart[colour + 1];
     for_each_range(
         hi - lo,
-        [&](index_t, index_t a, index_t z) { gs_rows<NS>(cols, vals, b, x, rows, lo + a, lo + z); },
+        [&](index_t, index_t a, index_t z) {
+          gs_rows<NS, I>(cols, vals, b, x, rows, lo + a, lo + z);
+        },
         n);
   }
 }
@@ -84,9 +88,9 @@ void gauss_seidel(View<const index_t, 2> cols, View<const double, 2> vals, View<
 // still hold 0, and subtracting v 0 leaves the sum as it was, so skipping them gives the
 // values of a sweep after x = 0. NS as gauss_seidel's: on the star's slots, those of
 // first_sweep_slots the star holds, as indices into it (in the same ascending order).
-template <int D, int NS>
-void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
-                        View<const double> b, View<double> x, View<const index_t> rows,
+template <int D, int NS, class I>
+void gauss_seidel_first(View<const I, 2> cols, View<const double, 2> vals, View<const double> b,
+                        View<double> x, View<const index_t> rows,
                         const std::array<index_t, (1 << D) + 1>& cstart) {
   constexpr int NCOL = 1 << D;
   constexpr int FULL = stencil_size(D);
@@ -109,7 +113,7 @@ void gauss_seidel_first(View<const index_t, 2> cols, View<const double, 2> vals,
         hi - lo,
         [&](index_t, index_t a, index_t z) {
           for (index_t k = lo + a; k < lo + z; ++k)
-            gs_row<NS>(cols, vals, b, x, rows(k), slots, nslots);
+            gs_row<NS, I>(cols, vals, b, x, rows(k), slots, nslots);
         },
         n);
   }
@@ -229,12 +233,12 @@ void galerkin_rows(index_t r0, index_t r1, View<const index_t, 2> cols, View<con
 
 void matvec(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
             View<double> y) {
-  apply(cols, vals, x, nullptr, y, false);
+  apply<index_t>(cols, vals, x, nullptr, y, false);
 }
 
 void residual(View<const index_t, 2> cols, View<const double, 2> vals, View<const double> x,
               View<const double> b, View<double> r) {
-  apply(cols, vals, x, b.data(), r, true);
+  apply<index_t>(cols, vals, x, b.data(), r, true);
 }
 
 double dot(View<const double> a, View<const double> b) {
@@ -577,10 +581,10 @@ template <int D>
 void Multigrid<D>::compact(Level& lv) {
   constexpr auto star = star_slots<D>();
   constexpr int NK = 2 * D + 1;
-  lv.kcols = {};
+  lv.icols = {};
   lv.kvals = {};
   const index_t n = lv.n;
-  if (n == 0) return;
+  if (n == 0 || n > std::numeric_limits<std::int32_t>::max()) return;
   bool in_star[NS] = {};
   for (int s : star) in_star[s] = true;
   const auto off = [&](index_t lo, index_t hi) {  // a row in [lo, hi) fills a slot off it
@@ -591,18 +595,37 @@ void Multigrid<D>::compact(Level& lv) {
   };
   // most operators (the pressure's, the coarse levels') fill a corner slot in their first
   // row: only a star's operator is scanned whole
-  if (off(0, 1) || reduce_chunks<index_t>(n, off) > 0) return;
-  auto kc = lv.kcols_store.template sized<2>({n, NK});
+  if (off(0, 1) || reduce_chunks<index_t>(n, off) > 0) {  // all 3^D slots, 32-bit columns
+    auto ic = lv.icols_store.template sized<2>({n, NS});
+    for_each_range(n, [&](index_t, index_t lo, index_t hi) {
+      for (index_t r = lo; r < hi; ++r)
+        for (int s = 0; s < NS; ++s) ic(r, s) = static_cast<std::int32_t>(lv.cols(r, s));
+    });
+    lv.icols = ic;
+    return;
+  }
+  auto ic = lv.icols_store.template sized<2>({n, NK});
   auto kv = lv.kvals_store.template sized<2>({n, NK});
   for_each_range(n, [&](index_t, index_t lo, index_t hi) {
     for (index_t r = lo; r < hi; ++r)
       for (int t = 0; t < NK; ++t) {
-        kc(r, t) = lv.cols(r, star[t]);
+        ic(r, t) = static_cast<std::int32_t>(lv.cols(r, star[t]));
         kv(r, t) = lv.vals(r, star[t]);
       }
   });
-  lv.kcols = kc;
+  lv.icols = ic;
   lv.kvals = kv;
+}
+
+template <int D>
+void Multigrid<D>::iterate_apply(const Level& lv, View<const double> x, const double* b,
+                                 View<double> y, bool subtract) const {
+  if (lv.kvals.size() > 0)
+    apply<std::int32_t>(lv.icols, lv.kvals, x, b, y, subtract);
+  else if (lv.icols.size() > 0)
+    apply<std::int32_t>(lv.icols, lv.vals, x, b, y, subtract);
+  else
+    apply<index_t>(lv.cols, lv.vals, x, b, y, subtract);
 }
 
 template <int D>
@@ -610,18 +633,23 @@ void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
   if (nlev_ == 0) throw std::logic_error("multigrid: vcycle before setup");
   auto bl = [&](index_t l) -> View<const double> { return l == 0 ? b : level_[l].b; };
   auto xl = [&](index_t l) -> View<double> { return l == 0 ? x : level_[l].x; };
-  // a level's sweeps on its compact form where it has one (the same values)
+  // a level's sweeps and residual on its iteration form (compact: the same sums)
+  using I32 = std::int32_t;
   const auto first = [&](const Level& lv, View<double> xv, View<const double> bv) {
-    if (lv.kcols.size() > 0)
-      gauss_seidel_first<D, 2 * D + 1>(lv.kcols, lv.kvals, bv, xv, lv.rows, lv.cstart);
+    if (lv.kvals.size() > 0)
+      gauss_seidel_first<D, 2 * D + 1, I32>(lv.icols, lv.kvals, bv, xv, lv.rows, lv.cstart);
+    else if (lv.icols.size() > 0)
+      gauss_seidel_first<D, NS, I32>(lv.icols, lv.vals, bv, xv, lv.rows, lv.cstart);
     else
-      gauss_seidel_first<D, NS>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart);
+      gauss_seidel_first<D, NS, index_t>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart);
   };
   const auto sweep = [&](const Level& lv, View<double> xv, View<const double> bv, bool fwd) {
-    if (lv.kcols.size() > 0)
-      gauss_seidel<D, 2 * D + 1>(lv.kcols, lv.kvals, bv, xv, lv.rows, lv.cstart, fwd);
+    if (lv.kvals.size() > 0)
+      gauss_seidel<D, 2 * D + 1, I32>(lv.icols, lv.kvals, bv, xv, lv.rows, lv.cstart, fwd);
+    else if (lv.icols.size() > 0)
+      gauss_seidel<D, NS, I32>(lv.icols, lv.vals, bv, xv, lv.rows, lv.cstart, fwd);
     else
-      gauss_seidel<D, NS>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart, fwd);
+      gauss_seidel<D, NS, index_t>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart, fwd);
   };
   for (index_t l = 0; l + 1 < nlev_; ++l) {
     Level& lv = level_[l];
@@ -631,10 +659,7 @@ void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
     else
       fill(xv, 0.0);
     for (int s = 1; s < sweeps; ++s) sweep(lv, xv, bl(l), true);
-    if (lv.kcols.size() > 0)
-      residual(lv.kcols, lv.kvals, xv, bl(l), lv.r);
-    else
-      residual(lv.cols, lv.vals, xv, bl(l), lv.r);
+    iterate_apply(lv, xv, bl(l).data(), lv.r, true);
     restrict_to(lv.tstart, lv.trow, lv.tw, lv.r, level_[l + 1].b);
   }
   cholesky_solve(bl(nlev_ - 1), xl(nlev_ - 1));
@@ -660,19 +685,10 @@ SolveResult Multigrid<D>::pcg(View<const double> rhs, View<double> x, double tol
     const Level& f;
     int sweeps;
     double dot(View<const double> a, View<const double> b) { return mpmflow::dot(a, b); }
-    bool star = f.kcols.size() > 0;  // the finest level's compact form (the same values)
     void residual(View<const double> x, View<const double> b, View<double> r) {
-      if (star)
-        mpmflow::residual(f.kcols, f.kvals, x, b, r);
-      else
-        mpmflow::residual(f.cols, f.vals, x, b, r);
+      mg.iterate_apply(f, x, b.data(), r, true);
     }
-    void matvec(View<const double> p, View<double> q) {
-      if (star)
-        mpmflow::matvec(f.kcols, f.kvals, p, q);
-      else
-        mpmflow::matvec(f.cols, f.vals, p, q);
-    }
+    void matvec(View<const double> p, View<double> q) { mg.iterate_apply(f, p, nullptr, q, false); }
     void vcycle(View<const double> r, View<double> z) { mg.vcycle(r, z, sweeps); }
     void fill(View<double> v, double value) { mpmflow::fill(v, value); }
     void copy(View<const double> from, View<double> to) { mpmflow::copy(from, to); }

@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "grid.hpp"
@@ -50,12 +51,13 @@ index_t worst_row(View<const index_t, 2> cols, View<const double, 2> vals, View<
 // The row kernels' element functions, one row each, on the host and (MPMFLOW_HD) the device
 // (src/core/cuda/multigrid.cuh): the same sums in the same order on both.
 
-// sum_s vals(r, s) x(cols(r, s)) over the row's filled slots (NS slots; 0: ns of them).
-template <int NS>
-MPMFLOW_HD inline double ell_row_product(View<const index_t, 2> cols, View<const double, 2> vals,
+// sum_s vals(r, s) x(cols(r, s)) over the row's filled slots (NS slots; 0: ns of them); I:
+// the columns' type (a level's iteration form holds them as 32-bit: Multigrid's icols).
+template <int NS, class I = index_t>
+MPMFLOW_HD inline double ell_row_product(View<const I, 2> cols, View<const double, 2> vals,
                                          View<const double> x, index_t r, index_t ns) {
   const index_t width = NS > 0 ? NS : ns;
-  const index_t* c = &cols(r, 0);
+  const I* c = &cols(r, 0);
   const double* v = &vals(r, 0);
   double acc = 0.0;
   for (index_t s = 0; s < width; ++s)
@@ -66,12 +68,12 @@ MPMFLOW_HD inline double ell_row_product(View<const index_t, 2> cols, View<const
 // Gauss-Seidel update of row r (the diagonal in the middle slot); slots, nslots: only these
 // off-diagonal slots (the first sweep from x = 0, gauss_seidel_first), or every slot
 // (slots null).
-template <int NS>
-MPMFLOW_HD inline void gs_row(View<const index_t, 2> cols, View<const double, 2> vals,
+template <int NS, class I = index_t>
+MPMFLOW_HD inline void gs_row(View<const I, 2> cols, View<const double, 2> vals,
                               View<const double> b, View<double> x, index_t r, const int* slots,
                               int nslots) {
   constexpr int centre = NS / 2;
-  const index_t* c = cols.data() + r * NS;
+  const I* c = cols.data() + r * NS;
   const double* v = vals.data() + r * NS;
   double* X = x.data();
   double acc = b(r);
@@ -256,9 +258,11 @@ class Multigrid {
     std::array<index_t, NP + 1> cstart{};  // colour k: rows[cstart[k]:cstart[k + 1]]
     View<const index_t, 2> cols;
     View<const double, 2> vals;
-    // the operator on the star's slots only (star_slots), when no row fills another: the
-    // iterations read these (n x (2D + 1)); empty otherwise
-    View<const index_t, 2> kcols;
+    // the iteration form, which the sweeps, residuals and products read: the columns as
+    // 32-bit numbers (a quarter less to read a slot), on the star's slots only (star_slots,
+    // kvals) when no row fills another, else on all 3^D (vals); empty on a level of 2^31
+    // rows or more (cols, vals are read)
+    View<const std::int32_t, 2> icols;
     View<const double, 2> kvals;
     View<const index_t> node;
     View<index_t> rows;
@@ -271,11 +275,15 @@ class Multigrid {
     View<index_t> tstart, trow;
     View<double> tw;
     View<double> b, x, r;  // right-hand side, solution, residual (level 0: b, x given)
-    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store, kcols_store,
-        tstart_store, trow_store;
+    Buffer<index_t> cols_store, node_store, rows_store, pcols_store, coord_store, tstart_store,
+        trow_store;
+    Buffer<std::int32_t> icols_store;
     Buffer<double> vals_store, pw_store, b_store, x_store, r_store, kvals_store, tw_store;
   };
-  void compact(Level& lv);       // lv.kcols, lv.kvals when its rows fill the star's slots only
+  void compact(Level& lv);  // lv's iteration form (icols; kvals on a star)
+  // y = A x (subtract: b - A x) with level lv's operator in its iteration form
+  void iterate_apply(const Level& lv, View<const double> x, const double* b, View<double> y,
+                     bool subtract) const;
   void coarse_level(index_t l);  // level l + 1's unknowns and P of level l
   void galerkin(index_t l);      // level l + 1's operator P^T A P
   void coordinates(Level& lv);   // lv.coord from lv.node (the only divisions of a setup)
