@@ -487,9 +487,10 @@ class DistributedProjection(ProjectionScheme):
         if self.pc_global.size:
             saved["p_cell"] = self.pc_global.copy()
         if self.movers:  # the free bodies' poses and velocities, as one process writes them
-            saved["body_state"] = (
-                self.body_state if self.body_state is not None else self.core.body_state
-            ).copy()
+            if self.body_state is None:  # before the first chunk: the case's (collective)
+                self.parted()
+                self.body_state = self.core.body_state.copy()
+            saved["body_state"] = self.body_state.copy()
         return saved
 
     def particle_state(self) -> dict[str, NDArray[Any]]:
