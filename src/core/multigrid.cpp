@@ -605,16 +605,30 @@ void Multigrid<D>::compact(Level& lv) {
     return;
   }
   auto ic = lv.icols_store.template sized<2>({n, NK});
-  auto kv = lv.kvals_store.template sized<2>({n, NK});
   for_each_range(n, [&](index_t, index_t lo, index_t hi) {
     for (index_t r = lo; r < hi; ++r)
-      for (int t = 0; t < NK; ++t) {
-        ic(r, t) = static_cast<std::int32_t>(lv.cols(r, star[t]));
-        kv(r, t) = lv.vals(r, star[t]);
-      }
+      for (int t = 0; t < NK; ++t) ic(r, t) = static_cast<std::int32_t>(lv.cols(r, star[t]));
   });
   lv.icols = ic;
-  lv.kvals = kv;
+  lv.kvals = lv.kvals_store.template sized<2>({n, NK});
+  star_values(lv);
+}
+
+template <int D>
+void Multigrid<D>::star_values(Level& lv) {
+  constexpr auto star = star_slots<D>();
+  constexpr int NK = 2 * D + 1;
+  if (lv.kvals.size() == 0) return;
+  auto kv = lv.kvals_store.template view<2>({lv.n, NK});
+  for_each_range(lv.n, [&](index_t, index_t lo, index_t hi) {
+    for (index_t r = lo; r < hi; ++r)
+      for (int t = 0; t < NK; ++t) kv(r, t) = lv.vals(r, star[t]);
+  });
+}
+
+template <int D>
+void Multigrid<D>::refresh() {
+  if (nlev_ > 0) star_values(level_[0]);
 }
 
 template <int D>

@@ -211,7 +211,9 @@ class Multigrid {
  public:
   // Build the levels for the matrix (cols, vals: n x 3^D) whose row r sits on grid point
   // node(r) of a grid with dims points per axis. The views must stay valid until the
-  // next setup (the finest level is not copied). The storage of earlier setups is reused
+  // next setup (the finest level is not copied, but for a star's values: refresh), and
+  // cols unchanged; vals may change in place between solves, followed by refresh() (the
+  // pressure's contact rounds hold rows at 0 so). The storage of earlier setups is reused
   // (allocation only when the hierarchy outgrows it). Throws std::invalid_argument on
   // shapes that do not match, std::runtime_error when the coarsest operator is not positive
   // definite (its Cholesky factor fails, where np.linalg.cholesky raised LinAlgError).
@@ -221,6 +223,9 @@ class Multigrid {
   void setup(View<const index_t, 2> cols, View<const double, 2> vals, View<const index_t> node,
              const std::array<index_t, D>& dims, index_t coarsest = COARSEST,
              const std::array<index_t, D>& period = {});
+  // The finest level's values changed in place since the setup: its iteration form (a
+  // star's copy of them) reads them again. The coarse levels stay those of the setup's.
+  void refresh();
   // One V-cycle with zero initial guess: x = M^-1 b (finest level: n values each):
   // sweeps forward colour Gauss-Seidel sweeps down, the dense solve, sweeps backward up.
   void vcycle(View<const double> b, View<double> x, int sweeps);
@@ -280,7 +285,8 @@ class Multigrid {
     Buffer<std::int32_t> icols_store;
     Buffer<double> vals_store, pw_store, b_store, x_store, r_store, kvals_store, tw_store;
   };
-  void compact(Level& lv);  // lv's iteration form (icols; kvals on a star)
+  void compact(Level& lv);      // lv's iteration form (icols; kvals on a star)
+  void star_values(Level& lv);  // a star's kvals from its vals (nothing on 3^D slots)
   // y = A x (subtract: b - A x) with level lv's operator in its iteration form
   void iterate_apply(const Level& lv, View<const double> x, const double* b, View<double> y,
                      bool subtract) const;

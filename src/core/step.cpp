@@ -1308,11 +1308,15 @@ int State<D>::pressure_solve(const Options<D>& O, Report& report) {
       exchange_->fill_nodes(fields, 1);
       for (index_t r = 0; r < n; ++r) zero(r) = flag(rows(r), 0) > 0.5;
     }
-    // the multigrid reads its finest level in place, and the coarse levels of the matrix
-    // the rounds started with stay a preconditioner for it; another solver sets up again
+    // the multigrid reads its finest level again (refresh), and the coarse levels of the
+    // matrix the rounds started with stay a preconditioner for it; another solver sets up
+    // again
     hold_at_zero(cols, vals0, zero, vals);
     holding = true;
-    if (solver_) setup();
+    if (solver_)
+      setup();
+    else
+      pressure_mg_.refresh();
   }
   auto p = p_node_.view(nn);
   // a held row's pressure is -0.0: 0 in every use, its sign marking the hold for the next

@@ -171,3 +171,25 @@ def sp_csr(cols, vals):
     r, s = np.nonzero(cols >= 0)
     n = cols.shape[0]
     return sp.csr_matrix((vals[r, s], (r, cols[r, s])), shape=(n, n))
+
+
+def test_a_star_changed_in_place_is_read_again_after_refresh():
+    """The pressure's contact rounds change the finest level's values in place between
+    solves (complementarity.hpp, hold_at_zero) and then call refresh(): a star's iteration
+    form copies its values, so without refresh the solve would answer the old matrix.
+    After the change and refresh, the solution satisfies the changed system."""
+    from mpmflow.state.pressure import multigrid
+
+    dims = (40, 30)
+    grids = np.meshgrid(*[np.linspace(-1, 1, n) for n in dims], indexing="ij")
+    cols, vals, node = star_laplacian(dims, sum(g**2 for g in grids) < 0.9)
+    b = np.random.default_rng(7).normal(size=node.size)
+    mg = multigrid(cols, vals, node, dims)
+    mg.pcg(b, np.zeros(node.size), 1e-10, 100, 1)
+    vals[:, 3**2 // 2] *= 1.5  # the diagonal changed in place, as the held array
+    mg.refresh()
+    x = np.zeros(node.size)
+    iterations, residual = mg.pcg(b, x, 1e-10, 100, 1)
+    assert residual <= 1e-10
+    r = b - sp_csr(cols, vals) @ x
+    assert np.linalg.norm(r) <= 1e-9 * np.linalg.norm(b)

@@ -61,6 +61,9 @@ void bind_class(nb::module_& m, const char* name) {
           },
           nb::arg("b"), nb::arg("x").noconvert(), nb::arg("sweeps"),
           "One V-cycle with zero initial guess: x = M^-1 b.")
+      .def(
+          "refresh", [](P& self) { self.mg.refresh(); },
+          "The finest level's values changed in place (the held vals array): read them again.")
       .def("levels", [](const P& self) { return self.mg.levels(); })
       .def("rows", [](const P& self) { return self.mg.rows(); });
 }

@@ -107,6 +107,10 @@ class Multigrid(Protocol):
 
     def vcycle(self, b: Floats, x: Floats, sweeps: int) -> None: ...
 
+    def refresh(self) -> None:
+        """The finest level's values changed in place since the setup: read them again."""
+        ...
+
     def levels(self) -> int: ...
 
     def rows(self) -> int:
