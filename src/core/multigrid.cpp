@@ -495,21 +495,14 @@ void Multigrid<D>::galerkin(index_t l) {
   std::array<index_t, STRIPS + 1> strip{}, bounds{};
   const index_t k = strips(row_cum, STRIPS, 2, View<index_t>(strip.data(), {STRIPS + 1}));
   for (index_t u = 0; u <= k; ++u) bounds[u] = row_cum(strip[u]);
-  for (index_t parity = 0; parity < 2; ++parity) {
-    for_each_chunk((k - parity + 1) / 2,
-                   [&](index_t, index_t lo, index_t hi) {
-                     for (index_t t = lo; t < hi; ++t) {
-                       const index_t u = 2 * t + parity;
-                       if (periodic)
-                         galerkin_rows<D, true>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols,
-                                                f.pw, chash, ccoord, c.period, ccols, cvals);
-                       else
-                         galerkin_rows<D, false>(bounds[u], bounds[u + 1], f.cols, f.vals, f.pcols,
-                                                 f.pw, chash, ccoord, c.period, ccols, cvals);
-                     }
-                   },
-                   n);
-  }
+  for_strips(bounds.data(), k, n, [&](index_t lo, index_t hi) {
+    if (periodic)
+      galerkin_rows<D, true>(lo, hi, f.cols, f.vals, f.pcols, f.pw, chash, ccoord, c.period, ccols,
+                             cvals);
+    else
+      galerkin_rows<D, false>(lo, hi, f.cols, f.vals, f.pcols, f.pw, chash, ccoord, c.period, ccols,
+                              cvals);
+  });
 }
 
 template <int D>

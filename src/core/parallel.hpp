@@ -4,9 +4,12 @@
 // (a grid-stride kernel for parallel_for, a two-pass block reduction for reduce_chunks, a
 // device scan for exclusive_scan) and compiles the same bodies.
 //
-// Determinism: a loop is cut into CHUNKS pieces (more than any thread count, so a static
-// schedule still balances), and sums are taken chunk by chunk then over the chunks in
-// order, so results do not depend on the number of threads.
+// Determinism: a loop is cut into CHUNKS pieces (more than any thread count), and sums are
+// taken chunk by chunk then over the chunks in order, so results do not depend on the number
+// of threads. The chunks are dealt to the threads in turn (schedule(static, 1)), not in
+// contiguous blocks: the work of a loop over nodes or particles is often where the material
+// is, in one part of the index range (SPHERIC's water fills the lower half of its tank's
+// slabs: with blocks, one of two threads held nearly all of it).
 #pragma once
 
 #include <algorithm>
@@ -62,8 +65,21 @@ void for_each_chunk(index_t n, F&& body, index_t work = -1) {
     for (index_t t = 0; t < nchunks; ++t) body(t, t * n / nchunks, (t + 1) * n / nchunks);
     return;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, 1)
   for (index_t t = 0; t < nchunks; ++t) body(t, t * n / nchunks, (t + 1) * n / nchunks);
+}
+
+// body(t) for t in [0, count): a few tasks of unequal work whose results do not depend on
+// which thread runs them (the strips of a scatter), each taken by the next free thread.
+// ``work`` estimates the total work (for the serial cut-off).
+template <class F>
+void for_each_task(index_t count, F&& body, index_t work) {
+  if (work < SERIAL_BELOW) {
+    for (index_t t = 0; t < count; ++t) body(t);
+    return;
+  }
+#pragma omp parallel for schedule(dynamic, 1)
+  for (index_t t = 0; t < count; ++t) body(t);
 }
 
 // The same for bodies whose result does not depend on how [0, n) is cut (no per-chunk
@@ -88,7 +104,7 @@ T reduce_chunks(index_t n, F&& body, C&& combine) {
   if (n < SERIAL_BELOW) {
     for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
   } else {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, 1)
     for (index_t t = 0; t < nchunks; ++t) part[t] = body(t * n / nchunks, (t + 1) * n / nchunks);
   }
   T total = part[0];

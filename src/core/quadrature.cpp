@@ -77,8 +77,10 @@ void particle_cell_tensors(const Grid<D>& g, View<const double, 2> x, View<const
   const double inv_h = 1.0 / g.h;
   const bool with_k = K.extent(0) > 0;
   const index_t n = cells_list.size();
-  // work: the particles of the listed cells, roughly
-  const index_t work = n > 0 ? (start(start.size() - 1) / std::max<index_t>(g.ncells, 1)) * n : 0;
+  // work: the particles of the listed cells (the grid's mean per cell, empty cells counted,
+  // would call a list of surface cells with 8 particles each serial work)
+  index_t work = 0;
+  for (index_t m = 0; m < n; ++m) work += start(cells_list(m) + 1) - start(cells_list(m));
   for_each_chunk(
       n,
       [&](index_t, index_t lo, index_t hi) {

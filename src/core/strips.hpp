@@ -47,20 +47,20 @@ inline index_t strips(View<const index_t> row_cum, index_t nstrips, index_t min_
 }
 
 // body(lo, hi) for the strips [bounds[u], bounds[u + 1]) (u = 0 to nstrips - 1): the even
-// strips in parallel, then the odd ones. ``work`` estimates the total work (for the serial
-// cut-off of the loops).
+// strips in parallel, then the odd ones, each strip taken by the next free thread (the
+// strips hold equal work only as far as their two-row minimum allows: where the material
+// fills a few rows, the first strips hold it all). ``work`` estimates the total work (for
+// the serial cut-off of the loops).
 template <class F>
 void for_strips(const index_t* bounds, index_t nstrips, index_t work, F&& body) {
   for (index_t parity = 0; parity < 2; ++parity) {
     const index_t count = (nstrips - parity + 1) / 2;
     if (count <= 0) continue;
-    for_each_chunk(
+    for_each_task(
         count,
-        [&](index_t, index_t lo, index_t hi) {
-          for (index_t t = lo; t < hi; ++t) {
-            const index_t u = 2 * t + parity;
-            body(bounds[u], bounds[u + 1]);
-          }
+        [&](index_t t) {
+          const index_t u = 2 * t + parity;
+          body(bounds[u], bounds[u + 1]);
         },
         work);
   }
