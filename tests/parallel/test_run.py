@@ -163,25 +163,47 @@ FLOAT = sets(
 )
 
 
-def test_a_floating_body_written_on_two_ranks_continues_on_one(tmp_path):
-    """A free box (tests/parallel/test_split_bodies.py) run on 2 ranks, and continued on one
-    process from the checkpoint at 0.1 s: its body state (pose, velocity) is in the
-    checkpoint, and the continued run ends where the 2 ranks' does, to the solves'
-    tolerance (the body's height 1e-8 m, the particles' places 1e-8 m)."""
-    case = EXAMPLES / "hydrostatic.toml"
-    two = tmp_path / "two"
-    done = mpmflow_on_ranks(2, "run", case, "--out", two, "-q", *FLOAT)
+@pytest.fixture(scope="module")
+def floating(tmp_path_factory):
+    """A free box (tests/parallel/test_split_bodies.py) run on 2 ranks to 0.2 s, a
+    checkpoint at 0.1 s and at the end; and the end's file name."""
+    two = tmp_path_factory.mktemp("floating") / "two"
+    done = mpmflow_on_ranks(2, "run", EXAMPLES / "hydrostatic.toml", "--out", two, "-q", *FLOAT)
     assert done.returncode == 0, done.stderr[-3000:]
-    again = tmp_path / "again"
+    last = max(p.name for p in two.glob("checkpoint_*.npz") if "_r" not in p.name)
+    return two, last
+
+
+def continued(floating, again: Path, ranks: int) -> tuple[dict, dict]:
+    """The floating run continued from its checkpoint at 0.1 s on ``ranks`` ranks: the
+    end's checkpoint arrays of the first run and of the continued one."""
+    two, last = floating
     shutil.copytree(two, again)
-    last = max(p.name for p in again.glob("checkpoint_*.npz") if "_r" not in p.name)  # the end
     for f in again.glob(last.replace(".npz", "*")):
         f.unlink()
     (again / "summary.json").unlink()
-    done = mpmflow_on_ranks(1, "run", case, "--out", again, "-q", "--restart", *FLOAT)
+    done = mpmflow_on_ranks(
+        ranks, "run", EXAMPLES / "hydrostatic.toml", "--out", again, "-q", "--restart", *FLOAT
+    )
     assert done.returncode == 0, done.stderr[-3000:]
-    a = checkpoint.read(two / last)[0]
-    b = checkpoint.read(again / last)[0]
+    return checkpoint.read(two / last)[0], checkpoint.read(again / last)[0]
+
+
+def test_a_floating_body_written_on_two_ranks_continues_on_one(floating, tmp_path):
+    """The floating run continued on one process from the checkpoint at 0.1 s: its body
+    state (pose, velocity) is in the checkpoint, and the continued run ends where the 2
+    ranks' does, to the solves' tolerance (the body's height 1e-8 m, the particles' places
+    1e-8 m)."""
+    a, b = continued(floating, tmp_path / "again", 1)
     assert a["scheme.body_state"][0, 1] < 0.105 - 1e-3  # m: the box sank from its start
     assert np.abs(a["scheme.body_state"] - b["scheme.body_state"]).max() < 1e-8
     assert np.abs(a["x"] - b["x"]).max() < 1e-8  # m
+
+
+def test_a_floating_body_written_on_two_ranks_continues_on_two_to_the_bit(floating, tmp_path):
+    """Continued on the same 2 ranks, the run is the one that never stopped (issue 44's
+    "restart bit-identical"): the same boxes, the same solves in the same order, so the
+    body's state and every particle's place, velocity and pressure are equal to the bit."""
+    a, b = continued(floating, tmp_path / "again", 2)
+    for key in ("scheme.body_state", "x", "v", "pressure", "volume"):
+        assert np.array_equal(a[key], b[key]), key
