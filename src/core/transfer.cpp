@@ -9,21 +9,32 @@ namespace mpmflow {
 
 template <int D>
 void scatter_mass_pressure(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                           View<const double> pressure, View<double> work_m, View<double> work_mp) {
+                           View<const double> pressure, View<const index_t> order,
+                           View<const index_t> start, View<double> work_m, View<double> work_mp) {
   constexpr int NC = Grid<D>::NC;
-  std::array<double, NC> w;
-  for (index_t i = 0; i < g.nnodes; ++i) {
+  parallel_for(g.nnodes, [&](index_t i) {
     work_m[i] = 0.0;
     work_mp[i] = 0.0;
-  }
-  const index_t n = x.extent(0);
-  for (index_t p = 0; p < n; ++p) {
-    const index_t base = g.weights_at(&x(p, 0), w.data());
-    for (int a = 0; a < NC; ++a) {
-      work_m[base + g.corner[a]] += w[a] * mass(p);
-      work_mp[base + g.corner[a]] += w[a] * mass(p) * pressure(p);
-    }
-  }
+  });
+  // cell by cell over strips of cell slabs, as particles_to_grid (one strip when the last
+  // axis is periodic)
+  std::array<index_t, 2 * STRIPS + 1> bounds;
+  const index_t slab = g.cs[D - 1];
+  const index_t nstrips = strips(
+      g.cells[D - 1], [&](index_t r) { return start(r * slab); },
+      g.periodic[D - 1] ? 1 : 2 * STRIPS, 2, bounds.data());
+  for_strips(bounds.data(), nstrips, x.extent(0), [&](index_t r0, index_t r1) {
+    std::array<double, NC> w;
+    for (index_t c = r0 * slab; c < r1 * slab; ++c)
+      for (index_t s = start(c); s < start(c + 1); ++s) {
+        const index_t p = order(s);
+        const index_t base = g.weights_at(&x(p, 0), w.data());
+        for (int a = 0; a < NC; ++a) {
+          work_m[base + g.corner[a]] += w[a] * mass(p);
+          work_mp[base + g.corner[a]] += w[a] * mass(p) * pressure(p);
+        }
+      }
+  });
   fold_images<D>(g, work_m);
   fold_images<D>(g, work_mp);
 }
@@ -32,19 +43,20 @@ template <int D>
 double pressure_deviation(const Grid<D>& g, View<const double, 2> x, View<const double> pressure,
                           View<const double> work_m, View<const double> work_mp) {
   constexpr int NC = Grid<D>::NC;
-  std::array<double, NC> w;
-  const index_t n = x.extent(0);
-  double total = 0.0;
-  for (index_t p = 0; p < n; ++p) {
-    const index_t base = g.weights_at(&x(p, 0), w.data());
-    double smooth = 0.0;
-    for (int a = 0; a < NC; ++a)
-      if (w[a] > 0.0)  // then the node has mass from this particle at least
-        smooth += w[a] * work_mp[base + g.corner[a]] / work_m[base + g.corner[a]];
-    const double d = pressure(p) - smooth;
-    total += d * d;
-  }
-  return total;
+  return reduce_chunks<double>(x.extent(0), [&](index_t lo, index_t hi) {
+    std::array<double, NC> w;
+    double total = 0.0;
+    for (index_t p = lo; p < hi; ++p) {
+      const index_t base = g.weights_at(&x(p, 0), w.data());
+      double smooth = 0.0;
+      for (int a = 0; a < NC; ++a)
+        if (w[a] > 0.0)  // then the node has mass from this particle at least
+          smooth += w[a] * work_mp[base + g.corner[a]] / work_m[base + g.corner[a]];
+      const double d = pressure(p) - smooth;
+      total += d * d;
+    }
+    return total;
+  });
 }
 
 namespace {
@@ -234,9 +246,9 @@ index_t grid_to_particles(const Grid<D>& g, View<double, 2> x, View<double, 2> v
 }
 
 #define MPMFLOW_TRANSFER(D)                                                                        \
-  template void scatter_mass_pressure<D>(const Grid<D>&, View<const double, 2>,                    \
-                                         View<const double>, View<const double>, View<double>,     \
-                                         View<double>);                                            \
+  template void scatter_mass_pressure<D>(                                                          \
+      const Grid<D>&, View<const double, 2>, View<const double>, View<const double>,               \
+      View<const index_t>, View<const index_t>, View<double>, View<double>);                       \
   template double pressure_deviation<D>(const Grid<D>&, View<const double, 2>, View<const double>, \
                                         View<const double>, View<const double>);                   \
   template void particles_to_grid<D>(const Grid<D>&, View<const double, 2>, View<const double, 2>, \

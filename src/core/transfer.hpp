@@ -354,13 +354,16 @@ struct GridToParticle {
 // The pressure noise (state.pressure_noise: the RMS over particles of p_p minus the
 // mass-weighted grid-smoothed pressure at x_p, Pa) in two halves, so that particles held in
 // parts (one per MPI rank) add up the first's sums: the particle-to-grid sums of m_p and
-// m_p p_p into work_m, work_mp (periodic images folded); then the sum over the particles of
-// (p_p - smoothed)^2 (Pa^2) from those sums. The smoothed field is the sum of m_p p_p over
+// m_p p_p into work_m, work_mp (periodic images folded; the particles grouped by cell,
+// cell c holding order[start[c]:start[c + 1]], as counting_sort gives them, and summed cell
+// by cell over strips of cell slabs); then the sum over the particles of (p_p -
+// smoothed)^2 (Pa^2) from those sums. The smoothed field is the sum of m_p p_p over
 // the nodal mass, interpolated back: a smooth pressure field is kept (up to
 // interpolation), a checkerboard is not.
 template <int D>
 void scatter_mass_pressure(const Grid<D>& g, View<const double, 2> x, View<const double> mass,
-                           View<const double> pressure, View<double> work_m, View<double> work_mp);
+                           View<const double> pressure, View<const index_t> order,
+                           View<const index_t> start, View<double> work_m, View<double> work_mp);
 template <int D>
 double pressure_deviation(const Grid<D>& g, View<const double, 2> x, View<const double> pressure,
                           View<const double> work_m, View<const double> work_mp);

@@ -92,19 +92,22 @@ void bind_transfer(nb::module_& m) {
       "pressure, wall put-back); returns how many particles were put back inside.");
   m.def(
       "scatter_mass_pressure",
-      [](Array<const double> x, Array<const double> mass, Array<const double> pressure, double h,
+      [](Array<const double> x, Array<const double> mass, Array<const double> pressure,
+         Array<const index_t> order, Array<const index_t> start, double h,
          std::vector<index_t> cells, Array<double> work_m, Array<double> work_mp) {
         with_dim(cells.size(), [&](auto d) {
           constexpr int D = decltype(d)::value;
           scatter_mass_pressure<D>(
               make_grid<D>(h, cells), view<const double, 2>(x, "x"),
               view<const double>(mass, "mass"), view<const double>(pressure, "pressure"),
+              view<const index_t>(order, "order"), view<const index_t>(start, "start"),
               view<double>(work_m, "work_m"), view<double>(work_mp, "work_mp"));
         });
       },
-      nb::arg("x"), nb::arg("mass"), nb::arg("pressure"), nb::arg("h"), nb::arg("cells"),
-      nb::arg("work_m").noconvert(), nb::arg("work_mp").noconvert(),
-      "The nodal sums of m_p and m_p p_p (kg, kg Pa) of pressure_noise's smoothing.");
+      nb::arg("x"), nb::arg("mass"), nb::arg("pressure"), nb::arg("order"), nb::arg("start"),
+      nb::arg("h"), nb::arg("cells"), nb::arg("work_m").noconvert(), nb::arg("work_mp").noconvert(),
+      "The nodal sums of m_p and m_p p_p (kg, kg Pa) of pressure_noise's smoothing, the "
+      "particles grouped by cell (counting_sort's order and start).");
   m.def(
       "pressure_deviation",
       [](Array<const double> x, Array<const double> pressure, double h, std::vector<index_t> cells,

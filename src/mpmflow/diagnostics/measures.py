@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import state
 from ..arrays import Floats
+from ..cells import CellBins
 from ..grid import Grid
 from ..particles import Particles
 
@@ -91,8 +92,17 @@ def totals(particles: Particles, gravity: Sequence[float]) -> state.Totals:
 
 
 def pressure_noise(
-    grid: Grid, particles: Particles, add: Callable[[Floats], Floats] | None = None
+    grid: Grid,
+    particles: Particles,
+    add: Callable[[Floats], Floats] | None = None,
+    bins: CellBins | None = None,
 ) -> float:
     """RMS difference between particle pressure and its grid-smoothed value (Pa); ``add``:
-    the sum over the parts of particles held in parts (``state.pressure_noise``)."""
-    return state.pressure_noise(grid, particles.x, particles.mass, particles.pressure, add=add)
+    the sum over the parts of particles held in parts (``state.pressure_noise``); ``bins``:
+    the particles binned by cell at this time, if at hand."""
+    P = particles
+    if bins is None:
+        return state.pressure_noise(grid, P.x, P.mass, P.pressure, add=add)
+    return state.pressure_noise(
+        grid, P.x, P.mass, P.pressure, add=add, order=bins.order, start=bins.start
+    )

@@ -371,7 +371,7 @@ class Simulation:
             "potential_energy": t.potential,
             "max_speed": t.max_speed,
             "max_pressure": t.max_pressure,
-            "pressure_noise": pressure_noise(g, P, self._add()),
+            "pressure_noise": pressure_noise(g, P, self._add(), bins),
             **volume_measures(bins.theta, g.cell_volume, self.volume0, self._open()),
             "max_particles_per_cell": self.most_per_cell(bins),
             "pressure_unknowns": int(self.scheme.last_unknowns),

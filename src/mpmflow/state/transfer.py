@@ -151,18 +151,26 @@ def pressure_noise(
     work_m: Floats | None = None,
     work_mp: Floats | None = None,
     add: Callable[[Floats], Floats] | None = None,
+    order: Ints | None = None,
+    start: Ints | None = None,
 ) -> float:
     """RMS over particles of p_p minus the mass-weighted grid-smoothed pressure at x_p (Pa);
     ``work_m``, ``work_mp``: scratch of one value per node (allocated if not given).
     ``add``: for particles held in parts (one per MPI rank), the sum of an array over the
     parts; the smoothing then reads every part's particles, the RMS runs over all of them
-    and every part gets the whole run's value."""
+    and every part gets the whole run's value. ``order``, ``start``: the particles grouped
+    by cell (``counting_sort``'s), binned here if not given."""
     if work_m is None:
         work_m = np.empty(grid.nnodes)
     if work_mp is None:
         work_mp = np.empty(grid.nnodes)
     h, cells = float(grid.spacing), arrays.cells(grid)
-    _core.scatter_mass_pressure(x, mass, pressure, h, cells, work_m, work_mp)
+    if order is None or start is None:
+        cell = np.empty(len(x), dtype=np.int64)
+        order, start = np.empty(len(x), dtype=np.int64), np.empty(grid.ncells + 1, dtype=np.int64)
+        cell_index(x, h, cells, cell)
+        counting_sort(cell, grid.ncells, start, order)
+    _core.scatter_mass_pressure(x, mass, pressure, order, start, h, cells, work_m, work_mp)
     if add is not None:
         work_m, work_mp = add(work_m), add(work_mp)
     total = float(_core.pressure_deviation(x, pressure, h, cells, work_m, work_mp))
