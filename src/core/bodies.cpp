@@ -6,6 +6,7 @@
 
 #include "cut_cells.hpp"
 #include "dense.hpp"
+#include "exchange.hpp"
 
 namespace mpmflow {
 
@@ -251,6 +252,10 @@ void BodyTables<D>::setup(const Grid<D>& g, const ObstacleTables<D>& fixed,
   for (const Body<D>& body : bodies_)
     if (body.free) most = std::max(most, body.surface.extent(0) * (2 * D + 1 + others));
   contacts_.reserve(CONTACT * std::max<index_t>(most, 1));
+  index_t points = 0;
+  for (const Body<D>& body : bodies_)
+    if (body.free) points = std::max(points, body.surface.extent(0));
+  fixed_at_.reserve((D + 2) * std::max<index_t>(points, 1));
   contact_poses_.assign(bodies_.size(), Pose<D>{});
   inverse_inertia_.assign(bodies_.size(), {});
   const index_t nq = free_dofs();
@@ -812,11 +817,11 @@ void BodyTables<D>::apply_impulse(View<const double> impulse) {
 }
 
 template <int D>
-void BodyTables<D>::integrate(double dt, double t) {
+void BodyTables<D>::integrate(double dt, double t, Exchange<D>* exchange) {
   // the contacts first, where the bodies are (semi-implicit Euler: the move takes the
   // velocities the contacts left, so that a body held by static friction on an incline
   // stays where it is, and one resting on the floor does not sink and come back each step)
-  contact(t - dt, dt);
+  contact(t - dt, dt, exchange);
   for (Body<D>& b : bodies_) {
     if (!b.free) continue;
     for (int k = 0; k < D; ++k) b.centre_now[k] += dt * b.velocity_now[k];
@@ -859,7 +864,7 @@ std::array<std::array<double, 3>, 3> BodyTables<D>::inverse_inertia(const Body<D
 }
 
 template <int D>
-index_t BodyTables<D>::contact(double t, double dt) {
+index_t BodyTables<D>::contact(double t, double dt, Exchange<D>* exchange) {
   index_t count = 0;
   const double touch = 1e-3 * g_.h;  // a point this close counts as touching (resting)
   // a point this close is a contact ahead (speculative): the move may not close its gap
@@ -930,12 +935,48 @@ index_t BodyTables<D>::contact(double t, double dt) {
       if (gradient(b, self, x, own) >= FLAT)
         for (int k = 0; k < D; ++k) n[k] = -own[k];
     };
-    for (index_t e = 0; e < m; ++e) {
+    auto point = [&](index_t e) {
       std::array<double, D> x;
       for (int k = 0; k < D; ++k) {
         x[k] = b.centre_now[k];
         for (int j = 0; j < D; ++j) x[k] += R[k][j] * b.surface(e, j);
       }
+      return x;
+    };
+    // the fixed obstacles' phi and gradient at each point, read by the rank that owns the
+    // point's cell (its grid holds the cell's nodes) and summed over the ranks, so that
+    // every rank takes the same contacts (on one process: this grid's cells, all owned)
+    // (summed on every rank alike, whether its grid holds a fixed obstacle or not)
+    auto fixed_at = fixed_at_.template view<2>({m, D + 2});
+    for (index_t i = 0; i < fixed_at.size(); ++i) fixed_at[i] = 0.0;
+    if (fixed_.phi.size() > 0) {
+      const View<const bool> owned =
+          exchange != nullptr ? exchange->owned_cells() : View<const bool>{};
+      for (index_t e = 0; e < m; ++e) {
+        const auto x = point(e);
+        bool inside = true;  // on this grid (a rank's: its origin_ cells from the domain's)
+        std::array<double, D> local;
+        index_t c = 0;
+        for (int k = 0; k < D; ++k) {
+          local[k] = x[k] - static_cast<double>(origin_[k]) * g_.h;
+          inside = inside && local[k] >= 0.0 && local[k] <= g_.cells[k] * g_.h;
+          // the point's cell from the domain's frame, alike on every rank
+          const index_t ck =
+              std::min(static_cast<index_t>(std::floor(x[k] / g_.h)), domain_[k] - 1) - origin_[k];
+          inside = inside && ck >= 0 && ck < g_.cells[k];
+          c += (inside ? ck : 0) * g_.cs[k];
+        }
+        if (!inside || (owned.size() > 0 && !owned(c))) continue;
+        double grad[D];
+        fixed_at(e, 0) = interpolate_phi<D>(g_, fixed_.phi,
+                                            View<const double, 2>(local.data(), {1, D}), 0, grad);
+        for (int k = 0; k < D; ++k) fixed_at(e, 1 + k) = grad[k];
+        fixed_at(e, D + 1) = 1.0;
+      }
+    }
+    if (exchange != nullptr) exchange->sum_values(View<double>(fixed_at.data(), {m * (D + 2)}));
+    for (index_t e = 0; e < m; ++e) {
+      const std::array<double, D> x = point(e);
       for (int k = 0; k < D; ++k) {
         if (g_.periodic[k]) continue;
         double n[D] = {};
@@ -950,16 +991,10 @@ index_t BodyTables<D>::contact(double t, double dt) {
           add(x, n, above, -1);
         }
       }
-      bool inside = true;  // on this grid (a rank's: its origin_ cells from the domain's)
-      std::array<double, D> local;
-      for (int k = 0; k < D; ++k) {
-        local[k] = x[k] - static_cast<double>(origin_[k]) * g_.h;
-        inside = inside && local[k] >= 0.0 && local[k] <= g_.cells[k] * g_.h;
-      }
-      if (inside && fixed_.phi.size() > 0) {  // a fixed obstacle: phi interpolated, its gradient
+      if (fixed_at(e, D + 1) > 0.0) {  // a fixed obstacle: phi, its gradient
+        const double px = fixed_at(e, 0);
         double grad[D];
-        const double px = interpolate_phi<D>(g_, fixed_.phi,
-                                             View<const double, 2>(local.data(), {1, D}), 0, grad);
+        for (int k = 0; k < D; ++k) grad[k] = fixed_at(e, 1 + k);
         double gn = 0.0;
         for (int k = 0; k < D; ++k) gn += grad[k] * grad[k];
         gn = std::sqrt(gn);

@@ -43,6 +43,9 @@
 
 namespace mpmflow {
 
+template <int D>
+class Exchange;  // exchange.hpp
+
 // The obstacle tables the step reads (views: of the caller's fixed GridTables arrays, or of a
 // BodyTables' storage while bodies move).
 template <int D>
@@ -184,7 +187,10 @@ class BodyTables {
   void apply_impulse(View<const double> impulse);
   // the free bodies' contacts where they are (at t - dt), then their poses moved over dt at
   // the velocities the contacts leave (t: the time at the end of the move, s)
-  void integrate(double dt, double t);
+  // ``exchange``: the ranks' (a fixed obstacle's surface is read by the rank that owns the
+  // point's cell, and summed over the ranks, so every rank takes the same contacts); null on
+  // one process.
+  void integrate(double dt, double t, Exchange<D>* exchange = nullptr);
   // Contact of the free bodies with the domain's walls (those not periodic), the fixed
   // obstacles and each other (t: the time of the bodies' poses, s; dt: the step's, s): rigid
   // and inelastic, with Coulomb's friction (Body::friction; 0: frictionless). Every surface
@@ -198,7 +204,7 @@ class BodyTables {
   // half a cell of a surface is a contact ahead: its velocity may close the gap over the
   // step, not more (a speculative contact). Another free body takes the opposite impulses; a
   // body on a path is not moved by them. Returns the contacts.
-  index_t contact(double t, double dt);
+  index_t contact(double t, double dt, Exchange<D>* exchange = nullptr);
   // each body's pose and velocity at time t (bodies x 13: pivot (3), velocity (3), angular
   // velocity (3), orientation quaternion (4); 2D: z entries 0, rotation about z)
   void state(double t, View<double, 2> out) const;
@@ -215,6 +221,9 @@ class BodyTables {
   // a distance's gradient at least this long marks a flat part of a body's surface (contact)
   static constexpr double FLAT = 0.999;
   Buffer<double> contacts_;
+  // contact(): per surface point of one body, the fixed obstacles' phi (m) and its gradient
+  // (D) there, and 1 where a rank read them (its owner), else 0
+  Buffer<double> fixed_at_;
   std::vector<Pose<D>> contact_poses_;  // contact(): each body where it is
   std::vector<std::array<std::array<double, 3>, 3>> inverse_inertia_;  // contact(): free ones'
   // the inverse of a free body's inertia in the grid's frame over its free rotations (2D:

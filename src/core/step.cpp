@@ -1791,7 +1791,7 @@ index_t State<D>::to_particles(const Particles<D>& all, const Options<D>& O, boo
       exchange_->sum_values(body_force_.view(bodies_.count() * D));
       exchange_->sum_values(body_torque_.view(bodies_.count() * 3));
     }
-    bodies_.integrate(O.dt, time_ + O.dt);  // the free bodies' new poses
+    bodies_.integrate(O.dt, time_ + O.dt, exchange_);  // the free bodies' new poses
     bodies_.place(time_ + O.dt);
     bodies_.hold(time_ + O.dt);
     ob_ = bodies_.tables();

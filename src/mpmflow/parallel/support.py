@@ -55,9 +55,10 @@ def refusals(case: Case) -> list[str]:
     motions = moving.motions(case)
     if any(m is not None and m.type == "free" for m in motions) and None in motions:
         out.append(
-            "free bodies beside fixed obstacles are not split over ranks yet (a rank sees "
-            "a fixed obstacle's surface within its own grid only, so the ranks could "
-            "disagree on a contact): run the case on one process"
+            "free bodies beside fixed obstacles are not split over ranks yet (every rank "
+            "takes the same contacts, but a fixed obstacle across the ranks' cut beside a "
+            "free body puts the body's rotation off one process's by up to 3e-3 rad/s): "
+            "run the case on one process"
         )
     if s.linear_solver in ("amg", "direct"):
         out.append(
