@@ -78,24 +78,31 @@ def floating() -> Simulation:
     return tank(FREE)
 
 
+def heaves(one: Simulation, many: Simulation, chunks: int) -> tuple[np.ndarray, np.ndarray]:
+    """The free body's pivot height (m) after each of ``chunks`` chunks of 10 steps, on one
+    process and over the ranks, checking that every rank holds the same body and that the
+    body (x 0.08-0.12 m) straddles one of the boxes' cuts."""
+    heave = []
+    for _ in range(chunks):
+        one.scheme.advance(one.dt, 10)
+        many.scheme.advance(many.dt, 10)
+        a, b = one.scheme.body_values()[2], many.scheme.body_values()[2]
+        heave.append((a[0, 1], b[0, 1]))
+        assert np.array_equal(b, world().bcast(b))  # the same body on every rank
+    if world().size > 1:
+        cuts = {int(c) * 0.01 for c in many.scheme.boxes.hi[:, 0] if c < 20}
+        assert any(0.08 < c < 0.12 for c in cuts)
+    a, b = np.array(heave).T
+    return a, b
+
+
 def test_a_free_body_across_the_rank_boundary_follows_one_process():
     """A free body's coupling to the pressure (State::couple_bodies: nq more solves and an
     nq x nq system) sums its products over the rows each rank owns, so every rank moves the
     body alike; its state goes from chunk to chunk (each split builds a new core). After 150
     steps it follows one process to the solves' tolerance, as the towed box does."""
-    one = alone(floating())
-    many = split(floating())
-    heave = []
-    for _ in range(15):
-        one.scheme.advance(one.dt, 10)
-        many.scheme.advance(many.dt, 10)
-        a, b = one.scheme.body_values()[2], many.scheme.body_values()[2]
-        heave.append((a[0, 1], b[0, 1]))  # the pivot's height (m)
-        assert np.array_equal(b, world().bcast(b))  # the same body on every rank
-    if world().size > 1:  # the box straddles a cut
-        cuts = {int(c) * 0.01 for c in many.scheme.boxes.hi[:, 0] if c < 20}
-        assert any(0.08 < c < 0.12 for c in cuts)
-    a, b = np.array(heave).T
+    one, many = alone(floating()), split(floating())
+    a, b = heaves(one, many, 15)
     assert a[0] - a.min() > 1e-3  # m: it sank towards its draft
     assert np.abs(b - a).max() < 1e-8  # m
     P = whole(many)[0]
@@ -131,19 +138,8 @@ def test_a_free_body_lands_on_a_fixed_obstacle_across_the_rank_boundary(monkeypa
     from mpmflow.parallel import support
 
     monkeypatch.setattr(support, "refusals", lambda case: [])
-    one = alone(landing())
-    many = split(landing())
-    heave = []
-    for _ in range(20):
-        one.scheme.advance(one.dt, 10)
-        many.scheme.advance(many.dt, 10)
-        a, b = one.scheme.body_values()[2], many.scheme.body_values()[2]
-        heave.append((a[0, 1], b[0, 1]))  # the pivot's height (m)
-        assert np.array_equal(b, world().bcast(b))  # the same body on every rank
-    if world().size > 1:  # both straddle a cut
-        cuts = {int(c) * 0.01 for c in many.scheme.boxes.hi[:, 0] if c < 20}
-        assert any(0.08 < c < 0.12 for c in cuts)
-    a, b = np.array(heave).T
+    one, many = alone(landing()), split(landing())
+    a, b = heaves(one, many, 20)
     # it fell 2 cm and rests on the block's top (y = 0.03 m): its centre 1 cm above it, to
     # the contact's touching distance and the rounding of the rest (1e-3 h is 5e-6 m)
     for height in (a, b):
