@@ -127,8 +127,8 @@ def test_a_free_body_lands_on_a_fixed_obstacle_across_the_rank_boundary(monkeypa
     """A free body's contact with a fixed obstacle reads the obstacle's surface where each
     surface point's cell is owned (BodyTables::contact: that rank interpolates its phi and
     the values are summed over the ranks), so every rank takes the same contacts and holds
-    the same body (each rank reading its own grid, the ranks parted ways and the run hung),
-    and the box lands on the block and rests there, as on one process.
+    the same body (with each rank reading its own grid, this test did not end within 10
+    minutes on 2 ranks), and the box lands on the block and rests there, as on one process.
 
     Not to the solves' tolerance: from the first steps, before any contact, the body's
     rotation on 2 ranks is off one process's by up to 3e-3 rad/s and its height by 2e-6 m
