@@ -627,12 +627,7 @@ void Multigrid<D>::refresh() {
 template <int D>
 void Multigrid<D>::iterate_apply(const Level& lv, View<const double> x, const double* b,
                                  View<double> y, bool subtract) const {
-  if (lv.kvals.size() > 0)
-    apply<std::int32_t>(lv.icols, lv.kvals, x, b, y, subtract);
-  else if (lv.icols.size() > 0)
-    apply<std::int32_t>(lv.icols, lv.vals, x, b, y, subtract);
-  else
-    apply<index_t>(lv.cols, lv.vals, x, b, y, subtract);
+  with_form(lv, [&](auto, auto cols, auto vals) { apply(cols, vals, x, b, y, subtract); });
 }
 
 template <int D>
@@ -640,23 +635,16 @@ void Multigrid<D>::vcycle(View<const double> b, View<double> x, int sweeps) {
   if (nlev_ == 0) throw std::logic_error("multigrid: vcycle before setup");
   auto bl = [&](index_t l) -> View<const double> { return l == 0 ? b : level_[l].b; };
   auto xl = [&](index_t l) -> View<double> { return l == 0 ? x : level_[l].x; };
-  // a level's sweeps and residual on its iteration form (compact: the same sums)
-  using I32 = std::int32_t;
+  // a level's sweeps on its iteration form (compact: the same sums)
   const auto first = [&](const Level& lv, View<double> xv, View<const double> bv) {
-    if (lv.kvals.size() > 0)
-      gauss_seidel_first<D, 2 * D + 1, I32>(lv.icols, lv.kvals, bv, xv, lv.rows, lv.cstart);
-    else if (lv.icols.size() > 0)
-      gauss_seidel_first<D, NS, I32>(lv.icols, lv.vals, bv, xv, lv.rows, lv.cstart);
-    else
-      gauss_seidel_first<D, NS, index_t>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart);
+    with_form(lv, [&](auto ns, auto cols, auto vals) {
+      gauss_seidel_first<D, decltype(ns)::value>(cols, vals, bv, xv, lv.rows, lv.cstart);
+    });
   };
   const auto sweep = [&](const Level& lv, View<double> xv, View<const double> bv, bool fwd) {
-    if (lv.kvals.size() > 0)
-      gauss_seidel<D, 2 * D + 1, I32>(lv.icols, lv.kvals, bv, xv, lv.rows, lv.cstart, fwd);
-    else if (lv.icols.size() > 0)
-      gauss_seidel<D, NS, I32>(lv.icols, lv.vals, bv, xv, lv.rows, lv.cstart, fwd);
-    else
-      gauss_seidel<D, NS, index_t>(lv.cols, lv.vals, bv, xv, lv.rows, lv.cstart, fwd);
+    with_form(lv, [&](auto ns, auto cols, auto vals) {
+      gauss_seidel<D, decltype(ns)::value>(cols, vals, bv, xv, lv.rows, lv.cstart, fwd);
+    });
   };
   for (index_t l = 0; l + 1 < nlev_; ++l) {
     Level& lv = level_[l];

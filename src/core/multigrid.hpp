@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "grid.hpp"
@@ -287,6 +288,18 @@ class Multigrid {
   };
   void compact(Level& lv);      // lv's iteration form (icols; kvals on a star)
   void star_values(Level& lv);  // a star's kvals from its vals (nothing on 3^D slots)
+  // f(ns, cols, vals) on level lv's iteration form, the one place its three forms are told
+  // apart: ns the slots of a row as a std::integral_constant (the star's 2D + 1, or 3^D),
+  // cols 32-bit (icols), or index_t on a level of 2^31 rows or more
+  template <class F>
+  void with_form(const Level& lv, F&& f) const {
+    if (lv.kvals.size() > 0)
+      f(std::integral_constant<int, 2 * D + 1>{}, lv.icols, lv.kvals);
+    else if (lv.icols.size() > 0)
+      f(std::integral_constant<int, NS>{}, lv.icols, lv.vals);
+    else
+      f(std::integral_constant<int, NS>{}, lv.cols, lv.vals);
+  }
   // y = A x (subtract: b - A x) with level lv's operator in its iteration form
   void iterate_apply(const Level& lv, View<const double> x, const double* b, View<double> y,
                      bool subtract) const;
