@@ -7,9 +7,10 @@ holds without owning them by their owners' values, and ``volume_system`` assembl
 of the local cells (the ghost layer's cells have every particle of theirs in the halo, so a
 rank and the owner agree on which cells are rows); the ranks decide together whether the
 system has rows and touches an empty cell. Here (the core's volume solver on a rank) the
-owned rows are numbered after the ranks before, PETSc solves to ``solver.tolerance`` and the
-solution reaches the ghost layer; the step's ``volume_apply`` moves the faces the particles
-are displaced by in ``to_particles``.
+owned rows are numbered after the ranks before, PETSc solves to
+``solver.volume_correction_tolerance`` and the solution reaches the ghost layer; the
+step's ``volume_apply`` moves the faces the particles are displaced by in
+``to_particles``.
 """
 
 from __future__ import annotations
