@@ -412,7 +412,8 @@ void BodyTables<D>::place(double t) {
         if (ix[k] + origin_[k] == 0 && shifts[b][2 * k]) x[k] += g_.h;
         if (ix[k] + origin_[k] == domain_[k] && shifts[b][2 * k + 1]) x[k] -= g_.h;
       }
-      const double d = bodies_[b].distance(poses_[b], x);
+      double d = bodies_[b].distance(poses_[b], x);
+      if (std::abs(d) <= ON_SURFACE * g_.h) d = 0.0;
       if (d < phi(i)) {
         phi(i) = d;
         owner(i) = static_cast<index_t>(b);

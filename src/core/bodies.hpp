@@ -130,6 +130,17 @@ class BodyTables {
   // footing at B / 15, its edge midway between two nodes, bore 1.156 times Prandtl's load,
   // 1.037 this way (docs/method.md, "Solids").
   static constexpr double REACH = 1.0;
+  // A node whose distance to a body is within ON_SURFACE cells of 0 is on its surface (phi
+  // = 0). A body's distance at a node comes from its pose and its lattice with rounding, so
+  // a face or corner on a plane of nodes reads +-1e-15 m there, and its sign decided whether
+  // the cells beside it were solid or cut (by a sliver): a free box with its corners on
+  // nodes, sinking in a tank symmetric about its axis, turned at 0.05 rad/s after 40 steps
+  // (one corner's node read in, the other's out), and a pose 1e-13 m off, or the ranks'
+  // sums taken in another order, turned it otherwise. The bound is above the drift of a pose
+  // that the solves' tolerance leaves (that box, landed on a block with its faces on nodes,
+  // had drifted by 1e-11 m after 180 steps, and a bound of 1e-9 cells split two runs there),
+  // and below anything a cut cell resolves (tests/parallel/test_split_bodies.py).
+  static constexpr double ON_SURFACE = 1e-6;
   // fixed: the fixed obstacles' tables (phi empty: none); fixed_no_slip: per node, whether
   // its nearest fixed obstacle is no-slip (empty: none is); nsub: the cut cells' sub-cells
   // per axis, or 0 for the staircase (a solid's tools, below). Reserves the storage (a step then

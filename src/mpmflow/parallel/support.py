@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from .. import materials
-from ..boundaries import moving, outlets
+from ..boundaries import outlets
 from ..errors import CaseError
 from ..grid import Grid
 from ..particles import Particles
@@ -51,14 +51,6 @@ def refusals(case: Case) -> list[str]:
             f"a saturated soil (material.model = {case.material.model!r}) takes the coupled "
             "elastic-pressure solve at every step and its pore flow between the cells, which "
             "are not split over ranks yet: run it on one process"
-        )
-    motions = moving.motions(case)
-    if any(m is not None and m.type == "free" for m in motions) and None in motions:
-        out.append(
-            "free bodies beside fixed obstacles are not split over ranks yet (every rank "
-            "takes the same contacts, but a fixed obstacle across the ranks' cut beside a "
-            "free body puts the body's rotation off one process's by up to 3e-3 rad/s): "
-            "run the case on one process"
         )
     if s.linear_solver in ("amg", "direct"):
         out.append(
