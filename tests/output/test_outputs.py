@@ -89,7 +89,7 @@ def test_a_torn_last_row_is_dropped_by_readers_and_by_the_restart(tmp_path):
     first.on_output = stop
     assert first.run()["status"] == "interrupted"
     with open(out / "timeseries.csv", "a") as f:  # rows after the checkpoint, the last torn
-        f.write("0.051,0.02,0.02,51,0,0.01,0,0,0,1,0,1,4,0\n0.052,0.0")
+        f.write("0.051,0.02,0.02,51,0,0.01,0,0,0,0,1,0,1,4,0\n0.052,0.0")
     run = open_run(out)
     assert run.timeseries["time"][-1] == pytest.approx(0.051)
     assert any("cut short" in note for note in run.notes)

@@ -25,10 +25,16 @@ def _sim(ke, pe, overrides=(), mass=19.5, dt=None):
         "time": 0.01 * np.arange(len(ke)),
         "kinetic_energy": np.asarray(ke, dtype=float),
         "potential_energy": np.asarray(pe, dtype=float),
+        "body_energy": np.zeros(len(ke)),  # no free body
     }
     grid = Grid.of_case(case)
     return SimpleNamespace(
-        case=case, grid=grid, mass0=mass, dt=dt or case.time.dt, series=columns.__getitem__
+        case=case,
+        grid=grid,
+        mass0=mass,
+        dt=dt or case.time.dt,
+        series=columns.__getitem__,
+        scheme=SimpleNamespace(movers=[]),  # no free body
     )
 
 

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..arrays import Floats
 from ..errors import CaseError
+from ..geometry.rotation import quaternion_matrix
 from ..geometry.shapes import Shape
 from ..grid import Grid
 
@@ -359,6 +360,37 @@ def _freedom(case: Case, k: int, shape: Shape, where: str) -> tuple[Freedom, Flo
         mass, inertia, locked, velocity, rate, centroid - pivot, float(motion.friction)
     )
     return freedom, pivot
+
+
+def free_energy(movers: list[Mover], state: Floats, gravity: Any) -> float:
+    """The free bodies' kinetic and potential energy (J; 2D J/m) at ``state``
+    (``State.body_state``: each body's pivot, velocity, angular velocity and orientation
+    quaternion): 1/2 m |v|^2 + 1/2 omega . I omega (I about the pivot, turned to the grid's
+    axes: the pivot is the centroid, or a hinge that does not move) and -m g . x of the
+    centroid, from the origin as the particles' ``potential_energy``. 0 without free bodies.
+    The prescribed bodies' energy is not counted: their paths do work on the water."""
+    g = np.zeros(3)
+    g[: len(gravity)] = np.asarray(gravity, dtype=float)
+    total = 0.0
+    for k, mover in enumerate(movers):
+        f = mover.free
+        if f is None:
+            continue
+        row = np.asarray(state[k], dtype=float)
+        R = quaternion_matrix(*row[9:13])
+        offset = np.zeros(3)
+        offset[: len(f.offset)] = f.offset
+        centroid = row[:3] + R @ offset
+        v, w = row[3:6], row[6:9]
+        inertia = R @ np.asarray(f.inertia, dtype=float) @ R.T
+        total += 0.5 * f.mass * float(v @ v) + 0.5 * float(w @ inertia @ w)
+        total -= f.mass * float(g @ centroid)
+    return total
+
+
+def free_mass(movers: list[Mover]) -> float:
+    """The free bodies' mass (kg; 2D kg/m)."""
+    return sum(m.free.mass for m in movers if m.free is not None)
 
 
 def motions(case: Case) -> list[Motion | None]:

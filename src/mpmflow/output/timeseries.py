@@ -44,6 +44,7 @@ COLUMNS = {
     "step": "-",
     "kinetic_energy": "J/m",
     "potential_energy": "J/m",
+    "body_energy": "J/m",
     "max_speed": "m/s",
     "max_pressure": "Pa",
     "pressure_noise": "Pa",

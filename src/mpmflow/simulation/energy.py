@@ -1,16 +1,19 @@
 """The energy check: a closed tank may lose energy but must not gain it (issue 39).
 
-Nothing in a run without inlets or moving obstacles puts energy into the water: walls and
-fixed obstacles stand still, gravity is constant, outlets only let energy leave, and viscosity only dissipates. So the
-mechanical energy E = KE + PE of the particles (``kinetic_energy`` + ``potential_energy``,
-the time series' columns) can only fall; a rise is the step's doing. At the end of a run
+Nothing in a run without inlets or obstacles on prescribed paths puts energy into the water:
+walls and fixed obstacles stand still, gravity is constant, outlets only let energy leave,
+viscosity only dissipates, and a free body only trades energy with the water (and loses it
+in its contacts). So the mechanical energy E = KE + PE of the particles and the free bodies
+(``kinetic_energy`` + ``potential_energy`` + ``body_energy``, the time series' columns) can
+only fall; a rise is the step's doing. At the end of a run
 (``record``, in summary.json's ``energy``) the largest rise over the output times,
 
     (E(t) - E(0)) / E_floor(0),
 
 is compared with ``THRESHOLD``. E_floor(0) is the initial energy measured from the domain's
 floor: KE + sum m |g| (height above the lowest point of the domain along gravity), the
-energy the water could give up falling to the bottom of the tank at rest. It is positive
+energy the water and the free bodies could give up falling to the bottom of the tank at
+rest. It is positive
 for any water above the floor or moving, does not depend on where the coordinates' origin
 lies, and is the measure of the validation report's long runs (docs/validation). With no
 gravity and no motion it would be 0: the scale is then the kinetic energy of the whole
@@ -23,7 +26,8 @@ less, and the dam break never above its start; the defects the issue measured ri
 the settings that likely caused it: ``advice``) and in summary.json.
 
 ``sources`` names what may legitimately raise KE + PE in a case; the check is off when
-there is any: an inlet is one, a moving obstacle (obstacles.N.motion) another.
+there is any: an inlet is one, an obstacle on a prescribed path (obstacles.N.motion, but
+a free one) another.
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import materials
-from ..boundaries import outlets
+from ..boundaries import moving, outlets
 from ..stability import SHALLOW_FRACTION, SMALL_FALL_COURANT, fall_speed, shallow_nodes
 
 if TYPE_CHECKING:
@@ -64,10 +68,15 @@ def sources(case: Case, grid: Grid) -> list[str]:
             )
     if case.inlets:
         why.append("the inlets ([[inlets]]) bring water, and its energy, into the domain")
-    moved = [o.name or f"obstacles.{k}" for k, o in enumerate(case.obstacles) if o.motion]
+    moved = [
+        o.name or f"obstacles.{k}"
+        for k, o in enumerate(case.obstacles)
+        if o.motion and o.motion.type != "free"
+    ]
     if moved:
         why.append(
-            f"the moving obstacles ({', '.join(moved)}: obstacles.N.motion) do work on the water"
+            f"the obstacles on prescribed paths ({', '.join(moved)}: obstacles.N.motion) do "
+            "work on the water"
         )
     return why
 
@@ -108,9 +117,11 @@ def record(sim: Simulation) -> dict[str, Any]:
             out["not_checked"] = "no output was written"
         return out
     ke, pe = sim.series("kinetic_energy"), sim.series("potential_energy")
-    e0 = initial_energy(ke[0], pe[0], sim.mass0, sim.case.physics.gravity, sim.grid.size)
-    scale = max(e0, 0.5 * sim.mass0 * FLOOR_SPEED**2)
-    largest, when = rise(t, ke + pe, scale)
+    body = sim.series("body_energy")  # the free bodies' KE + PE (0: none)
+    mass = sim.mass0 + moving.free_mass(getattr(sim.scheme, "movers", []))
+    e0 = initial_energy(ke[0], pe[0] + body[0], mass, sim.case.physics.gravity, sim.grid.size)
+    scale = max(e0, 0.5 * mass * FLOOR_SPEED**2)
+    largest, when = rise(t, ke + pe + body, scale)
     out.update(initial_energy=e0, largest_rise=largest, at_time=when, exceeded=largest > THRESHOLD)
     return out
 

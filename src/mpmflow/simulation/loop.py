@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from .. import checkpoint
+from ..boundaries import moving
 from ..case import Case, revalidate
 from ..cells import CellBins, bin_particles
 from ..diagnostics import parts
@@ -369,6 +370,7 @@ class Simulation:
             "step": self.steps,
             "kinetic_energy": t.kinetic,
             "potential_energy": t.potential,
+            "body_energy": self.body_energy(),
             "max_speed": t.max_speed,
             "max_pressure": t.max_pressure,
             "pressure_noise": pressure_noise(g, P, self._add(), bins),
@@ -377,6 +379,16 @@ class Simulation:
             "pressure_unknowns": int(self.scheme.last_unknowns),
             "solver_iterations": int(self.counters.iterations_since_output),
         }
+
+    def body_energy(self) -> float:
+        """The free bodies' kinetic and potential energy now (J; 2D J/m;
+        ``moving.free_energy``): with the particles' KE + PE, the energy of a closed tank
+        holding free bodies. 0 without free bodies."""
+        movers = getattr(self.scheme, "movers", None)
+        if not movers or not any(m.free is not None for m in movers):
+            return 0.0
+        state = self.scheme.body_values()[2]  # type: ignore[attr-defined]
+        return moving.free_energy(movers, state, self.case.physics.gravity)
 
     def _open(self) -> NDArray[np.float64] | None:
         """The cells' fluid fractions when obstacles cut cells (None: no obstacle)."""
