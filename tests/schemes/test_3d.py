@@ -81,6 +81,53 @@ def test_front_and_height_of_an_extruded_field_are_the_2d_ones():
     assert f3 == pytest.approx(f2, abs=1e-15) and h3 == pytest.approx(h2, abs=1e-15)
 
 
+def test_a_half_full_cell_is_half_full_to_rounding():
+    """Half a cell of particles reads 0.49999999999999994 in 3D where it reads 0.5 in 2D (the
+    dam break of the next test at 0.15 s: 125 such 3D cells, 25 such 2D cells, one per
+    slice); both are half full, so the front does not move a cell back in 3D
+    (measures.HALF_FULL)."""
+    g2, g3 = Grid(0.01, (6, 3)), Grid(0.01, (6, 2, 3))
+    theta2 = np.zeros((3, 6))
+    theta2[:, :3] = 1.0
+    theta2[:, 3] = 0.5
+    theta3 = np.repeat(theta2[:, None, :], 2, axis=1)
+    theta3[:, :, 3] = np.nextafter(0.5, 0.0)  # 0.49999999999999994
+    f2, h2 = front_and_height(g2, theta2.ravel())
+    f3, h3 = front_and_height(g3, theta3.ravel())
+    assert f2 == pytest.approx(0.035, abs=1e-12)  # the half-full cell's centre
+    assert f3 == pytest.approx(f2, abs=1e-12) and h3 == pytest.approx(h2, abs=1e-12)
+
+
+def test_the_3d_dam_break_across_a_slip_tank_is_the_2d_one():
+    """examples/dam_break_3d.toml extrudes the 2D dam break across a tank 5 cells wide with
+    slip walls, so each slice of it is the 2D flow on the same mesh and particle spacing.
+    Without the volume correction the two follow each other over the collapse's first 0.15
+    s to 1e-5 m (measured: 2.7e-6 m), and their fronts and heights are the same.
+
+    With the correction (the default) the 3D particles leave the 2D ones by 2.5e-6 m at the
+    toe in the 16th step, whatever the correction's solve tolerance, and by 0.15 s the
+    fronts differ by 0.07 a (the validation's 3D row): a difference between the 3D and the
+    2D correction, not found yet."""
+    over = ["output.snapshots=false", "time.end=0.15", "solver.volume_correction=0"]
+    sim3 = Simulation(load_case(EXAMPLES / "dam_break_3d.toml", over))
+    sim2 = Simulation(
+        load_case(
+            EXAMPLES / "dam_break.toml",
+            [*over, "grid.spacing=0.008", "bodies.0.particles_per_cell=2"],
+        )
+    )
+    start = {(round(x, 9), round(z, 9)): k for k, (x, z) in enumerate(sim2.particles.x)}
+    match = np.array([start[(round(x, 9), round(z, 9))] for x, _, z in sim3.particles.x])
+    across = sim3.particles.x[:, 1].copy()
+    sim3.run()
+    sim2.run()
+    x3, x2 = sim3.particles.x, sim2.particles.x[match]
+    assert np.abs(x3[:, [0, 2]] - x2).max() < 1e-5  # m
+    assert np.abs(x3[:, 1] - across).max() < 1e-5  # m (measured: 1.7e-6 m across the tank)
+    for name in ("front", "height"):
+        assert np.abs(sim3.series(name) - sim2.series(name)).max() < 1e-6  # m
+
+
 @pytest.mark.slow
 def test_3d_outputs_read_back_and_plot(tmp_path):
     """Snapshots keep z, energies are in J (not J/m), and `mpmflow plot` draws the x-z slice

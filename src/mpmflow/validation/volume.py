@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..cells import bin_particles
+from ..diagnostics.measures import WET
 from ..simulation import Simulation
 from .common import CaseResult, Row, fmt, markdown_table, pyplot, save
 from .types import Context, FloatArray
@@ -51,7 +52,7 @@ def packing(sim: Simulation) -> tuple[float, float, float, float]:
     theta = bin_particles(g, sim.particles).theta
     wet = theta > 0
     share = float(np.count_nonzero(theta > 1.2) / max(1, int(np.count_nonzero(wet))))
-    region = float(np.count_nonzero(theta >= 0.5) * g.cell_volume / sim.volume0)
+    region = float(np.count_nonzero(theta >= WET) * g.cell_volume / sim.volume0)
     deficit = float(1.0 - np.minimum(theta, 1.0).sum() * g.cell_volume / sim.volume0)
     f = theta.reshape(g.cells[1], g.cells[0])
     w = f > 0
