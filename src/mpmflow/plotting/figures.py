@@ -54,10 +54,10 @@ Floats = NDArray[np.float64]
 def energy_changes(series: Columns) -> tuple[Floats, Floats]:
     """(potential - initial, total - initial) of a run's timeseries, total = kinetic +
     potential energy of the particles and the free bodies, each the change since the first
-    row. The initial total holds the
-    initial kinetic energy too: a body released with a velocity starts with it, and
-    subtracting only the initial potential energy started "total - initial" at the initial
-    kinetic energy (+0.26 J for stl_drop_3d's blob at 1 m/s) as if energy had been made."""
+    row. The initial total holds the initial kinetic energy too: a body released with a
+    velocity starts with it, and subtracting only the initial potential energy started "total
+    - initial" at the initial kinetic energy (+0.26 J for stl_drop_3d's blob at 1 m/s) as if
+    energy had been made."""
     potential = series["potential_energy"]
     total = series["kinetic_energy"] + potential
     if "body_energy" in series:  # the free bodies' KE + PE (runs before 2026-12-01: none)

@@ -5,17 +5,17 @@ walls and fixed obstacles stand still, gravity is constant, outlets only let ene
 viscosity only dissipates, and a free body only trades energy with the water (and loses it
 in its contacts). So the mechanical energy E = KE + PE of the particles and the free bodies
 (``kinetic_energy`` + ``potential_energy`` + ``body_energy``, the time series' columns) can
-only fall; a rise is the step's doing. At the end of a run
-(``record``, in summary.json's ``energy``) the largest rise over the output times,
+only fall; a rise is the step's doing. At the end of a run (``record``, in summary.json's
+``energy``) the largest rise over the output times,
 
     (E(t) - E(0)) / E_floor(0),
 
 is compared with ``THRESHOLD``. E_floor(0) is the initial energy measured from the domain's
 floor: KE + sum m |g| (height above the lowest point of the domain along gravity), the
 energy the water and the free bodies could give up falling to the bottom of the tank at
-rest. It is positive
-for any water above the floor or moving, does not depend on where the coordinates' origin
-lies, and is the measure of the validation report's long runs (docs/validation). With no
+rest. It is positive for any water above the floor or moving, does not depend on where the
+coordinates' origin lies, and is the measure of the validation report's long runs
+(docs/validation). With no
 gravity and no motion it would be 0: the scale is then the kinetic energy of the whole
 mass at ``FLOOR_SPEED``.
 

@@ -230,6 +230,9 @@ def run(out: Path, quick: bool = False, context: Context | None = None) -> CaseR
                         if s_name == "sensor 4"
                         else "an instantaneous release: the simulated surge arrives before "
                         "the experiment's, whose gate still holds the water back"
+                        if not tag
+                        else f"the gate's lift ({GATE_SPEED} m/s, the manual's figure, not "
+                        "a measured path) sets when the surge leaves"
                     ),
                 )
             )
