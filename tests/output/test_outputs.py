@@ -123,6 +123,23 @@ def test_a_restart_refuses_a_time_series_cut_below_its_checkpoint(tmp_path, caps
     assert "--overwrite" in err and "Traceback" not in err
 
 
+def test_a_restart_refuses_a_time_series_of_other_columns(tmp_path, capsys):
+    """A run whose timeseries.csv has other columns than this version writes (one written
+    before the time series gained body_energy) is refused by name, not as a damaged file."""
+    out = tmp_path / "o"
+    args = ["run", str(EXAMPLES / "hydrostatic.toml"), "--out", str(out), "-q"]
+    args += ["--set", "grid.spacing=0.02", "--set", "time.end=0.1"]
+    assert main(args) == 0
+    lines = (out / "timeseries.csv").read_text().splitlines()
+    k = lines[0].split(",").index("body_energy")
+    older = [",".join(c for j, c in enumerate(line.split(",")) if j != k) for line in lines]
+    (out / "timeseries.csv").write_text("\n".join(older) + "\n")
+    assert main(args[:-1] + ["time.end=0.2", "--restart"]) == 2
+    err = capsys.readouterr().err
+    assert "has other columns than this run writes" in err and "body_energy" in err
+    assert "--overwrite" in err and "Traceback" not in err
+
+
 def test_a_checkpoint_holds_positions_not_rows(tmp_path):
     from mpmflow.checkpoint import read
 

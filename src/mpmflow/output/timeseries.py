@@ -118,6 +118,15 @@ class CsvAppender:
                 "with --overwrite."
             ) from None
         lines = head.count(b"\n")
+        first = head.split(b"\n", 1)[0] + b"\n"
+        if first != header.encode() and head.endswith(b"\n"):
+            raise CaseError(
+                f"--restart: {name} in {self.path.parent} has other columns than this run "
+                f"writes (its header: {first.decode(errors='replace').strip()!r}; this run's: "
+                f"{header.strip()!r}): it was written by another version of mpmflow (the time "
+                "series gained body_energy on 2026-12-01) or for other probes. Start the run "
+                "again with --overwrite."
+            )
         if (
             len(head) < self.bytes
             or not head.endswith(b"\n")
