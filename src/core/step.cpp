@@ -31,13 +31,6 @@
 namespace mpmflow {
 
 namespace {
-// The volume correction: a cell less than half full is surface. A cell's theta is its
-// particles' volume over its own, so half a cell of particles reads 1/2 only to rounding
-// (0.49999999999999994 in the 3D dam break's cells, 0.5 in the 2D one's): within 1e-12 of 1/2
-// a cell is half full, as the outputs' measures take it (diagnostics/measures.py, HALF_FULL).
-// Read exactly, such a cell made its neighbours surface rows in 3D but not in 2D, and the 3D
-// dam break across a slip tank left the 2D one by 0.07 a (tests/schemes/test_3d.py).
-constexpr double WET = 0.5 - 1e-12;
 
 // Adds the seconds from its construction to the next lap (or its end) to a phase's total.
 class PhaseClock {
@@ -1552,8 +1545,8 @@ index_t State<D>::volume_system(const Options<D>& O) {
   auto all_cols = vol_cols_.template view<2>({nc, NS});
   auto all_vals = vol_vals_.template view<2>({nc, NS});
   const VolumeSystem assembled = mpmflow::assemble<D>(
-      grid_, theta_.view(nc), density, WET, contact_.template view<2>({nn, D}), ob_.static_slot,
-      cell_row, all_cols, all_vals, vol_rhs_.view(nc), vol_rows_.view(nc));
+      grid_, theta_.view(nc), density, HALF_FULL, contact_.template view<2>({nn, D}),
+      ob_.static_slot, cell_row, all_cols, all_vals, vol_rhs_.view(nc), vol_rows_.view(nc));
   const index_t n = vol_n_ = assembled.n;
   vol_anchored_ = assembled.anchored;
   auto cols = vol_cols_.template view<2>({n, NS});

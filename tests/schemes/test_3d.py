@@ -103,8 +103,8 @@ def test_the_3d_dam_break_across_a_slip_tank_is_the_2d_one():
     slip walls, so each slice of it is the 2D flow on the same mesh and particle spacing:
     over the collapse's first 0.15 s the two follow each other to 1e-5 m (measured: 1.1e-6
     m), and their fronts and heights are the same. Until half a cell of particles was read
-    as half full to rounding (0.49999999999999994 in 3D, 0.5 in 2D: the volume correction's
-    WET and measures.HALF_FULL), the 3D correction took such a cell's neighbours as surface
+    as half full to rounding (0.49999999999999994 in 3D, 0.5 in 2D: state.HALF_FULL, which
+    the volume correction and the outputs' measures read), the 3D correction took such a cell's neighbours as surface
     rows where the 2D one did not: the particles parted by 2.5e-6 m at the toe in the 16th
     step and the fronts by 0.07 a at 0.15 s. Later the two still part (the heights by 0.035 a
     at 0.21 s: the validation's 3D rows): the side walls never pull, and from the 46th step

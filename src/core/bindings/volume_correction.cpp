@@ -8,6 +8,7 @@
 namespace mpmflow::bind {
 
 void bind_volume_correction(nb::module_& m) {
+  m.attr("HALF_FULL") = HALF_FULL;
   m.def(
       "cell_volume",
       [](Array<const double> x, Array<const double> volume, double h, std::vector<index_t> cells,

@@ -17,6 +17,8 @@ except ImportError as err:  # a source tree without the install's build
     ) from err
 
 CHUNKS: int = _core.CHUNKS
+# a cell at least this full is half full (src/core/volume_correction.hpp)
+HALF_FULL: float = _core.HALF_FULL
 POOL: int = _core.max_threads()  # the threads at import: OMP_NUM_THREADS, or the cores
 
 
