@@ -96,7 +96,7 @@ VALIDATION_CASES = (
     "bui_collapse",
     "heave_cylinder",
     "wave_maker",
-    "archimedes",
+    "floating_bodies",
     "terzaghi",
     "mandel",
     "seabed",

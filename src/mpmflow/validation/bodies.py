@@ -396,11 +396,13 @@ FLOATERS = (
 )
 
 
-def run_archimedes(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
+def run_floating_bodies(
+    out: Path, quick: bool = False, context: Context | None = None
+) -> CaseResult:
     end = ARCHIMEDES_END_QUICK if quick else ARCHIMEDES_END
     floaters = FLOATERS[:1] if quick else FLOATERS
     res = CaseResult(
-        "archimedes", "Archimedes: a floating box and cylinder released off their draft"
+        "floating_bodies", "Archimedes: a floating box and cylinder released off their draft"
     )
     lines = []
     plt = pyplot()
@@ -444,7 +446,7 @@ def run_archimedes(out: Path, quick: bool = False, context: Context | None = Non
         what = f"{name}, last {SETTLED:g} s of {end:g}"
         res.rows.append(
             Row(
-                "archimedes",
+                "floating_bodies",
                 f"draft, {what}",
                 "|mean pivot height - Archimedes' at the particles' level| / body height",
                 offset,
@@ -459,7 +461,7 @@ def run_archimedes(out: Path, quick: bool = False, context: Context | None = Non
         )
         res.rows.append(
             Row(
-                "archimedes",
+                "floating_bodies",
                 f"draft below the pressure's level, {what}",
                 "|mean pivot height - the level the floor's pressure gives| / body height",
                 against_level,
@@ -469,7 +471,7 @@ def run_archimedes(out: Path, quick: bool = False, context: Context | None = Non
         )
         res.rows.append(
             Row(
-                "archimedes",
+                "floating_bodies",
                 f"body at rest, {what}",
                 "largest |vertical speed| (m/s)",
                 speed,
@@ -484,7 +486,7 @@ def run_archimedes(out: Path, quick: bool = False, context: Context | None = Non
         )
         res.rows.append(
             Row(
-                "archimedes",
+                "floating_bodies",
                 f"water at rest, {what}",
                 "largest particle speed (m/s)",
                 water,
@@ -502,9 +504,9 @@ def run_archimedes(out: Path, quick: bool = False, context: Context | None = Non
     ax.set_ylabel("(y - y_rest) / height")
     ax.legend(loc="upper right")
     fig.tight_layout()
-    save(fig, out / "archimedes.png")
+    save(fig, out / "floating_bodies.png")
     res.figures.append(
-        ("archimedes.png", "Each body's height above Archimedes' rest, over its own height.")
+        ("floating_bodies.png", "Each body's height above Archimedes' rest, over its own height.")
     )
     res.text = (
         "Archimedes' rest at the level the water has with the body in it, two ways: the level "
