@@ -97,6 +97,7 @@ VALIDATION_CASES = (
     "heave_cylinder",
     "wave_maker",
     "floating_bodies",
+    "wedge_entry",
     "terzaghi",
     "mandel",
     "seabed",
