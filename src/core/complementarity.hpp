@@ -14,9 +14,11 @@
 // The problem is solved by the primal-dual active set method (Hintermueller, Ito and
 // Kunisch 2002, SIAM J. Optim. 13(3) 865-888; a semismooth Newton method): solve with the
 // held rows at 0, hold the rows whose pressure came out negative, let go of the held rows
-// whose w came out negative, and solve again until nothing changes. The matrix is an
-// M-matrix (the bilinear element's Laplacian: non-positive couplings; the ghost surface
-// adds to the diagonal only), for which the method ends in finitely many rounds.
+// whose w came out negative, and solve again until nothing changes. Away from obstacles the
+// matrix is an M-matrix (the bilinear element's Laplacian: non-positive couplings; the ghost
+// surface adds to the diagonal only), for which the method ends in finitely many rounds; a
+// cut cell's sliver couples some nodes positively (pressure_system.hpp), and the rounds are
+// capped (MAX_CONTACT_ROUNDS) and reported there.
 #pragma once
 
 #include "view.hpp"

@@ -1,5 +1,7 @@
 #include "pressure_system.hpp"
 
+#include <algorithm>
+
 #include "ghost_pressure.hpp"
 #include "parallel.hpp"
 #include "stencil.hpp"
@@ -31,10 +33,12 @@ void assemble_matrix(const Grid<D>& g, View<const index_t> cell_slot, View<const
         const index_t j = neighbour_node<D, P>(g, i, ix, s, t);
         if (node_row(j) < 0) {
           anch = true;
-          if (subcell && sv < 0.0)
-            S[centre] += sv * (dep.size() > 0 && dep(j) >= 0.0
-                                   ? shallow_factor(dep(j))
-                                   : ghost_factor(node_f(i), node_f(j), theta_min));
+          if (subcell) {
+            const double factor = dep.size() > 0 && dep(j) >= 0.0
+                                      ? shallow_factor(dep(j))
+                                      : ghost_factor(node_f(i), node_f(j), theta_min);
+            S[centre] += sv * (sv < 0.0 ? factor : std::max(factor, -1.0));
+          }
           S[s] = 0.0;
         }
       }

@@ -8,7 +8,14 @@
 // Free surface (subcell): the coupling of an unknown node i to a node g outside the unknowns
 // uses the pressure extrapolated linearly along the edge i-g to p = 0 at the surface
 // (ghost_pressure.hpp's ghost_factor); it changes only the diagonal, so the matrix stays
-// symmetric positive definite. Without subcell nodes outside the unknowns have p = 0.
+// symmetric. A coupling of the bilinear element is negative in a whole cell, and its
+// extrapolation adds to the diagonal. In a cut cell whose fluid part is a sliver, two nodes
+// on the same side of it couple positively; their extrapolation (factor 1 - 1/theta <= 0)
+// takes from the diagonal, by at most the coupling itself (the factor held at -1 or above,
+// theta >= 1/2; exact for a linear pressure there). Leaving such couplings out (p = 0 at g)
+// broke the column at rest wherever the surface crosses a sliver: water beside a box whose
+// side is 0.3 of a cell off a grid line moved at 2 mm/s within 1 s (docs/method.md,
+// "Obstacles"). Without subcell nodes outside the unknowns have p = 0.
 #pragma once
 
 #include <array>

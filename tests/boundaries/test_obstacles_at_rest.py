@@ -170,3 +170,45 @@ def test_a_slanted_face_meets_the_wall_at_its_own_slope():
     assert np.array_equal(
         obstacles.node_distance(grid, box, at)[wall], box.signed_distance(up)[wall]
     )
+
+
+@pytest.mark.parametrize(
+    "side",
+    [
+        0.0333,
+        pytest.param(
+            0.0367,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="a cut cell two thirds fluid at the surface: its volume fraction, "
+                "from the particles, is not the water's level in it (0.03 m/s, docs/method.md, "
+                "'Obstacles')",
+            ),
+        ),
+    ],
+)
+def test_still_water_round_a_box_through_its_surface_stays_at_rest(side):
+    """A box through the surface of the column at rest, its left side off the grid lines.
+    At 0.0333 m the cut cells beside it are slivers (a third of a cell of water) where the
+    surface crosses them. In a sliver two nodes on the same side of it couple positively,
+    and the surface's ghost extrapolation left those couplings out (p = 0 at the ghost
+    node): the water beside the sliver moved at 2 mm/s within 0.2 s
+    (src/core/pressure_system.hpp). The sliver's rows now take the extrapolation too, and
+    the column stays at rest, exactly as the one without the box. At 0.0367 m (two thirds
+    of a cell of water) it still moves, at 0.03 m/s, before and after."""
+    width = 0.0333
+    case = load_case(
+        EXAMPLES / "hydrostatic.toml",
+        [
+            "time.end=0.2",
+            "output.snapshots=false",
+            f"obstacles=[{{type='box', min=[{side}, 0.163], max=[{side + width}, 0.27]}}]",
+            "bodies.0.around_obstacles=true",
+        ],
+    )
+    sim = Simulation(case)
+    sim.run()
+    P = sim.particles
+    assert np.nanmax(sim.series("max_speed")) < 1e-6
+    exact = RHO * G * (DEPTH - P.x[:, -1])
+    assert np.max(np.abs(P.pressure - exact)) <= 1e-6 * RHO * G * DEPTH

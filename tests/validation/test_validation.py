@@ -217,13 +217,12 @@ def test_frictional_column_fails_where_the_experiment_did(quick):
 
 @pytest.mark.slow
 def test_wedge_entry_peaks_where_the_similarity_solution_does(quick):
-    """The wedge of deadrise 20 degrees at the quick report's coarse mesh (h = 0.004 m, V t
-    up to 6 h): the pressure's peak on the face at Zhao & Faltinsen's height within the
-    issue's 10% (measured -4.5%), its value within 20% (measured -12.5%; 10% at the
-    finest mesh of the full report, where the spray root is resolved)."""
+    """The wedge of deadrise 20 degrees at the quick report's mesh (h = 2 mm, V t up to 12
+    h): the pressure's peak on the face within the issue's 10% of Zhao & Faltinsen's value
+    and height (measured -4.1% and +0.6%; at 1 mm in the full report +0.1% and -1.1%)."""
     _, rows, _ = quick
     assert row(rows, "wedge_entry", "peak's height on the wedge").passed
-    assert abs(row(rows, "wedge_entry", "peak pressure coefficient").value) < 0.2
+    assert row(rows, "wedge_entry", "peak pressure coefficient").passed
 
 
 def test_the_cli_names_every_validation_case():

@@ -42,7 +42,9 @@ from .common import (
 )
 from .types import Context
 
-SPACINGS, SPACINGS_QUICK = (0.004, 0.002, 0.001), (0.004,)  # m
+# the quick report's (the test suite's) is the middle mesh: at 4 mm (V t up to 6 h) the
+# peak's height moved from 0.486 to 0.606 V t with a change of the surface's rows
+SPACINGS, SPACINGS_QUICK = (0.004, 0.002, 0.001), (0.002,)  # m
 CELLS_PER_STEP = 0.1  # V dt / h
 ZF_CP, ZF_Z = 17.77, 0.5087  # Zhao & Faltinsen (1993), beta = 20 degrees
 BINS = np.arange(-0.25, 1.0 + 1e-9, 0.025)  # z / (V t)
