@@ -89,3 +89,20 @@ class Grid:
         axes = [np.arange(n) * self.spacing for n in self.nodes]
         mesh = np.meshgrid(*axes, indexing="ij")
         return np.stack([m.ravel(order="F") for m in mesh], axis=1)
+
+    def interpolate(
+        self, values: NDArray[np.float64], x: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """A nodal field (nnodes, flat order) at the points ``x`` (n, dim; m), interpolated
+        multilinearly from the nodes of the cell holding each (points past the last cell
+        take its nodes)."""
+        nodes = np.array([int(n) for n in self.nodes])
+        s = x / self.spacing
+        i0 = np.clip(np.floor(s).astype(np.int64), 0, nodes - 2)
+        w = s - i0
+        strides = np.cumprod(np.concatenate([[1], nodes[:-1]]))
+        value = np.zeros(x.shape[0])
+        for corner in np.ndindex(*(2,) * self.dim):
+            c = np.array(corner)
+            value += np.prod(np.where(c, w, 1 - w), axis=1) * values[(i0 + c) @ strides]
+        return value

@@ -238,16 +238,7 @@ def grid_distance(tables: Tables, grid: Grid, x: Floats) -> Floats:
     """phi (m) at the points ``x`` (n, D), interpolated multilinearly from the nodes in the
     cell holding each: the solid the step sees (its edges and corners rounded within a cell,
     its faces on the walls as ``node_distance`` takes them) is where this is negative."""
-    nodes = np.array([int(n) for n in grid.nodes])
-    s = x / grid.spacing
-    i0 = np.clip(np.floor(s).astype(np.int64), 0, nodes - 2)
-    w = s - i0
-    strides = np.cumprod(np.concatenate([[1], nodes[:-1]]))
-    value = np.zeros(x.shape[0])
-    for corner in np.ndindex(*(2,) * grid.dim):
-        c = np.array(corner)
-        value += np.prod(np.where(c, w, 1 - w), axis=1) * tables.phi[(i0 + c) @ strides]
-    return value
+    return grid.interpolate(tables.phi, x)
 
 
 def of_case(case: Case, grid: Grid) -> Tables:

@@ -29,8 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..case import load_case
 from ..simulation import Simulation
 from .common import (
+    EXAMPLES,
     CaseResult,
     Row,
     fmt,
@@ -77,7 +79,6 @@ class FaceReader:
         self.dt = float(sim.case.time.dt)
         self.q = 0.5 * float(sim.case.material.density) * self.V**2
         self.nodes = sim.grid.node_coordinates()
-        self.nx = sim.grid.cells[0] + 1
 
     def __call__(self, sim: Simulation) -> None:
         if not self.nodes.size:
@@ -96,16 +97,7 @@ class FaceReader:
         # the interpolation 0.75 h into the water along the normal
         xs = np.linspace(0.0, 0.9 * self.length, 400)
         pts = np.c_[xs, apex + xs * tb] + 0.75 * self.h * np.array([math.sin(self.beta), -cb])
-        i = np.clip((pts[:, 0] / self.h).astype(int), 0, self.nx - 2)
-        j = (pts[:, 1] / self.h).astype(int)
-        fx, fy = pts[:, 0] / self.h - i, pts[:, 1] / self.h - j
-        P = p.reshape(-1, self.nx)
-        inner = (
-            P[j, i] * (1 - fx) * (1 - fy)
-            + P[j, i + 1] * fx * (1 - fy)
-            + P[j + 1, i] * (1 - fx) * fy
-            + P[j + 1, i + 1] * fx * fy
-        )
+        inner = sim.grid.interpolate(p, pts)
         z_face = (xs * tb + apex - self.apex0) / (self.V * t)
         self.samples.append((t, z_nodes, p[on] / self.q, z_face, inner / self.q))
 
@@ -139,10 +131,11 @@ class FaceReader:
 def run_wedge_entry(out: Path, quick: bool = False, context: Context | None = None) -> CaseResult:
     res = CaseResult("wedge_entry", "Slamming: a wedge entering still water (Zhao & Faltinsen)")
     runs = []
+    wedge = load_case(EXAMPLES / "wedge_entry.toml").obstacles[0]
+    speed = float(np.linalg.norm(wedge.motion.velocity))  # type: ignore[union-attr, arg-type]
     for h in SPACINGS_QUICK if quick else SPACINGS:
         reader = FaceReader(h)
-        # V dt = h / 10 (V = 2 m/s): the example's dt at its 0.002 m
-        dt = CELLS_PER_STEP * h / 2.0
+        dt = CELLS_PER_STEP * h / speed  # V dt = h / 10: the example's dt at its 0.002 m
         sim = run_example(
             "wedge_entry.toml",
             [f"grid.spacing={h}", f"time.dt={dt}", f"output.interval={dt}"],
